@@ -1,0 +1,63 @@
+#pragma once
+// Monotonic time for the whole firmware. Everything periodic sleeps to absolute deadlines.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+
+namespace sen3bot::hal {
+
+// Nanoseconds on a monotonic time line whose origin is unspecified (CLOCK_MONOTONIC on
+// POSIX, zero at construction for the simulated clock). Signed so differences are natural.
+using Nanos = std::int64_t;
+
+constexpr Nanos kNanosPerMicro = 1'000;
+constexpr Nanos kNanosPerMilli = 1'000'000;
+constexpr Nanos kNanosPerSecond = 1'000'000'000;
+
+constexpr Nanos micros(std::int64_t us) { return us * kNanosPerMicro; }
+constexpr Nanos millis(std::int64_t ms) { return ms * kNanosPerMilli; }
+constexpr Nanos seconds(std::int64_t s) { return s * kNanosPerSecond; }
+constexpr double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
+
+class Clock {
+ public:
+  virtual ~Clock() = default;
+  [[nodiscard]] virtual Nanos now() const = 0;
+  // Blocks until now() >= deadline_ns. Returns immediately for a deadline in the past.
+  virtual void sleep_until(Nanos deadline_ns) = 0;
+  // True for a clock that only moves when told to (lockstep simulation).
+  [[nodiscard]] virtual bool simulated() const { return false; }
+};
+
+// CLOCK_MONOTONIC, sleeping with clock_nanosleep(TIMER_ABSTIME) so that periodic loops
+// never accumulate drift from the time spent computing the next deadline.
+class PosixClock final : public Clock {
+ public:
+  [[nodiscard]] Nanos now() const override;
+  void sleep_until(Nanos deadline_ns) override;
+};
+
+// A clock that only moves when advanced. sleep_until() jumps forward to the deadline, so a
+// single-threaded lockstep loop runs simulated time as fast as the CPU allows.
+class SimClock final : public Clock {
+ public:
+  explicit SimClock(Nanos start_ns = 0) : now_ns_(start_ns) {}
+
+  [[nodiscard]] Nanos now() const override { return now_ns_.load(std::memory_order_acquire); }
+  void sleep_until(Nanos deadline_ns) override { advance_to(deadline_ns); }
+  [[nodiscard]] bool simulated() const override { return true; }
+
+  // Time never goes backwards: advancing to the past is a no-op.
+  void advance_to(Nanos t_ns) {
+    Nanos current = now_ns_.load(std::memory_order_relaxed);
+    while (t_ns > current &&
+           !now_ns_.compare_exchange_weak(current, t_ns, std::memory_order_acq_rel)) {
+    }
+  }
+  void advance_by(Nanos dt_ns) { now_ns_.fetch_add(dt_ns > 0 ? dt_ns : 0, std::memory_order_acq_rel); }
+
+ private:
+  std::atomic<Nanos> now_ns_;
+};
+
+}  // namespace sen3bot::hal

@@ -1,0 +1,22 @@
+# Project-wide compile options, applied through the sen3bot_options interface target so
+# every library, test and tool is built the same way.
+add_library(sen3bot_options INTERFACE)
+target_compile_options(sen3bot_options INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
+  -Wnon-virtual-dtor -Woverloaded-virtual -Wimplicit-fallthrough)
+if(SEN3BOT_WERROR)
+  target_compile_options(sen3bot_options INTERFACE -Werror)
+endif()
+if(SEN3BOT_SANITIZE)
+  target_compile_options(sen3bot_options INTERFACE
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  target_link_options(sen3bot_options INTERFACE -fsanitize=address,undefined)
+  target_compile_definitions(sen3bot_options INTERFACE SEN3BOT_SANITIZED=1)
+endif()
+
+# Every library in the tree: static, position independent, with the project options.
+function(sen3bot_library name)
+  add_library(${name} STATIC ${ARGN})
+  target_link_libraries(${name} PUBLIC sen3bot_options)
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()
