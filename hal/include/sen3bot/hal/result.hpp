@@ -29,7 +29,7 @@ std::string_view to_string(Errc code) noexcept;
 
 class Error {
  public:
-  static constexpr std::size_t kMessageCapacity = 160;
+  static constexpr std::size_t kMessageCapacity = 256;
 
   Error() = default;
   Error(Errc code, std::string_view message) noexcept : code_(code) { assign(message); }

@@ -1,0 +1,261 @@
+#include "cli.hpp"
+
+#include <pthread.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <string>
+#include <string_view>
+
+#include "config.hpp"
+#include "firmware.hpp"
+#include "sen3bot/capture/dump.hpp"
+#include "sen3bot/hal/rt_setup.hpp"
+
+#ifndef SEN3BOT_VERSION
+#define SEN3BOT_VERSION "unknown"
+#endif
+
+namespace sen3bot::firmware {
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: sen3bot <command> [options]\n"
+    "\n"
+    "Real-time controller firmware for the Sen3Bot mobile robot (Pioneer 3-DX base,\n"
+    "SICK LMS200 laser, ONVIF/RTSP camera).\n"
+    "\n"
+    "commands:\n"
+    "  run --config FILE [--duration S] [--clock lockstep|realtime]\n"
+    "        Load the configuration, build the task table and run it until SIGINT or\n"
+    "        SIGTERM (or for the configured duration), then print task statistics.\n"
+    "        --duration overrides run.duration_s (0: until a signal); --clock overrides\n"
+    "        run.clock: 'realtime' runs on the monotonic clock with one thread per task\n"
+    "        group, 'lockstep' runs simulated time as fast as the CPU allows.\n"
+    "  capture dump FILE\n"
+    "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
+    "  version\n"
+    "        Print the firmware version.\n"
+    "  --help, -h\n"
+    "        Print this text.\n"
+    "\n"
+    "exit status: 0 success, 1 run-time failure, 2 bad command line or configuration.\n";
+
+std::atomic<tasks::Scheduler*> g_signal_target{nullptr};
+
+void on_stop_signal(int) {
+  // Only an atomic store: async-signal-safe.
+  if (tasks::Scheduler* s = g_signal_target.load()) s->request_stop();
+}
+
+struct RunOptions {
+  std::string config_path;
+  bool have_duration = false;
+  double duration_s = 0;
+  bool have_clock = false;
+  ClockMode clock = ClockMode::lockstep;
+};
+
+bool parse_double(const char* text, double& out) {
+  char* end = nullptr;
+  errno = 0;
+  out = std::strtod(text, &end);
+  return errno == 0 && end != text && *end == '\0';
+}
+
+void print_warnings(const tasks::Scheduler& scheduler, std::FILE* err) {
+  for (std::size_t i = 0; i < scheduler.warning_count(); ++i)
+    std::fprintf(err, "sen3bot: warning: %s (continuing without it)\n", scheduler.warning(i).c_str());
+}
+
+int run_realtime(Firmware& fw, const FirmwareConfig& config, std::FILE* out, std::FILE* err) {
+  tasks::Scheduler& scheduler = fw.scheduler();
+  // Block the stop signals before any thread starts so every thread inherits the mask and
+  // only this thread receives them, synchronously.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  sigset_t previous;
+  pthread_sigmask(SIG_BLOCK, &stop_signals, &previous);
+
+  if (Status s = scheduler.start(); !s) {
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    std::fprintf(err, "sen3bot: %s\n", s.error().c_str());
+    return 1;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  int signal_number = 0;
+  for (;;) {
+    timespec poll{0, 100'000'000};
+    const int sig = sigtimedwait(&stop_signals, nullptr, &poll);
+    if (sig > 0) {
+      signal_number = sig;
+      break;
+    }
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    if (config.duration_s > 0 && elapsed >= config.duration_s) break;
+  }
+  scheduler.request_stop();
+  scheduler.join();
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  print_warnings(scheduler, err);
+  if (signal_number != 0) std::fprintf(out, "stopped by %s\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+  return 0;
+}
+
+int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& config, std::FILE* out, std::FILE* err) {
+  tasks::Scheduler& scheduler = fw.scheduler();
+  g_signal_target.store(&scheduler);
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  struct sigaction old_int {};
+  struct sigaction old_term {};
+  sigaction(SIGINT, &action, &old_int);
+  sigaction(SIGTERM, &action, &old_term);
+
+  const hal::Nanos duration =
+      config.duration_s > 0 ? static_cast<hal::Nanos>(config.duration_s * 1e9) : INT64_MAX / 2;
+  const auto wall_start = std::chrono::steady_clock::now();
+  const Status s = scheduler.run_lockstep(clock, duration);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+  g_signal_target.store(nullptr);
+  if (!s) {
+    std::fprintf(err, "sen3bot: %s\n", s.error().c_str());
+    return 1;
+  }
+  const double sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+  std::fprintf(out, "simulated %.3f s in %.3f s of wall time (%.0fx real time)\n", sim_s, wall_s,
+               wall_s > 0 ? sim_s / wall_s : 0.0);
+  return 0;
+}
+
+int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  RunOptions options;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    auto value = [&](const char* what) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(err, "sen3bot run: %s needs a value\n", what);
+        return nullptr;
+      }
+      return argv[++i];
+    };
+    if (arg == "--config") {
+      const char* v = value("--config");
+      if (!v) return 2;
+      options.config_path = v;
+    } else if (arg == "--duration") {
+      const char* v = value("--duration");
+      if (!v) return 2;
+      if (!parse_double(v, options.duration_s) || options.duration_s < 0) {
+        std::fprintf(err, "sen3bot run: --duration: expected seconds >= 0, got '%s'\n", v);
+        return 2;
+      }
+      options.have_duration = true;
+    } else if (arg == "--clock") {
+      const char* v = value("--clock");
+      if (!v) return 2;
+      const std::string_view c = v;
+      if (c == "lockstep") {
+        options.clock = ClockMode::lockstep;
+      } else if (c == "realtime") {
+        options.clock = ClockMode::realtime;
+      } else {
+        std::fprintf(err, "sen3bot run: --clock: expected lockstep or realtime, got '%s'\n", v);
+        return 2;
+      }
+      options.have_clock = true;
+    } else {
+      std::fprintf(err, "sen3bot run: unknown option '%s' (see sen3bot --help)\n", argv[i]);
+      return 2;
+    }
+  }
+  if (options.config_path.empty()) {
+    std::fprintf(err, "sen3bot run: --config FILE is required (see sen3bot --help)\n");
+    return 2;
+  }
+
+  Result<FirmwareConfig> loaded = load_config(options.config_path);
+  if (!loaded) {
+    std::fprintf(err, "sen3bot: %s\n", loaded.error().c_str());
+    return 2;
+  }
+  FirmwareConfig& config = *loaded;
+  if (options.have_duration) config.duration_s = options.duration_s;
+  if (options.have_clock) config.clock = options.clock;
+  const bool realtime = config.clock == ClockMode::realtime;
+
+  std::fprintf(out, "sen3bot %s: robot '%s', %s clock, %s\n", SEN3BOT_VERSION, config.robot_name.c_str(),
+               realtime ? "real-time" : "lockstep simulated",
+               config.duration_s > 0 ? (std::to_string(config.duration_s) + " s").c_str() : "until SIGINT/SIGTERM");
+
+  if (realtime && config.lock_memory) {
+    if (Status s = hal::lock_memory(); !s)
+      std::fprintf(err, "sen3bot: warning: %s (continuing without it)\n", s.error().c_str());
+  }
+
+  hal::PosixClock posix_clock;
+  hal::SimClock sim_clock;
+  hal::Clock& clock = realtime ? static_cast<hal::Clock&>(posix_clock) : static_cast<hal::Clock&>(sim_clock);
+  Firmware fw(config, clock, out);
+  if (Status s = fw.init(); !s) {
+    std::fprintf(err, "sen3bot: %s\n", s.error().c_str());
+    return 1;
+  }
+  fw.print_memory(out);
+  std::fflush(out);
+
+  const int rc = realtime ? run_realtime(fw, config, out, err) : run_lockstep(fw, sim_clock, config, out, err);
+  fw.shutdown();
+  std::fprintf(out, "\ntask statistics:\n");
+  fw.scheduler().print_stats(out);
+  std::fflush(out);
+  return rc;
+}
+
+int capture_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  if (argc == 2 && std::string_view(argv[0]) == "dump") {
+    if (Status s = capture::dump(argv[1], out); !s) {
+      std::fprintf(err, "sen3bot capture dump: %s\n", s.error().c_str());
+      return 1;
+    }
+    return 0;
+  }
+  std::fprintf(err, "usage: sen3bot capture dump FILE\n");
+  return 2;
+}
+
+}  // namespace
+
+int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  if (argc < 2) {
+    std::fputs(kUsage, err);
+    return 2;
+  }
+  const std::string_view command = argv[1];
+  if (command == "--help" || command == "-h" || command == "help") {
+    std::fputs(kUsage, out);
+    return 0;
+  }
+  if (command == "version" || command == "--version") {
+    std::fprintf(out, "sen3bot %s\n", SEN3BOT_VERSION);
+    return 0;
+  }
+  if (command == "run") return run_command(argc - 2, argv + 2, out, err);
+  if (command == "capture") return capture_command(argc - 2, argv + 2, out, err);
+  std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
+  return 2;
+}
+
+}  // namespace sen3bot::firmware

@@ -1,0 +1,116 @@
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+
+namespace sen3bot::firmware {
+namespace {
+
+std::string read_all(std::FILE* f) {
+  std::fflush(f);
+  std::rewind(f);
+  std::string text;
+  std::array<char, 4096> buf;
+  while (std::size_t n = std::fread(buf.data(), 1, buf.size(), f)) text.append(buf.data(), n);
+  return text;
+}
+
+struct Outcome {
+  int code;
+  std::string out;
+  std::string err;
+};
+
+Outcome run(std::vector<std::string> args) {
+  args.insert(args.begin(), "sen3bot");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::FILE* out = std::tmpfile();
+  std::FILE* err = std::tmpfile();
+  const int code = cli_main(static_cast<int>(args.size()), argv.data(), out, err);
+  Outcome o{code, read_all(out), read_all(err)};
+  std::fclose(out);
+  std::fclose(err);
+  return o;
+}
+
+const std::string kSim = SEN3BOT_SOURCE_DIR "/config/sim.yaml";
+
+TEST(Cli, HelpAndVersion) {
+  Outcome o = run({"--help"});
+  EXPECT_EQ(o.code, 0);
+  EXPECT_NE(o.out.find("run --config FILE"), std::string::npos);
+  o = run({"version"});
+  EXPECT_EQ(o.code, 0);
+  EXPECT_EQ(o.out.rfind("sen3bot ", 0), 0u);
+  o = run({});
+  EXPECT_EQ(o.code, 2);
+  o = run({"fly"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("unknown command 'fly'"), std::string::npos);
+}
+
+TEST(Cli, RunRejectsBadArguments) {
+  EXPECT_EQ(run({"run"}).code, 2);
+  EXPECT_EQ(run({"run", "--config"}).code, 2);
+  Outcome o = run({"run", "--config", kSim, "--duration", "soon"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("--duration: expected seconds"), std::string::npos);
+  o = run({"run", "--config", "/no/such.yaml"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("/no/such.yaml: cannot open"), std::string::npos);
+}
+
+TEST(Cli, LockstepRunPrintsStatusAndStatistics) {
+  Outcome o = run({"run", "--config", kSim, "--duration", "30"});
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("lockstep simulated clock"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("memory budgets"), std::string::npos);
+  EXPECT_NE(o.out.find("status  2 tasks"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("simulated 30.000 s"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("task statistics"), std::string::npos);
+  // health at 10 Hz for 30 s.
+  EXPECT_NE(o.out.find("health         control        100000      500  60       300"), std::string::npos) << o.out;
+}
+
+TEST(Cli, RealTimeRunStopsCleanlyOnSigint) {
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::string a0 = "sen3bot", a1 = "run", a2 = "--config", a3 = kSim, a4 = "--clock", a5 = "realtime", a6 = "--duration", a7 = "0";
+    char* argv[] = {a0.data(), a1.data(), a2.data(), a3.data(), a4.data(), a5.data(), a6.data(), a7.data(), nullptr};
+    std::FILE* devnull = std::fopen("/dev/null", "w");
+    _exit(cli_main(8, argv, out, devnull));
+  }
+  usleep(600'000);
+  ASSERT_EQ(kill(child, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const std::string text = read_all(out);
+  std::fclose(out);
+  EXPECT_NE(text.find("stopped by SIGINT"), std::string::npos) << text;
+  EXPECT_NE(text.find("task statistics"), std::string::npos) << text;
+}
+
+TEST(Cli, CaptureDumpReportsAMissingFile) {
+  Outcome o = run({"capture", "dump", "/no/such.s3bcap"});
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.err.find("/no/such.s3bcap"), std::string::npos) << o.err;
+  EXPECT_EQ(run({"capture"}).code, 2);
+}
+
+}  // namespace
+}  // namespace sen3bot::firmware

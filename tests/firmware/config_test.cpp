@@ -1,0 +1,118 @@
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "config.hpp"
+
+namespace sen3bot::firmware {
+namespace {
+
+constexpr const char* kValid = R"(
+robot: { name: test-bot }
+run: { clock: realtime, duration_s: 2.5 }
+realtime: { lock_memory: false, prefault_stack_bytes: 128KiB }
+threads:
+  control: { cpu: 1 }
+  background: { realtime: false }
+tasks:
+  health: { arena_bytes: 4KiB, stall_periods: 5 }
+  telemetry: { arena_bytes: 2048, status_period_s: 0.5 }
+)";
+
+std::string message_of(std::string_view yaml) {
+  Result<FirmwareConfig> r = parse_config(yaml, "robot.yaml");
+  EXPECT_FALSE(r);
+  return r ? std::string() : std::string(r.error().message());
+}
+
+TEST(Config, ParsesEveryKey) {
+  Result<FirmwareConfig> r = parse_config(kValid, "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const FirmwareConfig& c = *r;
+  EXPECT_EQ(c.robot_name, "test-bot");
+  EXPECT_EQ(c.clock, ClockMode::realtime);
+  EXPECT_DOUBLE_EQ(c.duration_s, 2.5);
+  EXPECT_FALSE(c.lock_memory);
+  EXPECT_EQ(c.prefault_stack_bytes, 128u * 1024);
+  EXPECT_EQ(c.threads.at("control").cpu, 1);
+  EXPECT_TRUE(c.threads.at("control").realtime);
+  EXPECT_FALSE(c.threads.at("background").realtime);
+  EXPECT_EQ(c.tasks.at("health").arena_bytes, 4096u);
+  EXPECT_EQ(c.tasks.at("telemetry").arena_bytes, 2048u);
+  EXPECT_EQ(c.health_stall_periods, 5);
+  EXPECT_EQ(c.telemetry_status_period_ms, 500);
+}
+
+TEST(Config, TheShippedConfigurationsLoad) {
+  for (const char* name : {"/config/sim.yaml", "/config/robot.yaml"}) {
+    Result<FirmwareConfig> r = load_config(std::string(SEN3BOT_SOURCE_DIR) + name);
+    EXPECT_TRUE(r) << name << ": " << (r ? "" : r.error().c_str());
+  }
+}
+
+TEST(Config, ErrorsNameTheFileTheKeyAndTheProblem) {
+  std::string m = message_of(R"(
+robot: { name: x }
+run: { clock: lockstep, duration_s: abc }
+tasks: { health: { arena_bytes: 1KiB } }
+)");
+  EXPECT_NE(m.find("robot.yaml: run.duration_s: expected a number, got 'abc' (line 3"), std::string::npos) << m;
+
+  m = message_of(R"(
+robot: { name: x }
+run: { clock: sometimes, duration_s: 1 }
+tasks: {}
+)");
+  EXPECT_NE(m.find("run.clock: expected 'lockstep' or 'realtime', got 'sometimes'"), std::string::npos) << m;
+
+  m = message_of(R"(
+robot: { name: x }
+run: { clock: lockstep, duration_s: 1 }
+tasks:
+  health: { arena_bytes: 4KB }
+)");
+  EXPECT_NE(m.find("tasks.health.arena_bytes: "), std::string::npos) << m;
+  EXPECT_NE(m.find("4KB"), std::string::npos) << m;
+
+  m = message_of(R"(
+robot: { name: x }
+run: { clock: lockstep, duration_s: 1 }
+tasks:
+  health: { arena_bytes: 4KiB, stal_periods: 3 }
+)");
+  EXPECT_NE(m.find("tasks.health.stal_periods: unknown key"), std::string::npos) << m;
+  EXPECT_NE(m.find("(line 5"), std::string::npos) << m;
+
+  m = message_of("robot: { name: x }\ntasks: {}\n");
+  EXPECT_NE(m.find("robot.yaml: run: missing"), std::string::npos) << m;
+
+  m = message_of("robot: { name: x }\nrun: { clock: lockstep, duration_s: -1 }\ntasks: {}\n");
+  EXPECT_NE(m.find("run.duration_s: value -1 is outside"), std::string::npos) << m;
+
+  m = message_of("robot: [1, 2\n");
+  EXPECT_NE(m.find("robot.yaml: not valid YAML"), std::string::npos) << m;
+
+  m = message_of("");
+  EXPECT_NE(m.find("robot.yaml: the file is empty"), std::string::npos) << m;
+
+  m = message_of("- just\n- a list\n");
+  EXPECT_NE(m.find("expected a mapping"), std::string::npos) << m;
+
+  m = message_of(R"(
+robot: { name: x }
+run: { clock: lockstep, duration_s: 1 }
+threads: { control: { cpu: many } }
+tasks: {}
+)");
+  EXPECT_NE(m.find("threads.control.cpu: expected an integer, got 'many'"), std::string::npos) << m;
+}
+
+TEST(Config, AMissingFileSaysSo) {
+  Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code(), Errc::not_found);
+  EXPECT_NE(r.error().message().find("/nonexistent/robot.yaml"), std::string_view::npos);
+}
+
+}  // namespace
+}  // namespace sen3bot::firmware

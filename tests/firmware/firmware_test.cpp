@@ -1,0 +1,103 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+#include "config.hpp"
+#include "firmware.hpp"
+#include "task_table.hpp"
+
+namespace sen3bot::firmware {
+namespace {
+
+FirmwareConfig sim_config() {
+  Result<FirmwareConfig> r = load_config(SEN3BOT_SOURCE_DIR "/config/sim.yaml");
+  EXPECT_TRUE(r);
+  return *r;
+}
+
+TEST(TaskTable, RowsAreValidAndNamesUnique) {
+  for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
+    const auto& row = kTaskTable[i];
+    EXPECT_GT(row.period_us, 0) << row.name;
+    EXPECT_GT(row.budget_us, 0) << row.name;
+    EXPECT_LE(row.budget_us, row.period_us) << row.name;
+    for (std::size_t j = i + 1; j < kTaskTable.size(); ++j) EXPECT_NE(row.name, kTaskTable[j].name);
+  }
+}
+
+TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
+  FirmwareConfig config = sim_config();
+  hal::SimClock clock;
+  Firmware fw(config, clock, stdout);
+  ASSERT_TRUE(fw.init());
+  ASSERT_EQ(fw.scheduler().task_count(), kTaskTable.size());
+  for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
+    EXPECT_EQ(fw.arena(i).name(), kTaskTable[i].name);
+    EXPECT_LE(fw.arena(i).used_bytes(), fw.arena(i).capacity_bytes());
+  }
+}
+
+TEST(Firmware, AnExceededBudgetFailsInitNamingTaskArenaAndKey) {
+  FirmwareConfig config = sim_config();
+  config.tasks["telemetry"].arena_bytes = 64;  // its line buffer needs 512 B
+  hal::SimClock clock;
+  Firmware fw(config, clock, stdout);
+  const Status s = fw.init();
+  ASSERT_FALSE(s);
+  const std::string m(s.error().message());
+  EXPECT_EQ(s.error().code(), Errc::capacity);
+  EXPECT_NE(m.find("task 'telemetry' init failed"), std::string::npos) << m;
+  EXPECT_NE(m.find("budget 64 B exceeded: request of 512 B"), std::string::npos) << m;
+  EXPECT_NE(m.find("tasks.telemetry.arena_bytes"), std::string::npos) << m;
+}
+
+TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
+  FirmwareConfig config = sim_config();
+  config.tasks.erase("health");
+  hal::SimClock clock;
+  {
+    Firmware fw(config, clock, stdout);
+    const Status s = fw.init();
+    ASSERT_FALSE(s);
+    EXPECT_NE(std::string(s.error().message()).find("tasks.health.arena_bytes: missing"), std::string::npos);
+  }
+  config = sim_config();
+  config.tasks["navigator"].arena_bytes = 1024;
+  {
+    Firmware fw(config, clock, stdout);
+    const Status s = fw.init();
+    ASSERT_FALSE(s);
+    EXPECT_NE(std::string(s.error().message()).find("tasks.navigator: no such task"), std::string::npos);
+  }
+  config = sim_config();
+  config.threads["gpu"] = ThreadConfig{};
+  {
+    Firmware fw(config, clock, stdout);
+    const Status s = fw.init();
+    ASSERT_FALSE(s);
+    EXPECT_NE(std::string(s.error().message()).find("threads.gpu: no task runs on this thread"), std::string::npos);
+  }
+}
+
+TEST(Firmware, ASimulatedMinuteKeepsEveryRateExactly) {
+  FirmwareConfig config = sim_config();
+  std::FILE* sink = std::fopen("/dev/null", "w");
+  hal::SimClock clock;
+  Firmware fw(config, clock, sink);
+  ASSERT_TRUE(fw.init());
+  ASSERT_TRUE(fw.scheduler().run_lockstep(clock, hal::seconds(60)));
+  for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
+    const tasks::TaskStats s = fw.scheduler().stats(i);
+    EXPECT_EQ(s.runs, static_cast<std::uint64_t>(60'000'000 / kTaskTable[i].period_us)) << s.name;
+    EXPECT_EQ(s.overruns + s.slips + s.skips, 0u) << s.name;
+  }
+  tasks::Sample<tasks::HealthReport> health;
+  ASSERT_TRUE(fw.bus().health.read(health));
+  EXPECT_TRUE(health.value.ok);
+  fw.shutdown();
+  std::fclose(sink);
+}
+
+}  // namespace
+}  // namespace sen3bot::firmware
