@@ -62,6 +62,13 @@ struct RunOptions {
   ClockMode clock = ClockMode::lockstep;
 };
 
+std::string duration_text(double duration_s) {
+  if (duration_s <= 0) return "until SIGINT/SIGTERM";
+  char text[48];
+  std::snprintf(text, sizeof text, "for %.1f s", duration_s);
+  return text;
+}
+
 bool parse_double(const char* text, double& out) {
   char* end = nullptr;
   errno = 0;
@@ -198,7 +205,7 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 
   std::fprintf(out, "sen3bot %s: robot '%s', %s clock, %s\n", SEN3BOT_VERSION, config.robot_name.c_str(),
                realtime ? "real-time" : "lockstep simulated",
-               config.duration_s > 0 ? (std::to_string(config.duration_s) + " s").c_str() : "until SIGINT/SIGTERM");
+               duration_text(config.duration_s).c_str());
 
   if (realtime && config.lock_memory) {
     if (Status s = hal::lock_memory(); !s)

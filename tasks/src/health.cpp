@@ -12,6 +12,7 @@ Status HealthTask::init(std::pmr::memory_resource& arena) {
   Previous* storage = alloc.allocate(n);
   for (std::size_t i = 0; i < n; ++i) alloc.construct(storage + i);
   previous_ = std::span<Previous>(storage, n);
+  self_index_ = scheduler_.index_of(*this);
   return Status::success();
 }
 
@@ -24,7 +25,7 @@ void HealthTask::step(const StepContext& context) {
     const TaskCounters& c = scheduler_.counters(i);
     const std::uint64_t runs = c.runs.load(std::memory_order_acquire);
     const hal::Nanos last = runs ? c.last_start_ns.load(std::memory_order_relaxed) : scheduler_.start_time_ns();
-    const bool stalled = now - last > config_.stall_periods * hal::micros(spec.period_us);
+    const bool stalled = i != self_index_ && now - last > config_.stall_periods * hal::micros(spec.period_us);
     if (stalled) {
       ++report.stalled_count;
       report.stalled_mask |= std::uint64_t{1} << i;

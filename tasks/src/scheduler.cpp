@@ -12,6 +12,9 @@ namespace {
 // A real-time thread wakes at least this often so that a stop request is seen promptly even
 // when its next release is far away (a 1 Hz background task).
 constexpr hal::Nanos kStopPollInterval_ns = hal::millis(50);
+// Real-time threads are created, pinned, raised and their stacks prefaulted before the first
+// release, so start-up is not counted as release jitter.
+constexpr hal::Nanos kStartupPhase_ns = hal::millis(20);
 
 std::mutex& warnings_mutex() {
   static std::mutex m;
@@ -195,7 +198,9 @@ void Scheduler::thread_main(std::size_t group_index) {
   if (options.realtime && group.priority > 0) {
     if (Status s = hal::set_current_thread_fifo(group.priority); !s) warn(s.error());
   }
-  if (options.prefault_stack_bytes > 0) hal::prefault_stack(options.prefault_stack_bytes);
+  if (options.prefault_stack_bytes > 0) {
+    if (Status s = hal::prefault_stack(options.prefault_stack_bytes); !s) warn(s.error());
+  }
 
   while (!stop_.load(std::memory_order_acquire)) {
     const hal::Nanos release = next_release(group);
@@ -207,7 +212,7 @@ void Scheduler::thread_main(std::size_t group_index) {
 
 Status Scheduler::start() {
   if (clock_.simulated()) return Error(Errc::invalid_argument, "scheduler: real-time start needs a real clock");
-  if (Status s = prepare(clock_.now()); !s) return s;
+  if (Status s = prepare(clock_.now() + kStartupPhase_ns); !s) return s;
   running_ = true;
   for (std::size_t g = 0; g < group_count_; ++g) groups_[g].thread = std::thread([this, g] { thread_main(g); });
   return Status::success();

@@ -50,7 +50,6 @@ TEST(HealthTask, ReportsAStalledTaskAndItsRecovery) {
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
   ASSERT_TRUE(rig.scheduler.add({"worker", 50'000, 10'000, 50, "io"}, worker));
   ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
-  ASSERT_TRUE(health.init(rig.arena));
 
   // Sample the report at every health run.
   std::uint64_t degraded_reports = 0, healthy_reports = 0;
@@ -60,6 +59,7 @@ TEST(HealthTask, ReportsAStalledTaskAndItsRecovery) {
     (s.value.ok ? healthy_reports : degraded_reports)++;
   });
   ASSERT_TRUE(rig.scheduler.add({"observer", 100'000, 1'000, 1, "background"}, observer));
+  ASSERT_TRUE(health.init(rig.arena));
   ASSERT_TRUE(rig.scheduler.run_lockstep(rig.clock, seconds(3)));
 
   Sample<HealthReport> last;

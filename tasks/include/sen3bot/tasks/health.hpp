@@ -35,6 +35,7 @@ class HealthTask final : public Task {
   const hal::Clock& clock_;
   HealthConfig config_;
   std::span<Previous> previous_;
+  std::size_t self_index_ = 0;  // a running health task is never stalled itself
 };
 
 }  // namespace sen3bot::tasks

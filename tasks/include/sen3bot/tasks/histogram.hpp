@@ -61,7 +61,7 @@ class LatencyHistogram {
 
   static constexpr std::size_t index_of(std::uint64_t v) noexcept {
     if (v < kSubBuckets) return static_cast<std::size_t>(v);
-    int exponent = std::bit_width(v) - 1;  // >= kSubBucketBits
+    const int exponent = static_cast<int>(std::bit_width(v)) - 1;  // >= kSubBucketBits
     if (exponent > kMaxExponent) return kBucketCount - 1;
     const int shift = exponent - kSubBucketBits;
     const std::uint64_t sub = (v >> shift) & (kSubBuckets - 1);

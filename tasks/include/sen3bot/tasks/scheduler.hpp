@@ -103,6 +103,12 @@ class Scheduler {
   [[nodiscard]] TaskStats stats(std::size_t index) const;
   [[nodiscard]] const TaskCounters& counters(std::size_t index) const { return slots_[index].counters; }
   [[nodiscard]] const TaskSpec& spec(std::size_t index) const { return slots_[index].spec; }
+  // The table index of a task added to this scheduler, or task_count() if it was not added.
+  [[nodiscard]] std::size_t index_of(const Task& task) const noexcept {
+    for (std::size_t i = 0; i < task_count_; ++i)
+      if (slots_[i].task == &task) return i;
+    return task_count_;
+  }
   [[nodiscard]] hal::Nanos start_time_ns() const noexcept { return start_ns_.load(std::memory_order_acquire); }
 
   [[nodiscard]] std::size_t warning_count() const noexcept { return warning_count_.load(std::memory_order_acquire); }

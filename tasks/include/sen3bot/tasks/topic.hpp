@@ -31,12 +31,10 @@ class Topic {
     const std::uint64_t seq = seq_.load(std::memory_order_relaxed);
     seq_.store(seq + 1, std::memory_order_relaxed);  // odd: write in progress
     std::atomic_thread_fence(std::memory_order_release);
-    Payload p{};
-    std::memcpy(&p.value, &value, sizeof(T));
-    p.stamp_ns = stamp_ns;
-    p.count = seq / 2 + 1;
     std::array<std::uint64_t, kWords> words{};
-    std::memcpy(words.data(), &p, sizeof(Payload));
+    std::memcpy(words.data(), &value, sizeof(T));
+    words[kValueWords] = static_cast<std::uint64_t>(stamp_ns);
+    words[kValueWords + 1] = seq / 2 + 1;
     for (std::size_t i = 0; i < kWords; ++i) words_[i].store(words[i], std::memory_order_relaxed);
     seq_.store(seq + 2, std::memory_order_release);
   }
@@ -52,11 +50,11 @@ class Topic {
       for (std::size_t i = 0; i < kWords; ++i) words[i] = words_[i].load(std::memory_order_relaxed);
       std::atomic_thread_fence(std::memory_order_acquire);
       if (seq_.load(std::memory_order_relaxed) != before) continue;
-      Payload p;
-      std::memcpy(&p, words.data(), sizeof(Payload));
-      std::memcpy(&out.value, &p.value, sizeof(T));
-      out.stamp_ns = p.stamp_ns;
-      out.sequence = p.count;
+      // T is trivially copyable (asserted above); the cast silences -Wclass-memaccess for
+      // types whose default constructor is not trivial.
+      std::memcpy(static_cast<void*>(&out.value), words.data(), sizeof(T));
+      out.stamp_ns = static_cast<hal::Nanos>(words[kValueWords]);
+      out.sequence = words[kValueWords + 1];
       return true;
     }
     return false;
@@ -65,12 +63,9 @@ class Topic {
   [[nodiscard]] std::uint64_t published() const noexcept { return seq_.load(std::memory_order_acquire) / 2; }
 
  private:
-  struct Payload {
-    T value;
-    hal::Nanos stamp_ns;
-    std::uint64_t count;
-  };
-  static constexpr std::size_t kWords = (sizeof(Payload) + 7) / 8;
+  // Layout over the words: the value, then the stamp, then the publish count.
+  static constexpr std::size_t kValueWords = (sizeof(T) + 7) / 8;
+  static constexpr std::size_t kWords = kValueWords + 2;
   static constexpr int kMaxAttempts = 64;
 
   std::atomic<std::uint64_t> seq_{0};

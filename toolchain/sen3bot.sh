@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# The two README commands.
+#   toolchain/sen3bot.sh mission   install what is missing, build, run the simulated robot
+#   toolchain/sen3bot.sh test      install what is missing, build, run every test suite:
+#                                  native (-Werror), ASan+UBSan, and aarch64 under qemu-user
+# Environment: SEN3BOT_SKIP_SANITIZE=1 / SEN3BOT_SKIP_CROSS=1 leave those suites out;
+# SEN3BOT_JOBS sets build parallelism (default: number of CPUs).
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+jobs=${SEN3BOT_JOBS:-$(nproc)}
+
+configure_and_build() {  # <build-dir> <cmake options...>
+  local dir=$1
+  shift
+  cmake -S . -B "$dir" -G Ninja -DSEN3BOT_WERROR=ON "$@" >/dev/null
+  cmake --build "$dir" -j "$jobs"
+}
+
+section() { printf '\n==== %s ====\n' "$*"; }
+
+case "${1:-}" in
+  mission)
+    section "installing missing packages"
+    toolchain/bootstrap.sh
+    section "building"
+    configure_and_build build
+    section "running the simulated robot"
+    exec build/firmware/sen3bot run --config config/sim.yaml
+    ;;
+  test)
+    start=$SECONDS
+    section "installing missing packages"
+    if [[ "${SEN3BOT_SKIP_CROSS:-0}" == 1 ]]; then toolchain/bootstrap.sh; else toolchain/bootstrap.sh --cross; fi
+    section "native build and tests"
+    configure_and_build build
+    ctest --test-dir build --output-on-failure -j "$jobs"
+    if [[ "${SEN3BOT_SKIP_SANITIZE:-0}" != 1 ]]; then
+      section "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+      configure_and_build build-sanitize -DSEN3BOT_SANITIZE=ON -DSEN3BOT_BENCH=OFF
+      ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+        ctest --test-dir build-sanitize --output-on-failure -j "$jobs"
+    fi
+    if [[ "${SEN3BOT_SKIP_CROSS:-0}" != 1 ]]; then
+      section "aarch64 cross build, tests under qemu-aarch64"
+      toolchain/cross-test.sh aarch64
+    fi
+    section "all suites passed in $((SECONDS - start)) s"
+    ;;
+  *)
+    echo "usage: $0 mission|test" >&2
+    exit 2
+    ;;
+esac
