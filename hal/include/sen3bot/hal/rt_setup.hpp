@@ -1,0 +1,57 @@
+#pragma once
+// Real-time process and thread set-up. Every step reports {ok | why not} and never aborts,
+// so the same binary runs on the robot's computer (capabilities granted) and on a laptop
+// or CI machine (warned, runs best-effort).
+#include <array>
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+#include "sen3bot/hal/result.hpp"
+
+namespace sen3bot::hal {
+
+// mlockall(MCL_CURRENT | MCL_FUTURE): no page faults to disk in the control loop.
+// Needs CAP_IPC_LOCK or an RLIMIT_MEMLOCK larger than the process.
+Status lock_memory();
+Status unlock_memory();  // munlockall, for tests and orderly shutdown
+
+// Touches bytes of the calling thread's stack now, so the first deep call in the loop does
+// not page-fault (effective together with lock_memory). Errc::invalid_argument if the
+// stack has less room than that.
+Status prefault_stack(std::size_t bytes);
+
+// SCHED_FIFO at priority (1..99) for the calling thread. Needs CAP_SYS_NICE or an
+// RLIMIT_RTPRIO of at least priority; the Error says so.
+Status set_current_thread_fifo(int priority);
+
+// Pins the calling thread to one CPU (0-based).
+Status set_current_thread_affinity(int cpu);
+
+struct RtSetupOptions {
+  bool lock_memory = true;
+  std::size_t prefault_stack_bytes = 256 * 1024;  // 0 skips the step
+  int fifo_priority = 0;                          // 0 keeps the normal scheduler
+  int cpu = -1;                                   // -1 keeps the current affinity
+};
+
+struct RtStepResult {
+  std::string_view step;  // "lock memory", "prefault stack", ...
+  bool attempted = false;
+  Status status;
+};
+
+struct RtSetupReport {
+  std::array<RtStepResult, 4> steps{};
+  [[nodiscard]] bool all_ok() const noexcept;
+};
+
+// Runs the requested steps for the calling thread, all of them even if one fails.
+RtSetupReport apply_rt_setup(const RtSetupOptions& options);
+
+// One line per step, for the start-up log:
+//   lock memory: ok
+//   SCHED_FIFO: FAILED (permission) SCHED_FIFO priority 80 not permitted (...)
+std::string describe(const RtSetupReport& report);
+
+}  // namespace sen3bot::hal

@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Installs, with apt-get, every Debian 12 (bookworm) package that building and testing Sen3Bot
+# needs. Idempotent: packages already installed are skipped (checked with dpkg-query), and apt
+# is not even started when nothing is missing, so a second run takes well under a second.
+#
+#   toolchain/bootstrap.sh [--cross] [--deploy] [--dry-run]
+#
+#   (none)     native build, tests, benchmarks, sanitizers and the optional libFuzzer build
+#   --cross    also the Raspberry Pi cross build: cross compilers, qemu-user, and the tools
+#              toolchain/sysroot.sh uses to assemble the arm64/armhf sysroot
+#   --deploy   also what toolchain/deploy.sh uses (ssh/scp, rsync)
+#   --dry-run  print what would be installed, install nothing
+#
+# Runs as root directly, or through sudo when started by another user. Non-interactive.
+# Later work adds its packages to the lists below (one per line, a comment saying who needs it).
+set -euo pipefail
+
+# --- Native build and tests ------------------------------------------------------------------
+NATIVE_PACKAGES=(
+  build-essential            # gcc/g++ 12, make, libc6-dev
+  g++
+  cmake                      # >= 3.25 (bookworm: 3.25.1)
+  ninja-build
+  pkgconf                    # pkg-config, for dependencies without CMake packages
+  libgtest-dev
+  libgmock-dev
+  libbenchmark-dev
+  libeigen3-dev
+  libyaml-cpp-dev
+  libopencv-core-dev
+  libopencv-imgproc-dev
+  libopencv-imgcodecs-dev
+  rt-tests                   # cyclictest, compared against by the jitter benchmark
+  clang                      # optional libFuzzer build (SEN3BOT_LIBFUZZER=ON)
+  libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14
+)
+
+# --- Raspberry Pi cross build (--cross) -------------------------------------------------------
+CROSS_PACKAGES=(
+  g++-aarch64-linux-gnu      # 64-bit Raspberry Pi OS (Pi 3/4/5)
+  g++-arm-linux-gnueabihf    # 32-bit Raspberry Pi OS
+  qemu-user                  # runs the cross-built tests (qemu-aarch64, qemu-arm)
+  apt                        # sysroot.sh: private apt (download only)
+  dpkg                       # sysroot.sh: dpkg-deb -x
+  debian-archive-keyring     # sysroot.sh: verifies the mirror's Release files
+  ca-certificates            # https mirrors
+  coreutils                  # sha256sum, realpath
+  findutils
+)
+
+# --- Deployment to the robot (--deploy) -------------------------------------------------------
+DEPLOY_PACKAGES=(
+  openssh-client             # ssh, scp
+  rsync
+)
+# ----------------------------------------------------------------------------------------------
+
+want_cross=0
+want_deploy=0
+dry_run=0
+for arg in "$@"; do
+  case "${arg}" in
+    --cross) want_cross=1 ;;
+    --deploy) want_deploy=1 ;;
+    --dry-run) dry_run=1 ;;
+    -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "bootstrap.sh: unknown argument '${arg}'" >&2; exit 2 ;;
+  esac
+done
+
+packages=("${NATIVE_PACKAGES[@]}")
+if [[ "${want_cross}" == 1 ]]; then packages+=("${CROSS_PACKAGES[@]}"); fi
+if [[ "${want_deploy}" == 1 ]]; then packages+=("${DEPLOY_PACKAGES[@]}"); fi
+
+if ! command -v dpkg-query >/dev/null || ! command -v apt-get >/dev/null; then
+  echo "bootstrap.sh: needs a Debian-based system (dpkg-query and apt-get)" >&2
+  exit 1
+fi
+
+# One dpkg-query call for the whole list; packages it does not know are reported on stderr.
+declare -A installed=()
+while IFS=' ' read -r name status; do
+  [[ "${status}" == installed ]] && installed["${name%%:*}"]=1
+done < <(dpkg-query -W -f='${Package} ${db:Status-Status}\n' "${packages[@]}" 2>/dev/null || true)
+
+missing=()
+for pkg in "${packages[@]}"; do
+  [[ -n "${installed[${pkg}]:-}" ]] || missing+=("${pkg}")
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "bootstrap: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+echo "bootstrap: installing ${#missing[@]} package(s): ${missing[*]}"
+if [[ "${dry_run}" == 1 ]]; then
+  exit 0
+fi
+
+as_root=()
+if [[ "$(id -u)" != 0 ]]; then
+  if command -v sudo >/dev/null; then
+    as_root=(sudo)
+  else
+    echo "bootstrap.sh: not root and no sudo; run it as root" >&2
+    exit 1
+  fi
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+"${as_root[@]}" apt-get update -q
+"${as_root[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q \
+  --no-install-recommends "${missing[@]}"
+echo "bootstrap: installed ${missing[*]}"
