@@ -202,11 +202,16 @@ Result<FirmwareConfig> parse_config(std::string_view yaml_text, const std::strin
 }
 
 Result<FirmwareConfig> load_config(const std::string& path) {
-  std::ifstream in(path);
+  // A configuration is a few kilobytes; anything far larger is the wrong file.
+  constexpr std::size_t kMaxConfigBytes = 1 << 20;
+  std::ifstream in(path, std::ios::binary);
   if (!in) return Error::format(Errc::not_found, "%s: cannot open the configuration file", path.c_str());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_config(text.str(), path);
+  std::string text(kMaxConfigBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxConfigBytes)
+    return Error::format(Errc::config, "%s: larger than %zu bytes; not a configuration file", path.c_str(), kMaxConfigBytes);
+  return parse_config(text, path);
 }
 
 }  // namespace sen3bot::firmware

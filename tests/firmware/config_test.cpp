@@ -116,3 +116,25 @@ TEST(Config, AMissingFileSaysSo) {
 
 }  // namespace
 }  // namespace sen3bot::firmware
+
+namespace sen3bot::firmware {
+namespace {
+
+TEST(Config, HostileFilesAreRejectedWithoutCrashing) {
+  const std::string nested(5000, '[');
+  EXPECT_FALSE(parse_config(nested, "deep.yaml"));
+  const std::string path = ::testing::TempDir() + "/huge.yaml";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    const std::string line = "# padding padding padding padding padding padding padding padding\n";
+    for (int i = 0; i < 20'000; ++i) std::fputs(line.c_str(), f);
+    std::fclose(f);
+  }
+  Result<FirmwareConfig> r = load_config(path);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message().find("not a configuration file"), std::string_view::npos) << r.error().c_str();
+}
+
+}  // namespace
+}  // namespace sen3bot::firmware

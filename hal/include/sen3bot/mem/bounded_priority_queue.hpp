@@ -1,7 +1,8 @@
 #pragma once
 // BoundedPriorityQueue<T, N, Compare>: std::priority_queue semantics (top() is the greatest
 // element under Compare, so std::less gives a max-queue) over inline storage for N elements.
-// push() returns false when full. Never allocates; Compare must not throw.
+// push() returns false when full. Never allocates; T's copy/move and Compare must not throw
+// (the operations are noexcept).
 //
 // For a min-queue over integer keys with decrease-key (an A* open list), use BoundedIndexHeap.
 #include <algorithm>
