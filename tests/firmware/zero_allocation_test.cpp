@@ -5,7 +5,7 @@
 
 #include <cstdio>
 
-#include "allocation_counter.hpp"
+#include "alloc_counter.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "task_table.hpp"
@@ -38,13 +38,14 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   for (const auto& row : kTaskTable) longest_period_us = std::max(longest_period_us, row.period_us);
   const hal::Nanos window = hal::micros(longest_period_us) * static_cast<hal::Nanos>(kSteadyStateTicks);
 
-  testing::AllocationCounter::arm();
+  mem::testing::AllocationScope scope;
   const Status ran = scheduler.run_lockstep(clock, window);
-  testing::AllocationCounter::disarm();
+  const std::uint64_t allocations = scope.allocations();
+  const std::uint64_t malloc_calls = scope.malloc_calls();
   ASSERT_TRUE(ran);
 
-  EXPECT_EQ(testing::AllocationCounter::count(), 0u)
-      << "steady state allocated (malloc counted: " << testing::AllocationCounter::counts_malloc() << ")";
+  EXPECT_EQ(allocations, 0u) << "operator new called in steady state";
+  EXPECT_EQ(malloc_calls, 0u) << "malloc called in steady state";
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) {
     const tasks::TaskStats s = scheduler.stats(i);
     EXPECT_GE(s.runs - runs_before[i], kSteadyStateTicks) << s.name;
@@ -54,22 +55,20 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
 }
 
 TEST(ZeroAllocation, TheCounterSeesAllocations) {
-  // Guards the guard: if the replacement operators were not linked in, the test above would
+  // Guards the guard: if the replacement functions were not linked in, the test above would
   // pass vacuously.
-  testing::AllocationCounter::arm();
+  mem::testing::AllocationScope scope;
   auto* p = new int(7);
   std::vector<int> v(100);
-  asm volatile("" : : "g"(p), "g"(v.data()) : "memory");  // keep both allocations
-  testing::AllocationCounter::disarm();
+  void* raw = std::malloc(64);
+  asm volatile("" : : "g"(p), "g"(v.data()), "g"(raw) : "memory");  // keep all three
+  const std::uint64_t allocations = scope.allocations();
+  const std::uint64_t malloc_calls = scope.malloc_calls();
   delete p;
-  EXPECT_GE(testing::AllocationCounter::count(), 2u);
-  if (testing::AllocationCounter::counts_malloc()) {
-    testing::AllocationCounter::arm();
-    void* raw = std::malloc(64);
-    asm volatile("" : : "g"(raw) : "memory");
-    testing::AllocationCounter::disarm();
-    std::free(raw);
-    EXPECT_EQ(testing::AllocationCounter::count(), 1u);
+  std::free(raw);
+  EXPECT_EQ(allocations, 2u);
+  if (mem::testing::counts_malloc()) {
+    EXPECT_EQ(malloc_calls, 3u);
   }
 }
 

@@ -1,6 +1,6 @@
 // The firmware rule: memory is taken at start-up, steady state allocates nothing. These tests
 // run each container's steady-state operations many times under a counting global operator new
-// (support/alloc_counter.cpp) and require zero calls. A positive control proves the counter sees
+// (tests/support/alloc_counter.cpp) and require zero calls. A positive control proves the counter sees
 // allocations at all.
 #include <gtest/gtest.h>
 

@@ -1,7 +1,8 @@
 #pragma once
-// Counts calls to the global operator new/delete, to prove that code allocates nothing in
-// steady state. Link the sen3bot_alloc_counter object library into a test executable: it
-// replaces every form of global operator new/delete with malloc-based ones that count.
+// Counts calls to the global operator new/delete and (outside sanitizer builds, whose runtime
+// owns malloc) to malloc, calloc, realloc, aligned_alloc, memalign and posix_memalign, to prove
+// that code allocates nothing in steady state. Link the sen3bot_alloc_counter object library
+// into a test executable: it replaces those functions with counting ones.
 //
 //   AllocationScope scope;
 //   for (int i = 0; i < 10'000; ++i) task.step();
@@ -17,7 +18,11 @@ struct AllocationStats {
   std::uint64_t allocations = 0;    // calls to any operator new / new[]
   std::uint64_t deallocations = 0;  // calls to any operator delete / delete[] with a non-null pointer
   std::uint64_t bytes = 0;          // bytes requested from operator new
+  std::uint64_t malloc_calls = 0;   // C allocation calls, including those behind operator new
 };
+
+// False in sanitizer builds: there only operator new is counted.
+bool counts_malloc() noexcept;
 
 // Totals since the process started.
 AllocationStats allocation_stats() noexcept;
@@ -33,6 +38,9 @@ class AllocationScope {
     return allocation_stats().deallocations - start_.deallocations;
   }
   [[nodiscard]] std::uint64_t bytes() const noexcept { return allocation_stats().bytes - start_.bytes; }
+  [[nodiscard]] std::uint64_t malloc_calls() const noexcept {
+    return allocation_stats().malloc_calls - start_.malloc_calls;
+  }
 
  private:
   AllocationStats start_;
