@@ -58,8 +58,8 @@ if [[ ${#missing[@]} -gt 0 ]]; then
   echo "cross-test.sh: missing ${missing[*]}; run: toolchain/bootstrap.sh --cross" >&2
   exit 1
 fi
-generator=()
-if command -v ninja >/dev/null; then generator=(-G Ninja); fi
+generator=()   # an existing build directory keeps its generator
+if [[ ! -f "${build_dir}/CMakeCache.txt" ]] && command -v ninja >/dev/null; then generator=(-G Ninja); fi
 
 phase_start=${SECONDS}
 timings=()

@@ -5,7 +5,7 @@
 #
 # The sysroot is a plain directory of unpacked Debian arm64 (or armhf) packages: the libraries
 # the firmware and its tests link against (yaml-cpp, GoogleTest/GoogleMock, Google Benchmark,
-# Eigen, OpenCV core/imgproc) and their whole runtime dependency closure, including libc6 and
+# Eigen, OpenCV core/imgproc/imgcodecs) and their whole dependency closure, including libc6 and
 # its dynamic loader so qemu-user can run the test binaries (qemu -L <sysroot>).
 #
 # Why a separate directory and not `dpkg --add-architecture arm64; apt install foo:arm64`:
@@ -63,7 +63,7 @@ for arg in "$@"; do
     armhf|arm) arch=armhf ;;
     --force) force=1 ;;
     --print-dir) print_dir=1 ;;
-    -h|--help) sed -n '2,32p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,31p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "sysroot.sh: unknown argument '${arg}'" >&2; exit 2 ;;
   esac
 done

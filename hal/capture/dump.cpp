@@ -16,8 +16,13 @@ void print_wall_time(std::FILE* out, std::int64_t wall_ns) {
     std::fputs("unknown", out);
     return;
   }
-  const std::int64_t seconds = wall_ns / hal::kNanosPerSecond - (wall_ns % hal::kNanosPerSecond < 0 ? 1 : 0);
-  const std::int64_t fraction_ns = wall_ns - seconds * hal::kNanosPerSecond;
+  // Floor division without multiplying back: any i64 from a hostile file must not overflow.
+  std::int64_t seconds = wall_ns / hal::kNanosPerSecond;
+  std::int64_t fraction_ns = wall_ns % hal::kNanosPerSecond;
+  if (fraction_ns < 0) {
+    fraction_ns += hal::kNanosPerSecond;
+    seconds -= 1;
+  }
   const std::time_t t = static_cast<std::time_t>(seconds);
   std::tm utc{};
   char text[32];

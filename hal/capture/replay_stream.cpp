@@ -1,8 +1,20 @@
 #include "sen3bot/capture/replay_stream.hpp"
 
+#include <cstdint>
 #include <cstring>
 
 namespace sen3bot::capture {
+
+namespace {
+
+// Record times come from a file; a time near INT64_MAX must saturate, not overflow.
+hal::Nanos due_time(hal::Nanos start_ns, hal::Nanos t_ns) noexcept {
+  hal::Nanos due_ns = 0;
+  if (__builtin_add_overflow(start_ns, t_ns, &due_ns)) return t_ns > 0 ? INT64_MAX : INT64_MIN;
+  return due_ns;
+}
+
+}  // namespace
 
 ReplayStream::ReplayStream(const CaptureFile& capture, std::uint8_t channel, hal::Clock& clock, ReplayTiming timing)
     : clock_(clock), timing_(timing), replay_start_ns_(clock.now()) {
@@ -33,14 +45,14 @@ ReplayStream::ReplayStream(const CaptureFile& capture, std::uint8_t channel, hal
 
 std::optional<hal::Nanos> ReplayStream::next_due_ns() const noexcept {
   if (finished()) return std::nullopt;
-  return replay_start_ns_ + chunks_[next_chunk_].t_ns;
+  return due_time(replay_start_ns_, chunks_[next_chunk_].t_ns);
 }
 
 Result<std::size_t> ReplayStream::read(std::span<std::uint8_t> out) {
   if (finished()) return Error(Errc::disconnected, "replay finished");
   if (out.empty()) return std::size_t{0};
   const Chunk& chunk = chunks_[next_chunk_];
-  const hal::Nanos due_ns = replay_start_ns_ + chunk.t_ns;
+  const hal::Nanos due_ns = due_time(replay_start_ns_, chunk.t_ns);
   if (clock_.now() < due_ns) {
     if (timing_ == ReplayTiming::original) return std::size_t{0};
     if (clock_.simulated()) clock_.sleep_until(due_ns);  // a SimClock jumps; never blocks

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <vector>
 
@@ -102,8 +103,10 @@ bool CaptureWriter::append(hal::Nanos now_ns, std::uint8_t channel, RecordKind k
     rejected_records_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
-  // Time never goes backwards in a file, whatever the caller passes.
-  hal::Nanos t_ns = now_ns - start_monotonic_ns_;
+  // Time never goes backwards in a file and never precedes the start, whatever the caller passes.
+  hal::Nanos t_ns = 0;
+  if (__builtin_sub_overflow(now_ns, start_monotonic_ns_, &t_ns)) t_ns = now_ns < 0 ? 0 : INT64_MAX;
+  if (t_ns < 0) t_ns = 0;
   const hal::Nanos last_t_ns = last_t_ns_.load(std::memory_order_relaxed);
   if (t_ns < last_t_ns) t_ns = last_t_ns;
 

@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -85,6 +86,19 @@ TEST(CaptureDump, MalformedOrMissingFilePrintsNothing) {
   status = dump(std::filesystem::path("/nonexistent.s3bcap"), stdout);
   ASSERT_FALSE(status);
   EXPECT_EQ(status.error().code(), Errc::not_found);
+}
+
+TEST(CaptureDump, ExtremeTimesDoNotOverflow) {
+  CaptureInfo info = test::two_channel_info();
+  info.start_wall_ns = INT64_MIN;  // found by the fuzzer: floor division used to overflow
+  info.start_monotonic_ns = INT64_MIN;
+  test::FileBuilder b;
+  b.header(info).rx(INT64_MAX, 0, Bytes{1});
+  auto file = CaptureFile::parse(b.bytes());
+  ASSERT_TRUE(file) << file.error().c_str();
+  const std::string text = capture_output([&](std::FILE* out) { ASSERT_TRUE(dump(*file, out)); });
+  EXPECT_THAT(text, HasSubstr("9223372036.854775807"));
+  EXPECT_THAT(text, HasSubstr("-9223372036.854775808 s"));
 }
 
 TEST(CaptureDump, DumpsTheCheckedInCapture) {

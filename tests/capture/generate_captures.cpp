@@ -5,6 +5,7 @@
 //
 // usage: capture_generate --data-dir tests/data [--no-pty]
 //   --no-pty keeps the existing loopback_session.s3bcap (its timing differs on every run).
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -49,6 +50,10 @@ void write_corpus(const std::filesystem::path& dir, const std::filesystem::path&
     many.channels.push_back({static_cast<std::uint8_t>(i * 7), std::string(kMaxChannelNameBytes, static_cast<char>('A' + i % 26)), 115200});
   save("valid_max_channels.s3bcap", FileBuilder().header(many).rx(0, 217, Bytes{0xFF}).bytes());
   save("valid_synthetic_session.s3bcap", test::read_bytes(synthetic));
+  CaptureInfo extreme = info;
+  extreme.start_wall_ns = INT64_MIN;
+  extreme.start_monotonic_ns = INT64_MAX;
+  save("valid_extreme_times.s3bcap", FileBuilder().header(extreme).rx(0, 0, Bytes{1}).rx(INT64_MAX, 0, Bytes{2}).bytes());
 
   // Invalid inputs, one defect each.
   Bytes b = FileBuilder().header(info).bytes();

@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <chrono>
 #include <thread>
 
@@ -228,6 +229,18 @@ TEST(ReplayStream, AsFastAsPossibleOnARealClockIgnoresTimestamps) {
   hal::PosixClock clock;
   ReplayStream replay(capture, 0, clock, ReplayTiming::as_fast_as_possible);
   EXPECT_EQ(read_now(replay, 8), (Bytes{9, 9}));
+}
+
+TEST(ReplayStream, RecordTimesNearTheLimitSaturate) {
+  test::FileBuilder b;
+  b.header(test::two_channel_info()).rx(INT64_MAX - 1, 0, Bytes{7});
+  const CaptureFile capture = parse_ok(b.bytes());
+  hal::SimClock clock(hal::seconds(5));
+  ReplayStream replay(capture, 0, clock, ReplayTiming::original);
+  EXPECT_EQ(replay.next_due_ns(), INT64_MAX);
+  EXPECT_TRUE(read_now(replay, 8).empty());
+  clock.advance_to(INT64_MAX);
+  EXPECT_EQ(read_now(replay, 8), Bytes{7});
 }
 
 TEST(ReplayStream, ChannelWithoutRxIsFinishedAtOnce) {

@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <atomic>
 #include <thread>
 
@@ -117,12 +118,14 @@ TEST(CaptureWriter, TimesAreRelativeToStartAndNeverDecrease) {
   EXPECT_TRUE(writer.record(t0 - 5, 0, Direction::rx, Bytes{1}));             // before the start
   EXPECT_TRUE(writer.record(t0 + hal::millis(5), 0, Direction::rx, Bytes{2}));
   EXPECT_TRUE(writer.record(t0 + hal::millis(3), 1, Direction::rx, Bytes{3}));  // a caller's clock went back
+  EXPECT_TRUE(writer.record(INT64_MIN, 1, Direction::rx, Bytes{4}));  // now - start would overflow
   ASSERT_TRUE(writer.close());
   const CaptureFile file = load_ok(path);
-  ASSERT_EQ(file.records().size(), 4u);
+  ASSERT_EQ(file.records().size(), 5u);
   EXPECT_EQ(file.records()[0].t_ns, 0);
   EXPECT_EQ(file.records()[1].t_ns, hal::millis(5));
   EXPECT_EQ(file.records()[2].t_ns, hal::millis(5));
+  EXPECT_EQ(file.records()[3].t_ns, hal::millis(5));
 }
 
 TEST(CaptureWriter, SplitsPayloadsLargerThanTheBound) {

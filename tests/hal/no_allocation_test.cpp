@@ -1,5 +1,5 @@
 // The steady-state I/O paths allocate nothing: read/write, poll, send/receive, including
-// the error values they return. Counted with the global operator new from tests/mem.
+// the error values they return. Counted with the shared allocator from tests/support.
 #include <gtest/gtest.h>
 #include <poll.h>
 
