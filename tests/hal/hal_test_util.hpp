@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdlib>
 // Helpers for the HAL tests: bounded waits over non-blocking ByteStreams.
 #include <poll.h>
 
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "sen3bot/hal/byte_stream.hpp"
+#include "sen3bot/hal/serial.hpp"
 
 namespace sen3bot::hal::testing {
 
@@ -65,5 +67,13 @@ inline std::vector<std::uint8_t> every_byte_value() {
 }
 
 inline bool contains(std::string_view text, std::string_view part) { return text.find(part) != std::string_view::npos; }
+
+
+// qemu-user 7.2 (the cross suite's runtime) translates termios rates only up to 460800 and has
+// no TCGETS2/TCSETS2, so higher and non-standard rates cannot be exercised under it. The
+// cross toolchain files set SEN3BOT_QEMU_USER for test programs run through qemu.
+inline bool runtime_translates_baud(std::uint32_t baud) {
+  return std::getenv("SEN3BOT_QEMU_USER") == nullptr || (sen3bot::hal::is_standard_baud(baud) && baud <= 460800);
+}
 
 }  // namespace sen3bot::hal::testing

@@ -104,6 +104,7 @@ TEST(HalSerial, SetBaudAtRuntimeIsSeenByTheMaster) {
   ASSERT_TRUE(port.ok()) << port.error().c_str();
   // A baud probe as the LMS200 drivers do it, including a BOTHER rate and back.
   for (const std::uint32_t baud : {19200U, 38400U, 500000U, 250000U, 9600U}) {
+    if (!testing::runtime_translates_baud(baud)) continue;
     Status changed = (*port)->set_baud(baud);
     ASSERT_TRUE(changed.ok()) << changed.error().c_str();
     EXPECT_EQ(*(*port)->baud(), baud);
@@ -121,6 +122,7 @@ TEST(HalSerial, EveryStandardRateIsAccepted) {
   Result<std::unique_ptr<SerialPort>> port = SerialPort::open(device->slave_path(), 9600);
   ASSERT_TRUE(port.ok());
   for (const std::uint32_t baud : standard_baud_rates()) {
+    if (!testing::runtime_translates_baud(baud)) continue;
     Status changed = (*port)->set_baud(baud);
     EXPECT_TRUE(changed.ok()) << baud << ": " << changed.error().c_str();
     EXPECT_EQ(*device->slave_baud(), baud);
@@ -187,6 +189,7 @@ TEST(HalSerial, ReopenOnTheSamePathKeepsWorking) {
   ASSERT_TRUE(device);
   Result<std::unique_ptr<SerialPort>> port = SerialPort::open(device->slave_path(), 38400);
   ASSERT_TRUE(port.ok());
+  if (!testing::runtime_translates_baud(500000)) GTEST_SKIP() << "qemu-user cannot translate 500000 baud";
   ASSERT_TRUE((*port)->set_baud(500000).ok());
   Status reopened = (*port)->reopen();
   ASSERT_TRUE(reopened.ok()) << reopened.error().c_str();
