@@ -9,7 +9,9 @@ if(SEN3BOT_WERROR)
 endif()
 if(SEN3BOT_SANITIZE)
   target_compile_options(sen3bot_options INTERFACE
-    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+    # GCC 12 reports false maybe-uninitialized warnings in sanitizer-instrumented code.
+    -Wno-maybe-uninitialized)
   target_link_options(sen3bot_options INTERFACE -fsanitize=address,undefined)
   target_compile_definitions(sen3bot_options INTERFACE SEN3BOT_SANITIZED=1)
 endif()
