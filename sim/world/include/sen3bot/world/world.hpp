@@ -1,0 +1,97 @@
+#pragma once
+// The simulated ground truth: the static map plus scripted moving obstacles (boxes, people)
+// that walk polylines. Everything is a pure function of (map, scripts, seed, time), so a
+// lockstep run is reproducible bit for bit.
+//
+// The laser emulator adapts to scan(): ranges for a sensor pose, angle_min, increment, count
+// and max range. Ray casting walks the grid cell by cell (exact boundary crossings) and
+// intersects movers analytically.
+#include <cstdint>
+#include <random>
+#include <span>
+#include <vector>
+
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/map.hpp"
+
+namespace sen3bot::world {
+
+using nav::Footprint;
+using nav::Point2D;
+using nav::Pose2D;
+
+enum class MoverShape : std::uint8_t { circle, square };
+
+// One scripted obstacle. With one vertex (or speed 0) it stands still. Otherwise it walks
+// the polyline at speed_mps from start_time_s on, back and forth (ping-pong) or around
+// (loop, closing the last vertex to the first).
+struct MoverScript {
+  std::vector<Point2D> path;
+  double speed_mps = 0.0;
+  double size_m = 0.4;      // circle diameter or square side
+  MoverShape shape = MoverShape::circle;
+  bool loop = false;
+  double start_time_s = 0.0;   // before this it waits at the first vertex
+  double appear_time_s = 0.0;  // invisible (not hit by rays, no collisions) before this
+  bool person = false;
+};
+
+struct WorldConfig {
+  int occupied_threshold = 50;  // map cells with occupancy >= this are solid (unknown is free)
+  double range_noise_sigma_m = 0.0;  // Gaussian range noise added by noisy_scan()
+  std::uint64_t seed = 1;
+};
+
+class World {
+ public:
+  World(const nav::OccupancyMap& map, WorldConfig config = {});
+
+  [[nodiscard]] const nav::OccupancyMap& map() const noexcept { return map_; }
+  std::size_t add_mover(const MoverScript& script);
+  [[nodiscard]] std::size_t mover_count() const noexcept { return movers_.size(); }
+
+  // Moves every scripted obstacle to its place at time_s.
+  void set_time(double time_s) noexcept;
+  [[nodiscard]] double time_s() const noexcept { return time_s_; }
+  // Current centre of a mover (for tests and reports); visible() says whether it exists yet.
+  [[nodiscard]] Point2D mover_position(std::size_t index) const noexcept { return movers_[index].position; }
+  [[nodiscard]] bool mover_visible(std::size_t index) const noexcept { return movers_[index].visible; }
+
+  // Distance along the ray to the first solid thing, or max_range_m if none is nearer.
+  [[nodiscard]] double cast_ray(double x_m, double y_m, double angle_rad, double max_range_m) const noexcept;
+
+  // Noise-free ranges of a planar scanner at `sensor` (map frame): beam i points at
+  // sensor.theta + angle_min + i * increment. Writes min(count, ranges.size()) values.
+  void scan(const Pose2D& sensor, double angle_min_rad, double increment_rad, std::size_t count,
+            double max_range_m, std::span<float> ranges_m) const noexcept;
+  // The same with the configured Gaussian range noise from the world's seeded generator
+  // (deterministic for a given sequence of calls).
+  void noisy_scan(const Pose2D& sensor, double angle_min_rad, double increment_rad, std::size_t count,
+                  double max_range_m, std::span<float> ranges_m) noexcept;
+
+  // True when the footprint at `pose` overlaps a solid map cell, a visible mover or leaves the map.
+  [[nodiscard]] bool collides(const Pose2D& pose, const Footprint& footprint) const noexcept;
+  // Distance from the footprint at `pose` to the nearest visible mover or solid cell centre,
+  // searched up to limit_m (returns limit_m when nothing is nearer).
+  [[nodiscard]] double clearance_m(const Pose2D& pose, const Footprint& footprint, double limit_m) const noexcept;
+
+ private:
+  struct Mover {
+    MoverScript script;
+    std::vector<double> cumulative_m;  // arc length at each vertex (loop: closing edge appended)
+    Point2D position;
+    bool visible = true;
+  };
+
+  [[nodiscard]] bool solid(int col, int row) const noexcept;
+  [[nodiscard]] double ray_to_map(double x_m, double y_m, double dx, double dy, double max_range_m) const noexcept;
+  static Point2D position_at(const Mover& mover, double time_s) noexcept;
+
+  nav::OccupancyMap map_;
+  WorldConfig config_;
+  std::vector<Mover> movers_;
+  double time_s_ = 0.0;
+  std::mt19937_64 rng_;
+};
+
+}  // namespace sen3bot::world

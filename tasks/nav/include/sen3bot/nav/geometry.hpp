@@ -1,0 +1,79 @@
+#pragma once
+// Small geometry shared by the navigation pieces and the simulated world: poses in the map
+// frame and the robot footprint. All trivially copyable so they can travel on topics.
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+
+namespace sen3bot::nav {
+
+struct Pose2D {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double theta_rad = 0.0;
+};
+
+struct Point2D {
+  double x_m = 0.0;
+  double y_m = 0.0;
+};
+
+inline double normalize_angle(double a_rad) noexcept {
+  a_rad = std::fmod(a_rad + std::numbers::pi, 2.0 * std::numbers::pi);
+  if (a_rad < 0.0) a_rad += 2.0 * std::numbers::pi;
+  return a_rad - std::numbers::pi;
+}
+
+// The robot outline in the robot frame (x forward, y left): a convex polygon of up to
+// kMaxVertices corners, or a circle when vertex_count is 0.
+struct Footprint {
+  static constexpr std::size_t kMaxVertices = 16;
+  std::array<Point2D, kMaxVertices> vertices{};
+  std::size_t vertex_count = 0;
+  double circle_radius_m = 0.0;  // used when vertex_count == 0
+
+  static Footprint circle(double radius_m) noexcept {
+    Footprint f;
+    f.circle_radius_m = radius_m;
+    return f;
+  }
+  static Footprint rectangle(double length_m, double width_m) noexcept {
+    Footprint f;
+    const double hx = length_m / 2.0;
+    const double hy = width_m / 2.0;
+    f.vertices[0] = {hx, hy};
+    f.vertices[1] = {-hx, hy};
+    f.vertices[2] = {-hx, -hy};
+    f.vertices[3] = {hx, -hy};
+    f.vertex_count = 4;
+    return f;
+  }
+  // Pioneer 3-DX body (navigation.md): 0.455 m long, 0.381 m wide, centred on the axle.
+  static Footprint pioneer() noexcept { return rectangle(0.455, 0.381); }
+
+  // Distance from the centre to the nearest edge (the inscribed radius).
+  [[nodiscard]] double inscribed_radius_m() const noexcept {
+    if (vertex_count == 0) return circle_radius_m;
+    double r = 1e300;
+    for (std::size_t i = 0; i < vertex_count; ++i) {
+      const Point2D a = vertices[i];
+      const Point2D b = vertices[(i + 1) % vertex_count];
+      const double ex = b.x_m - a.x_m;
+      const double ey = b.y_m - a.y_m;
+      const double len = std::hypot(ex, ey);
+      if (len <= 0.0) continue;
+      r = std::min(r, std::abs(ex * a.y_m - ey * a.x_m) / len);
+    }
+    return r;
+  }
+  // Distance from the centre to the farthest corner (the circumscribed radius).
+  [[nodiscard]] double circumscribed_radius_m() const noexcept {
+    if (vertex_count == 0) return circle_radius_m;
+    double r = 0.0;
+    for (std::size_t i = 0; i < vertex_count; ++i) r = std::max(r, std::hypot(vertices[i].x_m, vertices[i].y_m));
+    return r;
+  }
+};
+
+}  // namespace sen3bot::nav

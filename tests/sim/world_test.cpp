@@ -1,0 +1,113 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "sen3bot/world/world.hpp"
+
+namespace sen3bot::world {
+namespace {
+
+// 4 x 4 m room at 0.05 m with one-cell walls on every side.
+nav::OccupancyMap room() {
+  nav::OccupancyMap m(80, 80, 0.05, 0.0, 0.0);
+  for (int i = 0; i < 80; ++i) {
+    m.set(i, 0, 100);
+    m.set(i, 79, 100);
+    m.set(0, i, 100);
+    m.set(79, i, 100);
+  }
+  return m;
+}
+
+TEST(World, RaysHitWallsAtExactDistances) {
+  const World w(room());
+  EXPECT_NEAR(w.cast_ray(2.0, 2.0, 0.0, 10.0), 1.95, 1e-9);          // wall cell starts at 3.95
+  EXPECT_NEAR(w.cast_ray(2.0, 2.0, M_PI, 10.0), 1.95, 1e-9);         // wall cell ends at 0.05
+  EXPECT_NEAR(w.cast_ray(2.0, 2.0, M_PI / 2.0, 10.0), 1.95, 1e-9);
+  EXPECT_NEAR(w.cast_ray(2.0, 2.0, M_PI / 4.0, 10.0), 1.95 * std::sqrt(2.0), 1e-9);
+  EXPECT_DOUBLE_EQ(w.cast_ray(2.0, 2.0, 0.0, 1.0), 1.0);  // max range when nothing nearer
+}
+
+TEST(World, RotatedMapOriginIsHonoured) {
+  nav::OccupancyMap m(40, 40, 0.05, 2.0, 0.0, M_PI / 2.0);  // grid +x is map +y
+  for (int r = 0; r < 40; ++r) m.set(30, r, 100);              // a wall at map y in [1.5, 1.55)
+  const World w(m);
+  EXPECT_NEAR(w.cast_ray(1.0, 0.5, M_PI / 2.0, 5.0), 1.0, 1e-9);
+}
+
+TEST(World, MoversWalkPolylinesDeterministically) {
+  World w(room());
+  MoverScript person;
+  person.path = {{1.0, 1.0}, {3.0, 1.0}};
+  person.speed_mps = 0.5;
+  person.person = true;
+  const auto id = w.add_mover(person);
+  w.set_time(2.0);
+  EXPECT_NEAR(w.mover_position(id).x_m, 2.0, 1e-12);
+  w.set_time(5.0);  // 2.5 m walked: at the end and 0.5 m back
+  EXPECT_NEAR(w.mover_position(id).x_m, 2.5, 1e-12);
+  MoverScript loop = person;
+  loop.path = {{1.0, 1.0}, {2.0, 1.0}, {2.0, 2.0}};
+  loop.loop = true;
+  loop.speed_mps = 1.0;
+  const auto id2 = w.add_mover(loop);
+  w.set_time(2.0 + std::sqrt(2.0) + 0.25);  // once round plus 0.25 m
+  EXPECT_NEAR(w.mover_position(id2).x_m, 1.25, 1e-9);
+  EXPECT_NEAR(w.mover_position(id2).y_m, 1.0, 1e-9);
+}
+
+TEST(World, ScanSeesMoversOnlyOnceVisible) {
+  World w(room());
+  MoverScript box;
+  box.path = {{3.0, 2.0}};
+  box.size_m = 0.2;
+  box.shape = MoverShape::square;
+  box.appear_time_s = 1.0;
+  w.add_mover(box);
+  std::vector<float> ranges(181);
+  const Pose2D sensor{2.0, 2.0, 0.0};
+  w.scan(sensor, -M_PI / 2.0, M_PI / 180.0, 181, 8.0, ranges);
+  EXPECT_NEAR(ranges[90], 1.95, 1e-6);
+  w.set_time(1.0);
+  w.scan(sensor, -M_PI / 2.0, M_PI / 180.0, 181, 8.0, ranges);
+  EXPECT_NEAR(ranges[90], 0.9, 1e-6);
+  EXPECT_NEAR(ranges[0], 1.95, 1e-6);
+}
+
+TEST(World, NoisyScanIsSeeded) {
+  WorldConfig cfg;
+  cfg.range_noise_sigma_m = 0.01;
+  cfg.seed = 7;
+  World a(room(), cfg);
+  World b(room(), cfg);
+  std::vector<float> ra(50);
+  std::vector<float> rb(50);
+  a.noisy_scan({2.0, 2.0, 0.3}, -1.0, 0.04, 50, 8.0, ra);
+  b.noisy_scan({2.0, 2.0, 0.3}, -1.0, 0.04, 50, 8.0, rb);
+  EXPECT_EQ(ra, rb);
+  const World clean(room());
+  std::vector<float> rc(50);
+  clean.scan({2.0, 2.0, 0.3}, -1.0, 0.04, 50, 8.0, rc);
+  EXPECT_NE(ra, rc);
+}
+
+TEST(World, FootprintCollisions) {
+  World w(room());
+  const auto pioneer = nav::Footprint::pioneer();
+  EXPECT_FALSE(w.collides({2.0, 2.0, 0.0}, pioneer));
+  EXPECT_FALSE(w.collides({0.3, 2.0, 0.0}, pioneer));  // 0.2275 m half length, wall ends at 0.05
+  EXPECT_TRUE(w.collides({0.25, 2.0, 0.0}, pioneer));
+  EXPECT_FALSE(w.collides({0.25, 2.0, M_PI / 2.0}, pioneer));  // turned: half width 0.19 m
+  EXPECT_TRUE(w.collides({0.2, 2.0, 0.0}, nav::Footprint::circle(0.26)));
+  MoverScript person;
+  person.path = {{2.6, 2.0}};
+  person.size_m = 0.4;
+  w.add_mover(person);
+  EXPECT_TRUE(w.collides({2.2, 2.0, 0.0}, pioneer));
+  EXPECT_FALSE(w.collides({1.8, 2.0, 0.0}, pioneer));
+  EXPECT_NEAR(w.clearance_m({1.8, 2.0, 0.0}, pioneer, 2.0), 2.6 - 0.2 - (1.8 + 0.2275), 1e-9);
+}
+
+}  // namespace
+}  // namespace sen3bot::world
