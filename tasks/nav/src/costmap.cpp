@@ -1,0 +1,357 @@
+#include "sen3bot/nav/costmap.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "sen3bot/nav/arena.hpp"
+
+namespace sen3bot::nav {
+
+Status Costmap2D::init(int width, int height, double resolution_m, std::pmr::memory_resource& resource) {
+  if (width <= 0 || height <= 0 || !(resolution_m > 0.0)) {
+    return Error::format(Errc::config, "costmap: bad size %d x %d at %g m", width, height, resolution_m);
+  }
+  if (static_cast<std::size_t>(width) * static_cast<std::size_t>(height) > kMaxMapCells) {
+    return Error::format(Errc::config, "costmap: %d x %d cells is too large", width, height);
+  }
+  return guarded("costmap", [&]() -> Status {
+    cells_ = allocate_array<std::uint8_t>(resource, static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+    width_ = width;
+    height_ = height;
+    resolution_m_ = resolution_m;
+    return Status::success();
+  });
+}
+
+void Costmap2D::fill(std::uint8_t cost) noexcept { std::fill(cells_.begin(), cells_.end(), cost); }
+
+// --- LayeredCostmap -----------------------------------------------------------------------
+
+Status LayeredCostmap::add_layer(CostmapLayer& layer) {
+  if (!layers_.push_back(&layer)) {
+    return Error::format(Errc::capacity, "costmap: more than %zu layers", kMaxLayers);
+  }
+  return Status::success();
+}
+
+Status LayeredCostmap::init(const CostmapConfig& config, std::pmr::memory_resource& resource) {
+  config_ = config;
+  if (!(config.resolution_m > 0.0) || !(config.width_m > 0.0) || !(config.height_m > 0.0)) {
+    return Error::format(Errc::config, "costmap: width_m, height_m and resolution_m must be > 0");
+  }
+  const int width = static_cast<int>(std::lround(config.width_m / config.resolution_m));
+  const int height = static_cast<int>(std::lround(config.height_m / config.resolution_m));
+  if (Status s = master_.init(width, height, config.resolution_m, resource); !s) return s;
+  master_.set_origin(config.origin_x_m, config.origin_y_m);
+  window_placed_ = false;
+  return init_layers(resource);
+}
+
+Status LayeredCostmap::init_over_map(const OccupancyMap& map, std::pmr::memory_resource& resource) {
+  if (map.origin_yaw_rad() != 0.0) {
+    return Error::format(Errc::config, "costmap: maps with a non-zero origin yaw are not supported");
+  }
+  config_ = CostmapConfig{};
+  config_.rolling = false;
+  config_.resolution_m = map.resolution_m();
+  config_.width_m = map.width() * map.resolution_m();
+  config_.height_m = map.height() * map.resolution_m();
+  config_.origin_x_m = map.origin_x_m();
+  config_.origin_y_m = map.origin_y_m();
+  if (Status s = master_.init(map.width(), map.height(), map.resolution_m(), resource); !s) return s;
+  master_.set_origin(map.origin_x_m(), map.origin_y_m());
+  return init_layers(resource);
+}
+
+Status LayeredCostmap::init_layers(std::pmr::memory_resource& resource) {
+  for (CostmapLayer* layer : layers_) {
+    if (Status s = layer->init(master_, resource); !s) return s;
+  }
+  return Status::success();
+}
+
+void LayeredCostmap::move_window(double robot_x_m, double robot_y_m) noexcept {
+  const double res = master_.resolution_m();
+  const double want_x = robot_x_m - master_.width() * res / 2.0;
+  const double want_y = robot_y_m - master_.height() * res / 2.0;
+  const double cells_x = std::floor((want_x - config_.lattice_x_m) / res);
+  const double cells_y = std::floor((want_y - config_.lattice_y_m) / res);
+  const double new_x = config_.lattice_x_m + cells_x * res;
+  const double new_y = config_.lattice_y_m + cells_y * res;
+  if (window_placed_) {
+    const int shift_c = static_cast<int>(std::lround((new_x - master_.origin_x_m()) / res));
+    const int shift_r = static_cast<int>(std::lround((new_y - master_.origin_y_m()) / res));
+    if (shift_c == 0 && shift_r == 0) return;
+    for (CostmapLayer* layer : layers_) layer->on_window_moved(shift_c, shift_r);
+  }
+  master_.set_origin(new_x, new_y);
+  window_placed_ = true;
+}
+
+void LayeredCostmap::update(const CostmapInputs& inputs) noexcept {
+  if (config_.rolling) move_window(inputs.robot_pose.x_m, inputs.robot_pose.y_m);
+  master_.fill(kFreeCost);
+  for (CostmapLayer* layer : layers_) layer->update(master_, inputs);
+}
+
+// --- StaticLayer --------------------------------------------------------------------------
+
+Status StaticLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
+  if (std::abs(master.resolution_m() - map_.resolution_m()) > 1e-9) {
+    return Error::format(Errc::config, "static layer: costmap resolution %g m differs from the map's %g m",
+                         master.resolution_m(), map_.resolution_m());
+  }
+  if (map_.origin_yaw_rad() != 0.0) {
+    return Error::format(Errc::config, "static layer: maps with a non-zero origin yaw are not supported");
+  }
+  return guarded("static layer", [&]() -> Status {
+    costs_ = allocate_array<std::uint8_t>(resource, map_.cell_count());
+    const auto& cells = map_.cells();
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const int v = cells[i];
+      std::uint8_t cost = kFreeCost;
+      if (v < 0) {
+        cost = config_.track_unknown ? kNoInformationCost : kFreeCost;
+      } else if (v >= config_.lethal_threshold) {
+        cost = kLethalCost;
+      }
+      costs_[i] = cost;
+    }
+    return Status::success();
+  });
+}
+
+void StaticLayer::update(Costmap2D& master, const CostmapInputs& /*inputs*/) noexcept {
+  const double res = map_.resolution_m();
+  const int off_c = static_cast<int>(std::lround((master.origin_x_m() - map_.origin_x_m()) / res));
+  const int off_r = static_cast<int>(std::lround((master.origin_y_m() - map_.origin_y_m()) / res));
+  const std::uint8_t outside = config_.track_unknown ? kNoInformationCost : kFreeCost;
+  for (int r = 0; r < master.height(); ++r) {
+    const int mr = r + off_r;
+    for (int c = 0; c < master.width(); ++c) {
+      const int mc = c + off_c;
+      master.set(c, r, map_.in_bounds(mc, mr) ? costs_[static_cast<std::size_t>(mr) * map_.width() + mc] : outside);
+    }
+  }
+}
+
+// --- ObstacleLayer ------------------------------------------------------------------------
+
+Status ObstacleLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
+  if (Status s = grid_.init(master.width(), master.height(), master.resolution_m(), resource); !s) return s;
+  grid_.set_origin(master.origin_x_m(), master.origin_y_m());
+  return guarded("obstacle layer", [&]() -> Status {
+    scratch_ = allocate_array<std::uint8_t>(resource, master.size());
+    return Status::success();
+  });
+}
+
+void ObstacleLayer::clear() noexcept { grid_.fill(kFreeCost); }
+
+void ObstacleLayer::on_window_moved(int shift_cols, int shift_rows) noexcept {
+  const int w = grid_.width();
+  const int h = grid_.height();
+  std::fill(scratch_.begin(), scratch_.end(), kFreeCost);
+  for (int r = 0; r < h; ++r) {
+    const int src_r = r + shift_rows;
+    if (src_r < 0 || src_r >= h) continue;
+    for (int c = 0; c < w; ++c) {
+      const int src_c = c + shift_cols;
+      if (src_c < 0 || src_c >= w) continue;
+      scratch_[grid_.index(c, r)] = grid_.at(src_c, src_r);
+    }
+  }
+  std::memcpy(grid_.cells().data(), scratch_.data(), scratch_.size());
+}
+
+void ObstacleLayer::raytrace(int c0, int r0, int c1, int r1, int max_cells) noexcept {
+  // Bresenham from the sensor cell towards the endpoint cell, the endpoint itself excluded.
+  const int dc = std::abs(c1 - c0);
+  const int dr = -std::abs(r1 - r0);
+  const int sc = c0 < c1 ? 1 : -1;
+  const int sr = r0 < r1 ? 1 : -1;
+  int err = dc + dr;
+  int c = c0;
+  int r = r0;
+  for (int steps = 0; steps < max_cells && (c != c1 || r != r1); ++steps) {
+    if (grid_.in_bounds(c, r)) {
+      grid_.set(c, r, kFreeCost);
+    } else if (steps > 0) {
+      break;  // left the window; nothing further can be inside again on a straight line
+    }
+    const int e2 = 2 * err;
+    if (e2 >= dr) {
+      err += dr;
+      c += sc;
+    }
+    if (e2 <= dc) {
+      err += dc;
+      r += sr;
+    }
+  }
+}
+
+void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcept {
+  grid_.set_origin(master.origin_x_m(), master.origin_y_m());
+  const double res = grid_.resolution_m();
+  if (inputs.scan != nullptr) {
+    const ScanView& scan = *inputs.scan;
+    const Pose2D& s = inputs.sensor_pose;
+    const double sx = (s.x_m - grid_.origin_x_m()) / res;
+    const double sy = (s.y_m - grid_.origin_y_m()) / res;
+    const int c0 = static_cast<int>(std::floor(sx));
+    const int r0 = static_cast<int>(std::floor(sy));
+    // Clearing first, then marking, so a ray never erases another beam's endpoint.
+    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      const double range = scan.ranges_m[i];
+      if (!std::isfinite(range) || range < scan.range_min_m) continue;
+      const bool no_return = range >= scan.range_max_m;
+      if (no_return && !config_.clear_no_return) continue;
+      const double clear_range = std::min(no_return ? config_.raytrace_max_range_m : range, config_.raytrace_max_range_m);
+      if (clear_range <= config_.raytrace_min_range_m) continue;
+      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+      const double ex = sx + std::cos(angle) * clear_range / res;
+      const double ey = sy + std::sin(angle) * clear_range / res;
+      const int max_cells = static_cast<int>(std::ceil(2.0 * clear_range / res)) + 2;
+      const int c1 = static_cast<int>(std::floor(ex));
+      const int r1 = static_cast<int>(std::floor(ey));
+      raytrace(c0, r0, c1, r1, max_cells);
+      // A ray cut short by the range limit clears its last cell too.
+      if (clear_range < range && grid_.in_bounds(c1, r1)) grid_.set(c1, r1, kFreeCost);
+    }
+    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      const double range = scan.ranges_m[i];
+      if (!std::isfinite(range) || range < scan.range_min_m || range >= scan.range_max_m) continue;
+      if (range > config_.obstacle_max_range_m || range < config_.obstacle_min_range_m) continue;
+      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+      int c = 0;
+      int r = 0;
+      if (grid_.world_to_cell(s.x_m + std::cos(angle) * range, s.y_m + std::sin(angle) * range, c, r)) {
+        grid_.set(c, r, kLethalCost);
+      }
+    }
+  }
+  if (config_.footprint_clearing) {
+    const int reach = static_cast<int>(std::ceil(config_.footprint_clearing_radius_m / res));
+    int rc = 0;
+    int rr = 0;
+    grid_.world_to_cell(inputs.robot_pose.x_m, inputs.robot_pose.y_m, rc, rr);
+    const double limit2 = std::pow(config_.footprint_clearing_radius_m / res, 2);
+    for (int r = rr - reach; r <= rr + reach; ++r) {
+      for (int c = rc - reach; c <= rc + reach; ++c) {
+        if (grid_.in_bounds(c, r) && double((c - rc) * (c - rc) + (r - rr) * (r - rr)) <= limit2) grid_.set(c, r, kFreeCost);
+      }
+    }
+  }
+  // Max-combine into the master (Nav2's combination_method 1).
+  const auto marks = grid_.cells();
+  auto out = master.cells();
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (marks[i] > out[i] || out[i] == kNoInformationCost) {
+      if (marks[i] != kFreeCost) out[i] = marks[i];
+    }
+  }
+}
+
+// --- InflationLayer -----------------------------------------------------------------------
+
+std::uint8_t InflationLayer::cost_at(double distance_m, const InflationLayerConfig& config) noexcept {
+  if (distance_m <= 0.0) return kLethalCost;
+  if (distance_m <= config.inscribed_radius_m) return kInscribedCost;
+  if (distance_m > config.inflation_radius_m) return kFreeCost;
+  const double factor = std::exp(-config.cost_scaling_factor * (distance_m - config.inscribed_radius_m));
+  return static_cast<std::uint8_t>((kInscribedCost - 1) * factor);
+}
+
+Status InflationLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
+  if (config_.inflation_radius_m < config_.inscribed_radius_m || config_.cost_scaling_factor < 0.0) {
+    return Error::format(Errc::config, "inflation: inflation_radius_m %g must be >= inscribed_radius_m %g, csf >= 0",
+                         config_.inflation_radius_m, config_.inscribed_radius_m);
+  }
+  const double res = master.resolution_m();
+  radius_cells_ = static_cast<int>(std::ceil(config_.inflation_radius_m / res));
+  return guarded("inflation layer", [&]() -> Status {
+    const std::size_t line = static_cast<std::size_t>(std::max(master.width(), master.height())) + 1;
+    distance2_ = allocate_array<float>(resource, master.size());
+    f_ = allocate_array<float>(resource, line);
+    d_ = allocate_array<float>(resource, line);
+    z_ = allocate_array<float>(resource, line + 1);
+    v_ = allocate_array<int>(resource, line);
+    const std::size_t lut_size = static_cast<std::size_t>(radius_cells_) * radius_cells_ + 1;
+    lut_ = allocate_array<std::uint8_t>(resource, lut_size);
+    for (std::size_t k = 0; k < lut_size; ++k) lut_[k] = cost_at(std::sqrt(static_cast<double>(k)) * res, config_);
+    return Status::success();
+  });
+}
+
+// Felzenszwalb-Huttenlocher lower envelope of parabolas over f_[0..n), result in d_.
+void InflationLayer::transform_1d(std::size_t n) noexcept {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::size_t k = 0;
+  v_[0] = 0;
+  z_[0] = -kInf;
+  z_[1] = kInf;
+  // Cells at infinity are skipped as parabola sites; they cannot be nearest.
+  std::size_t first = 0;
+  while (first < n && f_[first] == kInf) ++first;
+  if (first == n) {
+    for (std::size_t q = 0; q < n; ++q) d_[q] = kInf;
+    return;
+  }
+  v_[0] = static_cast<int>(first);
+  for (std::size_t q = first + 1; q < n; ++q) {
+    if (f_[q] == kInf) continue;
+    const float fq = f_[q] + static_cast<float>(q * q);
+    float s = 0.0f;
+    for (;;) {
+      const auto p = static_cast<std::size_t>(v_[k]);
+      s = (fq - (f_[p] + static_cast<float>(p * p))) / (2.0f * static_cast<float>(q) - 2.0f * static_cast<float>(p));
+      if (s > z_[k] || k == 0) break;
+      --k;
+    }
+    ++k;
+    v_[k] = static_cast<int>(q);
+    z_[k] = s;
+    z_[k + 1] = kInf;
+  }
+  k = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    while (z_[k + 1] < static_cast<float>(q)) ++k;
+    const float diff = static_cast<float>(q) - static_cast<float>(v_[k]);
+    d_[q] = diff * diff + f_[static_cast<std::size_t>(v_[k])];
+  }
+}
+
+void InflationLayer::inflate(Costmap2D& grid) noexcept {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const int w = grid.width();
+  const int h = grid.height();
+  // Columns, then rows: the exact squared Euclidean distance in cells.
+  for (int c = 0; c < w; ++c) {
+    for (int r = 0; r < h; ++r) f_[r] = grid.at(c, r) == kLethalCost ? 0.0f : kInf;
+    transform_1d(static_cast<std::size_t>(h));
+    for (int r = 0; r < h; ++r) distance2_[grid.index(c, r)] = d_[r];
+  }
+  const float limit = static_cast<float>(lut_.size() - 1);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) f_[c] = distance2_[grid.index(c, r)];
+    transform_1d(static_cast<std::size_t>(w));
+    for (int c = 0; c < w; ++c) {
+      const float d2 = d_[c];
+      if (!(d2 <= limit)) continue;
+      const std::uint8_t cost = lut_[static_cast<std::size_t>(d2 + 0.5f)];
+      std::uint8_t& cell = grid.cells()[grid.index(c, r)];
+      if (cell == kNoInformationCost) {
+        if (cost >= kInscribedCost) cell = cost;
+      } else if (cost > cell) {
+        cell = cost;
+      }
+    }
+  }
+}
+
+void InflationLayer::update(Costmap2D& master, const CostmapInputs& /*inputs*/) noexcept { inflate(master); }
+
+}  // namespace sen3bot::nav
