@@ -1,0 +1,107 @@
+#include "sen3bot/p2os/emulator_runner.hpp"
+
+#include <poll.h>
+
+#include "sen3bot/hal/clock.hpp"
+
+namespace sen3bot::p2os {
+
+namespace {
+// The loop wakes at least this often to send SIPs on time (SipCycle is 100 ms).
+constexpr int kLoopPeriodMs = 2;
+}  // namespace
+
+EmulatorRunner::~EmulatorRunner() { stop(); }
+
+void EmulatorRunner::start_thread() {
+  thread_ = std::thread([this] {
+    hal::PosixClock clock;
+    while (!stop_.load(std::memory_order_acquire)) {
+      int fd = -1;
+      {
+        std::lock_guard lock(mutex_);
+        fd = serve(clock.now());
+      }
+      if (fd >= 0) {
+        pollfd p{fd, POLLIN, 0};
+        (void)::poll(&p, 1, kLoopPeriodMs);
+        // A hung-up fd polls ready at once; pace the loop anyway so it never spins.
+        if (p.revents & (POLLHUP | POLLERR | POLLNVAL)) clock.sleep_until(clock.now() + hal::millis(kLoopPeriodMs));
+      } else {
+        clock.sleep_until(clock.now() + hal::millis(kLoopPeriodMs));
+      }
+    }
+  });
+}
+
+void EmulatorRunner::stop() {
+  stop_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+}
+
+Result<std::unique_ptr<PtyEmulatorRunner>> PtyEmulatorRunner::start(const EmulatorConfig& config,
+                                                                   std::string_view link_path) {
+  Result<std::unique_ptr<hal::PtyPair>> pty = hal::PtyPair::open();
+  if (!pty) return pty.error();
+  if (!link_path.empty()) {
+    if (Status s = (*pty)->link_slave(link_path); !s) return s.error();
+  }
+  std::unique_ptr<PtyEmulatorRunner> runner(new PtyEmulatorRunner(config, std::move(*pty)));
+  runner->start_thread();
+  return runner;
+}
+
+PtyEmulatorRunner::PtyEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::PtyPair> pty)
+    : EmulatorRunner(config), pty_(std::move(pty)), slave_path_(pty_->slave_path()) {}
+
+PtyEmulatorRunner::~PtyEmulatorRunner() { stop(); }
+
+void PtyEmulatorRunner::close_device() {
+  std::lock_guard lock(mutex_);
+  pty_.reset();
+}
+
+int PtyEmulatorRunner::serve(hal::Nanos now_ns) {
+  if (!pty_) return -1;
+  // A pty master reads EIO while no client holds the slave; the robot carries on regardless.
+  (void)emulator_.step(*pty_, now_ns);
+  return pty_->poll_fd();
+}
+
+Result<std::unique_ptr<TcpEmulatorRunner>> TcpEmulatorRunner::start(const EmulatorConfig& config, std::uint16_t port,
+                                                                   std::string_view bind_address) {
+  Result<std::unique_ptr<hal::TcpListener>> listener = hal::TcpListener::listen(bind_address, port);
+  if (!listener) return listener.error();
+  std::unique_ptr<TcpEmulatorRunner> runner(new TcpEmulatorRunner(config, std::move(*listener)));
+  runner->start_thread();
+  return runner;
+}
+
+TcpEmulatorRunner::TcpEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::TcpListener> listener)
+    : EmulatorRunner(config), listener_(std::move(listener)), port_(listener_->port()) {}
+
+TcpEmulatorRunner::~TcpEmulatorRunner() { stop(); }
+
+void TcpEmulatorRunner::drop_client() {
+  std::lock_guard lock(mutex_);
+  client_.reset();
+}
+
+int TcpEmulatorRunner::serve(hal::Nanos now_ns) {
+  if (!client_) {
+    Result<std::unique_ptr<hal::TcpStream>> accepted = listener_->accept();
+    if (accepted && *accepted) {
+      client_ = std::move(*accepted);
+      clients_.fetch_add(1);
+      emulator_.reset_session();
+    }
+  }
+  if (!client_) return listener_->poll_fd();
+  if (Status s = emulator_.step(*client_, now_ns); !s) {
+    client_.reset();  // the client left; the next one starts a new session
+    return listener_->poll_fd();
+  }
+  return client_->poll_fd();
+}
+
+}  // namespace sen3bot::p2os
