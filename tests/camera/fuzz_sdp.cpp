@@ -1,0 +1,17 @@
+// Fuzz target: the SDP parser, then control resolution of what it found.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "sen3bot/camera/rtsp_url.hpp"
+#include "sen3bot/camera/sdp.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace sen3bot::camera;
+  auto sd = parse_sdp(std::string_view(reinterpret_cast<const char*>(data), size));
+  if (!sd) return 0;
+  if (sd->media.size() > kMaxSdpMedia) __builtin_trap();
+  for (const SdpMedia& m : sd->media) (void)resolve_control("rtsp://h/base/", m.control);
+  (void)resolve_control("rtsp://h/base", sd->session_control);
+  return 0;
+}
