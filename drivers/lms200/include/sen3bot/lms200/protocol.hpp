@@ -54,7 +54,8 @@ inline constexpr std::uint8_t kReplyAddressFlag = 0x80;   // replies carry 0x80 
 inline constexpr std::size_t kHeaderBytes = 4;            // STX, ADR, LEN
 inline constexpr std::size_t kCrcBytes = 2;
 inline constexpr std::size_t kFrameOverheadBytes = kHeaderBytes + kCrcBytes;
-// 401 values with real-time indices: 1 + 2 + 802 + 2 + 1. Larger LEN is never a telegram.
+// The largest real telegram (401 values with real-time indices) has LEN 808 and 814 bytes;
+// LEN above 814 is never a telegram, whatever the margin a firmware revision might use.
 inline constexpr std::uint16_t kMinLen = 1;
 inline constexpr std::uint16_t kMaxLen = 814;
 inline constexpr std::size_t kMaxFrameBytes = kMaxLen + kFrameOverheadBytes;  // 820
