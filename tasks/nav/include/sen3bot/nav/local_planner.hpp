@@ -1,0 +1,159 @@
+#pragma once
+// Local planner (LP): dynamic window approach over the Pioneer's limits. Each control period
+// it samples (v, w) reachable within one period under the acceleration limits, rolls each
+// out for sim_time_s, discards rollouts whose footprint touches a lethal cell anywhere along
+// the way, and scores the rest (thesis eq. A.6 plus path and goal distance):
+//
+//   G = heading_weight   * (1 - |bearing of the target from the rollout's end pose| / pi)
+//     + clearance_weight * (1 - max centre cost along the rollout / 253)
+//     + velocity_weight  * v / max_v
+//     - path_weight      * distance from the rollout's end to the pruned path / prune_distance
+//     - goal_weight      * distance from the rollout's end to the target / prune_distance
+//
+// The two distances are breadth-first (4-connected) through cells below the inscribed cost,
+// as DWB's map-grid critics do, so an obstacle between a rollout and the target counts.
+//
+// The target is the farthest point of the global path within prune_distance_m (along the
+// path) of the point nearest the robot: the LP sees only that window of the path, so it
+// tracks the plan closely and returns to it after avoiding something. Path points inside a
+// lethal or inscribed cell (an obstacle the plan did not know) are skipped: the target moves
+// past them so the rollouts bend around the obstacle, and while any window point is blocked
+// the path-distance term is off (the robot has to leave the path to pass).
+// With no admissible moving rollout it recovers: wait, then rotate in place towards the
+// target, then back off, in a cycle, counting each. Every period samples again first, so a
+// recovery ends as soon as a way forward opens; after max_recovery_cycles it reports failure.
+#include <cstdint>
+#include <memory_resource>
+#include <span>
+
+#include "sen3bot/hal/result.hpp"
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/geometry.hpp"
+
+namespace sen3bot::nav {
+
+struct PathPoint {
+  float x_m = 0.0f;
+  float y_m = 0.0f;
+};
+
+struct DwaConfig {
+  // Pioneer 3-DX limits (navigation.md): 1.2 m/s and 300 deg/s; indoors we stay lower.
+  double max_v_mps = 0.5;
+  double max_w_radps = 1.2;
+  double acc_v_mps2 = 0.6;
+  double acc_w_radps2 = 2.0;
+  double control_period_s = 0.1;   // the task's period: sizes the dynamic window
+  int v_samples = 20;
+  int w_samples = 21;              // 20 x 21 = 420 rollouts
+  double sim_time_s = 1.5;
+  double sim_step_s = 0.1;
+  Footprint footprint = Footprint::pioneer();
+  double footprint_padding_m = 0.05;  // one cell of margin around the footprint
+  // Footprint cells are checked only where the centre cell's cost is at least this (the
+  // inflation radius must reach the circumscribed radius for that to be safe).
+  std::uint8_t footprint_check_min_cost = 1;
+  double heading_weight = 0.5;
+  double clearance_weight = 0.4;
+  double velocity_weight = 0.6;
+  double path_weight = 1.5;
+  double goal_weight = 1.0;
+  double prune_distance_m = 1.0;
+  double blocked_lookahead_m = 2.0;  // how far past the window a blocked path may move the target
+  double min_progress_v_mps = 0.02;  // slower than this counts as not moving...
+  double align_angle_rad = 0.6;      // ...unless turning towards a target farther off than this
+  double goal_tolerance_m = 0.15;
+  double slow_down_radius_m = 0.6;  // v is capped proportionally inside this radius of the goal
+  std::size_t max_path_points = 2048;
+  std::size_t max_costmap_cells = 120 * 120;  // the local costmap (6 x 6 m at 0.05 m)
+  // Recoveries.
+  double wait_s = 1.0;
+  double rotate_s = 1.5;
+  double rotate_w_radps = 0.6;
+  double backoff_s = 1.0;
+  double backoff_v_mps = -0.1;
+  int max_recovery_cycles = 3;
+};
+
+enum class DwaStatus : std::uint8_t {
+  idle,         // no path
+  tracking,
+  reached,      // within goal tolerance: commanding zero
+  waiting,      // recovery 1
+  rotating,     // recovery 2
+  backing_off,  // recovery 3
+  failed,       // recoveries exhausted
+};
+const char* to_string(DwaStatus status) noexcept;
+
+struct DwaCommand {
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  DwaStatus status = DwaStatus::idle;
+  std::uint32_t admissible = 0;  // rollouts that passed the collision check
+  std::uint32_t evaluated = 0;
+  double distance_to_goal_m = 0.0;
+};
+
+struct RecoveryCounts {
+  std::uint32_t waits = 0;
+  std::uint32_t rotations = 0;
+  std::uint32_t backoffs = 0;
+  [[nodiscard]] std::uint32_t total() const noexcept { return waits + rotations + backoffs; }
+};
+
+class DwaPlanner {
+ public:
+  Status init(const DwaConfig& config, std::pmr::memory_resource& resource);
+
+  // Copies the global path (map frame, start first); resets progress and recoveries.
+  void set_path(std::span<const PathPoint> path) noexcept;
+  void clear_path() noexcept;
+  [[nodiscard]] std::size_t path_size() const noexcept { return path_count_; }
+
+  // One control period: pose in the map frame, current body velocities, the local costmap.
+  DwaCommand compute(const Pose2D& pose, double v_mps, double w_radps, const Costmap2D& costmap) noexcept;
+
+  // True when the footprint at pose touches a lethal or unknown cell (or leaves the costmap).
+  [[nodiscard]] bool footprint_collides(const Pose2D& pose, const Costmap2D& costmap) const noexcept;
+
+  [[nodiscard]] const RecoveryCounts& recoveries() const noexcept { return recoveries_; }
+  [[nodiscard]] const DwaConfig& config() const noexcept { return config_; }
+  // The pruned window of the last compute(): path indices [begin, end].
+  [[nodiscard]] std::size_t window_begin() const noexcept { return window_begin_; }
+  [[nodiscard]] std::size_t window_end() const noexcept { return window_end_; }
+
+ private:
+  struct Rollout {
+    bool admissible = false;
+    std::uint8_t max_cost = 0;
+    Pose2D end;
+  };
+  Rollout roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
+  [[nodiscard]] double distance_to_window(double x_m, double y_m) const noexcept;
+  void update_window(const Pose2D& pose) noexcept;
+  void wavefront(const Costmap2D& costmap, std::span<std::uint16_t> distance, bool from_path) noexcept;
+  [[nodiscard]] double grid_distance_m(std::span<const std::uint16_t> distance, const Costmap2D& costmap, double x_m,
+                                       double y_m) const noexcept;
+  void skip_blocked_part(const Costmap2D& costmap) noexcept;
+  DwaCommand recover(const Pose2D& pose, const Costmap2D& costmap, DwaCommand out) noexcept;
+
+  DwaConfig config_;
+  std::span<PathPoint> path_;
+  std::span<std::uint8_t> path_blocked_;  // per window point: inside an obstacle
+  std::span<std::uint16_t> goal_distance_;  // cells from the target, through free space
+  std::span<std::uint16_t> path_distance_;  // cells from the pruned path window
+  std::span<std::uint32_t> queue_;
+  std::span<Point2D> perimeter_;  // footprint outline sampled every half cell (robot frame)
+  std::size_t path_count_ = 0;
+  std::size_t window_begin_ = 0;
+  std::size_t window_end_ = 0;
+  std::size_t target_index_ = 0;
+  bool window_blocked_ = false;
+  RecoveryCounts recoveries_;
+  DwaStatus recovery_state_ = DwaStatus::tracking;
+  int recovery_ticks_ = 0;
+  int recovery_cycles_ = 0;
+};
+
+}  // namespace sen3bot::nav

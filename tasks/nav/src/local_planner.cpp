@@ -1,0 +1,393 @@
+#include "sen3bot/nav/local_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "sen3bot/nav/arena.hpp"
+
+namespace sen3bot::nav {
+namespace {
+constexpr double kPerimeterStepM = 0.025;  // half a 0.05 m cell: no cell is skipped along an edge
+constexpr std::size_t kMaxPerimeterPoints = 512;
+constexpr std::uint16_t kUnreached = 0xFFFF;
+constexpr double kUnreachedPenaltyM = 10.0;  // a rollout ending where the target cannot be reached
+}  // namespace
+
+const char* to_string(DwaStatus status) noexcept {
+  switch (status) {
+    case DwaStatus::idle: return "idle";
+    case DwaStatus::tracking: return "tracking";
+    case DwaStatus::reached: return "reached";
+    case DwaStatus::waiting: return "waiting";
+    case DwaStatus::rotating: return "rotating";
+    case DwaStatus::backing_off: return "backing_off";
+    case DwaStatus::failed: return "failed";
+  }
+  return "?";
+}
+
+Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& resource) {
+  if (config.v_samples < 1 || config.w_samples < 1 || !(config.control_period_s > 0.0) || !(config.sim_step_s > 0.0) ||
+      config.sim_time_s < config.sim_step_s || config.max_path_points == 0) {
+    return Error::format(Errc::config, "dwa: samples, control_period_s, sim_step_s, sim_time_s and max_path_points must be positive");
+  }
+  config_ = config;
+  return guarded("dwa", [&]() -> Status {
+    path_ = allocate_array<PathPoint>(resource, config.max_path_points);
+    path_blocked_ = allocate_array<std::uint8_t>(resource, config.max_path_points);
+    goal_distance_ = allocate_array<std::uint16_t>(resource, config.max_costmap_cells);
+    path_distance_ = allocate_array<std::uint16_t>(resource, config.max_costmap_cells);
+    queue_ = allocate_array<std::uint32_t>(resource, config.max_costmap_cells);
+    perimeter_ = allocate_array<Point2D>(resource, kMaxPerimeterPoints);
+    std::size_t n = 0;
+    // The checked outline is padded (each corner pushed out per axis, exact for the
+    // rectangular Pioneer), so an edge grazing a lethal cell's corner is not missed.
+    Footprint fp = config.footprint;
+    fp.circle_radius_m += config.footprint_padding_m;
+    for (std::size_t i = 0; i < fp.vertex_count; ++i) {
+      fp.vertices[i].x_m += std::copysign(config.footprint_padding_m, fp.vertices[i].x_m);
+      fp.vertices[i].y_m += std::copysign(config.footprint_padding_m, fp.vertices[i].y_m);
+    }
+    if (fp.vertex_count == 0) {
+      const double circumference = 2.0 * std::numbers::pi * fp.circle_radius_m;
+      const auto steps = std::clamp<std::size_t>(static_cast<std::size_t>(circumference / kPerimeterStepM) + 1, 8, kMaxPerimeterPoints);
+      for (std::size_t i = 0; i < steps; ++i) {
+        const double a = 2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(steps);
+        perimeter_[n++] = {fp.circle_radius_m * std::cos(a), fp.circle_radius_m * std::sin(a)};
+      }
+    } else {
+      for (std::size_t i = 0; i < fp.vertex_count; ++i) {
+        const Point2D a = fp.vertices[i];
+        const Point2D b = fp.vertices[(i + 1) % fp.vertex_count];
+        const double len = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+        const auto steps = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / kPerimeterStepM)));
+        for (std::size_t k = 0; k < steps && n < kMaxPerimeterPoints; ++k) {
+          const double t = static_cast<double>(k) / static_cast<double>(steps);
+          perimeter_[n++] = {a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m)};
+        }
+      }
+    }
+    perimeter_ = perimeter_.first(n);
+    return Status::success();
+  });
+}
+
+void DwaPlanner::set_path(std::span<const PathPoint> path) noexcept {
+  path_count_ = std::min(path.size(), path_.size());
+  std::copy_n(path.begin(), path_count_, path_.begin());
+  window_begin_ = 0;
+  window_end_ = 0;
+  target_index_ = 0;
+  recovery_state_ = DwaStatus::tracking;
+  recovery_ticks_ = 0;
+  recovery_cycles_ = 0;
+}
+
+void DwaPlanner::clear_path() noexcept { path_count_ = 0; }
+
+bool DwaPlanner::footprint_collides(const Pose2D& pose, const Costmap2D& costmap) const noexcept {
+  const double c = std::cos(pose.theta_rad);
+  const double s = std::sin(pose.theta_rad);
+  for (const Point2D& p : perimeter_) {
+    int col = 0;
+    int row = 0;
+    if (!costmap.world_to_cell(pose.x_m + c * p.x_m - s * p.y_m, pose.y_m + s * p.x_m + c * p.y_m, col, row)) return true;
+    const std::uint8_t cost = costmap.at(col, row);
+    if (cost == kLethalCost || cost == kNoInformationCost) return true;
+  }
+  return false;
+}
+
+DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept {
+  Rollout r;
+  Pose2D p = pose;
+  const int steps = static_cast<int>(std::lround(config_.sim_time_s / config_.sim_step_s));
+  const double dt = config_.sim_step_s;
+  for (int k = 0; k < steps; ++k) {
+    // Exact arc for constant (v, w) over one step.
+    if (std::abs(w) < 1e-6) {
+      p.x_m += v * dt * std::cos(p.theta_rad);
+      p.y_m += v * dt * std::sin(p.theta_rad);
+    } else {
+      const double th = p.theta_rad + w * dt;
+      p.x_m += v / w * (std::sin(th) - std::sin(p.theta_rad));
+      p.y_m -= v / w * (std::cos(th) - std::cos(p.theta_rad));
+      p.theta_rad = th;
+    }
+    int col = 0;
+    int row = 0;
+    if (!costmap.world_to_cell(p.x_m, p.y_m, col, row)) return r;
+    const std::uint8_t cost = costmap.at(col, row);
+    if (cost >= kInscribedCost) return r;  // the centre inside the inscribed radius: certain collision
+    if (cost >= config_.footprint_check_min_cost && footprint_collides(p, costmap)) return r;
+    r.max_cost = std::max(r.max_cost, cost);
+  }
+  r.admissible = true;
+  r.end = p;
+  return r;
+}
+
+void DwaPlanner::update_window(const Pose2D& pose) noexcept {
+  // The nearest path point, searched forward from the last one (the robot does not go back
+  // along its plan) within a bounded look-ahead, so a looping path cannot make it jump.
+  double best = std::numeric_limits<double>::infinity();
+  std::size_t nearest = window_begin_;
+  double walked = 0.0;
+  for (std::size_t i = window_begin_; i < path_count_; ++i) {
+    if (i > window_begin_) {
+      walked += std::hypot(path_[i].x_m - path_[i - 1].x_m, path_[i].y_m - path_[i - 1].y_m);
+      if (walked > 2.0 * config_.prune_distance_m + 1.0) break;
+    }
+    const double d = std::hypot(path_[i].x_m - pose.x_m, path_[i].y_m - pose.y_m);
+    if (d < best) {
+      best = d;
+      nearest = i;
+    }
+  }
+  window_begin_ = nearest;
+  double along = 0.0;
+  std::size_t end = nearest;
+  while (end + 1 < path_count_) {
+    const double step = std::hypot(path_[end + 1].x_m - path_[end].x_m, path_[end + 1].y_m - path_[end].y_m);
+    if (along + step > config_.prune_distance_m) break;
+    along += step;
+    ++end;
+  }
+  window_end_ = end;
+}
+
+void DwaPlanner::wavefront(const Costmap2D& costmap, std::span<std::uint16_t> distance, bool from_path) noexcept {
+  // 4-connected breadth-first distances in cells through cells below the inscribed cost
+  // (DWB's map-grid critics): an obstacle between a rollout's end and the target counts.
+  const std::size_t n = costmap.size();
+  std::fill_n(distance.begin(), n, kUnreached);
+  std::size_t head = 0;
+  std::size_t tail = 0;
+  const auto seed = [&](double x_m, double y_m) {
+    int col = 0;
+    int row = 0;
+    if (!costmap.world_to_cell(x_m, y_m, col, row) || costmap.at(col, row) >= kInscribedCost) return;
+    const std::size_t i = costmap.index(col, row);
+    if (distance[i] == 0) return;
+    distance[i] = 0;
+    queue_[tail++] = static_cast<std::uint32_t>(i);
+  };
+  if (from_path) {
+    for (std::size_t i = window_begin_; i <= target_index_; ++i) seed(path_[i].x_m, path_[i].y_m);
+  } else {
+    seed(path_[target_index_].x_m, path_[target_index_].y_m);
+  }
+  const int w = costmap.width();
+  const auto cells = costmap.cells();
+  while (head < tail) {
+    const std::uint32_t cur = queue_[head++];
+    const auto next_d = static_cast<std::uint16_t>(distance[cur] + 1);
+    const int c = static_cast<int>(cur % static_cast<std::uint32_t>(w));
+    const std::size_t neighbours[4] = {c + 1 < w ? cur + 1 : cur, c > 0 ? cur - 1 : cur,
+                                       cur + static_cast<std::size_t>(w) < n ? cur + static_cast<std::size_t>(w) : cur,
+                                       cur >= static_cast<std::size_t>(w) ? cur - static_cast<std::size_t>(w) : cur};
+    for (const std::size_t k : neighbours) {
+      if (distance[k] != kUnreached || cells[k] >= kInscribedCost) continue;
+      distance[k] = next_d;
+      queue_[tail++] = static_cast<std::uint32_t>(k);
+    }
+  }
+}
+
+double DwaPlanner::grid_distance_m(std::span<const std::uint16_t> distance, const Costmap2D& costmap, double x_m,
+                                    double y_m) const noexcept {
+  int col = 0;
+  int row = 0;
+  if (!costmap.world_to_cell(x_m, y_m, col, row)) return kUnreachedPenaltyM;
+  const std::uint16_t d = distance[costmap.index(col, row)];
+  return d == kUnreached ? kUnreachedPenaltyM : d * costmap.resolution_m();
+}
+
+double DwaPlanner::distance_to_window(double x_m, double y_m) const noexcept {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = window_begin_; i <= window_end_; ++i) {
+    if (path_blocked_[i - window_begin_] != 0) continue;
+    best = std::min(best, std::hypot(path_[i].x_m - x_m, path_[i].y_m - y_m));
+  }
+  return std::isfinite(best) ? best : 0.0;
+}
+
+void DwaPlanner::skip_blocked_part(const Costmap2D& costmap) noexcept {
+  // Path points inside an obstacle the global plan did not know about cannot be tracked:
+  // they do not count for the path distance, and the target moves past them (up to
+  // blocked_lookahead_m farther along the path) so the rollouts are drawn around it.
+  const auto blocked = [&](std::size_t i) {
+    int col = 0;
+    int row = 0;
+    return costmap.world_to_cell(path_[i].x_m, path_[i].y_m, col, row) && costmap.at(col, row) >= kInscribedCost;
+  };
+  bool any = false;
+  const std::size_t span = std::min(window_end_ - window_begin_ + 1, path_blocked_.size());
+  for (std::size_t k = 0; k < span; ++k) {
+    path_blocked_[k] = blocked(window_begin_ + k) ? 1 : 0;
+    any = any || path_blocked_[k] != 0;
+  }
+  window_end_ = window_begin_ + span - 1;
+  target_index_ = window_end_;
+  window_blocked_ = any;
+  if (!any) return;
+  std::size_t i = window_end_;
+  if (path_blocked_[span - 1] != 0) {  // the window ends inside the obstacle: look beyond it
+    double extra = 0.0;
+    while (i + 1 < path_count_ && extra < config_.blocked_lookahead_m) {
+      extra += std::hypot(path_[i + 1].x_m - path_[i].x_m, path_[i + 1].y_m - path_[i].y_m);
+      ++i;
+      if (!blocked(i)) break;
+    }
+  }
+  target_index_ = i;
+}
+
+DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps, const Costmap2D& costmap) noexcept {
+  DwaCommand out;
+  if (path_count_ == 0) return out;
+  const PathPoint goal = path_[path_count_ - 1];
+  out.distance_to_goal_m = std::hypot(goal.x_m - pose.x_m, goal.y_m - pose.y_m);
+  if (out.distance_to_goal_m <= config_.goal_tolerance_m) {
+    out.status = DwaStatus::reached;
+    return out;
+  }
+  if (recovery_state_ == DwaStatus::failed) {
+    out.status = DwaStatus::failed;
+    return out;
+  }
+  update_window(pose);
+  skip_blocked_part(costmap);
+
+  const double dt = config_.control_period_s;
+  const double v_cap = std::min(config_.max_v_mps, config_.max_v_mps * std::max(0.1, out.distance_to_goal_m / config_.slow_down_radius_m));
+  double v_lo = std::max(0.0, v_mps - config_.acc_v_mps2 * dt);
+  double v_hi = std::min(v_cap, v_mps + config_.acc_v_mps2 * dt);
+  if (v_hi < v_lo) v_lo = v_hi = std::max(0.0, std::min(v_cap, v_lo));  // over the cap: brake
+  const double w_lo = std::max(-config_.max_w_radps, w_radps - config_.acc_w_radps2 * dt);
+  const double w_hi = std::min(config_.max_w_radps, w_radps + config_.acc_w_radps2 * dt);
+  const PathPoint target = path_[target_index_];
+  if (costmap.size() > goal_distance_.size()) {
+    out.status = DwaStatus::failed;  // a costmap larger than init() sized for: a configuration error
+    return out;
+  }
+  wavefront(costmap, goal_distance_, false);
+  if (!window_blocked_) wavefront(costmap, path_distance_, true);
+
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < config_.v_samples; ++i) {
+    const double v = config_.v_samples == 1 ? v_hi : v_lo + (v_hi - v_lo) * i / (config_.v_samples - 1);
+    for (int j = 0; j < config_.w_samples; ++j) {
+      const double w = config_.w_samples == 1 ? 0.0 : w_lo + (w_hi - w_lo) * j / (config_.w_samples - 1);
+      ++out.evaluated;
+      const Rollout r = roll_out(pose, v, w, costmap);
+      if (!r.admissible) continue;
+      ++out.admissible;
+      const double bearing = std::atan2(target.y_m - r.end.y_m, target.x_m - r.end.x_m);
+      const double heading = 1.0 - std::abs(normalize_angle(bearing - r.end.theta_rad)) / std::numbers::pi;
+      const double clearance = 1.0 - r.max_cost / static_cast<double>(kInscribedCost);
+      const double velocity = v / config_.max_v_mps;
+      // While the window is blocked the LP is going around: only the target pulls.
+      const double path_distance =
+          window_blocked_ ? 0.0 : grid_distance_m(path_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
+      const double goal_distance = grid_distance_m(goal_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
+      const double score = config_.heading_weight * heading + config_.clearance_weight * clearance +
+                           config_.velocity_weight * velocity - config_.path_weight * path_distance -
+                           config_.goal_weight * goal_distance;
+      if (score > best_score) {  // strict: the first best sample wins ties
+        best_score = score;
+        out.v_mps = v;
+        out.w_radps = w;
+      }
+    }
+  }
+  // Standing still, or turning on the spot while already facing the target, is not progress:
+  // then recover instead of spinning in front of an obstacle.
+  const double target_bearing =
+      std::abs(normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad));
+  const bool progress = out.v_mps >= config_.min_progress_v_mps ||
+                        (out.w_radps != 0.0 && target_bearing > config_.align_angle_rad);
+  if (out.admissible > 0 && progress) {
+    out.status = DwaStatus::tracking;
+    recovery_state_ = DwaStatus::tracking;
+    recovery_cycles_ = 0;
+    return out;
+  }
+  out.v_mps = 0.0;
+  out.w_radps = 0.0;
+  return recover(pose, costmap, out);
+}
+
+DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, DwaCommand out) noexcept {
+  const double dt = config_.control_period_s;
+  const auto ticks_for = [&](double seconds) { return std::max(1, static_cast<int>(std::lround(seconds / dt))); };
+  const auto enter = [&](DwaStatus state) {
+    recovery_state_ = state;
+    recovery_ticks_ = 0;
+    if (state == DwaStatus::waiting) ++recoveries_.waits;
+    if (state == DwaStatus::rotating) ++recoveries_.rotations;
+    if (state == DwaStatus::backing_off) ++recoveries_.backoffs;
+  };
+  if (recovery_state_ == DwaStatus::tracking) enter(DwaStatus::waiting);
+  for (int guard = 0; guard < 4; ++guard) {
+    ++recovery_ticks_;
+    switch (recovery_state_) {
+      case DwaStatus::waiting:
+        if (recovery_ticks_ <= ticks_for(config_.wait_s)) {
+          out.status = DwaStatus::waiting;
+          out.v_mps = 0.0;
+          out.w_radps = 0.0;
+          return out;
+        }
+        enter(DwaStatus::rotating);
+        continue;
+      case DwaStatus::rotating: {
+        const PathPoint target = path_[target_index_];
+        const double bearing = normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad);
+        const double w = bearing >= 0.0 ? config_.rotate_w_radps : -config_.rotate_w_radps;
+        const Pose2D ahead{pose.x_m, pose.y_m, pose.theta_rad + w * dt * 3.0};
+        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !footprint_collides(ahead, costmap)) {
+          out.status = DwaStatus::rotating;
+          out.v_mps = 0.0;
+          out.w_radps = w;
+          return out;
+        }
+        enter(DwaStatus::backing_off);
+        continue;
+      }
+      case DwaStatus::backing_off: {
+        const double back = config_.backoff_v_mps * dt * 3.0;
+        const Pose2D behind{pose.x_m + back * std::cos(pose.theta_rad), pose.y_m + back * std::sin(pose.theta_rad), pose.theta_rad};
+        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !footprint_collides(behind, costmap)) {
+          out.status = DwaStatus::backing_off;
+          out.v_mps = config_.backoff_v_mps;
+          out.w_radps = 0.0;
+          return out;
+        }
+        if (++recovery_cycles_ >= config_.max_recovery_cycles) {
+          recovery_state_ = DwaStatus::failed;
+          out.status = DwaStatus::failed;
+          out.v_mps = 0.0;
+          out.w_radps = 0.0;
+          return out;
+        }
+        // Back to sampling: the next compute() tries the window again before waiting.
+        recovery_state_ = DwaStatus::tracking;
+        out.status = DwaStatus::waiting;
+        out.v_mps = 0.0;
+        out.w_radps = 0.0;
+        return out;
+      }
+      default:
+        enter(DwaStatus::waiting);
+        continue;
+    }
+  }
+  out.v_mps = 0.0;
+  out.w_radps = 0.0;
+  return out;
+}
+
+}  // namespace sen3bot::nav

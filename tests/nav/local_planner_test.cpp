@@ -1,0 +1,147 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/local_planner.hpp"
+#include "sen3bot/world/world.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+// 8 x 4 m corridor room with walls; a 0.4 m box sits on the straight line y = 2.
+OccupancyMap corridor(bool with_box) {
+  OccupancyMap m(160, 80, 0.05, 0.0, 0.0);
+  for (int c = 0; c < 160; ++c) {
+    m.set(c, 0, 100);
+    m.set(c, 79, 100);
+  }
+  for (int r = 0; r < 80; ++r) {
+    m.set(0, r, 100);
+    m.set(159, r, 100);
+  }
+  if (with_box) {
+    for (int r = 36; r < 44; ++r)
+      for (int c = 76; c < 84; ++c) m.set(c, r, 100);
+  }
+  return m;
+}
+
+struct DriveResult {
+  bool reached = false;
+  bool collided = false;
+  int steps = 0;
+  Pose2D final_pose;
+  DwaStatus last = DwaStatus::idle;
+};
+
+DriveResult drive(const OccupancyMap& map, DwaPlanner& dwa, Pose2D pose, int max_steps) {
+  mem::BudgetArena arena("costmap", 1 << 20);
+  StaticLayer st(map);
+  InflationLayer infl;
+  LayeredCostmap cm;
+  EXPECT_TRUE(cm.add_layer(st));
+  EXPECT_TRUE(cm.add_layer(infl));
+  EXPECT_TRUE(cm.init_over_map(map, arena));
+  cm.update({});
+  const world::World truth(map);
+  DriveResult run;
+  double v = 0.0;
+  double w = 0.0;
+  const double dt = dwa.config().control_period_s;
+  for (; run.steps < max_steps; ++run.steps) {
+    const DwaCommand cmd = dwa.compute(pose, v, w, cm.costmap());
+    run.last = cmd.status;
+    run.final_pose = pose;
+    if (std::getenv("DWA_TRACE") != nullptr && run.steps % 5 == 0) std::printf("%d %.2f %.2f %.2f v %.2f w %.2f %s adm %u\n", run.steps, pose.x_m, pose.y_m, pose.theta_rad, cmd.v_mps, cmd.w_radps, to_string(cmd.status), cmd.admissible);
+    if (cmd.status == DwaStatus::reached) {
+      run.reached = true;
+      break;
+    }
+    v = cmd.v_mps;
+    w = cmd.w_radps;
+    pose.x_m += v * dt * std::cos(pose.theta_rad + w * dt / 2.0);
+    pose.y_m += v * dt * std::sin(pose.theta_rad + w * dt / 2.0);
+    pose.theta_rad = normalize_angle(pose.theta_rad + w * dt);
+    if (truth.collides(pose, dwa.config().footprint)) {
+      if (std::getenv("DWA_TRACE") != nullptr) std::printf("collision at %.3f %.3f %.3f clearance %.3f\n", pose.x_m, pose.y_m, pose.theta_rad, truth.clearance_m(pose, dwa.config().footprint, 1.0));
+      run.collided = true;
+    }
+  }
+  return run;
+}
+
+std::vector<PathPoint> straight(double x0, double x1, double y) {
+  std::vector<PathPoint> path;
+  for (double x = x0; x <= x1 + 1e-9; x += 0.05) path.push_back({static_cast<float>(x), static_cast<float>(y)});
+  return path;
+}
+
+TEST(Dwa, FollowsAFreePathToTheGoal) {
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const auto path = straight(1.0, 7.0, 2.0);
+  dwa.set_path(path);
+  const DriveResult run = drive(corridor(false), dwa, {1.0, 2.0, 0.3}, 400);
+  EXPECT_TRUE(run.reached);
+  EXPECT_FALSE(run.collided);
+  EXPECT_LT(run.steps, 200);  // 6 m at up to 0.5 m/s
+  EXPECT_EQ(dwa.recoveries().total(), 0u);
+}
+
+TEST(Dwa, AvoidsABoxOnThePathAndReachesTheGoal) {
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const auto path = straight(1.0, 7.0, 2.0);  // the global path goes straight through the box
+  dwa.set_path(path);
+  const DriveResult run = drive(corridor(true), dwa, {1.0, 2.0, 0.0}, 600);
+  EXPECT_TRUE(run.reached) << run.final_pose.x_m << "," << run.final_pose.y_m << " " << to_string(run.last)
+                           << " recoveries " << dwa.recoveries().total();
+  EXPECT_FALSE(run.collided);
+}
+
+TEST(Dwa, RecoversWhenBlockedAndCountsIt) {
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaConfig cfg;
+  cfg.max_recovery_cycles = 1;
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init(cfg, arena));
+  // Walled in: a full wall across the corridor right ahead.
+  OccupancyMap map = corridor(false);
+  for (int r = 0; r < 80; ++r) map.set(30, r, 100);
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  const DriveResult run = drive(map, dwa, {1.1, 2.0, 0.0}, 300);
+  EXPECT_FALSE(run.reached);
+  EXPECT_FALSE(run.collided);
+  EXPECT_GE(dwa.recoveries().waits, 1u);
+  EXPECT_GE(dwa.recoveries().total(), 2u);
+}
+
+TEST(Dwa, ComputeAllocatesNothing) {
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const OccupancyMap map = corridor(true);
+  StaticLayer st(map);
+  InflationLayer infl;
+  LayeredCostmap cm;
+  ASSERT_TRUE(cm.add_layer(st));
+  ASSERT_TRUE(cm.add_layer(infl));
+  ASSERT_TRUE(cm.init_over_map(map, arena));
+  cm.update({});
+  const auto path = straight(1.0, 7.0, 2.0);
+  dwa.set_path(path);
+  mem::testing::AllocationScope scope;
+  for (int i = 0; i < 100; ++i) (void)dwa.compute({1.0 + 0.01 * i, 2.0, 0.0}, 0.2, 0.0, cm.costmap());
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
