@@ -75,7 +75,9 @@ struct Lockstep {
 // the callback the harness already has. Works on any driver state source.
 class SquareDriver {
  public:
-  SquareDriver(double side_m, double v_m_s, double omega_rad_s) : side_m_(side_m), v_(v_m_s), w_(omega_rad_s) {}
+  // decel_m_s2 / rot_decel_rad_s2: the braking profile, no harder than the robot can brake.
+  SquareDriver(double side_m, double v_m_s, double omega_rad_s, double decel_m_s2 = 1.0, double rot_decel_rad_s2 = 3.0)
+      : side_m_(side_m), v_(v_m_s), w_(omega_rad_s), decel_(decel_m_s2), rot_decel_(rot_decel_rad_s2) {}
 
   // Given the latest state, the setpoint to use now; done() once four sides are driven.
   BaseSetpoint next(const BaseState& s) {
@@ -88,29 +90,30 @@ class SquareDriver {
     if (side_ >= 4) return BaseSetpoint{0, 0, true};
     if (turning_) {
       const double error = std::remainder(heading_ - s.theta_rad, 2 * std::numbers::pi);
-      if (std::fabs(error) < 0.01 && std::fabs(s.omega_rad_s) < 0.05) {
+      if (std::fabs(error) < 0.02 && std::fabs(s.omega_rad_s) < 0.1) {
         turning_ = false;
         start_x_ = s.x_m;
         start_y_ = s.y_m;
         return BaseSetpoint{0, 0, true};
       }
-      return BaseSetpoint{0, std::clamp(error * 3.0, -w_, w_), true};
+      const double w = std::min({w_, std::sqrt(2 * rot_decel_ * std::fabs(error)), std::fabs(error) * 6.0});
+      return BaseSetpoint{0, std::copysign(w, error), true};
     }
     const double travelled = std::hypot(s.x_m - start_x_, s.y_m - start_y_);
     const double remaining = side_m_ - travelled;
-    if (remaining <= 0.002) {
+    if (remaining <= 0.01) {
       side_ += 1;
       turning_ = true;
       heading_ = std::remainder(heading_ + std::numbers::pi / 2, 2 * std::numbers::pi);
       return BaseSetpoint{0, 0, true};
     }
     const double error = std::remainder(heading_ - s.theta_rad, 2 * std::numbers::pi);
-    return BaseSetpoint{std::min(v_, std::max(0.05, remaining * 1.5)), error * 2.0, true};
+    return BaseSetpoint{std::min(v_, std::max(0.1, std::sqrt(2 * decel_ * remaining))), error * 2.0, true};
   }
   [[nodiscard]] bool done() const { return side_ >= 4; }
 
  private:
-  double side_m_, v_, w_;
+  double side_m_, v_, w_, decel_, rot_decel_;
   bool started_ = false;
   bool turning_ = false;
   int side_ = 0;

@@ -1,0 +1,190 @@
+// Driver and emulator in real time over a real pseudo-terminal and over TCP. Bounds are
+// generous (these also run under sanitizers and qemu); exact timing is tested in lockstep.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+#include "lockstep_harness.hpp"
+#include "sen3bot/hal/serial.hpp"
+#include "sen3bot/p2os/emulator_runner.hpp"
+#include "sen3bot/p2os/task.hpp"
+
+namespace sen3bot::p2os {
+namespace {
+
+constexpr std::uint8_t cmd(Command c) { return static_cast<std::uint8_t>(c); }
+
+EmulatorConfig quick_robot() {
+  EmulatorConfig c = test::fast_emulator_config();
+  // Brisker than a real P3-DX so the square takes a few seconds of wall clock.
+  c.trans_accel_mm_s2 = 4000;
+  c.trans_decel_mm_s2 = 4000;
+  c.rot_accel_deg_s2 = 1500;
+  c.rot_decel_deg_s2 = 1500;
+  c.trans_acc_top_mm_s2 = 4000;
+  c.rot_acc_top_deg_s2 = 1500;
+  return c;
+}
+
+// Steps the driver on the monotonic clock every 2 ms until `done` or the time limit.
+struct RealtimeLoop {
+  P2osDriver& driver;
+  hal::PosixClock clock;
+  std::function<void(hal::Nanos)> planner;
+
+  bool run_until(const std::function<bool()>& done, hal::Nanos max_ns) {
+    const hal::Nanos end = clock.now() + max_ns;
+    while (clock.now() < end) {
+      const hal::Nanos now = clock.now();
+      if (planner) planner(now);
+      driver.step(now);
+      if (done()) return true;
+      clock.sleep_until(now + hal::millis(2));
+    }
+    return false;
+  }
+  void run_for(hal::Nanos d) {
+    (void)run_until([] { return false; }, d);
+  }
+  void hold(double v_m_s, double omega_rad_s) {
+    planner = [this, v_m_s, omega_rad_s](hal::Nanos t) { driver.set_setpoint(BaseSetpoint{v_m_s, omega_rad_s, true}, t); };
+  }
+};
+
+TEST(P2osPty, ConnectEnableDriveSquareMatchesGroundTruth) {
+  auto runner = PtyEmulatorRunner::start(quick_robot());
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  auto port = hal::SerialPort::open((*runner)->slave_path(), 9600);
+  ASSERT_TRUE(port) << port.error().c_str();
+  P2osDriver driver{P2osConfig{}};
+  RealtimeLoop loop{driver, {}, {}};
+  driver.attach(**port, loop.clock.now());
+  ASSERT_TRUE(loop.run_until([&] { return driver.state().link == LinkState::connected; }, hal::seconds(5)));
+
+  test::SquareDriver square(1.0, 1.5, 4.0, 3.0, 15.0);
+  loop.planner = [&](hal::Nanos t) {
+    if (driver.take_new_sip()) driver.set_setpoint(square.next(driver.state()), t);
+  };
+  ASSERT_TRUE(loop.run_until([&] { return square.done(); }, hal::seconds(40)));
+  loop.hold(0, 0);
+  ASSERT_TRUE(loop.run_until([&] { return !driver.state().moving && driver.state().sip_count > 0; }, hal::seconds(5)));
+  loop.run_for(hal::millis(300));  // SIPs after the robot came to rest
+
+  const Pose2 truth = (*runner)->with_emulator([](P2osEmulator& e) { return e.ground_truth(); });
+  const BaseState& s = driver.state();
+  EXPECT_NEAR(s.x_m, truth.x_m, 0.003);
+  EXPECT_NEAR(s.y_m, truth.y_m, 0.003);
+  EXPECT_NEAR(std::remainder(s.theta_rad - truth.theta_rad, 2 * std::numbers::pi), 0.0, 0.003);
+  EXPECT_LT(std::hypot(truth.x_m, truth.y_m), 0.25);
+  EXPECT_NEAR(s.distance_m, 4.0, 0.4);
+  EXPECT_EQ(s.bad_checksums, 0u);
+  EXPECT_EQ((*runner)->with_emulator([](P2osEmulator& e) { return e.stats().bad_checksums; }), 0u);
+}
+
+TEST(P2osPty, SilenceNoiseAndVanishingDevice) {
+  auto runner = PtyEmulatorRunner::start(quick_robot());
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  PtyEmulatorRunner& emu = **runner;
+  auto port = hal::SerialPort::open(emu.slave_path(), 9600);
+  ASSERT_TRUE(port) << port.error().c_str();
+  P2osDriver driver{P2osConfig{}};
+  RealtimeLoop loop{driver, {}, {}};
+  driver.attach(**port, loop.clock.now());
+  ASSERT_TRUE(loop.run_until([&] { return driver.state().link == LinkState::connected; }, hal::seconds(5)));
+  loop.hold(0.3, 0);
+  loop.run_for(hal::millis(400));
+
+  // The robot falls silent: reported within a second.
+  emu.with_emulator([](P2osEmulator& e) { e.set_silent(true); });
+  const hal::Nanos silent_at = loop.clock.now();
+  ASSERT_TRUE(loop.run_until([&] { return driver.state().link != LinkState::connected; }, hal::seconds(3)));
+  EXPECT_LE(loop.clock.now() - silent_at, hal::seconds(1));
+  loop.run_for(hal::millis(200));
+  emu.with_emulator([](P2osEmulator& e) { e.set_silent(false); });
+  ASSERT_TRUE(loop.run_until([&] { return driver.state().link == LinkState::connected; }, hal::seconds(5)));
+  EXPECT_EQ(driver.state().reconnects, 1u);
+  // The first velocity commands after the new OPEN are zero.
+  const bool zero_first = emu.with_emulator([](P2osEmulator& e) {
+    long open_at = -1;
+    for (std::size_t i = 0; i < e.command_log_size(); ++i)
+      if (e.command_log(i).command == cmd(kOpen)) open_at = static_cast<long>(i);
+    if (open_at < 0 || static_cast<std::size_t>(open_at + 2) >= e.command_log_size()) return false;
+    const ReceivedCommand& a = e.command_log(static_cast<std::size_t>(open_at + 1));
+    const ReceivedCommand& b = e.command_log(static_cast<std::size_t>(open_at + 2));
+    return a.command == cmd(Command::vel) && a.value == 0 && b.command == cmd(Command::rvel) && b.value == 0;
+  });
+  EXPECT_TRUE(zero_first);
+
+  // Noise bursts and corrupt packets: the link holds.
+  for (int i = 0; i < 3; ++i) {
+    emu.with_emulator([](P2osEmulator& e) {
+      e.inject_noise(120);
+      e.inject_bad_checksums(1);
+    });
+    loop.run_for(hal::millis(150));
+  }
+  loop.run_for(hal::millis(200));
+  EXPECT_EQ(driver.state().link, LinkState::connected);
+  EXPECT_EQ(driver.state().link_losses, 1u);  // only the silence
+  EXPECT_GE(driver.state().bad_checksums, 3u);
+
+  // The device disappears: an error, promptly, and no hang.
+  emu.close_device();
+  ASSERT_TRUE(loop.run_until([&] { return !driver.attached(); }, hal::seconds(2)));
+  ASSERT_TRUE(driver.stream_error().has_value());
+  EXPECT_EQ(driver.state().link, LinkState::disconnected);
+}
+
+TEST(P2osTcp, TaskConnectsDrivesAndReconnectsAfterDrop) {
+  auto runner = TcpEmulatorRunner::start(quick_robot(), 0);
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  TcpEmulatorRunner& emu = **runner;
+  P2osConfig config;
+  config.port = "tcp://127.0.0.1:" + std::to_string(emu.port());
+  config.reopen_delay_ms = 100;
+  hal::PosixClock clock;
+  tasks::Topic<BaseSetpoint> setpoints;
+  tasks::Topic<BaseState> states;
+  P2osTask task(config, clock, setpoints, states);
+  std::array<std::byte, 64 * 1024> buffer;
+  std::pmr::monotonic_buffer_resource arena(buffer.data(), buffer.size(), std::pmr::null_memory_resource());
+  ASSERT_TRUE(task.init(arena));
+  std::uint64_t cycle = 0;
+  auto run_until = [&](const std::function<bool(const BaseState&)>& done, hal::Nanos max_ns) {
+    const hal::Nanos end = clock.now() + max_ns;
+    while (clock.now() < end) {
+      const hal::Nanos now = clock.now();
+      setpoints.publish(BaseSetpoint{0.4, 0, true}, now);
+      task.step(tasks::StepContext{now, now, cycle++});
+      tasks::Sample<BaseState> s;
+      if (states.read(s) && done(s.value)) return true;
+      clock.sleep_until(now + hal::millis(2));
+    }
+    return false;
+  };
+  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link == LinkState::connected; }, hal::seconds(5)));
+  ASSERT_TRUE(run_until([](const BaseState& s) { return s.v_m_s > 0.39; }, hal::seconds(3)));
+  const double x_before = task.driver()->state().x_m;
+  EXPECT_GT(x_before, 0.0);
+  emu.drop_client();
+  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link != LinkState::connected; }, hal::seconds(2)));
+  // A new TCP client gets a fresh session from the simulator; the task reopens by itself.
+  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link == LinkState::connected && s.v_m_s > 0.39; },
+                        hal::seconds(5)));
+  EXPECT_GE(emu.clients_served(), 2u);
+  task.shutdown();
+  const bool closed = [&] {
+    for (int i = 0; i < 100; ++i) {
+      if (emu.with_emulator([](P2osEmulator& e) { return e.state() == EmulatorState::sync_wait; })) return true;
+      clock.sleep_until(clock.now() + hal::millis(10));
+    }
+    return false;
+  }();
+  EXPECT_TRUE(closed);
+  EXPECT_EQ(emu.with_emulator([](P2osEmulator& e) { return e.stats().bad_checksums; }), 0u);
+}
+
+}  // namespace
+}  // namespace sen3bot::p2os
