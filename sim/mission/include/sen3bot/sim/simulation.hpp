@@ -1,0 +1,122 @@
+#pragma once
+// The simulated robot for the main job: the map as ground truth with scripted movers, the
+// Pioneer (ARCOS) and LMS200 emulators on the far ends of the drivers' byte streams, and the
+// bookkeeping a mission report needs (true pose, contacts, clearance).
+//
+// The firmware under test does not know it is simulated: its drivers talk to the emulators
+// through in-memory pipes (lockstep: one thread, deterministic for a seed) or through real
+// pseudo-terminals whose slave paths the drivers open as serial ports (real time).
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sen3bot/hal/clock.hpp"
+#include "sen3bot/hal/memory_stream.hpp"
+#include "sen3bot/hal/pty.hpp"
+#include "sen3bot/hal/result.hpp"
+#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/p2os/emulator.hpp"
+#include "sen3bot/tasks/task.hpp"
+#include "sen3bot/tasks/topic.hpp"
+#include "sen3bot/world/world.hpp"
+
+namespace sen3bot::sim {
+
+enum class LinkKind : std::uint8_t {
+  memory,  // in-memory byte pipes, for lockstep simulated time
+  pty,     // real pseudo-terminals, for real time
+};
+
+struct SimulationConfig {
+  std::string map_path;               // ROS map_server YAML of the ground-truth world
+  nav::Pose2D start_pose;             // true pose of the robot at t = 0 (map frame)
+  nav::Pose2D laser_mount;            // scanner pose in the robot frame
+  nav::Footprint footprint = nav::Footprint::pioneer();
+  std::uint64_t seed = 1;             // range noise and fault noise
+  double range_noise_sigma_m = 0.01;  // Gaussian noise on each simulated range
+  double laser_max_range_m = 8.0;     // beyond this the scanner reports "no echo"
+  LinkKind link = LinkKind::memory;
+  std::vector<world::MoverScript> movers;  // people and boxes walking polylines
+  p2os::EmulatorConfig base;
+  lms200::EmulatorOptions laser;
+  std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
+};
+
+// What really happened, published every simulation step.
+struct GroundTruth {
+  hal::Nanos stamp_ns = 0;
+  nav::Pose2D pose;                 // true robot pose, map frame
+  double speed_m_s = 0;             // true forward speed
+  double clearance_m = 0;           // footprint to the nearest obstacle or mover (capped)
+  double nearest_person_m = 0;      // robot centre to the nearest visible person (capped)
+  std::uint64_t contacts = 0;       // times the footprint started to overlap something
+  bool in_contact = false;
+};
+static_assert(std::is_trivially_copyable_v<GroundTruth>);
+
+class Simulation {
+ public:
+  // Loads the map, builds the world and opens the links. Allocates; call before the run.
+  static Result<std::unique_ptr<Simulation>> create(const SimulationConfig& config);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  // The drivers' ends. Memory links: the streams and the laser's line; pty links: the slave
+  // device paths (open them as serial ports).
+  [[nodiscard]] hal::ByteStream* base_driver_stream() noexcept;
+  [[nodiscard]] hal::ByteStream* laser_driver_stream() noexcept;
+  [[nodiscard]] lms200::LineControl* laser_driver_line() noexcept;
+  [[nodiscard]] std::string base_device_path() const;
+  [[nodiscard]] std::string laser_device_path() const;
+
+  // Advances the world to `now` and lets both emulators read and answer. Never allocates.
+  void step(hal::Nanos now_ns) noexcept;
+  [[nodiscard]] const GroundTruth& truth() const noexcept { return truth_; }
+
+  [[nodiscard]] world::World& world() noexcept { return *world_; }
+  [[nodiscard]] p2os::P2osEmulator& base() noexcept { return base_; }
+  [[nodiscard]] lms200::Lms200Emulator& laser() noexcept { return *laser_; }
+  [[nodiscard]] const SimulationConfig& config() const noexcept { return config_; }
+
+ private:
+  class WorldRanges;
+  class WorldObstacles;
+  class PtyLine;
+
+  explicit Simulation(const SimulationConfig& config);
+  Status open(const nav::OccupancyMap& map);
+
+  SimulationConfig config_;
+  std::unique_ptr<world::World> world_;
+  std::unique_ptr<WorldRanges> ranges_;
+  std::unique_ptr<WorldObstacles> obstacles_;
+  p2os::P2osEmulator base_;
+  std::unique_ptr<lms200::Lms200Emulator> laser_;
+  // Memory links.
+  std::unique_ptr<hal::MemoryPipe> base_pipe_;
+  std::unique_ptr<hal::MemoryPipe> laser_pipe_;
+  std::unique_ptr<lms200::SimulatedLine> laser_line_;
+  // Pty links.
+  std::unique_ptr<hal::PtyPair> base_pty_;
+  std::unique_ptr<hal::PtyPair> laser_pty_;
+  std::unique_ptr<PtyLine> laser_pty_line_;
+  GroundTruth truth_;
+};
+
+// The simulation as a scheduler task: one step per period, GroundTruth published each step.
+class SimulationTask final : public tasks::Task {
+ public:
+  SimulationTask(Simulation& simulation, tasks::Topic<GroundTruth>& truth_topic)
+      : simulation_(simulation), truth_topic_(truth_topic) {}
+  Status init(std::pmr::memory_resource&) override { return Status::success(); }
+  void step(const tasks::StepContext& context) override;
+
+ private:
+  Simulation& simulation_;
+  tasks::Topic<GroundTruth>& truth_topic_;
+};
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,157 @@
+#include "sen3bot/sim/simulation.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "sen3bot/nav/map.hpp"
+
+namespace sen3bot::sim {
+
+namespace {
+
+constexpr double kClearanceLimitM = 5.0;  // clearance/person distances are capped here
+constexpr double kNanosPerSecond = 1e9;
+
+nav::Pose2D compose(const nav::Pose2D& a, const nav::Pose2D& b) {
+  const double c = std::cos(a.theta_rad);
+  const double s = std::sin(a.theta_rad);
+  return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, nav::normalize_angle(a.theta_rad + b.theta_rad)};
+}
+
+nav::Pose2D to_nav(const p2os::Pose2& p) { return {p.x_m, p.y_m, p.theta_rad}; }
+
+}  // namespace
+
+// The scanner's view: the world ray-cast from the sensor pose, with seeded range noise.
+class Simulation::WorldRanges final : public lms200::RangeSource {
+ public:
+  WorldRanges(world::World& world, double max_range_m) : world_(world), max_range_m_(max_range_m) {}
+  void ranges(hal::Nanos, const lms200::ScanGeometry& geometry, std::span<float> out_m) override {
+    const lms200::SensorPose p = sensor_pose();
+    const double max_m = std::min(max_range_m_, geometry.range_max_m > 0 ? geometry.range_max_m : max_range_m_);
+    world_.noisy_scan({p.x_m, p.y_m, p.theta_rad}, geometry.angle_min_rad, geometry.angle_increment_rad, geometry.count,
+                      max_m, out_m);
+    // The world reports max range for "nothing hit"; the scanner reports no echo.
+    for (float& r : out_m)
+      if (!(r < max_m)) r = std::numeric_limits<float>::infinity();
+  }
+
+ private:
+  world::World& world_;
+  double max_range_m_;
+};
+
+// The base's view: a motion into a wall or a mover stalls the wheels; sonar rays see the world.
+class Simulation::WorldObstacles final : public p2os::EmulatorWorld {
+ public:
+  WorldObstacles(world::World& world, const nav::Footprint& footprint) : world_(world), footprint_(footprint) {}
+  bool motion_blocked(const p2os::Pose2& from, const p2os::Pose2& to) override {
+    // Moving out of an overlap (a person walked into the robot) is allowed.
+    return world_.collides(to_nav(to), footprint_) && !world_.collides(to_nav(from), footprint_);
+  }
+  double sonar_range_m(const p2os::Pose2& sensor, double max_range_m) override {
+    return world_.cast_ray(sensor.x_m, sensor.y_m, sensor.theta_rad, max_range_m);
+  }
+
+ private:
+  world::World& world_;
+  nav::Footprint footprint_;
+};
+
+// The laser driver's real line rate, read from the pty master.
+class Simulation::PtyLine final : public lms200::ClientLine {
+ public:
+  explicit PtyLine(hal::PtyPair& pty) : pty_(pty) {}
+  Result<std::uint32_t> client_baud() override { return pty_.slave_baud(); }
+
+ private:
+  hal::PtyPair& pty_;
+};
+
+Simulation::Simulation(const SimulationConfig& config) : config_(config), base_(config.base) {}
+Simulation::~Simulation() = default;
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const SimulationConfig& config) {
+  Result<nav::OccupancyMap> map = nav::load_map(config.map_path);
+  if (!map) return Error::format(map.error().code(), "simulation: %s", map.error().c_str());
+  std::unique_ptr<Simulation> sim(new Simulation(config));
+  if (Status s = sim->open(*map); !s) return s.error();
+  return sim;
+}
+
+Status Simulation::open(const nav::OccupancyMap& map) {
+  world::WorldConfig world_config;
+  world_config.seed = config_.seed;
+  world_config.range_noise_sigma_m = config_.range_noise_sigma_m;
+  world_ = std::make_unique<world::World>(map, world_config);
+  for (const world::MoverScript& mover : config_.movers) world_->add_mover(mover);
+  world_->set_time(0.0);
+  if (world_->collides(config_.start_pose, config_.footprint))
+    return Error::format(Errc::config, "simulation: the start pose (%.2f, %.2f) m overlaps an obstacle of %s",
+                         config_.start_pose.x_m, config_.start_pose.y_m, config_.map_path.c_str());
+
+  ranges_ = std::make_unique<WorldRanges>(*world_, config_.laser_max_range_m);
+  obstacles_ = std::make_unique<WorldObstacles>(*world_, config_.footprint);
+  base_.set_world(obstacles_.get());
+  base_.set_ground_truth({config_.start_pose.x_m, config_.start_pose.y_m, config_.start_pose.theta_rad});
+
+  if (config_.link == LinkKind::memory) {
+    base_pipe_ = std::make_unique<hal::MemoryPipe>(config_.pipe_bytes, "sim:base-driver", "sim:base-robot");
+    laser_pipe_ = std::make_unique<hal::MemoryPipe>(config_.pipe_bytes, "sim:laser-driver", "sim:laser-scanner");
+    laser_line_ = std::make_unique<lms200::SimulatedLine>(config_.laser.initial_baud);
+    laser_ = std::make_unique<lms200::Lms200Emulator>(config_.laser, laser_pipe_->b(), *ranges_, laser_line_.get());
+  } else {
+    Result<std::unique_ptr<hal::PtyPair>> base_pty = hal::PtyPair::open();
+    if (!base_pty) return Error::format(base_pty.error().code(), "simulation: base pty: %s", base_pty.error().c_str());
+    Result<std::unique_ptr<hal::PtyPair>> laser_pty = hal::PtyPair::open();
+    if (!laser_pty) return Error::format(laser_pty.error().code(), "simulation: laser pty: %s", laser_pty.error().c_str());
+    base_pty_ = std::move(*base_pty);
+    laser_pty_ = std::move(*laser_pty);
+    laser_pty_line_ = std::make_unique<PtyLine>(*laser_pty_);
+    laser_ = std::make_unique<lms200::Lms200Emulator>(config_.laser, *laser_pty_, *ranges_, laser_pty_line_.get());
+  }
+  truth_.pose = config_.start_pose;
+  return Status::success();
+}
+
+hal::ByteStream* Simulation::base_driver_stream() noexcept { return base_pipe_ ? &base_pipe_->a() : nullptr; }
+hal::ByteStream* Simulation::laser_driver_stream() noexcept { return laser_pipe_ ? &laser_pipe_->a() : nullptr; }
+lms200::LineControl* Simulation::laser_driver_line() noexcept { return laser_line_.get(); }
+std::string Simulation::base_device_path() const { return base_pty_ ? std::string(base_pty_->slave_path()) : std::string(); }
+std::string Simulation::laser_device_path() const {
+  return laser_pty_ ? std::string(laser_pty_->slave_path()) : std::string();
+}
+
+void Simulation::step(hal::Nanos now_ns) noexcept {
+  world_->set_time(static_cast<double>(now_ns) / kNanosPerSecond);
+  hal::ByteStream& base_stream = base_pipe_ ? static_cast<hal::ByteStream&>(base_pipe_->b()) : *base_pty_;
+  // A failed step means the driver's end went away; the robot keeps its state, as hardware does.
+  (void)base_.step(base_stream, now_ns);
+
+  const nav::Pose2D pose = to_nav(base_.ground_truth());
+  const nav::Pose2D sensor = compose(pose, config_.laser_mount);
+  ranges_->set_sensor_pose(sensor.x_m, sensor.y_m, sensor.theta_rad);
+  laser_->step(now_ns);
+
+  truth_.stamp_ns = now_ns;
+  truth_.pose = pose;
+  truth_.speed_m_s = base_.velocity_m_s();
+  truth_.clearance_m = world_->clearance_m(pose, config_.footprint, kClearanceLimitM);
+  double nearest = kClearanceLimitM;
+  for (std::size_t i = 0; i < world_->mover_count(); ++i) {
+    if (!world_->mover_visible(i) || !config_.movers[i].person) continue;
+    const nav::Point2D p = world_->mover_position(i);
+    nearest = std::min(nearest, std::hypot(p.x_m - pose.x_m, p.y_m - pose.y_m));
+  }
+  truth_.nearest_person_m = nearest;
+  const bool contact = world_->collides(pose, config_.footprint);
+  if (contact && !truth_.in_contact) ++truth_.contacts;
+  truth_.in_contact = contact;
+}
+
+void SimulationTask::step(const tasks::StepContext& context) {
+  simulation_.step(context.release_ns);
+  truth_topic_.publish(simulation_.truth(), context.release_ns);
+}
+
+}  // namespace sen3bot::sim
