@@ -1,0 +1,75 @@
+#pragma once
+// The camera as the firmware sees it: one non-real-time thread runs the RTSP client and the
+// decoder and publishes frames to a fixed pool; real-time tasks read the newest frame with
+// frames().acquire_latest(), which never blocks or allocates.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "sen3bot/camera/decoder.hpp"
+#include "sen3bot/camera/frame_pool.hpp"
+#include "sen3bot/camera/rtsp_client.hpp"
+#include "sen3bot/hal/clock.hpp"
+
+namespace sen3bot::camera {
+
+struct CameraConfig {
+  RtspClientConfig rtsp;                 // URL, credentials, transport, timeouts (see there)
+  std::size_t frame_pool_slots = 4;      // >= 3; one more per reader that holds frames long
+  std::uint32_t max_width_px = 1280;     // pool slot size; frames are shrunk to fit, never enlarged
+  std::uint32_t max_height_px = 720;
+  PixelFormat format = PixelFormat::bgr8;  // bgr8 for display/detection, gray8 for cheap work
+  int downscale = 1;                     // 1, 2 or 4: divide the source size before fitting
+  int poll_period_ms = 5;                // longest sleep of the camera thread between steps
+};
+
+struct CameraStatus {
+  ClientState state = ClientState::idle;
+  StreamInfo stream;
+  RtspClientStats rtsp;
+  DepacketizerStats depacketizer;
+  DecoderStats decoder;
+  double latency_ms_p50 = 0;  // last RTP packet of a frame -> frame readable, over the last 256
+  double latency_ms_max = 0;
+  std::string last_error;
+};
+
+class Camera {
+ public:
+  static Result<std::unique_ptr<Camera>> create(CameraConfig config, hal::Clock& clock);
+  ~Camera();
+  Camera(const Camera&) = delete;
+  Camera& operator=(const Camera&) = delete;
+
+  Status start();
+  void stop();  // TEARDOWN and join; idempotent
+
+  [[nodiscard]] FramePool& frames() { return *pool_; }
+  [[nodiscard]] CameraStatus status() const;  // copies under a mutex: not for real-time code
+
+ private:
+  class Sink;
+  Camera(CameraConfig config, hal::Clock& clock, std::unique_ptr<FramePool> pool);
+  void run();
+  void on_frame(const EncodedFrame& frame);
+
+  CameraConfig config_;
+  hal::Clock& clock_;
+  std::unique_ptr<FramePool> pool_;
+  std::unique_ptr<Sink> sink_;
+  std::unique_ptr<RtspClient> client_;
+  std::unique_ptr<FrameDecoder> decoder_;
+  VideoCodec decoder_codec_ = VideoCodec::unknown;
+  std::thread thread_;
+  std::atomic<bool> running_{false};
+  mutable std::mutex status_mutex_;
+  CameraStatus status_;
+  static constexpr std::size_t kLatencySamples = 256;
+  double latencies_ms_[kLatencySamples] = {};
+  std::size_t latency_count_ = 0;
+};
+
+}  // namespace sen3bot::camera
