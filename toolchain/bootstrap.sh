@@ -33,6 +33,18 @@ NATIVE_PACKAGES=(
   rt-tests                   # cyclictest, compared against by the jitter benchmark
   clang                      # optional libFuzzer build (SEN3BOT_LIBFUZZER=ON)
   libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14
+  libssl-dev                 # camera: MD5 for RTSP Digest auth (libcrypto)
+  libavcodec-dev             # camera: H.264 decoding
+  libavutil-dev
+  libswscale-dev             # camera: YUV -> BGR/grey and downscaling
+  python3-gi                 # camera tests: the RTSP peer is gst-rtsp-server driven from Python
+  python3-gst-1.0
+  gir1.2-gst-rtsp-server-1.0
+  gstreamer1.0-rtsp
+  gstreamer1.0-plugins-base  # videotestsrc, jpegenc
+  gstreamer1.0-plugins-good  # rtph264pay, rtpjpegpay
+  gstreamer1.0-plugins-ugly  # x264enc
+  ffmpeg                     # camera tests: ffprobe cross-checks what the peer streams
 )
 
 # --- Raspberry Pi cross build (--cross) -------------------------------------------------------

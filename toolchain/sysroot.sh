@@ -41,6 +41,8 @@ SYSROOT_PACKAGES=(
   libbenchmark-dev
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev
+  libssl-dev                   # camera: libcrypto (Digest auth)
+  libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
 )
 # libopencv-imgcodecs-dev links libgdal32: +~100 packages, +~50 MiB download, +~200 MB unpacked.
 SYSROOT_IMGCODECS_PACKAGES=(libopencv-imgcodecs-dev)
