@@ -102,4 +102,49 @@ std::string describe_packet_json(double t_s, PacketDirection direction, const Fr
   return out;
 }
 
+Status decode_capture(const capture::CaptureFile& capture, std::string_view channel_name,
+                      const std::function<void(const std::string& line)>& emit) {
+  const capture::ChannelDecl* channel = nullptr;
+  if (!channel_name.empty()) {
+    channel = capture.find_channel(channel_name);
+  } else {
+    channel = capture.find_channel("p2os");
+    if (channel == nullptr && capture.info().channels.size() == 1) channel = &capture.info().channels.front();
+  }
+  if (channel == nullptr) {
+    return Error::format(Errc::not_found, "capture has no channel '%.*s'",
+                         static_cast<int>(channel_name.empty() ? 4 : channel_name.size()),
+                         channel_name.empty() ? "p2os" : channel_name.data());
+  }
+  // Time stamps in the capture are exact; the parsers' gap rule uses them too.
+  FrameParser rx_parser;
+  FrameParser tx_parser;
+  for (const capture::Record& record : capture.records()) {
+    if (record.channel != channel->id) continue;
+    const double t_s = hal::to_seconds(record.t_ns);
+    if (record.kind == capture::RecordKind::rx) {
+      rx_parser.feed(record.payload, record.t_ns,
+                     [&](const Frame& f) { emit(describe_packet_json(t_s, PacketDirection::from_robot, f)); });
+    } else if (record.kind == capture::RecordKind::tx) {
+      tx_parser.feed(record.payload, record.t_ns,
+                     [&](const Frame& f) { emit(describe_packet_json(t_s, PacketDirection::to_robot, f)); });
+    } else if (record.kind == capture::RecordKind::baud_change) {
+      std::string line;
+      append(line, "{\"t_s\":%.6f,\"baud\":%u}", t_s, static_cast<unsigned>(record.baud));
+      emit(line);
+    }
+  }
+  std::string summary;
+  const ParserStats& rx = rx_parser.stats();
+  const ParserStats& tx = tx_parser.stats();
+  append(summary, "{\"summary\":true,\"rx_packets\":%llu,\"tx_packets\":%llu,\"rx_bad_checksums\":%llu,",
+         static_cast<unsigned long long>(rx.frames), static_cast<unsigned long long>(tx.frames),
+         static_cast<unsigned long long>(rx.bad_checksums));
+  append(summary, "\"tx_bad_checksums\":%llu,\"rx_discarded_bytes\":%llu,\"tx_discarded_bytes\":%llu}",
+         static_cast<unsigned long long>(tx.bad_checksums), static_cast<unsigned long long>(rx.discarded_bytes),
+         static_cast<unsigned long long>(tx.discarded_bytes));
+  emit(summary);
+  return Status::success();
+}
+
 }  // namespace sen3bot::p2os
