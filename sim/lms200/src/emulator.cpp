@@ -216,9 +216,11 @@ void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number) noex
 }
 
 void Lms200Emulator::handle(hal::Nanos now, FrameView request) noexcept {
-  ++counters_.requests;
   const auto p = request.payload();
   const std::uint8_t cmd = p[0];
+  if (counters_.requests < EmulatorCounters::kLoggedRequests)
+    counters_.request_log[counters_.requests] = static_cast<std::uint16_t>((cmd << 8) | (p.size() > 1 ? p[1] : 0));
+  ++counters_.requests;
   auto reject = [this] {
     ++counters_.rejected;
     reply(kReplyRejected, {}, true);

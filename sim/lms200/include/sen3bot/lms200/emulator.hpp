@@ -154,6 +154,9 @@ struct EmulatorCounters {
   std::uint64_t garbled_rx_bytes = 0;  // arrived while the client's rate differed
   std::uint64_t garbled_tx_bytes = 0;
   std::uint64_t bytes_sent = 0;
+  // The first kLoggedRequests requests as (command << 8) | first parameter byte.
+  static constexpr std::size_t kLoggedRequests = 64;
+  std::array<std::uint16_t, kLoggedRequests> request_log{};
 };
 
 class Lms200Emulator {
