@@ -33,6 +33,7 @@ NATIVE_PACKAGES=(
   rt-tests                   # cyclictest, compared against by the jitter benchmark
   clang                      # optional libFuzzer build (SEN3BOT_LIBFUZZER=ON)
   libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14
+  libmrpt-hwdrivers-dev      # lms200 tests: MRPT's CSickLaserSerial, a third-party LMS200 client
   libssl-dev                 # camera: MD5 for RTSP Digest auth (libcrypto)
   libavcodec-dev             # camera: H.264 decoding
   libavutil-dev
