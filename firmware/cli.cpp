@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 
+#include "commands.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "sen3bot/capture/dump.hpp"
@@ -40,6 +41,15 @@ constexpr const char* kUsage =
     "        group, 'lockstep' runs simulated time as fast as the CPU allows.\n"
     "  capture dump FILE\n"
     "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
+    "  decode p2os CAPTURE\n"
+    "        Decode the Pioneer base packets of a wire capture as JSON lines (time,\n"
+    "        direction, type, fields).\n"
+    "  p2os-emulator (--pty LINK | --tcp PORT) [--name NAME]\n"
+    "        Run the Pioneer 3-DX (ARCOS) emulator until SIGINT: on a pseudo-terminal\n"
+    "        whose slave is symlinked at LINK, or on a TCP port (MobileSim style).\n"
+    "  drive --port DEV|tcp://HOST:PORT --vel M_S --rvel RAD_S --seconds S [--baud B]\n"
+    "        Connect to the base, enable the motors, drive at the given velocities, print\n"
+    "        odometry as JSON lines, then stop, disable and close.\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -261,6 +271,10 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
   if (command == "run") return run_command(argc - 2, argv + 2, out, err);
   if (command == "capture") return capture_command(argc - 2, argv + 2, out, err);
+  if (command == "decode" && argc >= 3 && std::string_view(argv[2]) == "p2os")
+    return decode_p2os_command(argc - 3, argv + 3, out, err);
+  if (command == "p2os-emulator") return p2os_emulator_command(argc - 2, argv + 2, out, err);
+  if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
   std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
   return 2;
 }

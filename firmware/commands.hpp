@@ -1,0 +1,16 @@
+#pragma once
+// Device command-line entry points, one function per command; cli.cpp dispatches to them.
+// Each takes the arguments after its command words and returns the process exit code
+// (0 success, 1 run-time failure, 2 bad command line).
+#include <cstdio>
+
+namespace sen3bot::firmware {
+
+// sen3bot decode p2os CAPTURE
+int decode_p2os_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot p2os-emulator (--pty LINK | --tcp PORT)
+int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot drive --port DEV|tcp://HOST:PORT --vel M_S --rvel RAD_S --seconds S
+int drive_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
+}  // namespace sen3bot::firmware
