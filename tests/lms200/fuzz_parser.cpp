@@ -13,6 +13,11 @@ namespace {
 
 using namespace sen3bot::lms200;
 
+constexpr MeasuringMode kModes[] = {
+    MeasuringMode::range8_fields_dazzle, MeasuringMode::range8_reflector8,  MeasuringMode::range8_fields_abc,
+    MeasuringMode::range16_reflector4,   MeasuringMode::range16_fields_ab,  MeasuringMode::range32_reflector2,
+    MeasuringMode::range32_field_a,      MeasuringMode::range32_immediate,  MeasuringMode::reflectivity};
+
 void check(bool ok) {
   if (!ok) std::abort();
 }
@@ -32,8 +37,8 @@ void decode_all(FrameView f) {
   if (s.ok()) {
     check(s->count <= kMaxValues);
     for (std::size_t i = 0; i < s->count; ++i)
-      for (std::uint8_t m : {0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x0F, 0x3F}) {
-        const ScanValue v = decode_value(s->words[i], static_cast<MeasuringMode>(m));
+      for (MeasuringMode m : kModes) {
+        const ScanValue v = decode_value(s->words[i], m);
         check((v.reason == InvalidReason::none) == ((v.flags & value_flag::kValid) != 0));
       }
   }
