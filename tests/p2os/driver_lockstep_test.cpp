@@ -378,6 +378,53 @@ TEST(P2osLockstep, WatchdogStopsAndResumesLastSetpoint) {
   EXPECT_NEAR(emu.velocity_m_s(), 0.3, 1e-9);  // ARCOS resumes the old setpoint
 }
 
+TEST(P2osLockstep, EmulatorPositionHeadingAndWheelCommands) {
+  hal::MemoryPipe pipe(4096);
+  P2osEmulator emu(test::fast_emulator_config());
+  hal::Nanos t = 0;
+  auto run = [&](hal::Nanos d) {
+    const hal::Nanos end = t + d;
+    std::uint8_t sink[1024];
+    while (t < end) {
+      (void)emu.step(pipe.b(), t);
+      (void)pipe.a().read(sink);
+      t += hal::millis(5);
+    }
+  };
+  auto send = [&](const Packet& p) {
+    (void)pipe.a().write(p.view());
+    run(hal::millis(10));
+  };
+  for (const Packet& p : {encode_command(Command::sync0), encode_command(Command::sync1), encode_command(Command::sync2),
+                          encode_command(kOpen), encode_command_int(Command::enable, 1)})
+    send(p);
+  // MOVE: position mode, stops at the goal.
+  send(encode_command_int(Command::move, 500));
+  for (int i = 0; i < 8; ++i) {
+    send(encode_command(kPulse));
+    run(hal::millis(400));
+  }
+  EXPECT_NEAR(emu.ground_truth().x_m, 0.5, 0.003);
+  EXPECT_EQ(emu.velocity_m_s(), 0.0);
+  // HEAD: absolute heading in degrees, signed as ARIA sends it.
+  send(encode_command_int(Command::head, -90));
+  for (int i = 0; i < 8; ++i) {
+    send(encode_command(kPulse));
+    run(hal::millis(400));
+  }
+  EXPECT_NEAR(emu.ground_truth().theta_rad, -std::numbers::pi / 2, 0.01);
+  // VEL2 as ARIA encodes it: left = right = 10 units (200 mm/s) -> packed 0x0A0A, positive.
+  send(encode_command_int(Command::vel2, 0x0A0A));
+  run(hal::seconds(1));
+  EXPECT_NEAR(emu.velocity_m_s(), 0.2, 1e-9);
+  EXPECT_NEAR(emu.omega_rad_s(), 0.0, 1e-9);
+  // Left -10, right +10 units: packed -2550 goes out as 0x1B + 2550; a pure turn.
+  send(encode_command_int(Command::vel2, static_cast<std::int16_t>((-10 << 8) + 10)));
+  run(hal::seconds(1));
+  EXPECT_NEAR(emu.velocity_m_s(), 0.0, 1e-9);
+  EXPECT_NEAR(emu.omega_rad_s(), 200.0 * 0.0056, 1e-6);
+}
+
 // A link that garbles every byte unless both ends run at the same rate: lets the driver's
 // baud probing and HOSTBAUD switch be tested without a UART.
 class RateCheckedLink final : public hal::ByteStream, public BaudControl {

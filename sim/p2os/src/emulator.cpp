@@ -14,6 +14,8 @@ constexpr double kThetaUnitRad = 2.0 * std::numbers::pi / kThetaUnitsPerRev;
 constexpr double kVel2DivisorMm = 20.0;
 // Integration step: big enough to be cheap, small enough that a square stays square.
 constexpr hal::Nanos kMaxIntegrationStepNs = hal::millis(5);
+// MOVE counts as done within this distance of the goal.
+constexpr double kMoveDoneMm = 0.5;
 // Heading-servo gain for HEAD/DHEAD, 1/s.
 constexpr double kHeadingGainPerS = 3.0;
 // AMRISim sends this temperature for "no sensor".
@@ -55,6 +57,7 @@ void P2osEmulator::reset_session() noexcept {
   v_mm_s_ = w_deg_s_ = 0;
   target_v_mm_s_ = target_w_deg_s_ = 0;
   heading_mode_ = false;
+  move_mode_ = false;
   encoder_mode_ = 0;
   sonar_on_ = config_.sonar_enabled;
   max_v_mm_s_ = config_.trans_vel_max_mm_s;
@@ -85,6 +88,7 @@ void P2osEmulator::set_estop(bool pressed) noexcept {
 void P2osEmulator::stop_motion() noexcept {
   target_v_mm_s_ = target_w_deg_s_ = 0;
   heading_mode_ = false;
+  move_mode_ = false;
 }
 
 std::size_t P2osEmulator::command_log_size() const noexcept {
@@ -229,6 +233,11 @@ void P2osEmulator::handle_command(const Frame& frame, hal::Nanos now_ns) noexcep
       return;
     case Command::vel:
       target_v_mm_s_ = std::clamp(value, -max_v_mm_s_, max_v_mm_s_);
+      move_mode_ = false;
+      return;
+    case Command::move:
+      move_mode_ = true;
+      move_remaining_mm_ = value;
       return;
     case Command::rvel:
     case Command::rotate:
@@ -243,6 +252,11 @@ void P2osEmulator::handle_command(const Frame& frame, hal::Nanos now_ns) noexcep
       heading_mode_ = true;
       target_heading_rad_ = wrap_angle_rad(odom_theta_rad_ + value / kDegPerRad);
       return;
+    case Command::dchead:
+      // Relative to the current heading setpoint (or the heading, if none).
+      target_heading_rad_ = wrap_angle_rad((heading_mode_ ? target_heading_rad_ : odom_theta_rad_) + value / kDegPerRad);
+      heading_mode_ = true;
+      return;
     case Command::vel2: {
       const Vel2Units units = decode_vel2(arg);
       const double left_mm_s = units.left * kVel2DivisorMm;
@@ -251,6 +265,7 @@ void P2osEmulator::handle_command(const Frame& frame, hal::Nanos now_ns) noexcep
       target_w_deg_s_ = std::clamp((right_mm_s - left_mm_s) / 2.0 * config_.diff_conv_rad_per_mm * kDegPerRad,
                                    -max_w_deg_s_, max_w_deg_s_);
       heading_mode_ = false;
+      move_mode_ = false;
       return;
     }
     case Command::stop:
@@ -312,6 +327,11 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
       const double error_deg = wrap_angle_rad(target_heading_rad_ - odom_theta_rad_) * kDegPerRad;
       tw = std::clamp(error_deg * kHeadingGainPerS, -max_w_deg_s_, max_w_deg_s_);
     }
+    if (move_mode_ && !watchdog_tripped_) {
+      // Position mode: the fastest speed that can still brake to rest at the goal.
+      const double reach = std::sqrt(2.0 * std::max(decel_mm_s2_, 1.0) * std::fabs(move_remaining_mm_));
+      tv = std::fabs(move_remaining_mm_) < kMoveDoneMm ? 0.0 : std::copysign(reach, move_remaining_mm_);
+    }
     tv = std::clamp(tv, -max_v_mm_s_, max_v_mm_s_);
     v_mm_s_ = approach(v_mm_s_, tv, accel_mm_s2_, decel_mm_s2_, dt_s);
     w_deg_s_ = approach(w_deg_s_, tw, rot_accel_deg_s2_, rot_decel_deg_s2_, dt_s);
@@ -331,6 +351,7 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
     }
     stalled_now_ = false;
     truth_ = to;
+    if (move_mode_) move_remaining_mm_ -= ds_mm;
     const double odom_mid = odom_theta_rad_ + dth_rad / 2;
     odom_x_mm_ += ds_mm * std::cos(odom_mid);
     odom_y_mm_ += ds_mm * std::sin(odom_mid);

@@ -172,6 +172,8 @@ class P2osEmulator {
   double target_v_mm_s_ = 0;
   double target_w_deg_s_ = 0;
   bool heading_mode_ = false;
+  bool move_mode_ = false;          // MOVE: translate a distance, then stop
+  double move_remaining_mm_ = 0;    // signed
   double target_heading_rad_ = 0;  // controller odometry frame
   double max_v_mm_s_ = 0;
   double max_w_deg_s_ = 0;
