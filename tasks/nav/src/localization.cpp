@@ -1,0 +1,432 @@
+#include "sen3bot/nav/localization.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "sen3bot/nav/arena.hpp"
+
+namespace sen3bot::nav {
+
+double normal_quantile(double p) noexcept {
+  // Acklam's algorithm: rational approximations in a central and two tail regions.
+  static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
+                                 1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
+  static constexpr double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
+                                 6.680131188771972e+01, -1.328068155288572e+01};
+  static constexpr double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
+                                 -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
+  static constexpr double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                                 3.754408661907416e+00};
+  constexpr double low = 0.02425;
+  if (!(p > 0.0 && p < 1.0)) return p <= 0.0 ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+  if (p < low) {
+    const double q = std::sqrt(-2.0 * std::log(p));
+    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+  }
+  if (p > 1.0 - low) {
+    const double q = std::sqrt(-2.0 * std::log(1.0 - p));
+    return -(((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+  }
+  const double q = p - 0.5;
+  const double r = q * q;
+  return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
+}
+
+std::size_t kld_particle_count(std::size_t k, double err, double z, std::size_t min_count, std::size_t max_count) noexcept {
+  if (k <= 1) return min_count;
+  const double km1 = static_cast<double>(k - 1);
+  const double b = 2.0 / (9.0 * km1);
+  const double x = 1.0 - b + std::sqrt(b) * z;
+  const double n = std::ceil(km1 / (2.0 * err) * x * x * x);
+  return std::clamp(static_cast<std::size_t>(n), min_count, max_count);
+}
+
+std::size_t MonteCarloLocalization::storage_bytes(const MclConfig& c, const OccupancyMap& map) noexcept {
+  const std::size_t cells = map.cell_count();
+  const std::size_t line = static_cast<std::size_t>(std::max(map.width(), map.height())) + 2;
+  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t)) + line * (3 * sizeof(float) + sizeof(int)) +
+         c.max_particles * (2 * sizeof(Particle) + sizeof(double) + 2 * sizeof(std::uint64_t)) + 1024;
+}
+
+namespace {
+
+// One row or column of the exact squared distance transform (Felzenszwalb-Huttenlocher).
+void edt_1d(const float* f, std::size_t n, float* out, int* v, float* z) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::size_t first = 0;
+  while (first < n && f[first] == kInf) ++first;
+  if (first == n) {
+    std::fill(out, out + n, kInf);
+    return;
+  }
+  std::size_t k = 0;
+  v[0] = static_cast<int>(first);
+  z[0] = -kInf;
+  z[1] = kInf;
+  for (std::size_t q = first + 1; q < n; ++q) {
+    if (f[q] == kInf) continue;
+    float s = 0.0f;
+    for (;;) {
+      const auto p = static_cast<std::size_t>(v[k]);
+      s = ((f[q] + static_cast<float>(q * q)) - (f[p] + static_cast<float>(p * p))) /
+          (2.0f * static_cast<float>(q) - 2.0f * static_cast<float>(p));
+      if (s > z[k] || k == 0) break;
+      --k;
+    }
+    ++k;
+    v[k] = static_cast<int>(q);
+    z[k] = s;
+    z[k + 1] = kInf;
+  }
+  k = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    while (z[k + 1] < static_cast<float>(q)) ++k;
+    const float diff = static_cast<float>(q) - static_cast<float>(v[k]);
+    out[q] = diff * diff + f[static_cast<std::size_t>(v[k])];
+  }
+}
+
+}  // namespace
+
+Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap& map, std::pmr::memory_resource& resource) {
+  if (config.min_particles == 0 || config.max_particles < config.min_particles || !(config.kld_err > 0.0) ||
+      !(config.kld_confidence > 0.0 && config.kld_confidence < 1.0) || config.max_beams == 0 ||
+      !(config.sigma_hit_m > 0.0) || map.cell_count() == 0) {
+    return Error::format(Errc::config,
+                         "mcl: need 0 < min_particles <= max_particles, kld_err > 0, 0 < kld_confidence < 1, "
+                         "max_beams > 0, sigma_hit_m > 0 and a map");
+  }
+  if (map.origin_yaw_rad() != 0.0) return Error::format(Errc::config, "mcl: maps with a non-zero origin yaw are not supported");
+  config_ = config;
+  z_ = normal_quantile(config.kld_confidence);
+  width_ = map.width();
+  height_ = map.height();
+  resolution_m_ = map.resolution_m();
+  origin_x_m_ = map.origin_x_m();
+  origin_y_m_ = map.origin_y_m();
+  rng_.seed(config.seed);
+  return guarded("mcl", [&]() -> Status {
+    const std::size_t cells = map.cell_count();
+    field_ = allocate_array<float>(resource, cells);
+    log_field_ = allocate_array<float>(resource, cells);
+    auto squared = allocate_array<float>(resource, cells);
+    free_cells_ = allocate_array<std::uint32_t>(resource, cells);
+    const std::size_t line = static_cast<std::size_t>(std::max(width_, height_)) + 2;
+    auto f = allocate_array<float>(resource, line);
+    auto d = allocate_array<float>(resource, line);
+    auto z = allocate_array<float>(resource, line);
+    auto v = allocate_array<int>(resource, line);
+    particles_ = allocate_array<Particle>(resource, config.max_particles);
+    next_ = allocate_array<Particle>(resource, config.max_particles);
+    cumulative_ = allocate_array<double>(resource, config.max_particles);
+    bins_ = allocate_array<std::uint64_t>(resource, 2 * config.max_particles);
+
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    free_count_ = 0;
+    for (int c = 0; c < width_; ++c) {
+      for (int r = 0; r < height_; ++r) f[static_cast<std::size_t>(r)] = map.at(c, r) >= config.occupied_threshold ? 0.0f : kInf;
+      edt_1d(f.data(), static_cast<std::size_t>(height_), d.data(), v.data(), z.data());
+      for (int r = 0; r < height_; ++r) squared[static_cast<std::size_t>(r) * width_ + c] = d[static_cast<std::size_t>(r)];
+    }
+    const double two_sigma2 = 2.0 * config.sigma_hit_m * config.sigma_hit_m;
+    const double range_max = 10.0;  // LMS200 default range: only scales the z_rand floor
+    const double max_d = config.likelihood_max_dist_m;
+    pz_far_ = static_cast<float>(config.z_hit * std::exp(-max_d * max_d / two_sigma2) + config.z_rand / range_max);
+    log_pz_far_ = std::log(pz_far_);
+    for (int r = 0; r < height_; ++r) {
+      const std::size_t row = static_cast<std::size_t>(r) * width_;
+      for (int c = 0; c < width_; ++c) f[static_cast<std::size_t>(c)] = squared[row + c];
+      edt_1d(f.data(), static_cast<std::size_t>(width_), d.data(), v.data(), z.data());
+      for (int c = 0; c < width_; ++c) {
+        const double dist = std::min(max_d, std::sqrt(static_cast<double>(d[static_cast<std::size_t>(c)])) * resolution_m_);
+        field_[row + c] = static_cast<float>(config.z_hit * std::exp(-dist * dist / two_sigma2) + config.z_rand / range_max);
+        // Distance from the obstacle cell's edge rather than its centre, for the interpolation.
+        const double edge = std::max(0.0, dist - 0.5 * resolution_m_);
+        log_field_[row + c] = static_cast<float>(std::log(config.z_hit * std::exp(-edge * edge / two_sigma2) + config.z_rand / range_max));
+        const int occ = map.at(c, r);
+        if (occ >= 0 && occ < config.occupied_threshold / 2) free_cells_[free_count_++] = static_cast<std::uint32_t>(row + c);
+      }
+    }
+    set_pose(config.initial_pose, config.initial_std_xy_m, config.initial_std_theta_rad);
+    return Status::success();
+  });
+}
+
+float MonteCarloLocalization::log_field(double x_m, double y_m) const noexcept {
+  // Bilinear between cell centres: a wall face then scores as well as the wall cell, so the
+  // estimate does not snap half a cell into walls.
+  const double gx = (x_m - origin_x_m_) / resolution_m_ - 0.5;
+  const double gy = (y_m - origin_y_m_) / resolution_m_ - 0.5;
+  if (!(gx >= 0.0 && gy >= 0.0 && gx < width_ - 1 && gy < height_ - 1)) return log_pz_far_;
+  const auto c = static_cast<std::size_t>(gx);
+  const auto r = static_cast<std::size_t>(gy);
+  const auto fx = static_cast<float>(gx - static_cast<double>(c));
+  const auto fy = static_cast<float>(gy - static_cast<double>(r));
+  const std::size_t i = r * static_cast<std::size_t>(width_) + c;
+  const std::size_t w = static_cast<std::size_t>(width_);
+  const float top = log_field_[i] + fx * (log_field_[i + 1] - log_field_[i]);
+  const float bottom = log_field_[i + w] + fx * (log_field_[i + w + 1] - log_field_[i + w]);
+  return top + fy * (bottom - top);
+}
+
+float MonteCarloLocalization::likelihood(double x_m, double y_m) const noexcept {
+  const double gx = (x_m - origin_x_m_) / resolution_m_;
+  const double gy = (y_m - origin_y_m_) / resolution_m_;
+  if (!(gx >= 0.0 && gy >= 0.0 && gx < width_ && gy < height_)) return pz_far_;
+  return field_[static_cast<std::size_t>(gy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(gx)];
+}
+
+void MonteCarloLocalization::set_pose(const Pose2D& pose, double std_xy_m, double std_theta_rad) noexcept {
+  std::normal_distribution<double> n01(0.0, 1.0);
+  count_ = config_.max_particles;
+  // A confident start needs no more than the minimum; a vague one gets all the particles.
+  if (std_xy_m <= config_.bin_xy_m) count_ = config_.min_particles;
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    particles_[i] = {pose.x_m + std_xy_m * n01(rng_), pose.y_m + std_xy_m * n01(rng_),
+                     normalize_angle(pose.theta_rad + std_theta_rad * n01(rng_)), w};
+  }
+  updates_since_resample_ = 0;
+  compute_estimate();
+  estimate_.valid = true;
+}
+
+void MonteCarloLocalization::global_initialize() noexcept {
+  if (free_count_ == 0) return;
+  std::uniform_int_distribution<std::size_t> pick(0, free_count_ - 1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  count_ = config_.max_particles;
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    const std::uint32_t cell = free_cells_[pick(rng_)];
+    const double c = static_cast<double>(cell % static_cast<std::uint32_t>(width_)) + unit(rng_);
+    const double r = static_cast<double>(cell / static_cast<std::uint32_t>(width_)) + unit(rng_);
+    particles_[i] = {origin_x_m_ + c * resolution_m_, origin_y_m_ + r * resolution_m_,
+                     (2.0 * unit(rng_) - 1.0) * std::numbers::pi, w};
+  }
+  updates_since_resample_ = 0;
+  compute_estimate();
+  estimate_.valid = true;
+}
+
+void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to) noexcept {
+  // Probabilistic Robotics' sample_motion_model_odometry, as AMCL's differential model.
+  const double dx = to.x_m - from.x_m;
+  const double dy = to.y_m - from.y_m;
+  const double trans = std::hypot(dx, dy);
+  const double rot1 = trans < 0.01 ? 0.0 : normalize_angle(std::atan2(dy, dx) - from.theta_rad);
+  const double rot2 = normalize_angle(to.theta_rad - from.theta_rad - rot1);
+  // Driving backwards: measure the first rotation from the reversed heading.
+  const double rot1_noise = std::min(std::abs(rot1), std::abs(normalize_angle(rot1 - std::numbers::pi)));
+  const double rot2_noise = std::min(std::abs(rot2), std::abs(normalize_angle(rot2 - std::numbers::pi)));
+  const double sd_rot1 = std::sqrt(config_.alpha1 * rot1_noise * rot1_noise + config_.alpha2 * trans * trans);
+  const double sd_trans = std::sqrt(config_.alpha3 * trans * trans + config_.alpha4 * (rot1_noise * rot1_noise + rot2_noise * rot2_noise));
+  const double sd_rot2 = std::sqrt(config_.alpha1 * rot2_noise * rot2_noise + config_.alpha2 * trans * trans);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    const double r1 = rot1 - sd_rot1 * n01(rng_);
+    const double t = trans - sd_trans * n01(rng_);
+    const double r2 = rot2 - sd_rot2 * n01(rng_);
+    p.x_m += t * std::cos(p.theta_rad + r1);
+    p.y_m += t * std::sin(p.theta_rad + r1);
+    p.theta_rad = normalize_angle(p.theta_rad + r1 + r2);
+  }
+}
+
+void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
+  const std::size_t beams = scan.ranges_m.size();
+  if (beams == 0) return;
+  const std::size_t used = std::min(beams, config_.max_beams);
+  const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
+  // Beam end points in the robot frame, computed once per scan.
+  double bx[512];
+  double by[512];
+  std::size_t n = 0;
+  const double mc = std::cos(config_.laser_mount.theta_rad);
+  const double ms = std::sin(config_.laser_mount.theta_rad);
+  for (std::size_t k = 0; k < used && n < 512; ++k) {
+    const auto i = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
+    const double r = scan.ranges_m[i];
+    if (!std::isfinite(r) || r < scan.range_min_m || r >= scan.range_max_m) continue;
+    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+    const double sx = r * std::cos(a);
+    const double sy = r * std::sin(a);
+    bx[n] = config_.laser_mount.x_m + mc * sx - ms * sy;
+    by[n] = config_.laser_mount.y_m + ms * sx + mc * sy;
+    ++n;
+  }
+  if (n == 0) return;
+  // Log-likelihood per particle first, then weights relative to the best one, so the
+  // product over beams cannot underflow.
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    const double c = std::cos(p.theta_rad);
+    const double s = std::sin(p.theta_rad);
+    double score = 0.0;
+    if (config_.beam_model == MclBeamModel::cubed_sum) {
+      double sum = 1.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        const double pz = likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
+        sum += pz * pz * pz;
+      }
+      score = std::log(sum);
+    } else {
+      for (std::size_t k = 0; k < n; ++k) {
+        score += log_field(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
+      }
+      score *= config_.product_exponent;
+    }
+    cumulative_[i] = score;  // scratch until resampling
+    best = std::max(best, score);
+  }
+  double total = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    p.weight *= std::exp(cumulative_[i] - best);
+    total += p.weight;
+  }
+  if (!(total > 0.0)) {
+    for (std::size_t i = 0; i < count_; ++i) particles_[i].weight = 1.0 / static_cast<double>(count_);
+    return;
+  }
+  for (std::size_t i = 0; i < count_; ++i) particles_[i].weight /= total;
+}
+
+void MonteCarloLocalization::resample() noexcept {
+  double acc = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    acc += particles_[i].weight;
+    cumulative_[i] = acc;
+  }
+  std::fill(bins_.begin(), bins_.end(), std::uint64_t{0});
+  const std::size_t table = bins_.size();
+  std::size_t occupied = 0;
+  std::size_t target = config_.min_particles;
+  std::uniform_real_distribution<double> unit(0.0, acc);
+  std::size_t drawn = 0;
+  while (drawn < config_.max_particles && (drawn < target || drawn < config_.min_particles)) {
+    const double u = unit(rng_);
+    const auto it = std::lower_bound(cumulative_.begin(), cumulative_.begin() + static_cast<std::ptrdiff_t>(count_), u);
+    const std::size_t pick = std::min<std::size_t>(static_cast<std::size_t>(it - cumulative_.begin()), count_ - 1);
+    next_[drawn] = particles_[pick];
+    ++drawn;
+    // The histogram bin of the drawn particle; a new bin raises the KLD target.
+    const auto bx = static_cast<std::int64_t>(std::floor(next_[drawn - 1].x_m / config_.bin_xy_m));
+    const auto by = static_cast<std::int64_t>(std::floor(next_[drawn - 1].y_m / config_.bin_xy_m));
+    const auto bt = static_cast<std::int64_t>(std::floor(next_[drawn - 1].theta_rad / config_.bin_theta_rad));
+    const std::uint64_t key = ((static_cast<std::uint64_t>(bx) & 0xFFFFFu) << 40) |
+                              ((static_cast<std::uint64_t>(by) & 0xFFFFFu) << 20) |
+                              (static_cast<std::uint64_t>(bt) & 0xFFFFFu) | (std::uint64_t{1} << 63);
+    std::size_t slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 33) % table;
+    while (bins_[slot] != 0 && bins_[slot] != key) slot = (slot + 1) % table;
+    if (bins_[slot] == 0) {
+      bins_[slot] = key;
+      ++occupied;
+      target = kld_particle_count(occupied, config_.kld_err, z_, config_.min_particles, config_.max_particles);
+    }
+  }
+  count_ = drawn;
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    particles_[i] = next_[i];
+    particles_[i].weight = w;
+  }
+}
+
+void MonteCarloLocalization::compute_estimate() noexcept {
+  double wsum = 0.0;
+  double mx = 0.0;
+  double my = 0.0;
+  double mc = 0.0;
+  double ms = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const Particle& p = particles_[i];
+    wsum += p.weight;
+    mx += p.weight * p.x_m;
+    my += p.weight * p.y_m;
+    mc += p.weight * std::cos(p.theta_rad);
+    ms += p.weight * std::sin(p.theta_rad);
+  }
+  if (!(wsum > 0.0)) return;
+  mx /= wsum;
+  my /= wsum;
+  const double mean_theta = std::atan2(ms, mc);
+  double xx = 0.0;
+  double xy = 0.0;
+  double yy = 0.0;
+  double tt = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const Particle& p = particles_[i];
+    const double dx = p.x_m - mx;
+    const double dy = p.y_m - my;
+    const double dt = normalize_angle(p.theta_rad - mean_theta);
+    xx += p.weight * dx * dx;
+    xy += p.weight * dx * dy;
+    yy += p.weight * dy * dy;
+    tt += p.weight * dt * dt;
+  }
+  estimate_.pose = {mx, my, mean_theta};
+  estimate_.cov_xx = xx / wsum;
+  estimate_.cov_xy = xy / wsum;
+  estimate_.cov_yy = yy / wsum;
+  estimate_.cov_tt = tt / wsum;
+  estimate_.particles = static_cast<std::uint32_t>(count_);
+  estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m;
+}
+
+bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan) noexcept {
+  const Pose2D now{odom.x_m, odom.y_m, odom.theta_rad};
+  odom_latest_ = now;
+  if (!have_odom_) {
+    have_odom_ = true;
+    odom_at_update_ = now;
+    last_update_ns_ = odom.stamp_ns;
+    return false;
+  }
+  if (scan == nullptr) return false;
+  const double moved = std::hypot(now.x_m - odom_at_update_.x_m, now.y_m - odom_at_update_.y_m);
+  const double turned = std::abs(normalize_angle(now.theta_rad - odom_at_update_.theta_rad));
+  const bool by_time = config_.update_max_interval_s > 0.0 &&
+                       static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= config_.update_max_interval_s;
+  const bool first = estimate_.updates == 0;
+  if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time)) return false;
+  motion_update(odom_at_update_, now);
+  sensor_update(*scan);
+  if (++updates_since_resample_ >= config_.resample_interval) {
+    resample();
+    updates_since_resample_ = 0;
+  }
+  compute_estimate();
+  odom_at_update_ = now;
+  last_update_ns_ = odom.stamp_ns;
+  ++estimate_.updates;
+  estimate_.stamp_ns = odom.stamp_ns;
+  return true;
+}
+
+PoseEstimate MonteCarloLocalization::estimate() const noexcept {
+  PoseEstimate e = estimate_;
+  if (!have_odom_) return e;
+  // Carry the filter pose forward by the odometry moved since the last update.
+  const double c0 = std::cos(odom_at_update_.theta_rad);
+  const double s0 = std::sin(odom_at_update_.theta_rad);
+  const double dx = odom_latest_.x_m - odom_at_update_.x_m;
+  const double dy = odom_latest_.y_m - odom_at_update_.y_m;
+  const double fx = c0 * dx + s0 * dy;  // in the robot frame at the last update
+  const double fy = -s0 * dx + c0 * dy;
+  const double c = std::cos(e.pose.theta_rad);
+  const double s = std::sin(e.pose.theta_rad);
+  e.pose.x_m += c * fx - s * fy;
+  e.pose.y_m += s * fx + c * fy;
+  e.pose.theta_rad = normalize_angle(e.pose.theta_rad + odom_latest_.theta_rad - odom_at_update_.theta_rad);
+  return e;
+}
+
+}  // namespace sen3bot::nav

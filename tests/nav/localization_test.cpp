@@ -1,0 +1,154 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/localization.hpp"
+#include "sen3bot/world/world.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(Kld, QuantileAndBound) {
+  EXPECT_NEAR(normal_quantile(0.99), 2.326348, 1e-5);
+  EXPECT_NEAR(normal_quantile(0.5), 0.0, 1e-9);
+  EXPECT_NEAR(normal_quantile(0.01), -2.326348, 1e-5);
+  // AMCL's defaults (err 0.05, "pf_z" 0.99 used as z): the anchor table's numbers.
+  EXPECT_EQ(kld_particle_count(10, 0.05, 0.99, 1, 100000), 131u);
+  EXPECT_EQ(kld_particle_count(50, 0.05, 0.99, 1, 100000), 588u);
+  EXPECT_EQ(kld_particle_count(100, 0.05, 0.99, 1, 100000), 1129u);
+  EXPECT_EQ(kld_particle_count(100, 0.05, 0.99, 500, 1000), 1000u);
+  EXPECT_EQ(kld_particle_count(1, 0.05, 0.99, 500, 1000), 500u);
+}
+
+// Drives a ground-truth pose along a polyline in the lab and feeds MCL noisy odometry and
+// ideal-but-noisy scans; returns per-update errors after `settle` updates.
+struct TrackResult {
+  double rms_xy_m = 0.0;
+  double rms_theta_rad = 0.0;
+  double final_error_m = 0.0;
+  std::uint32_t updates = 0;
+  bool allocation_free = true;
+};
+
+TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
+  auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  EXPECT_TRUE(map.ok());
+  world::WorldConfig wc;
+  wc.range_noise_sigma_m = 0.01;
+  wc.seed = 3;
+  world::World truth(*map, wc);
+  mem::BudgetArena arena("mcl", MonteCarloLocalization::storage_bytes(cfg, *map));
+  MonteCarloLocalization mcl;
+  EXPECT_TRUE(mcl.init(cfg, *map, arena));
+  if (global) mcl.global_initialize();
+  const std::vector<Point2D> route = {{2.5, 1.0}, {2.5, 4.0}, {4.2, 4.2}, {4.2, 3.0}, {3.0, 3.0}, {3.0, 1.0}, {2.5, 1.0}};
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> odo_noise(0.0, 0.01);
+  Pose2D pose{route[0].x_m, route[0].y_m, M_PI / 2.0};
+  Pose2D odom = pose;  // odometry starts equal to the map pose; it drifts from there
+  std::vector<float> ranges(361);
+  ScanMessage msg;
+  msg.count = 361;
+  msg.angle_min_rad = static_cast<float>(-M_PI / 2.0);
+  msg.increment_rad = static_cast<float>(M_PI / 360.0);
+  msg.range_max_m = 8.0f;
+  double sum_xy = 0.0;
+  double sum_t = 0.0;
+  std::uint32_t counted = 0;
+  TrackResult result;
+  hal::Nanos t_ns = 0;
+  const auto step_to = [&](const Pose2D& next) {
+    // Odometry sees the true motion in the robot frame, with noise on each step.
+    const double c = std::cos(pose.theta_rad);
+    const double s = std::sin(pose.theta_rad);
+    const double fx = c * (next.x_m - pose.x_m) + s * (next.y_m - pose.y_m);
+    const double fy = -s * (next.x_m - pose.x_m) + c * (next.y_m - pose.y_m);
+    const double dth = normalize_angle(next.theta_rad - pose.theta_rad);
+    const double nfx = fx * (1.0 + odo_noise(rng));
+    const double ndth = dth * (1.0 + odo_noise(rng)) + 0.1 * odo_noise(rng) * std::abs(fx);
+    odom.x_m += std::cos(odom.theta_rad) * nfx - std::sin(odom.theta_rad) * fy;
+    odom.y_m += std::sin(odom.theta_rad) * nfx + std::cos(odom.theta_rad) * fy;
+    odom.theta_rad = normalize_angle(odom.theta_rad + ndth);
+    pose = next;
+    t_ns += 100'000'000;
+    truth.noisy_scan(pose, msg.angle_min_rad, msg.increment_rad, msg.count, msg.range_max_m, std::span<float>(msg.ranges_m.data(), msg.count));
+    const ScanView view = msg.view();
+    const Odometry o{odom.x_m, odom.y_m, odom.theta_rad, 0.0, 0.0, t_ns, true};
+    mem::testing::AllocationScope scope;
+    const bool updated = mcl.update(o, &view);
+    if (scope.allocations() != 0) result.allocation_free = false;
+    const PoseEstimate e = mcl.estimate();
+    if (updated && std::getenv("MCL_TRACE") != nullptr) std::printf("u%u true %.3f %.3f %.3f est %.3f %.3f %.3f n %u sd %.3f\n", e.updates, pose.x_m, pose.y_m, pose.theta_rad, e.pose.x_m, e.pose.y_m, e.pose.theta_rad, e.particles, std::sqrt(e.cov_xx));
+    if (updated && e.updates > settle) {
+      const double exy = std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m);
+      const double et = normalize_angle(e.pose.theta_rad - pose.theta_rad);
+      sum_xy += exy * exy;
+      sum_t += et * et;
+      ++counted;
+    }
+  };
+  for (int lap = 0; lap < 2; ++lap) {
+    for (std::size_t i = 1; i < route.size(); ++i) {
+      const Point2D a = route[i - 1];
+      const Point2D b = route[i];
+      const double heading = std::atan2(b.y_m - a.y_m, b.x_m - a.x_m);
+      // Turn on the spot in 0.1 rad steps, then drive in 0.05 m steps.
+      while (std::abs(normalize_angle(heading - pose.theta_rad)) > 1e-9) {
+        const double d = std::clamp(normalize_angle(heading - pose.theta_rad), -0.1, 0.1);
+        step_to({pose.x_m, pose.y_m, normalize_angle(pose.theta_rad + d)});
+      }
+      const double len = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+      const int steps = static_cast<int>(std::ceil(len / 0.05));
+      for (int k = 1; k <= steps; ++k) {
+        const double t = static_cast<double>(k) / steps;
+        step_to({a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m), heading});
+      }
+    }
+  }
+  const PoseEstimate e = mcl.estimate();
+  result.final_error_m = std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m);
+  result.updates = e.updates;
+  result.rms_xy_m = counted > 0 ? std::sqrt(sum_xy / counted) : 1e9;
+  result.rms_theta_rad = counted > 0 ? std::sqrt(sum_t / counted) : 1e9;
+  return result;
+}
+
+TEST(Mcl, TracksWithinFiveCentimetresAndTwoDegrees) {
+  MclConfig cfg;
+  cfg.initial_pose = {2.5, 1.0, M_PI / 2.0};
+  cfg.initial_std_xy_m = 0.05;
+  cfg.initial_std_theta_rad = 0.03;
+  cfg.update_min_d_m = 0.1;
+  cfg.update_min_a_rad = 0.1;
+  cfg.sigma_hit_m = 0.05;
+  // The simulated odometry drifts about 1 %: AMCL's default alphas (0.2) would spread the
+  // particles far more than it does.
+  cfg.alpha1 = cfg.alpha2 = cfg.alpha3 = cfg.alpha4 = 0.05;
+  const TrackResult r = track(cfg, 3, false);
+  std::printf("tracking RMS %.4f m, %.3f deg over %u updates\n", r.rms_xy_m, r.rms_theta_rad * 180.0 / M_PI, r.updates);
+  EXPECT_GT(r.updates, 50u);
+  EXPECT_LT(r.rms_xy_m, 0.05);
+  EXPECT_LT(r.rms_theta_rad, 2.0 * M_PI / 180.0);
+  EXPECT_TRUE(r.allocation_free);
+}
+
+TEST(Mcl, ConvergesFromAWrongInitialGuess) {
+  MclConfig cfg;
+  cfg.initial_pose = {2.9, 0.7, M_PI / 2.0 + 0.25};  // 0.5 m and 14 degrees off
+  cfg.initial_std_xy_m = 0.5;
+  cfg.initial_std_theta_rad = 0.3;
+  cfg.update_min_d_m = 0.1;
+  cfg.update_min_a_rad = 0.1;
+  const TrackResult r = track(cfg, 15, false);  // converged within 15 updates
+  EXPECT_LT(r.rms_xy_m, 0.1);
+  EXPECT_LT(r.final_error_m, 0.1);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
