@@ -1,0 +1,85 @@
+#pragma once
+// The safety filter: the last stage before the base. It takes the requested velocity and can
+// only lower it (same sign, never larger in magnitude), to zero when:
+//  * the newest laser scan is older than stale_scan_periods scan periods (or none arrived),
+//  * odometry is older than odom_timeout_s (or none arrived),
+//  * the e-stop is pressed or the motors are reported off,
+//  * localization is lost,
+//  * a laser point lies inside the stop zone along the direction of motion: ahead of the
+//    footprint's front edge by less than stop_distance_m, within the footprint's half width
+//    plus lateral_margin_m. Between stop_distance_m and slow_distance_m the forward speed is
+//    scaled down linearly. Turning on the spot is refused when a point is inside the
+//    circumscribed circle plus lateral_margin_m.
+// The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
+// max_reverse_mps (the back-off recovery's speed).
+#include <cstdint>
+#include <type_traits>
+
+#include "sen3bot/hal/clock.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/scan.hpp"
+
+namespace sen3bot::nav {
+
+struct VelocityCommand {
+  double v_mps = 0.0;
+  double w_radps = 0.0;
+  hal::Nanos stamp_ns = 0;
+};
+static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+
+struct SafetyConfig {
+  double scan_period_s = 0.2;      // LMS200 at 38.4 kbaud: about 5 scans/s
+  double stale_scan_periods = 3.0;
+  double odom_timeout_s = 0.3;
+  double stop_distance_m = 0.25;
+  double slow_distance_m = 0.6;
+  double lateral_margin_m = 0.05;
+  double max_reverse_mps = 0.1;
+  Footprint footprint = Footprint::pioneer();
+  SensorMount laser_mount;
+};
+
+enum SafetyReason : std::uint32_t {
+  kSafetyNone = 0,
+  kSafetyScanStale = 1u << 0,
+  kSafetyOdomStale = 1u << 1,
+  kSafetyEstop = 1u << 2,
+  kSafetyMotorsOff = 1u << 3,
+  kSafetyLocalizationLost = 1u << 4,
+  kSafetyObstacle = 1u << 5,       // stopped for a point in the stop zone
+  kSafetySlowed = 1u << 6,         // scaled down in the slow zone
+  kSafetyReverseCapped = 1u << 7,
+};
+
+struct SafetyInputs {
+  VelocityCommand requested;
+  const ScanView* scan = nullptr;  // the newest scan, or null if none ever arrived
+  hal::Nanos odom_stamp_ns = -1;   // -1: never
+  bool estop = false;
+  bool motors_enabled = true;
+  bool localization_lost = false;
+  hal::Nanos now_ns = 0;
+};
+
+struct SafetyOutput {
+  VelocityCommand command;
+  std::uint32_t reasons = kSafetyNone;
+  double nearest_ahead_m = 0.0;  // free distance ahead of the front edge in the corridor
+};
+static_assert(std::is_trivially_copyable_v<SafetyOutput>);
+
+class SafetyFilter {
+ public:
+  explicit SafetyFilter(const SafetyConfig& config = {}) noexcept;
+  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) const noexcept;
+  [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
+
+ private:
+  SafetyConfig config_;
+  double front_m_ = 0.0;
+  double half_width_m_ = 0.0;
+  double turn_radius_m_ = 0.0;
+};
+
+}  // namespace sen3bot::nav

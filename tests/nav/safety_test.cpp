@@ -1,0 +1,131 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sen3bot/nav/safety.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+constexpr hal::Nanos kSecond = 1'000'000'000;
+
+struct Scene {
+  ScanMessage msg;
+  ScanView view;
+  SafetyInputs in;
+  Scene() {
+    msg.count = 181;
+    msg.angle_min_rad = static_cast<float>(-M_PI / 2);
+    msg.increment_rad = static_cast<float>(M_PI / 180);
+    msg.range_max_m = 8.0f;
+    for (std::size_t i = 0; i < 181; ++i) msg.ranges_m[i] = 5.0f;
+    msg.stamp_ns = 10 * kSecond;
+    view = msg.view();
+    in.scan = &view;
+    in.odom_stamp_ns = 10 * kSecond;
+    in.now_ns = 10 * kSecond + kSecond / 10;
+    in.requested = {0.4, 0.2, in.now_ns};
+  }
+};
+
+TEST(Safety, PassesACommandWhenAllIsWell) {
+  Scene s;
+  const SafetyOutput out = SafetyFilter().filter(s.in);
+  EXPECT_EQ(out.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(out.command.v_mps, 0.4);
+  EXPECT_DOUBLE_EQ(out.command.w_radps, 0.2);
+}
+
+TEST(Safety, StopsOnAStaleLaserScan) {
+  Scene s;
+  SafetyFilter f;  // 0.2 s period: stale after 0.6 s
+  s.in.now_ns = s.msg.stamp_ns + 590'000'000;
+  s.in.odom_stamp_ns = s.in.now_ns;
+  EXPECT_EQ(f.filter(s.in).reasons, kSafetyNone);
+  s.in.now_ns = s.msg.stamp_ns + 610'000'000;
+  s.in.odom_stamp_ns = s.in.now_ns;
+  const SafetyOutput out = f.filter(s.in);
+  EXPECT_TRUE(out.reasons & kSafetyScanStale);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_EQ(out.command.w_radps, 0.0);
+  s.in.scan = nullptr;
+  EXPECT_TRUE(f.filter(s.in).reasons & kSafetyScanStale);
+}
+
+TEST(Safety, StopsOnEstopMotorsOdometryAndLostLocalization) {
+  SafetyFilter f;
+  {
+    Scene s;
+    s.in.estop = true;
+    EXPECT_EQ(f.filter(s.in).reasons, kSafetyEstop);
+    EXPECT_EQ(f.filter(s.in).command.v_mps, 0.0);
+  }
+  {
+    Scene s;
+    s.in.motors_enabled = false;
+    EXPECT_EQ(f.filter(s.in).reasons, kSafetyMotorsOff);
+  }
+  {
+    Scene s;
+    s.in.odom_stamp_ns = s.in.now_ns - kSecond;
+    EXPECT_EQ(f.filter(s.in).reasons, kSafetyOdomStale);
+  }
+  {
+    Scene s;
+    s.in.localization_lost = true;
+    const SafetyOutput out = f.filter(s.in);
+    EXPECT_EQ(out.reasons, kSafetyLocalizationLost);
+    EXPECT_EQ(out.command.w_radps, 0.0);
+  }
+}
+
+TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
+  SafetyFilter f;
+  Scene s;
+  // A point 0.4 m straight ahead: 0.17 m past the front edge (0.2275 m), inside 0.25 m.
+  s.msg.ranges_m[90] = 0.4f;
+  s.view = s.msg.view();
+  SafetyOutput out = f.filter(s.in);
+  EXPECT_TRUE(out.reasons & kSafetyObstacle);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  // Reversing away is still allowed.
+  s.in.requested.v_mps = -0.05;
+  out = f.filter(s.in);
+  EXPECT_DOUBLE_EQ(out.command.v_mps, -0.05);
+  // The same point 60 degrees to the side is outside the corridor.
+  Scene side;
+  side.msg.ranges_m[150] = 0.6f;
+  side.view = side.msg.view();
+  out = f.filter(side.in);
+  EXPECT_FALSE(out.reasons & kSafetyObstacle);
+  EXPECT_DOUBLE_EQ(out.command.v_mps, 0.4);
+  // In the slow zone the speed is scaled, not zeroed.
+  Scene slow;
+  slow.msg.ranges_m[90] = 0.2275f + 0.425f;
+  slow.view = slow.msg.view();
+  out = f.filter(slow.in);
+  EXPECT_TRUE(out.reasons & kSafetySlowed);
+  EXPECT_NEAR(out.command.v_mps, 0.4 * 0.5, 1e-6);
+}
+
+TEST(Safety, NeverRaisesSpeed) {
+  SafetyFilter f;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> v(-1.0, 1.0);
+  std::uniform_real_distribution<float> r(0.05f, 9.0f);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Scene s;
+    for (std::size_t i = 0; i < 181; ++i) s.msg.ranges_m[i] = r(rng);
+    s.view = s.msg.view();
+    s.in.requested = {v(rng), v(rng) * 2.0, s.in.now_ns};
+    const SafetyOutput out = f.filter(s.in);
+    EXPECT_LE(std::abs(out.command.v_mps), std::abs(s.in.requested.v_mps));
+    EXPECT_LE(std::abs(out.command.w_radps), std::abs(s.in.requested.w_radps));
+    EXPECT_GE(out.command.v_mps * s.in.requested.v_mps, 0.0);
+    EXPECT_GE(out.command.w_radps * s.in.requested.w_radps, 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
