@@ -186,6 +186,35 @@ TEST(P2osArguments, Vel2BothSignEncodings) {
   EXPECT_EQ(u.right, 5);
 }
 
+TEST(P2osArguments, EveryFirmwareCommandRoundTrips) {
+  struct Case {
+    Command command;
+    std::int32_t value;
+  };
+  const Case cases[] = {{Command::enable, 0},   {Command::seta, -300},  {Command::seta, 300},   {Command::setv, 1200},
+                        {Command::setrv, 300},  {Command::setra, -100}, {Command::vel, -1500},  {Command::rvel, 45},
+                        {Command::head, -180},  {Command::dhead, 90},   {Command::sonar, 0},    {Command::encoder, 2},
+                        {Command::hostbaud, 2}, {Command::bumpstall, 3}, {kOpen, 1},            {kClose, 1}};
+  for (const Case& c : cases) {
+    const Packet p = encode_command_int(c.command, c.value);
+    FrameParser parser;
+    int frames = 0;
+    parser.feed(p.view(), 0, [&](const Frame& f) {
+      ++frames;
+      EXPECT_EQ(f.type, static_cast<std::uint8_t>(c.command));
+      const CommandArgument a = decode_argument(f.payload);
+      EXPECT_EQ(a.kind, ArgKind::integer);
+      EXPECT_EQ(a.value, c.value) << command_name(f.type);
+    });
+    EXPECT_EQ(frames, 1);
+  }
+  for (Command bare : {Command::sync0, Command::sync1, Command::sync2, Command::stop, Command::estop, Command::config}) {
+    const Packet p = encode_command(bare);
+    EXPECT_EQ(p.size, 6);
+    EXPECT_EQ(decode_argument(p.body().subspan(1)).kind, ArgKind::none);
+  }
+}
+
 TEST(P2osArguments, IntClampsAtSixteenBits) {
   const Packet p = encode_command_int(Command::vel, 100000);
   EXPECT_EQ(decode_argument(p.body().subspan(1)).value, 0xFFFF);
