@@ -137,6 +137,36 @@ TEST(P2osPty, SilenceNoiseAndVanishingDevice) {
   EXPECT_EQ(driver.state().link, LinkState::disconnected);
 }
 
+TEST(P2osPty, ProbesTheRateThenSwitchesUpWithHostbaud) {
+  // The emulator garbles everything while the pty's line rate differs from its HOST rate,
+  // like a UART would. The robot is at 9600; the driver opens at 19200 and must find it.
+  auto runner = PtyEmulatorRunner::start(quick_robot(), {}, PtyRunnerOptions{true});
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  P2osConfig config;
+  config.port = (*runner)->slave_path();
+  config.baud = 19200;
+  config.probe_bauds = true;
+  config.sync_misses_per_baud = 1;
+  config.sync_timeout_ms = 300;
+  config.switch_to_baud = 38400;
+  auto link = open_p2os_link(config);
+  ASSERT_TRUE(link) << link.error().c_str();
+  P2osDriver driver(config);
+  RealtimeLoop loop{driver, {}, {}};
+  driver.attach(*link->stream, loop.clock.now(), link->baud_control, link->baud);
+  ASSERT_TRUE(loop.run_until([&] { return driver.state().link == LinkState::connected; }, hal::seconds(8)));
+  EXPECT_EQ(driver.current_baud(), 9600u);
+  // CONFIGpac says AutoBaud 2: HOSTBAUD to 38400, both ends switch, the link holds.
+  ASSERT_TRUE(loop.run_until([&] { return driver.current_baud() == 38400u; }, hal::seconds(3)));
+  loop.run_for(hal::seconds(1));
+  EXPECT_EQ(driver.state().link, LinkState::connected);
+  EXPECT_EQ(driver.state().link_losses, 0u);
+  EXPECT_EQ((*runner)->with_emulator([](P2osEmulator& e) { return e.host_baud(); }), 38400u);
+  const std::uint64_t sips = driver.state().sip_count;
+  loop.run_for(hal::millis(500));
+  EXPECT_GE(driver.state().sip_count, sips + 3);
+}
+
 TEST(P2osTcp, TaskConnectsDrivesAndReconnectsAfterDrop) {
   auto runner = TcpEmulatorRunner::start(quick_robot(), 0);
   ASSERT_TRUE(runner) << runner.error().c_str();

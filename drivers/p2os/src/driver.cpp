@@ -48,6 +48,10 @@ void P2osDriver::attach(hal::ByteStream& stream, hal::Nanos now_ns, BaudControl*
   baud_control_ = baud_control;
   baud_ = current_baud != 0 ? current_baud : config_.baud;
   open_baud_ = baud_;
+  // Probing continues from the rate we are at, in the usual order.
+  probe_index_ = 0;
+  for (std::size_t i = 0; i < kProbeBauds.size(); ++i)
+    if (kProbeBauds[i] == baud_) probe_index_ = i;
   have_in_flight_ = false;
   in_flight_offset_ = 0;
   sync_started_ns_ = now_ns;

@@ -14,6 +14,8 @@ constexpr double kThetaUnitRad = 2.0 * std::numbers::pi / kThetaUnitsPerRev;
 constexpr double kVel2DivisorMm = 20.0;
 // Integration step: big enough to be cheap, small enough that a square stays square.
 constexpr hal::Nanos kMaxIntegrationStepNs = hal::millis(5);
+// ARCOS reverts to its FLASH rate if no valid packet follows HOSTBAUD within this time.
+constexpr int kBaudRevertMs = 500;
 // MOVE counts as done within this distance of the goal.
 constexpr double kMoveDoneMm = 0.5;
 // Heading-servo gain for HEAD/DHEAD, 1/s.
@@ -67,8 +69,14 @@ void P2osEmulator::reset_session() noexcept {
   rot_accel_deg_s2_ = config_.rot_accel_deg_s2;
   rot_decel_deg_s2_ = config_.rot_decel_deg_s2;
   watchdog_tripped_ = false;
+  host_baud_ = flash_baud();
+  verifying_baud_ = false;
   parser_.reset();
   tx_head_ = tx_size_ = 0;
+}
+
+std::uint32_t P2osEmulator::flash_baud() const noexcept {
+  return config_.host_baud_code < std::size(kHostBaudRates) ? kHostBaudRates[config_.host_baud_code] : 9600;
 }
 
 Pose2 P2osEmulator::odometry_pose() const noexcept { return {odom_x_mm_, odom_y_mm_, odom_theta_rad_}; }
@@ -122,6 +130,10 @@ Status P2osEmulator::step(hal::ByteStream& stream, hal::Nanos now_ns) noexcept {
     if (*got < read_buffer_.size()) break;
   }
   stats_.bad_checksums = parser_.stats().bad_checksums;
+  if (verifying_baud_ && now_ns >= baud_verify_deadline_ns_) {
+    verifying_baud_ = false;
+    host_baud_ = flash_baud();
+  }
   advance(now_ns);
   if (reset_pending_) {
     reset_pending_ = false;
@@ -152,6 +164,7 @@ void P2osEmulator::on_packet(const Frame& frame, hal::Nanos now_ns) noexcept {
   stats_.packets_received += 1;
   stats_.command_counts[frame.type] += 1;
   last_packet_ns_ = now_ns;
+  verifying_baud_ = false;  // a valid packet at the current rate confirms it
   if (watchdog_tripped_) {
     watchdog_tripped_ = false;
     if (!config_.watchdog_resumes) stop_motion();
@@ -286,8 +299,12 @@ void P2osEmulator::handle_command(const Frame& frame, hal::Nanos now_ns) noexcep
       return;
     case Command::hostbaud:
       // On a pty or TCP the rate is meaningless; remember what was asked.
-      if (arg.value >= 0 && arg.value < static_cast<int>(std::size(kHostBaudRates)))
+      if (arg.value >= 0 && arg.value < static_cast<int>(std::size(kHostBaudRates))) {
         requested_host_baud_ = kHostBaudRates[arg.value];
+        host_baud_ = requested_host_baud_;
+        verifying_baud_ = true;
+        baud_verify_deadline_ns_ = now_ns + hal::millis(kBaudRevertMs);
+      }
       return;
     case Command::reset:
       reset_session();

@@ -2,6 +2,9 @@
 
 #include <poll.h>
 
+#include <algorithm>
+#include <array>
+
 #include "sen3bot/hal/clock.hpp"
 
 namespace sen3bot::p2os {
@@ -9,6 +12,30 @@ namespace sen3bot::p2os {
 namespace {
 // The loop wakes at least this often to send SIPs on time (SipCycle is 100 ms).
 constexpr int kLoopPeriodMs = 2;
+
+// What a UART at the wrong rate delivers: garbage in both directions.
+class MismatchedRate final : public hal::ByteStream {
+ public:
+  explicit MismatchedRate(hal::ByteStream& inner) : inner_(inner) {}
+  Result<std::size_t> read(std::span<std::uint8_t> out) override {
+    Result<std::size_t> got = inner_.read(out);
+    if (got)
+      for (std::size_t i = 0; i < *got; ++i) out[i] = garble(out[i]);
+    return got;
+  }
+  Result<std::size_t> write(std::span<const std::uint8_t> data) override {
+    std::array<std::uint8_t, 256> chunk;
+    const std::size_t n = std::min(chunk.size(), data.size());
+    for (std::size_t i = 0; i < n; ++i) chunk[i] = garble(data[i]);
+    return inner_.write(std::span<const std::uint8_t>(chunk.data(), n));
+  }
+  [[nodiscard]] std::string_view name() const override { return inner_.name(); }
+
+ private:
+  static std::uint8_t garble(std::uint8_t b) { return static_cast<std::uint8_t>((b << 3) | (b >> 5)) ^ 0xA5; }
+  hal::ByteStream& inner_;
+};
+
 }  // namespace
 
 EmulatorRunner::~EmulatorRunner() { stop(); }
@@ -40,19 +67,21 @@ void EmulatorRunner::stop() {
 }
 
 Result<std::unique_ptr<PtyEmulatorRunner>> PtyEmulatorRunner::start(const EmulatorConfig& config,
-                                                                   std::string_view link_path) {
+                                                                   std::string_view link_path,
+                                                                   PtyRunnerOptions options) {
   Result<std::unique_ptr<hal::PtyPair>> pty = hal::PtyPair::open();
   if (!pty) return pty.error();
   if (!link_path.empty()) {
     if (Status s = (*pty)->link_slave(link_path); !s) return s.error();
   }
-  std::unique_ptr<PtyEmulatorRunner> runner(new PtyEmulatorRunner(config, std::move(*pty)));
+  std::unique_ptr<PtyEmulatorRunner> runner(new PtyEmulatorRunner(config, std::move(*pty), options));
   runner->start_thread();
   return runner;
 }
 
-PtyEmulatorRunner::PtyEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::PtyPair> pty)
-    : EmulatorRunner(config), pty_(std::move(pty)), slave_path_(pty_->slave_path()) {}
+PtyEmulatorRunner::PtyEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::PtyPair> pty,
+                                     PtyRunnerOptions options)
+    : EmulatorRunner(config), pty_(std::move(pty)), options_(options), slave_path_(pty_->slave_path()) {}
 
 PtyEmulatorRunner::~PtyEmulatorRunner() { stop(); }
 
@@ -64,6 +93,14 @@ void PtyEmulatorRunner::close_device() {
 int PtyEmulatorRunner::serve(hal::Nanos now_ns) {
   if (!pty_) return -1;
   // A pty master reads EIO while no client holds the slave; the robot carries on regardless.
+  if (options_.enforce_baud) {
+    const Result<std::uint32_t> client_baud = pty_->slave_baud();
+    if (client_baud && *client_baud != emulator_.host_baud()) {
+      MismatchedRate garbled(*pty_);
+      (void)emulator_.step(garbled, now_ns);
+      return pty_->poll_fd();
+    }
+  }
   (void)emulator_.step(*pty_, now_ns);
   return pty_->poll_fd();
 }

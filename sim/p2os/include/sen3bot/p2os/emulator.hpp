@@ -135,6 +135,9 @@ class P2osEmulator {
   [[nodiscard]] const EmulatorStats& stats() const noexcept { return stats_; }
   [[nodiscard]] bool watchdog_tripped() const noexcept { return watchdog_tripped_; }
   [[nodiscard]] std::uint32_t requested_host_baud() const noexcept { return requested_host_baud_; }
+  // The HOST port's current rate: the FLASH rate, or what HOSTBAUD selected (reverting to the
+  // FLASH rate if no valid packet arrives at the new rate within 500 ms, and on reset).
+  [[nodiscard]] std::uint32_t host_baud() const noexcept { return host_baud_; }
   // The last commands received, oldest first (i < command_log_size()).
   [[nodiscard]] std::size_t command_log_size() const noexcept;
   [[nodiscard]] const ReceivedCommand& command_log(std::size_t i) const noexcept;
@@ -151,6 +154,7 @@ class P2osEmulator {
   void send_encoder() noexcept;
   Status flush(hal::ByteStream& stream) noexcept;
   void stop_motion() noexcept;
+  [[nodiscard]] std::uint32_t flash_baud() const noexcept;
   std::uint8_t next_noise_byte() noexcept;
 
   EmulatorConfig config_;
@@ -187,6 +191,9 @@ class P2osEmulator {
   int encoder_mode_ = 0;
   std::uint16_t battery_dv_ = 130;
   std::uint32_t requested_host_baud_ = 0;
+  std::uint32_t host_baud_ = 9600;
+  bool verifying_baud_ = false;
+  hal::Nanos baud_verify_deadline_ns_ = 0;
   int next_sonar_ = 0;
 
   // Timing.

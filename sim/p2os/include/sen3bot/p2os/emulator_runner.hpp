@@ -46,20 +46,29 @@ class EmulatorRunner {
   std::thread thread_;
 };
 
+struct PtyRunnerOptions {
+  // Behave like a UART: while the client's line rate (read through the master) differs from
+  // the robot's HOST rate, bytes in both directions arrive garbled. Off by default: on a pty
+  // the rate is meaningless and clients switching with HOSTBAUD should simply carry on.
+  bool enforce_baud = false;
+};
+
 class PtyEmulatorRunner final : public EmulatorRunner {
  public:
   // Opens a pty, optionally links `link_path` -> its slave, and starts serving.
   static Result<std::unique_ptr<PtyEmulatorRunner>> start(const EmulatorConfig& config,
-                                                          std::string_view link_path = {});
+                                                          std::string_view link_path = {},
+                                                          PtyRunnerOptions options = {});
   ~PtyEmulatorRunner() override;
   [[nodiscard]] const std::string& slave_path() const { return slave_path_; }
   // The device vanishes: the master is closed; the client's reads fail from then on.
   void close_device();
 
  private:
-  PtyEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::PtyPair> pty);
+  PtyEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::PtyPair> pty, PtyRunnerOptions options);
   int serve(hal::Nanos now_ns) override;
   std::unique_ptr<hal::PtyPair> pty_;
+  PtyRunnerOptions options_;
   std::string slave_path_;
 };
 
