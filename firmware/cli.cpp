@@ -50,6 +50,15 @@ constexpr const char* kUsage =
     "  drive --port DEV|tcp://HOST:PORT --vel M_S --rvel RAD_S --seconds S [--baud B]\n"
     "        Connect to the base, enable the motors, drive at the given velocities, print\n"
     "        odometry as JSON lines, then stop, disable and close.\n"
+    "  decode lms200 CAPTURE\n"
+    "        Decode the SICK LMS200 telegrams of a wire capture as JSON lines (time,\n"
+    "        direction, code, decoded fields; scans with ranges_m, null where invalid).\n"
+    "  lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]\n"
+    "        Run the LMS200 emulator until SIGINT on a pseudo-terminal symlinked at LINK;\n"
+    "        ranges from a ROS map_server map (default: a built-in 8 m x 6 m room).\n"
+    "  scan --port DEV --baud B --variant 180/0.5 --units cm|mm --count N [--timeout S]\n"
+    "        Connect to an LMS200 (probing its baud rate), print N scans as JSON lines\n"
+    "        (t_s, angle_min_rad, angle_increment_rad, ranges_m, units, baud), then stop.\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -274,6 +283,10 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (command == "decode" && argc >= 3 && std::string_view(argv[2]) == "p2os")
     return decode_p2os_command(argc - 3, argv + 3, out, err);
   if (command == "p2os-emulator") return p2os_emulator_command(argc - 2, argv + 2, out, err);
+  if (command == "decode" && argc >= 3 && std::string_view(argv[2]) == "lms200")
+    return decode_lms200_command(argc - 3, argv + 3, out, err);
+  if (command == "lms200-emulator") return lms200_emulator_command(argc - 2, argv + 2, out, err);
+  if (command == "scan") return scan_command(argc - 2, argv + 2, out, err);
   if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
   std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
   return 2;

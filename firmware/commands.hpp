@@ -13,4 +13,11 @@ int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err)
 // sen3bot drive --port DEV|tcp://HOST:PORT --vel M_S --rvel RAD_S --seconds S
 int drive_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+// sen3bot decode lms200 CAPTURE
+int decode_lms200_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]
+int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot scan --port DEV --baud B --variant A/R --units cm|mm --count N
+int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
 }  // namespace sen3bot::firmware
