@@ -5,11 +5,15 @@
 #include "sen3bot/mem/byte_size.hpp"
 
 #include <cctype>
+#include <climits>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <initializer_list>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace sen3bot::firmware {
 
@@ -108,6 +112,28 @@ class Reader {
     return *r;
   }
 
+  // Elements of a sequence under `key`, each as a Reader named key[i].
+  [[nodiscard]] std::vector<Reader> sequence(const std::string& key) const {
+    const YAML::Node n = node_[key];
+    if (!n.IsDefined() || n.IsNull()) fail(key, "missing", node_);
+    if (!n.IsSequence()) fail(key, "expected a list", n);
+    std::vector<Reader> items;
+    for (std::size_t i = 0; i < n.size(); ++i)
+      items.emplace_back(n[i], file_, full(key) + "[" + std::to_string(i) + "]");
+    return items;
+  }
+
+  // This node as a list of two numbers [x, y].
+  [[nodiscard]] nav::Point2D point() const {
+    if (!node_.IsSequence() || node_.size() != 2) fail_here("expected a point [x_m, y_m]");
+    double v[2];
+    for (std::size_t i = 0; i < 2; ++i)
+      if (!YAML::convert<double>::decode(node_[i], v[i]) || !std::isfinite(v[i])) fail_here("expected two numbers");
+    return {v[0], v[1]};
+  }
+
+  [[nodiscard]] const std::string& file() const { return file_; }
+
   template <typename F>
   void for_each_entry(F&& f) const {
     require_map();
@@ -131,14 +157,142 @@ class Reader {
   std::string path_;
 };
 
+// {x_m, y_m, theta_deg}; a missing key is 0.
+nav::Pose2D read_pose(const Reader& r) {
+  r.allow_only({"x_m", "y_m", "theta_deg"});
+  nav::Pose2D p;
+  if (r.has("x_m")) p.x_m = r.number("x_m", -1e4, 1e4);
+  if (r.has("y_m")) p.y_m = r.number("y_m", -1e4, 1e4);
+  if (r.has("theta_deg")) p.theta_rad = r.number("theta_deg", -360.0, 360.0) * std::numbers::pi / 180.0;
+  return p;
+}
+
+// A path relative to the configuration file's folder, as ROS map YAMLs do for their image.
+std::string relative_to(const std::string& file, const std::string& path) {
+  if (path.empty() || path.front() == '/') return path;
+  const std::size_t slash = file.find_last_of('/');
+  return slash == std::string::npos ? path : file.substr(0, slash + 1) + path;
+}
+
+std::int64_t millis(const Reader& r, const std::string& key, std::int64_t min_ms, std::int64_t max_ms) {
+  return static_cast<std::int64_t>(std::llround(r.number(key, static_cast<double>(min_ms) / 1000.0,
+                                                          static_cast<double>(max_ms) / 1000.0) * 1000.0));
+}
+
+world::MoverScript read_mover(const Reader& r, bool person) {
+  r.allow_only({"path", "speed_m_s", "size_m", "loop", "start_s", "appear_s", "shape"});
+  world::MoverScript m;
+  m.person = person;
+  m.shape = person ? world::MoverShape::circle : world::MoverShape::square;
+  for (const Reader& point : r.sequence("path")) m.path.push_back(point.point());
+  if (m.path.empty()) r.fail("path", "needs at least one point", YAML::Node());
+  if (r.has("speed_m_s")) m.speed_mps = r.number("speed_m_s", 0.0, 5.0);
+  if (r.has("size_m")) m.size_m = r.number("size_m", 0.05, 5.0);
+  if (r.has("loop")) m.loop = r.boolean("loop");
+  if (r.has("start_s")) m.start_time_s = r.number("start_s", 0.0, 1e7);
+  if (r.has("appear_s")) m.appear_time_s = r.number("appear_s", 0.0, 1e7);
+  if (r.has("shape")) {
+    const std::string shape = r.text("shape");
+    if (shape == "circle") m.shape = world::MoverShape::circle;
+    else if (shape == "square") m.shape = world::MoverShape::square;
+    else r.fail("shape", "expected circle or square, got '" + shape + "'", YAML::Node());
+  }
+  return m;
+}
+
+void read_sim(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "people", "boxes", "laser_status"});
+  sim::SimulationConfig& w = c.sim.world;
+  c.sim.enabled = true;
+  w.map_path = relative_to(r.file(), r.text("map"));
+  if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));
+  if (r.has("seed")) w.seed = static_cast<std::uint64_t>(r.integer("seed", 0, INT64_MAX));
+  if (r.has("range_noise_m")) w.range_noise_sigma_m = r.number("range_noise_m", 0.0, 1.0);
+  if (r.has("people"))
+    for (const Reader& m : r.sequence("people")) w.movers.push_back(read_mover(m, true));
+  if (r.has("boxes"))
+    for (const Reader& m : r.sequence("boxes")) w.movers.push_back(read_mover(m, false));
+  if (r.has("laser_status")) w.laser.status = static_cast<std::uint8_t>(r.integer("laser_status", 0, 255));
+  w.base.noise_seed = static_cast<std::uint32_t>(w.seed);
+}
+
+// `port: sim` is only meaningful with a simulated robot to connect to.
+bool read_port(const Reader& r, const FirmwareConfig& c, std::string& port) {
+  port = r.text("port");
+  if (port != "sim") return false;
+  if (!c.sim.enabled) r.fail("port", "'sim' needs a top-level sim section (the simulated robot)", YAML::Node());
+  return true;
+}
+
+void read_devices(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"base", "laser"});
+  if (r.has("base")) {
+    const Reader b = r.child("base");
+    b.allow_only({"port", "baud", "probe_bauds", "switch_to_baud", "link_timeout_s", "command_timeout_s",
+                  "request_encoders", "max_v_m_s", "max_omega_rad_s", "dist_conv_mm_per_unit", "vel_conv_mm_s_per_unit",
+                  "diff_conv_rad_per_mm"});
+    p2os::P2osConfig& p = c.devices.base;
+    c.devices.has_base = true;
+    c.devices.base_simulated = read_port(b, c, p.port);
+    if (b.has("baud")) p.baud = static_cast<std::uint32_t>(b.integer("baud", 50, 4'000'000));
+    if (b.has("probe_bauds")) p.probe_bauds = b.boolean("probe_bauds");
+    if (b.has("switch_to_baud")) p.switch_to_baud = static_cast<std::uint32_t>(b.integer("switch_to_baud", 0, 4'000'000));
+    if (b.has("link_timeout_s")) p.link_timeout_ms = static_cast<int>(millis(b, "link_timeout_s", 100, 60'000));
+    if (b.has("command_timeout_s")) p.command_timeout_ms = static_cast<int>(millis(b, "command_timeout_s", 50, 60'000));
+    if (b.has("request_encoders")) p.request_encoders = b.boolean("request_encoders");
+    if (b.has("max_v_m_s")) p.max_v_m_s = b.number("max_v_m_s", 0.0, 2.2);
+    if (b.has("max_omega_rad_s")) p.max_omega_rad_s = b.number("max_omega_rad_s", 0.0, 8.8);
+    if (b.has("dist_conv_mm_per_unit")) p.conversion.dist_conv_mm_per_unit = b.number("dist_conv_mm_per_unit", 0.01, 100.0);
+    if (b.has("vel_conv_mm_s_per_unit")) p.conversion.vel_conv_mm_s_per_unit = b.number("vel_conv_mm_s_per_unit", 0.01, 100.0);
+    if (b.has("diff_conv_rad_per_mm")) p.conversion.diff_conv_rad_per_mm = b.number("diff_conv_rad_per_mm", 1e-5, 1.0);
+  }
+  if (r.has("laser")) {
+    const Reader l = r.child("laser");
+    l.allow_only({"port", "baud", "variant", "units", "probe_bauds", "stale_scan_periods"});
+    lms200::Lms200Config& p = c.devices.laser;
+    c.devices.has_laser = true;
+    c.devices.laser_simulated = read_port(l, c, p.port);
+    if (l.has("baud")) {
+      const std::int64_t baud = l.integer("baud", 9600, 500'000);
+      if (baud != 9600 && baud != 19200 && baud != 38400 && baud != 500000)
+        l.fail("baud", "the LMS200 speaks 9600, 19200, 38400 or 500000 baud", YAML::Node());
+      p.baud = static_cast<std::uint32_t>(baud);
+    }
+    if (l.has("variant")) {
+      // "180/0.5": scan angle in degrees / resolution in degrees.
+      const std::string text = l.text("variant");
+      unsigned angle = 0;
+      double resolution = 0;
+      char tail = 0;
+      lms200::Variant v;
+      if (std::sscanf(text.c_str(), "%u/%lf%c", &angle, &resolution, &tail) == 2) {
+        v.angle_deg = static_cast<std::uint16_t>(angle);
+        v.resolution_cdeg = static_cast<std::uint16_t>(std::lround(resolution * 100.0));
+      }
+      if (!lms200::valid_variant(v) || v.angle_deg != angle)
+        l.fail("variant", "expected one of 180/1, 180/0.5, 100/1, 100/0.5, 100/0.25, got '" + text + "'", YAML::Node());
+      p.variant = v;
+    }
+    if (l.has("units")) {
+      const std::string units = l.text("units");
+      if (units == "cm") p.units = lms200::Units::cm;
+      else if (units == "mm") p.units = lms200::Units::mm;
+      else l.fail("units", "expected cm or mm, got '" + units + "'", YAML::Node());
+    }
+    if (l.has("probe_bauds")) p.probe_bauds = l.boolean("probe_bauds");
+    if (l.has("stale_scan_periods")) p.stale_scan_periods = static_cast<int>(l.integer("stale_scan_periods", 2, 100));
+  }
+}
+
 FirmwareConfig read(const Reader& top, const std::string& source) {
   FirmwareConfig c;
   c.source_path = source;
-  top.allow_only({"robot", "run", "realtime", "threads", "tasks"});
+  top.allow_only({"robot", "run", "realtime", "threads", "tasks", "devices", "sim"});
 
   const Reader robot = top.child("robot");
-  robot.allow_only({"name"});
+  robot.allow_only({"name", "laser_mount"});
   c.robot_name = robot.text("name");
+  if (robot.has("laser_mount")) c.laser_mount = read_pose(robot.child("laser_mount"));
 
   const Reader run = top.child("run");
   run.allow_only({"clock", "duration_s"});
@@ -184,6 +338,10 @@ FirmwareConfig read(const Reader& top, const std::string& source) {
     tc.arena_bytes = t.bytes("arena_bytes");
     c.tasks[name] = tc;
   });
+
+  if (top.has("sim")) read_sim(top.child("sim"), c);
+  if (top.has("devices")) read_devices(top.child("devices"), c);
+  c.sim.world.laser_mount = c.laser_mount;
   return c;
 }
 

@@ -8,6 +8,10 @@
 #include <string_view>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/lms200/device.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/p2os/driver.hpp"
+#include "sen3bot/sim/simulation.hpp"
 
 namespace sen3bot::firmware {
 
@@ -22,9 +26,25 @@ struct TaskConfig {
   std::size_t arena_bytes = 0;  // the task's whole memory budget for init()
 };
 
+// A device's `port: sim` connects its driver to the simulated robot of the `sim` section.
+struct DevicesConfig {
+  bool has_base = false;   // devices.base present
+  bool has_laser = false;  // devices.laser present
+  p2os::P2osConfig base;
+  bool base_simulated = false;
+  lms200::Lms200Config laser;
+  bool laser_simulated = false;
+};
+
+struct SimSection {
+  bool enabled = false;     // a `sim` section is present
+  sim::SimulationConfig world;
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
+  nav::Pose2D laser_mount{0.16, 0.0, 0.0};  // scanner pose in the robot frame (robot.laser_mount)
   ClockMode clock = ClockMode::lockstep;
   double duration_s = 0.0;  // 0: until SIGINT/SIGTERM
   bool lock_memory = true;
@@ -33,6 +53,8 @@ struct FirmwareConfig {
   std::map<std::string, TaskConfig, std::less<>> tasks;
   int health_stall_periods = 3;
   std::int64_t telemetry_status_period_ms = 10'000;
+  DevicesConfig devices;
+  SimSection sim;
 };
 
 Result<FirmwareConfig> load_config(const std::string& path);

@@ -4,6 +4,23 @@
 
 namespace sen3bot::firmware {
 
+namespace {
+
+// The driver's view of a simulated link it does not own (the pipe belongs to the simulation).
+class BorrowedStream final : public hal::ByteStream {
+ public:
+  explicit BorrowedStream(hal::ByteStream& stream) : stream_(stream) {}
+  Result<std::size_t> read(std::span<std::uint8_t> out) override { return stream_.read(out); }
+  Result<std::size_t> write(std::span<const std::uint8_t> data) override { return stream_.write(data); }
+  [[nodiscard]] int poll_fd() const override { return stream_.poll_fd(); }
+  [[nodiscard]] std::string_view name() const override { return stream_.name(); }
+
+ private:
+  hal::ByteStream& stream_;
+};
+
+}  // namespace
+
 Firmware::Firmware(const FirmwareConfig& config, hal::Clock& clock, std::FILE* out)
     : config_(config),
       clock_(clock),
@@ -17,7 +34,56 @@ Firmware::~Firmware() { shutdown(); }
 tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "health") return &health_;
   if (name == "telemetry") return &telemetry_;
+  if (name == "sim") return sim_task_.get();
+  if (name == "base") return base_task_.get();
+  if (name == "laser") return laser_task_.get();
   return nullptr;
+}
+
+Status Firmware::create_tasks() {
+  const char* file = config_.source_path.c_str();
+  const bool lockstep = config_.clock == ClockMode::lockstep;
+  if (config_.sim.enabled) {
+    sim::SimulationConfig world = config_.sim.world;
+    // Lockstep runs on one thread in simulated time: in-memory links. Real time: real ptys.
+    world.link = lockstep ? sim::LinkKind::memory : sim::LinkKind::pty;
+    Result<std::unique_ptr<sim::Simulation>> created = sim::Simulation::create(world);
+    if (!created) return Error::format(created.error().code(), "%s: sim: %s", file, created.error().c_str());
+    simulation_ = std::move(*created);
+    sim_task_ = std::make_unique<sim::SimulationTask>(*simulation_, ground_truth_);
+  }
+  if (config_.devices.has_base) {
+    p2os::P2osConfig base = config_.devices.base;
+    if (config_.devices.base_simulated) {
+      if (lockstep) {
+        hal::ByteStream* stream = simulation_->base_driver_stream();
+        base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_,
+                                                      [stream](const p2os::P2osConfig&) -> Result<p2os::OpenedLink> {
+                                                        p2os::OpenedLink link;
+                                                        link.stream = std::make_unique<BorrowedStream>(*stream);
+                                                        return link;
+                                                      });
+      } else {
+        base.port = simulation_->base_device_path();
+        base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_);
+      }
+    } else {
+      base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_);
+    }
+  }
+  if (config_.devices.has_laser) {
+    lms200::Lms200Config laser = config_.devices.laser;
+    if (config_.devices.laser_simulated && lockstep) {
+      laser_task_ = std::make_unique<lms200::Lms200Task>(laser, *simulation_->laser_driver_stream(),
+                                                         simulation_->laser_driver_line(), laser_scan_);
+    } else {
+      if (config_.devices.laser_simulated) laser.port = simulation_->laser_device_path();
+      laser_task_ = std::make_unique<lms200::Lms200Task>(laser, laser_scan_);
+    }
+  }
+  for (const tasks::TaskSpec& row : kTaskTable)
+    if (task_named(row.name) != nullptr) rows_.push_back(&row);
+  return Status::success();
 }
 
 Status Firmware::init() {
@@ -32,19 +98,23 @@ Status Firmware::init() {
       return Error::format(Errc::config, "%s: tasks.%s: no such task in the task table", file, name.c_str());
   }
 
-  for (const tasks::TaskSpec& row : kTaskTable) {
-    tasks::Task* task = task_named(row.name);
-    if (task == nullptr)
-      return Error::format(Errc::invalid_argument, "firmware: task table row '%.*s' has no task behind it",
-                           static_cast<int>(row.name.size()), row.name.data());
-    if (Status s = scheduler_.add(row, *task); !s) return s;
+  if (Status s = create_tasks(); !s) return s;
+  for (const auto& [name, task_config] : config_.tasks) {
+    if (task_named(name) == nullptr)
+      return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
+                           name.c_str(),
+                           name == "sim" ? "needs a sim section" : "needs its device under devices");
+  }
+  for (const tasks::TaskSpec* row : rows_) {
+    if (Status s = scheduler_.add(*row, *task_named(row->name)); !s) return s;
   }
   for (const auto& [name, thread] : config_.threads) {
     bool used = false;
-    for (const tasks::TaskSpec& row : kTaskTable) used = used || row.thread == name;
+    for (const tasks::TaskSpec* row : rows_) used = used || row->thread == name;
     if (!used) return Error::format(Errc::config, "%s: threads.%s: no task runs on this thread", file, name.c_str());
   }
-  for (const tasks::TaskSpec& row : kTaskTable) {
+  for (const tasks::TaskSpec* row_ptr : rows_) {
+    const tasks::TaskSpec& row = *row_ptr;
     tasks::ThreadOptions options;
     options.name = row.thread;
     options.prefault_stack_bytes = config_.prefault_stack_bytes;
@@ -56,8 +126,9 @@ Status Firmware::init() {
   }
 
   // init() in table order, each inside its own budget.
-  arenas_.reserve(kTaskTable.size());
-  for (const tasks::TaskSpec& row : kTaskTable) {
+  arenas_.reserve(rows_.size());
+  for (const tasks::TaskSpec* row_ptr : rows_) {
+    const tasks::TaskSpec& row = *row_ptr;
     const auto it = config_.tasks.find(row.name);
     if (it == config_.tasks.end())
       return Error::format(Errc::config, "%s: tasks.%.*s.arena_bytes: missing (every task needs a memory budget)", file,
@@ -77,7 +148,7 @@ void Firmware::shutdown() {
   if (!initialised_) return;
   scheduler_.request_stop();
   scheduler_.join();
-  for (const tasks::TaskSpec& row : kTaskTable) task_named(row.name)->shutdown();
+  for (const tasks::TaskSpec* row : rows_) task_named(row->name)->shutdown();
   initialised_ = false;
 }
 

@@ -13,6 +13,11 @@
 #include "sen3bot/tasks/health.hpp"
 #include "sen3bot/tasks/scheduler.hpp"
 #include "sen3bot/tasks/telemetry.hpp"
+#include "sen3bot/lms200/scan.hpp"
+#include "sen3bot/lms200/task.hpp"
+#include "sen3bot/p2os/task.hpp"
+#include "sen3bot/p2os/types.hpp"
+#include "sen3bot/sim/simulation.hpp"
 
 namespace sen3bot::firmware {
 
@@ -32,8 +37,17 @@ class Firmware {
   [[nodiscard]] const mem::BudgetArena& arena(std::size_t task_index) const { return *arenas_[task_index]; }
   void print_memory(std::FILE* out) const;
 
+  // The devices' messages, for the command line's reports and for tests.
+  [[nodiscard]] tasks::Topic<p2os::BaseSetpoint>& base_setpoint() { return base_setpoint_; }
+  [[nodiscard]] const tasks::Topic<p2os::BaseState>& base_state() const { return base_state_; }
+  [[nodiscard]] const tasks::Topic<lms200::LaserScan>& laser_scan() const { return laser_scan_; }
+  [[nodiscard]] const tasks::Topic<sim::GroundTruth>& ground_truth() const { return ground_truth_; }
+  // Null without a `sim` section.
+  [[nodiscard]] sim::Simulation* simulation() { return simulation_.get(); }
+
  private:
   tasks::Task* task_named(std::string_view name);
+  Status create_tasks();
 
   const FirmwareConfig& config_;
   hal::Clock& clock_;
@@ -42,6 +56,16 @@ class Firmware {
   tasks::Scheduler scheduler_;
   tasks::HealthTask health_;
   tasks::TelemetryTask telemetry_;
+  tasks::Topic<p2os::BaseSetpoint> base_setpoint_;
+  tasks::Topic<p2os::BaseState> base_state_;
+  tasks::Topic<lms200::LaserScan> laser_scan_;
+  tasks::Topic<sim::GroundTruth> ground_truth_;
+  // Created by init() from the configuration; a row whose task is absent does not run.
+  std::unique_ptr<sim::Simulation> simulation_;
+  std::unique_ptr<sim::SimulationTask> sim_task_;
+  std::unique_ptr<p2os::P2osTask> base_task_;
+  std::unique_ptr<lms200::Lms200Task> laser_task_;
+  std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   // One arena per task-table row, in table order; created once in init().
   std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;
   bool initialised_ = false;

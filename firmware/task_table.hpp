@@ -8,10 +8,15 @@
 
 namespace sen3bot::firmware {
 
-// Threads: "control" runs the real-time control loop tasks, "io" the device links,
-// "background" whatever may block (writing logs, files, network).
+// Threads: "control" runs the real-time control loop tasks, "io" the device links, "sim" the
+// simulated robot (only with a `sim` section), "background" whatever may block (logs, files,
+// network). A row runs when its task is configured: the devices under `devices`, the
+// simulated robot under `sim`; the rest always.
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
+    tasks::TaskSpec{"sim",          5'000,     2'000,     50,       "sim"},
+    tasks::TaskSpec{"base",         10'000,    500,       70,       "io"},
+    tasks::TaskSpec{"laser",        5'000,     500,       70,       "io"},
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
 };

@@ -9,7 +9,9 @@ namespace sen3bot::sim {
 
 namespace {
 
-constexpr double kClearanceLimitM = 5.0;  // clearance/person distances are capped here
+constexpr double kClearanceLimitM = 1.5;  // clearance/person distances are capped here
+// The clearance search is the costliest part of a step; 20 Hz is plenty for a report.
+constexpr hal::Nanos kClearancePeriodNs = 50'000'000;
 constexpr double kNanosPerSecond = 1e9;
 
 nav::Pose2D compose(const nav::Pose2D& a, const nav::Pose2D& b) {
@@ -136,7 +138,10 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   truth_.stamp_ns = now_ns;
   truth_.pose = pose;
   truth_.speed_m_s = base_.velocity_m_s();
-  truth_.clearance_m = world_->clearance_m(pose, config_.footprint, kClearanceLimitM);
+  if (now_ns >= next_clearance_ns_) {
+    truth_.clearance_m = world_->clearance_m(pose, config_.footprint, kClearanceLimitM);
+    next_clearance_ns_ = now_ns + kClearancePeriodNs;
+  }
   double nearest = kClearanceLimitM;
   for (std::size_t i = 0; i < world_->mover_count(); ++i) {
     if (!world_->mover_visible(i) || !config_.movers[i].person) continue;

@@ -49,7 +49,7 @@ struct GroundTruth {
   hal::Nanos stamp_ns = 0;
   nav::Pose2D pose;                 // true robot pose, map frame
   double speed_m_s = 0;             // true forward speed
-  double clearance_m = 0;           // footprint to the nearest obstacle or mover (capped)
+  double clearance_m = 0;           // footprint to the nearest obstacle or mover (capped, 20 Hz)
   double nearest_person_m = 0;      // robot centre to the nearest visible person (capped)
   std::uint64_t contacts = 0;       // times the footprint started to overlap something
   bool in_contact = false;
@@ -104,6 +104,7 @@ class Simulation {
   std::unique_ptr<hal::PtyPair> laser_pty_;
   std::unique_ptr<PtyLine> laser_pty_line_;
   GroundTruth truth_;
+  hal::Nanos next_clearance_ns_ = 0;
 };
 
 // The simulation as a scheduler task: one step per period, GroundTruth published each step.
