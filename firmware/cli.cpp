@@ -59,6 +59,11 @@ constexpr const char* kUsage =
     "  scan --port DEV --baud B --variant 180/0.5 --units cm|mm --count N [--timeout S]\n"
     "        Connect to an LMS200 (probing its baud rate), print N scans as JSON lines\n"
     "        (t_s, angle_min_rad, angle_increment_rad, ranges_m, units, baud), then stop.\n"
+    "  camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]\n"
+    "        Connect to an RTSP camera (rtsp://[user:pass@]host[:port]/path), decode N\n"
+    "        frames (default 30) and end with one JSON line: codec, width, height,\n"
+    "        transport, frames_decoded, frames_dropped, fps, latency_ms_p50. --save\n"
+    "        writes each frame seen as PNG. Exit status 1 when no frame was decoded.\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -293,3 +298,4 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
 }
 
 }  // namespace sen3bot::firmware
+  if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);

@@ -19,5 +19,7 @@ int decode_lms200_command(int argc, char** argv, std::FILE* out, std::FILE* err)
 int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot scan --port DEV --baud B --variant A/R --units cm|mm --count N
 int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]
+int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 }  // namespace sen3bot::firmware

@@ -5,6 +5,7 @@ Prints "READY <port>" on stdout once listening. Mounts:
   /h264       640x360 15 fps, x264 zerolatency, STAP-A + FU-A, SPS/PPS in band and in sprop
   /h264_fua   1280x720 10 fps at 4 Mbit/s, mtu 1400: every I-frame is many FU-A packets
   /mjpeg      640x360 JPEG type 1 (4:2:0), Q=255 with in-band tables
+  /mjpeg720   1280x720 JPEG type 1, 10 fps
   /mjpeg422   640x360 JPEG type 0 (4:2:2)
   /mjpeg_dri  JPEG type 65 (restart markers), when --dri-file names an MKV of such JPEGs
 """
@@ -27,6 +28,8 @@ MOUNTS = {
                  "! rtph264pay name=pay0 pt=96 config-interval=-1 mtu=1400",
     "/mjpeg": "videotestsrc is-live=true pattern=ball ! video/x-raw,format=I420,width=640,height=360,framerate=15/1 "
               "! jpegenc quality=75 ! rtpjpegpay name=pay0 pt=26",
+    "/mjpeg720": "videotestsrc is-live=true pattern=smpte ! video/x-raw,format=I420,width=1280,height=720,framerate=10/1 "
+                 "! jpegenc quality=75 ! rtpjpegpay name=pay0 pt=26",
     "/mjpeg422": "videotestsrc is-live=true ! video/x-raw,format=Y42B,width=640,height=360,framerate=15/1 "
                  "! jpegenc quality=75 ! rtpjpegpay name=pay0 pt=26",
 }
