@@ -2,7 +2,7 @@
 // pseudo-terminal, and checks the scans it decodes against the emulator's world.
 //
 // usage: lms200_mrpt_harness --baud B --units cm|mm --fov 100|180 --res 25|50|100
-//                            [--scans N] [--start-baud B] [--timeout S]
+//                            [--scans N] [--start-baud B] [--lms-units cm|mm] [--timeout S]
 // exit status: 0 all scans matched, 1 mismatch or timeout, 2 bad arguments.
 #include <mrpt/hwdrivers/CSickLaserSerial.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -30,6 +30,7 @@ struct Args {
   std::uint32_t baud = 38400;
   std::uint32_t start_baud = 9600;
   bool mm = false;
+  bool lms_mm = false;  // the emulated scanner's configured units at power-on
   int fov_deg = 180;
   int res_cdeg = 50;
   int scans = 3;
@@ -43,6 +44,7 @@ bool parse(int argc, char** argv, Args& a) {
     if (k == "--baud") a.baud = static_cast<std::uint32_t>(std::atol(v));
     else if (k == "--start-baud") a.start_baud = static_cast<std::uint32_t>(std::atol(v));
     else if (k == "--units") a.mm = std::strcmp(v, "mm") == 0;
+    else if (k == "--lms-units") a.lms_mm = std::strcmp(v, "mm") == 0;
     else if (k == "--fov") a.fov_deg = std::atoi(v);
     else if (k == "--res") a.res_cdeg = std::atoi(v);
     else if (k == "--scans") a.scans = std::atoi(v);
@@ -72,6 +74,10 @@ int main(int argc, char** argv) {
   WallWorld world = testing::test_world();
   EmulatorOptions eo;
   eo.initial_baud = a.start_baud;
+  if (a.lms_mm) {
+    eo.units = Units::mm;
+    eo.measuring_mode = MeasuringMode::range32_field_a;  // what MRPT selects for mm
+  }
   Result<std::unique_ptr<Lms200PtyRunner>> runner = Lms200PtyRunner::open(eo, world);
   if (!runner) {
     std::fprintf(stderr, "harness: %s\n", runner.error().c_str());
