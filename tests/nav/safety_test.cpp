@@ -83,7 +83,7 @@ TEST(Safety, StopsOnEstopMotorsOdometryAndLostLocalization) {
 TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   SafetyFilter f;
   Scene s;
-  // A point 0.4 m straight ahead: 0.17 m past the front edge (0.2275 m), inside 0.25 m.
+  // A point 0.4 m straight ahead: 0.17 m past the front edge (0.2275 m), inside the stop zone.
   s.msg.ranges_m[90] = 0.4f;
   s.view = s.msg.view();
   SafetyOutput out = f.filter(s.in);
@@ -95,14 +95,15 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   EXPECT_DOUBLE_EQ(out.command.v_mps, -0.05);
   // The same point 60 degrees to the side is outside the corridor.
   Scene side;
-  side.msg.ranges_m[150] = 0.6f;
+  side.msg.ranges_m[150] = 0.9f;
   side.view = side.msg.view();
   out = f.filter(side.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
   EXPECT_DOUBLE_EQ(out.command.v_mps, 0.4);
-  // In the slow zone the speed is scaled, not zeroed.
+  // In the slow zone the speed is scaled, not zeroed. Requested 0.4 m/s: stop distance
+  // 0.25 + 0.04 + 0.1333 = 0.4233 m; half way into the 0.35 m slow zone halves the speed.
   Scene slow;
-  slow.msg.ranges_m[90] = 0.2275f + 0.425f;
+  slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.04 + 0.16 / 1.2 + 0.175);
   slow.view = slow.msg.view();
   out = f.filter(slow.in);
   EXPECT_TRUE(out.reasons & kSafetySlowed);

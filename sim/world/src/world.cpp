@@ -155,7 +155,7 @@ std::size_t World::add_mover(const MoverScript& script) {
     m.cumulative_m.push_back(total);
   }
   m.position = position_at(m, time_s_);
-  m.visible = time_s_ >= m.script.appear_time_s;
+  m.visible = time_s_ >= m.script.appear_time_s && time_s_ < m.script.vanish_time_s;
   movers_.push_back(std::move(m));
   return movers_.size() - 1;
 }
@@ -187,7 +187,7 @@ void World::set_time(double time_s) noexcept {
   time_s_ = time_s;
   for (Mover& m : movers_) {
     m.position = position_at(m, time_s);
-    m.visible = time_s >= m.script.appear_time_s;
+    m.visible = time_s >= m.script.appear_time_s && time_s < m.script.vanish_time_s;
   }
 }
 

@@ -59,12 +59,15 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
 
   double v = in.requested.v_mps;
   double w = in.requested.w_radps;
+  const double speed = std::max({0.0, in.measured_v_mps, v});
+  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_mps2);
+  out.stop_distance_m = stop;
   if (v > 0.0) {
-    if (out.nearest_ahead_m <= config_.stop_distance_m) {
+    if (out.nearest_ahead_m <= stop) {
       v = 0.0;
       out.reasons |= kSafetyObstacle;
-    } else if (out.nearest_ahead_m < config_.slow_distance_m) {
-      const double scale = (out.nearest_ahead_m - config_.stop_distance_m) / (config_.slow_distance_m - config_.stop_distance_m);
+    } else if (out.nearest_ahead_m < stop + config_.slow_distance_m) {
+      const double scale = (out.nearest_ahead_m - stop) / config_.slow_distance_m;
       v *= scale;
       out.reasons |= kSafetySlowed;
     }

@@ -33,6 +33,7 @@ struct MoverScript {
   bool loop = false;
   double start_time_s = 0.0;   // before this it waits at the first vertex
   double appear_time_s = 0.0;  // invisible (not hit by rays, no collisions) before this
+  double vanish_time_s = 1e300;  // and again from this time on (walked out of the scene)
   bool person = false;
 };
 

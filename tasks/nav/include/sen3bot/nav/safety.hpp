@@ -6,9 +6,10 @@
 //  * the e-stop is pressed or the motors are reported off,
 //  * localization is lost,
 //  * a laser point lies inside the stop zone along the direction of motion: ahead of the
-//    footprint's front edge by less than stop_distance_m, within the footprint's half width
-//    plus lateral_margin_m. Between stop_distance_m and slow_distance_m the forward speed is
-//    scaled down linearly. Turning on the spot is refused when a point is inside the
+//    footprint's front edge by less than the stop distance, within the footprint's half
+//    width plus lateral_margin_m. The stop distance grows with the measured speed v:
+//    stop_distance_m + v * reaction_s + v^2 / (2 decel_mps2) (the base cannot stop at once).
+//    Up to slow_distance_m beyond that the forward speed is scaled down linearly. Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_mps (the back-off recovery's speed).
@@ -33,7 +34,9 @@ struct SafetyConfig {
   double stale_scan_periods = 3.0;
   double odom_timeout_s = 0.3;
   double stop_distance_m = 0.25;
-  double slow_distance_m = 0.6;
+  double slow_distance_m = 0.35;    // the slow zone's depth beyond the stop distance
+  double reaction_s = 0.1;          // command to wheels: one control period
+  double decel_mps2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
   double max_reverse_mps = 0.1;
   Footprint footprint = Footprint::pioneer();
@@ -59,6 +62,7 @@ struct SafetyInputs {
   bool estop = false;
   bool motors_enabled = true;
   bool localization_lost = false;
+  double measured_v_mps = 0.0;     // odometry speed, for the braking distance
   hal::Nanos now_ns = 0;
 };
 
@@ -66,6 +70,7 @@ struct SafetyOutput {
   VelocityCommand command;
   std::uint32_t reasons = kSafetyNone;
   double nearest_ahead_m = 0.0;  // free distance ahead of the front edge in the corridor
+  double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
 };
 static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 

@@ -1,0 +1,189 @@
+#pragma once
+// The navigation pieces as periodic tasks. Each takes a plain config struct and its topics in
+// the constructor, sizes everything in init() from its arena, and never allocates in step().
+//
+// Data flow (topics in brackets):
+//   laser driver [ScanMessage] ---+--> LocalizationTask --[PoseEstimate]--+
+//   base driver  [Odometry]   ----+                                       |
+//   mission      [NavGoal] ------> PlannerTask (global costmap + A*) <----+--[PathMessage]
+//   PathMessage + PoseEstimate + Odometry + ScanMessage --> ControllerTask (local costmap + DWA)
+//        --[VelocityCommand requested]--> SafetyTask (+ ScanMessage, Odometry, BaseFlags,
+//        PoseEstimate) --[VelocityCommand]--> base driver
+//
+// The OccupancyMap given to LocalizationTask, PlannerTask and ControllerTask must outlive them.
+#include <atomic>
+#include <cstdint>
+#include <span>
+
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/global_planner.hpp"
+#include "sen3bot/nav/local_planner.hpp"
+#include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/nav/safety.hpp"
+#include "sen3bot/tasks/task.hpp"
+#include "sen3bot/tasks/topic.hpp"
+
+namespace sen3bot::nav {
+
+// --- Localization ----------------------------------------------------------------------------
+
+struct LocalizationTaskConfig {
+  MclConfig mcl;
+};
+
+class LocalizationTask final : public tasks::Task {
+ public:
+  LocalizationTask(const LocalizationTaskConfig& config, const OccupancyMap& map, const tasks::Topic<ScanMessage>& scan,
+                   const tasks::Topic<Odometry>& odom, tasks::Topic<PoseEstimate>& estimate) noexcept
+      : config_(config), map_(map), scan_(scan), odom_(odom), estimate_(estimate) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+  // Thread-safe: the next step spreads the particles over the whole map.
+  void request_global_initialization() noexcept { global_request_.store(true, std::memory_order_relaxed); }
+  [[nodiscard]] const MonteCarloLocalization& filter() const noexcept { return mcl_; }
+
+ private:
+  LocalizationTaskConfig config_;
+  const OccupancyMap& map_;
+  const tasks::Topic<ScanMessage>& scan_;
+  const tasks::Topic<Odometry>& odom_;
+  tasks::Topic<PoseEstimate>& estimate_;
+  MonteCarloLocalization mcl_;
+  std::atomic<bool> global_request_{false};
+  std::uint64_t scan_seq_ = 0;
+  tasks::Sample<ScanMessage> scan_sample_;
+};
+
+// --- Global planner ---------------------------------------------------------------------------
+
+struct PlannerTaskConfig {
+  GlobalPlannerConfig planner;
+  StaticLayerConfig static_layer;
+  ObstacleLayerConfig obstacle;
+  InflationLayerConfig inflation;
+  bool use_scan = true;          // mark laser obstacles in the global costmap (thesis case 2)
+  double replan_period_s = 1.0;  // 0: plan only when the goal changes
+  double waypoint_pass_m = 0.5;  // waypoints behind the nearest one within this are dropped
+  SensorMount laser_mount;
+};
+
+class PlannerTask final : public tasks::Task {
+ public:
+  PlannerTask(const PlannerTaskConfig& config, const OccupancyMap& map, std::span<const Point2D> waypoints,
+              const tasks::Topic<NavGoal>& goal, const tasks::Topic<PoseEstimate>& pose,
+              const tasks::Topic<ScanMessage>& scan, tasks::Topic<PathMessage>& path) noexcept
+      : config_(config), map_(map), waypoints_in_(waypoints), goal_(goal), pose_(pose), scan_(scan), path_(path),
+        static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle), inflation_layer_(config.inflation) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+  [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
+  [[nodiscard]] std::uint32_t plans() const noexcept { return plan_id_; }
+
+ private:
+  void plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns) noexcept;
+
+  PlannerTaskConfig config_;
+  const OccupancyMap& map_;
+  std::span<const Point2D> waypoints_in_;
+  const tasks::Topic<NavGoal>& goal_;
+  const tasks::Topic<PoseEstimate>& pose_;
+  const tasks::Topic<ScanMessage>& scan_;
+  tasks::Topic<PathMessage>& path_;
+  StaticLayer static_layer_;
+  ObstacleLayer obstacle_layer_;
+  InflationLayer inflation_layer_;
+  LayeredCostmap costmap_;
+  GlobalPlanner planner_;
+  std::span<Point2D> waypoints_;
+  std::span<GridCell> cells_;
+  std::size_t next_waypoint_ = 0;
+  std::uint32_t plan_id_ = 0;
+  std::uint32_t goal_id_ = 0;
+  bool goal_active_ = false;
+  hal::Nanos last_plan_ns_ = 0;
+  std::uint64_t scan_seq_ = 0;
+  tasks::Sample<ScanMessage> scan_sample_;
+  PathMessage message_;
+};
+
+// --- Local planner (controller) ---------------------------------------------------------------
+
+struct ControllerTaskConfig {
+  CostmapConfig local_costmap{.rolling = true, .width_m = 6.0, .height_m = 6.0, .resolution_m = 0.05};
+  StaticLayerConfig static_layer;
+  ObstacleLayerConfig obstacle;
+  InflationLayerConfig inflation;
+  DwaConfig dwa;
+  SensorMount laser_mount;
+  double pose_timeout_s = 1.0;  // no fresh pose estimate: command zero
+};
+
+class ControllerTask final : public tasks::Task {
+ public:
+  ControllerTask(const ControllerTaskConfig& config, const OccupancyMap& map, const tasks::Topic<PoseEstimate>& pose,
+                 const tasks::Topic<Odometry>& odom, const tasks::Topic<ScanMessage>& scan,
+                 const tasks::Topic<PathMessage>& path, tasks::Topic<VelocityCommand>& command,
+                 tasks::Topic<ControllerStatus>& status) noexcept
+      : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
+        static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle), inflation_layer_(config.inflation) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+  [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
+  [[nodiscard]] const DwaPlanner& planner() const noexcept { return dwa_; }
+
+ private:
+  ControllerTaskConfig config_;
+  const OccupancyMap& map_;
+  const tasks::Topic<PoseEstimate>& pose_;
+  const tasks::Topic<Odometry>& odom_;
+  const tasks::Topic<ScanMessage>& scan_;
+  const tasks::Topic<PathMessage>& path_;
+  tasks::Topic<VelocityCommand>& command_;
+  tasks::Topic<ControllerStatus>& status_;
+  StaticLayer static_layer_;
+  ObstacleLayer obstacle_layer_;
+  InflationLayer inflation_layer_;
+  LayeredCostmap costmap_;
+  DwaPlanner dwa_;
+  std::uint32_t plan_id_ = 0;
+  std::uint64_t scan_seq_ = 0;
+  tasks::Sample<ScanMessage> scan_sample_;
+  tasks::Sample<PathMessage> path_sample_;
+};
+
+// --- Safety -----------------------------------------------------------------------------------
+
+struct SafetyTaskConfig {
+  SafetyConfig safety;
+  double command_timeout_s = 0.5;  // a requested command older than this counts as zero
+  bool require_base_flags = true;  // with no BaseFlags ever published, stop
+};
+
+class SafetyTask final : public tasks::Task {
+ public:
+  SafetyTask(const SafetyTaskConfig& config, const tasks::Topic<VelocityCommand>& requested,
+             const tasks::Topic<ScanMessage>& scan, const tasks::Topic<Odometry>& odom,
+             const tasks::Topic<BaseFlags>& base, const tasks::Topic<PoseEstimate>& pose,
+             tasks::Topic<VelocityCommand>& command, tasks::Topic<SafetyOutput>& status) noexcept
+      : config_(config), filter_(config.safety), requested_(requested), scan_(scan), odom_(odom), base_(base), pose_(pose),
+        command_(command), status_(status) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+  [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
+
+ private:
+  SafetyTaskConfig config_;
+  SafetyFilter filter_;
+  const tasks::Topic<VelocityCommand>& requested_;
+  const tasks::Topic<ScanMessage>& scan_;
+  const tasks::Topic<Odometry>& odom_;
+  const tasks::Topic<BaseFlags>& base_;
+  const tasks::Topic<PoseEstimate>& pose_;
+  tasks::Topic<VelocityCommand>& command_;
+  tasks::Topic<SafetyOutput>& status_;
+  tasks::Sample<ScanMessage> scan_sample_;
+  std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero
+};
+
+}  // namespace sen3bot::nav

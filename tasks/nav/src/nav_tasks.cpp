@@ -1,0 +1,239 @@
+#include "sen3bot/nav/nav_tasks.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "sen3bot/nav/arena.hpp"
+
+namespace sen3bot::nav {
+
+// --- LocalizationTask --------------------------------------------------------------------------
+
+Status LocalizationTask::init(std::pmr::memory_resource& arena) {
+  return guarded("localization task", [&]() -> Status { return mcl_.init(config_.mcl, map_, arena); });
+}
+
+void LocalizationTask::step(const tasks::StepContext& context) {
+  if (global_request_.exchange(false, std::memory_order_relaxed)) mcl_.global_initialize();
+  tasks::Sample<Odometry> odom;
+  if (!odom_.read(odom) || !odom.value.valid) return;
+  const ScanView* scan = nullptr;
+  ScanView view;
+  if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
+    scan_seq_ = scan_sample_.sequence;
+    view = scan_sample_.value.view();
+    scan = &view;
+  }
+  (void)mcl_.update(odom.value, scan);
+  PoseEstimate e = mcl_.estimate();
+  e.stamp_ns = context.start_ns;
+  estimate_.publish(e, context.start_ns);
+}
+
+// --- PlannerTask ----------------------------------------------------------------------------------
+
+Status PlannerTask::init(std::pmr::memory_resource& arena) {
+  return guarded("planner task", [&]() -> Status {
+    if (Status s = costmap_.add_layer(static_layer_); !s) return s;
+    if (config_.use_scan) {
+      if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
+    }
+    if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
+    if (Status s = costmap_.init_over_map(map_, arena); !s) return s;
+    GlobalPlannerConfig planner = config_.planner;
+    planner.max_cells = std::max(planner.max_cells, costmap_.costmap().size());
+    planner.max_waypoints = std::max(planner.max_waypoints, waypoints_in_.size());
+    if (Status s = planner_.init(planner, arena); !s) return s;
+    waypoints_ = allocate_array<Point2D>(arena, waypoints_in_.size());
+    std::copy(waypoints_in_.begin(), waypoints_in_.end(), waypoints_.begin());
+    cells_ = allocate_array<GridCell>(arena, costmap_.costmap().size());
+    costmap_.update({});
+    return Status::success();
+  });
+}
+
+void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns) noexcept {
+  // Waypoints behind the robot are dropped so a re-plan from mid-route is not pulled back.
+  std::size_t nearest = waypoints_.size();
+  double best = config_.waypoint_pass_m;
+  for (std::size_t i = next_waypoint_; i < waypoints_.size(); ++i) {
+    const double d = std::hypot(waypoints_[i].x_m - pose.x_m, waypoints_[i].y_m - pose.y_m);
+    if (d <= best) {
+      best = d;
+      nearest = i;
+    }
+  }
+  if (nearest < waypoints_.size()) next_waypoint_ = nearest;
+  const auto begin = std::chrono::steady_clock::now();
+  const PlanResult r = planner_.plan_world(costmap_.costmap(), {pose.x_m, pose.y_m}, {goal.x_m, goal.y_m},
+                                           waypoints_.subspan(next_waypoint_), cells_);
+  const auto end = std::chrono::steady_clock::now();
+  message_.plan_id = ++plan_id_;
+  message_.goal_id = goal.id;
+  message_.status = r.status;
+  message_.expansions = static_cast<std::uint32_t>(r.expansions);
+  message_.waypoints_passed = r.waypoints_passed;
+  message_.length_m = r.length_m;
+  message_.plan_time_ms = std::chrono::duration<double, std::milli>(end - begin).count();
+  message_.count = 0;
+  if (r.ok()) {
+    // Long paths are thinned evenly to fit the message; the last cell is always kept.
+    const std::size_t stride = (r.cells + PathMessage::kMaxPoints - 1) / PathMessage::kMaxPoints;
+    const Costmap2D& grid = costmap_.costmap();
+    for (std::size_t i = 0; i < r.cells; i += stride) {
+      double x = 0.0;
+      double y = 0.0;
+      grid.cell_to_world(cells_[i].col, cells_[i].row, x, y);
+      message_.points[message_.count++] = {static_cast<float>(x), static_cast<float>(y)};
+    }
+    if ((r.cells - 1) % stride != 0 && message_.count < PathMessage::kMaxPoints) {
+      double x = 0.0;
+      double y = 0.0;
+      grid.cell_to_world(cells_[r.cells - 1].col, cells_[r.cells - 1].row, x, y);
+      message_.points[message_.count++] = {static_cast<float>(x), static_cast<float>(y)};
+    }
+    // The exact goal as the last point, so the controller's tolerance is measured to it.
+    message_.points[message_.count - 1] = {static_cast<float>(goal.x_m), static_cast<float>(goal.y_m)};
+  }
+  path_.publish(message_, now_ns);
+  last_plan_ns_ = now_ns;
+}
+
+void PlannerTask::step(const tasks::StepContext& context) {
+  tasks::Sample<PoseEstimate> pose;
+  const bool have_pose = pose_.read(pose) && pose.value.valid;
+  const ScanView* scan = nullptr;
+  ScanView view;
+  if (config_.use_scan && scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
+    scan_seq_ = scan_sample_.sequence;
+    view = scan_sample_.value.view();
+    scan = &view;
+  }
+  if (have_pose && scan != nullptr) {
+    const Pose2D sensor = compose(pose.value.pose, config_.laser_mount);
+    costmap_.update({pose.value.pose, sensor, scan});
+  }
+  tasks::Sample<NavGoal> goal;
+  if (!goal_.read(goal)) return;
+  if (!goal.value.active) {
+    if (goal_active_) {
+      message_ = PathMessage{};
+      message_.plan_id = ++plan_id_;
+      message_.goal_id = goal.value.id;
+      path_.publish(message_, context.start_ns);
+    }
+    goal_active_ = false;
+    return;
+  }
+  if (!have_pose) return;
+  const bool new_goal = !goal_active_ || goal.value.id != goal_id_;
+  const bool due = config_.replan_period_s > 0.0 &&
+                   static_cast<double>(context.start_ns - last_plan_ns_) >= config_.replan_period_s * 1e9;
+  if (new_goal) next_waypoint_ = 0;
+  if (new_goal || due) {
+    goal_active_ = true;
+    goal_id_ = goal.value.id;
+    plan(goal.value, pose.value.pose, context.start_ns);
+  }
+}
+
+// --- ControllerTask -------------------------------------------------------------------------------
+
+Status ControllerTask::init(std::pmr::memory_resource& arena) {
+  return guarded("controller task", [&]() -> Status {
+    if (Status s = costmap_.add_layer(static_layer_); !s) return s;
+    if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
+    if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
+    CostmapConfig cfg = config_.local_costmap;
+    cfg.lattice_x_m = map_.origin_x_m();
+    cfg.lattice_y_m = map_.origin_y_m();
+    if (Status s = costmap_.init(cfg, arena); !s) return s;
+    DwaConfig dwa = config_.dwa;
+    dwa.max_costmap_cells = std::max(dwa.max_costmap_cells, costmap_.costmap().size());
+    dwa.max_path_points = std::max(dwa.max_path_points, PathMessage::kMaxPoints);
+    return dwa_.init(dwa, arena);
+  });
+}
+
+void ControllerTask::step(const tasks::StepContext& context) {
+  VelocityCommand command{0.0, 0.0, context.start_ns};
+  ControllerStatus status;
+  if (path_.read(path_sample_) && path_sample_.value.plan_id != plan_id_) {
+    plan_id_ = path_sample_.value.plan_id;
+    if (path_sample_.value.status == PlanStatus::ok && path_sample_.value.count > 0) {
+      dwa_.set_path(std::span<const PathPoint>(path_sample_.value.points.data(), path_sample_.value.count));
+    } else {
+      dwa_.clear_path();
+    }
+  }
+  tasks::Sample<PoseEstimate> pose;
+  tasks::Sample<Odometry> odom;
+  const bool fresh_pose = pose_.read(pose) && pose.value.valid &&
+                          static_cast<double>(context.start_ns - pose.stamp_ns) <= config_.pose_timeout_s * 1e9;
+  if (fresh_pose && odom_.read(odom)) {
+    const ScanView* scan = nullptr;
+    ScanView view;
+    if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
+      scan_seq_ = scan_sample_.sequence;
+      view = scan_sample_.value.view();
+      scan = &view;
+    }
+    const Pose2D sensor = compose(pose.value.pose, config_.laser_mount);
+    costmap_.update({pose.value.pose, sensor, scan});
+    const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_mps, odom.value.w_radps, costmap_.costmap());
+    command.v_mps = c.v_mps;
+    command.w_radps = c.w_radps;
+    status.status = c.status;
+    status.distance_to_goal_m = c.distance_to_goal_m;
+    status.admissible = c.admissible;
+  }
+  status.recoveries = dwa_.recoveries();
+  status.plan_id = plan_id_;
+  command_.publish(command, context.start_ns);
+  status_.publish(status, context.start_ns);
+}
+
+// --- SafetyTask ---------------------------------------------------------------------------------
+
+Status SafetyTask::init(std::pmr::memory_resource& /*arena*/) { return Status::success(); }
+
+void SafetyTask::step(const tasks::StepContext& context) {
+  SafetyInputs in;
+  in.now_ns = context.start_ns;
+  tasks::Sample<VelocityCommand> requested;
+  if (requested_.read(requested) &&
+      static_cast<double>(context.start_ns - requested.stamp_ns) <= config_.command_timeout_s * 1e9) {
+    in.requested = requested.value;
+  }
+  ScanView view;
+  if (scan_.read(scan_sample_)) {
+    view = scan_sample_.value.view();
+    in.scan = &view;
+  }
+  tasks::Sample<Odometry> odom;
+  if (odom_.read(odom) && odom.value.valid) {
+    in.odom_stamp_ns = odom.value.stamp_ns;
+    in.measured_v_mps = odom.value.v_mps;
+  }
+  tasks::Sample<BaseFlags> base;
+  if (base_.read(base)) {
+    in.estop = base.value.estop;
+    in.motors_enabled = base.value.motors_enabled;
+  } else {
+    in.motors_enabled = !config_.require_base_flags;
+  }
+  tasks::Sample<PoseEstimate> pose;
+  in.localization_lost = !pose_.read(pose) || !pose.value.valid || pose.value.lost;
+  const SafetyOutput out = filter_.filter(in);
+  if ((in.requested.v_mps != 0.0 || in.requested.w_radps != 0.0) && out.command.v_mps == 0.0 &&
+      out.command.w_radps == 0.0) {
+    ++stops_;
+  }
+  VelocityCommand command = out.command;
+  command.stamp_ns = context.start_ns;
+  command_.publish(command, context.start_ns);
+  status_.publish(out, context.start_ns);
+}
+
+}  // namespace sen3bot::nav
