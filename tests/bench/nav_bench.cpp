@@ -1,0 +1,191 @@
+// Navigation benchmarks: prints timings, asserts nothing. Run from anywhere:
+//   build/tests/bench/sen3bot_nav_bench [repetitions]
+// Numbers are host wall-clock medians (p50) and 99th percentiles over the repetitions.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "movingai.hpp"
+#include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/global_planner.hpp"
+#include "sen3bot/nav/local_planner.hpp"
+#include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/waypoints.hpp"
+#include "sen3bot/world/world.hpp"
+
+namespace {
+
+using namespace sen3bot;
+using namespace sen3bot::nav;
+using Clock = std::chrono::steady_clock;
+
+struct Stats {
+  double p50_ms = 0.0;
+  double p99_ms = 0.0;
+  double mean_ms = 0.0;
+};
+
+template <typename Body>
+Stats measure(int repetitions, Body&& body) {
+  std::vector<double> ms;
+  ms.reserve(static_cast<std::size_t>(repetitions));
+  for (int i = 0; i < repetitions; ++i) {
+    const auto t0 = Clock::now();
+    body(i);
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
+  std::sort(ms.begin(), ms.end());
+  Stats s;
+  s.p50_ms = ms[ms.size() / 2];
+  s.p99_ms = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+  for (double v : ms) s.mean_ms += v;
+  s.mean_ms /= static_cast<double>(ms.size());
+  return s;
+}
+
+ScanMessage lab_scan(const world::World& truth, const Pose2D& pose, std::uint16_t beams) {
+  ScanMessage scan;
+  scan.count = beams;
+  scan.angle_min_rad = static_cast<float>(-M_PI / 2.0);
+  scan.increment_rad = static_cast<float>(M_PI / (beams - 1));
+  scan.range_max_m = 8.0f;
+  truth.scan(pose, scan.angle_min_rad, scan.increment_rad, beams, scan.range_max_m,
+             std::span<float>(scan.ranges_m.data(), beams));
+  return scan;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int reps = argc > 1 ? std::max(10, std::atoi(argv[1])) : 300;
+  auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  auto waypoints = load_waypoints(SEN3BOT_SOURCE_DIR "/config/maps/lab_waypoints.txt");
+  if (!map || !waypoints) {
+    std::fprintf(stderr, "cannot load the lab map or waypoints\n");
+    return 1;
+  }
+  const world::World truth(*map);
+  mem::BudgetArena arena("bench", 64 << 20);
+
+  // Global costmap and A*.
+  StaticLayer st(*map);
+  ObstacleLayer obs;
+  InflationLayer infl;
+  LayeredCostmap global;
+  (void)global.add_layer(st);
+  (void)global.add_layer(obs);
+  (void)global.add_layer(infl);
+  (void)global.init_over_map(*map, arena);
+  global.update({});
+  const Pose2D at_start{4.0, 7.0, -M_PI / 2.0};
+  const ScanMessage scan361 = lab_scan(truth, at_start, 361);
+  const ScanView view361 = scan361.view();
+  Stats s = measure(reps, [&](int) { global.update({at_start, at_start, &view361}); });
+  std::printf("global costmap update (160x190, static+obstacle+inflation, 361 beams): p50 %.3f ms  p99 %.3f ms\n", s.p50_ms, s.p99_ms);
+
+  GlobalPlanner planner;
+  GlobalPlannerConfig pcfg;
+  (void)planner.init(pcfg, arena);
+  std::vector<GridCell> path(global.costmap().size());
+  PlanResult r;
+  s = measure(reps, [&](int) { r = planner.plan_world(global.costmap(), {4.0, 7.0}, {2.5, 2.0}, {}, path); });
+  std::printf("A* lab (4,7)->(2.5,2), cost-aware: %s, %zu expansions, %.2f m; p50 %.3f ms  p99 %.3f ms  (%.2f M expansions/s)\n",
+              to_string(r.status), r.expansions, r.length_m, s.p50_ms, s.p99_ms, static_cast<double>(r.expansions) / s.p50_ms / 1000.0);
+  std::vector<Point2D> reversed(waypoints->rbegin(), waypoints->rend());
+  s = measure(reps, [&](int) { r = planner.plan_world(global.costmap(), {4.0, 7.0}, {2.5, 2.0}, reversed, path); });
+  std::printf("A* lab with %zu waypoints: %s, %zu expansions, %u passed, %.2f m; p50 %.3f ms  p99 %.3f ms\n", reversed.size(),
+              to_string(r.status), r.expansions, r.waypoints_passed, r.length_m, s.p50_ms, s.p99_ms);
+  s = measure(reps, [&](int) { r = planner.plan_world(global.costmap(), {0.4, 0.4}, {7.6, 9.1}, {}, path); });
+  std::printf("A* lab corner to corner: %s, %zu expansions; p50 %.3f ms  p99 %.3f ms\n", to_string(r.status), r.expansions,
+              s.p50_ms, s.p99_ms);
+
+  // Moving AI maps, unit cost.
+  for (const char* name : {"random-32-32-10", "random-64-64-20", "maze-32-32-2", "room-32-32-4", "warehouse-64-32"}) {
+    const std::string base = std::string(SEN3BOT_SOURCE_DIR) + "/tests/data/movingai/" + name;
+    testing::MovingAiMap m;
+    if (!testing::load_movingai_map(base + ".map", m)) continue;
+    const auto scen = testing::load_movingai_scen(base + ".map.scen");
+    Costmap2D grid;
+    (void)grid.init(m.width, m.height, 1.0, arena);
+    testing::fill_costmap(m, grid);
+    GlobalPlanner unit;
+    GlobalPlannerConfig ucfg;
+    ucfg.unit_cost = true;
+    ucfg.max_cells = grid.size();
+    (void)unit.init(ucfg, arena);
+    std::size_t expansions = 0;
+    const Stats ms = measure(static_cast<int>(scen.size()) * 20, [&](int i) {
+      const auto& sc = scen[static_cast<std::size_t>(i) % scen.size()];
+      expansions += unit.plan(grid, sc.start, sc.goal, {}, path).expansions;
+    });
+    std::printf("A* Moving AI %-16s %zu scenarios: mean %.4f ms  p99 %.4f ms  (%.2f M expansions/s)\n", name, scen.size(),
+                ms.mean_ms, ms.p99_ms, static_cast<double>(expansions) / (ms.mean_ms * static_cast<double>(scen.size()) * 20.0) / 1000.0);
+  }
+
+  // Local costmap (6 x 6 m rolling) for a 361-beam scan.
+  StaticLayer lst(*map);
+  ObstacleLayer lobs;
+  InflationLayer linfl;
+  LayeredCostmap local;
+  (void)local.add_layer(lst);
+  (void)local.add_layer(lobs);
+  (void)local.add_layer(linfl);
+  CostmapConfig lcfg;
+  lcfg.rolling = true;
+  (void)local.init(lcfg, arena);
+  s = measure(reps * 3, [&](int i) {
+    Pose2D p = at_start;
+    p.y_m -= 0.002 * (i % 100);
+    local.update({p, p, &view361});
+  });
+  std::printf("local costmap update (120x120 rolling, static+obstacle+inflation, 361 beams): p50 %.3f ms  p99 %.3f ms\n",
+              s.p50_ms, s.p99_ms);
+  s = measure(reps * 3, [&](int) { lobs.update(local.costmap(), {at_start, at_start, &view361}); });
+  std::printf("  obstacle layer alone (raytrace + mark 361 beams): p50 %.3f ms\n", s.p50_ms);
+
+  // DWA on the local costmap, following the lab plan.
+  DwaPlanner dwa;
+  DwaConfig dcfg;
+  (void)dwa.init(dcfg, arena);
+  (void)planner.plan_world(global.costmap(), {4.0, 7.0}, {2.5, 2.0}, {}, path);
+  const PlanResult lab = planner.plan_world(global.costmap(), {4.0, 7.0}, {2.5, 2.0}, {}, path);
+  std::vector<PathPoint> points;
+  for (std::size_t i = 0; i < lab.cells; ++i) {
+    double x = 0.0;
+    double y = 0.0;
+    global.costmap().cell_to_world(path[i].col, path[i].row, x, y);
+    points.push_back({static_cast<float>(x), static_cast<float>(y)});
+  }
+  dwa.set_path(points);
+  local.update({at_start, at_start, &view361});
+  DwaCommand cmd;
+  s = measure(reps * 3, [&](int) { cmd = dwa.compute(at_start, 0.3, 0.0, local.costmap()); });
+  std::printf("DWA cycle (%d x %d = %u samples, %.1f s rollouts): p50 %.3f ms  p99 %.3f ms  (%u admissible)\n",
+              dcfg.v_samples, dcfg.w_samples, cmd.evaluated, dcfg.sim_time_s, s.p50_ms, s.p99_ms, cmd.admissible);
+
+  // MCL sensor update: particles x 60 beams.
+  for (const std::size_t particles : {500u, 1000u, 2000u}) {
+    MclConfig mcfg;
+    mcfg.min_particles = particles;
+    mcfg.max_particles = particles;
+    mcfg.initial_pose = at_start;
+    mcfg.update_max_interval_s = 1e-9;  // every call updates
+    mem::BudgetArena marena("mcl", MonteCarloLocalization::storage_bytes(mcfg, *map));
+    MonteCarloLocalization mcl;
+    (void)mcl.init(mcfg, *map, marena);
+    hal::Nanos t = 0;
+    s = measure(reps, [&](int) {
+      t += 1000;
+      const Odometry o{0.0, 0.0, 0.0, 0.0, 0.0, t, true};
+      (void)mcl.update(o, &view361);
+    });
+    std::printf("MCL update (%zu particles x 60 beams, motion + likelihood + KLD resample): p50 %.3f ms  p99 %.3f ms  (arena %zu B)\n",
+                particles, s.p50_ms, s.p99_ms, marena.used_bytes());
+  }
+  return 0;
+}
