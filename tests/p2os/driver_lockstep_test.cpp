@@ -448,11 +448,12 @@ class RateCheckedLink final : public hal::ByteStream, public BaudControl {
     return Status::success();
   }
   [[nodiscard]] bool rates_match() const {
-    const std::uint32_t robot = robot_.requested_host_baud() != 0 ? robot_.requested_host_baud() : robot_baud;
-    return robot == client_baud;
+    const bool switched = robot_follows_hostbaud && robot_.requested_host_baud() != 0;
+    return (switched ? robot_.requested_host_baud() : robot_baud) == client_baud;
   }
   std::uint32_t client_baud = 9600;
   std::uint32_t robot_baud = 9600;
+  bool robot_follows_hostbaud = true;  // false: a robot whose UART ignores HOSTBAUD
 
  private:
   hal::ByteStream& inner_;
@@ -482,6 +483,26 @@ TEST(P2osLockstep, SwitchesUpWithHostbaud) {
   EXPECT_EQ(h.driver.current_baud(), 38400u);
   EXPECT_EQ(h.driver.state().link, LinkState::connected);
   EXPECT_EQ(h.driver.state().link_losses, 0u);
+}
+
+TEST(P2osLockstep, RevertsWhenTheRobotStaysSilentAfterHostbaud) {
+  P2osConfig config;
+  config.switch_to_baud = 38400;
+  Lockstep h(config);
+  RateCheckedLink link(h.pipe.a(), h.emulator);
+  link.robot_follows_hostbaud = false;
+  h.driver.attach(link, h.now_ns, &link, 9600);
+  ASSERT_TRUE(h.connect());
+  ASSERT_TRUE(h.run_until([&] { return h.driver.current_baud() == 38400u; }, hal::seconds(2)));
+  const hal::Nanos switched_at = h.now_ns;
+  ASSERT_TRUE(h.run_until([&] { return h.driver.current_baud() == 9600u; }, hal::seconds(2)));
+  EXPECT_NEAR(hal::to_seconds(h.now_ns - switched_at), 0.9, 0.02);
+  const std::uint64_t sips = h.driver.state().sip_count;
+  h.run_for(hal::seconds(1));
+  EXPECT_GE(h.driver.state().sip_count, sips + 9);
+  EXPECT_EQ(h.driver.state().link, LinkState::connected);
+  EXPECT_EQ(h.driver.state().link_losses, 0u);
+  EXPECT_EQ(link.client_baud, 9600u);
 }
 
 // ---- The task wrapper ----
