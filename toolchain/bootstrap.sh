@@ -38,6 +38,8 @@ NATIVE_PACKAGES=(
   libavcodec-dev             # camera: H.264 decoding
   libavutil-dev
   libswscale-dev             # camera: YUV -> BGR/grey and downscaling
+  libpugixml-dev             # camera: ONVIF SOAP replies (no DTD, no external entities)
+  libcurl4-openssl-dev       # camera: ONVIF over HTTP (chunked bodies, HTTP Digest)
   python3-gi                 # camera tests: the RTSP peer is gst-rtsp-server driven from Python
   python3-gst-1.0
   gir1.2-gst-rtsp-server-1.0

@@ -43,6 +43,7 @@ SYSROOT_PACKAGES=(
   libopencv-core-dev libopencv-imgproc-dev
   libssl-dev                   # camera: libcrypto (Digest auth)
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
+  libpugixml-dev libcurl4-openssl-dev          # camera: ONVIF
 )
 # libopencv-imgcodecs-dev links libgdal32: +~100 packages, +~50 MiB download, +~200 MB unpacked.
 SYSROOT_IMGCODECS_PACKAGES=(libopencv-imgcodecs-dev)
