@@ -152,3 +152,23 @@ TEST(Mcl, ConvergesFromAWrongInitialGuess) {
 
 }  // namespace
 }  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(Mcl, GlobalInitializationIsReportedLost) {
+  auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  ASSERT_TRUE(map.ok());
+  MclConfig cfg;
+  mem::BudgetArena arena("mcl", MonteCarloLocalization::storage_bytes(cfg, *map));
+  MonteCarloLocalization mcl;
+  ASSERT_TRUE(mcl.init(cfg, *map, arena));
+  EXPECT_FALSE(mcl.estimate().lost);
+  EXPECT_EQ(mcl.particle_count(), cfg.min_particles);
+  mcl.global_initialize();
+  EXPECT_TRUE(mcl.estimate().lost);
+  EXPECT_EQ(mcl.particle_count(), cfg.max_particles);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
