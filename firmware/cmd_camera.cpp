@@ -14,13 +14,57 @@
 
 #include "commands.hpp"
 #include "sen3bot/camera/camera.hpp"
+#include "sen3bot/camera/onvif_client.hpp"
+#include "sen3bot/camera/rtsp_url.hpp"
 
 namespace sen3bot::firmware {
 namespace {
 
 constexpr const char* kCameraUsage =
-    "usage: sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]\n"
-    "  URL is rtsp://[user:pass@]host[:port]/path\n";
+    "usage: sen3bot camera discover [--timeout S]\n"
+    "       sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]\n"
+    "       sen3bot camera ptz onvif://user:pass@host[:port] --pan P --tilt T --zoom Z --seconds S\n"
+    "  URL is rtsp://[user:pass@]host[:port]/path or onvif://user:pass@host[:port]\n";
+
+// onvif://user:pass@host[:port] (port 80 by default) as an ONVIF client configuration.
+Result<camera::onvif::OnvifConfig> parse_onvif_url(std::string_view url) {
+  constexpr std::string_view kScheme = "onvif://";
+  if (!url.starts_with(kScheme)) return Error(Errc::invalid_argument, "expected onvif://user:pass@host[:port]");
+  const std::string_view rest = url.substr(kScheme.size());
+  std::string_view authority = rest.substr(0, rest.find('/'));
+  if (const std::size_t at = authority.rfind('@'); at != std::string_view::npos) authority.remove_prefix(at + 1);
+  const bool has_port = authority.find(':') != std::string_view::npos;
+  const std::string as_rtsp = "rtsp://" + std::string(rest);
+  auto parsed = camera::parse_rtsp_url(as_rtsp);
+  if (!parsed) return parsed.error();
+  camera::onvif::OnvifConfig config;
+  config.host = parsed->host;
+  config.port = has_port ? parsed->port : 80;
+  config.credentials = {parsed->user, parsed->password};
+  return config;
+}
+
+// Asks the device for its RTSP URI (host rewritten to the one we reach it on).
+Result<std::string> onvif_stream_url(std::string_view url) {
+  auto config = parse_onvif_url(url);
+  if (!config) return config.error();
+  const camera::Credentials creds = config->credentials;
+  auto client = camera::onvif::OnvifClient::create(*config);
+  if (!client) return client.error();
+  if (auto s = (*client)->connect(); !s) return s.error();
+  auto profiles = (*client)->profiles();
+  if (!profiles) return profiles.error();
+  const camera::onvif::Profile* p = camera::onvif::choose_profile(*profiles, "H264", 1280, 720);
+  if (p == nullptr) return Error(Errc::not_found, "no media profile");
+  auto uri = (*client)->stream_uri(p->token);
+  if (!uri) return uri.error();
+  // The RTSP URI carries no credentials: authenticate RTSP with the ONVIF ones.
+  std::string out = *uri;
+  if (!creds.user.empty() && out.starts_with("rtsp://") && out.find('@') == std::string::npos) {
+    out.insert(7, creds.user + ":" + creds.password + "@");
+  }
+  return out;
+}
 
 bool parse_positive(const char* text, double& out) {
   char* end = nullptr;
@@ -81,8 +125,12 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
   }
   if (std::string_view(config.rtsp.url).starts_with("onvif://")) {
-    std::fprintf(err, "sen3bot camera probe: onvif:// URLs are not supported by this build; give the rtsp:// URL\n");
-    return 2;
+    auto rtsp = onvif_stream_url(config.rtsp.url);
+    if (!rtsp) {
+      std::fprintf(err, "sen3bot camera probe: ONVIF: %s\n", rtsp.error().c_str());
+      return 1;
+    }
+    config.rtsp.url = *rtsp;
   }
   hal::PosixClock clock;
   auto cam = camera::Camera::create(config, clock);
@@ -150,10 +198,116 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return decoded > 0 ? 0 : 1;
 }
 
+int discover_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  camera::onvif::DiscoveryOptions options;
+  for (int i = 0; i < argc; ++i) {
+    double seconds = 0;
+    if (std::string_view(argv[i]) == "--timeout" && i + 1 < argc && parse_positive(argv[i + 1], seconds)) {
+      options.timeout_ms = static_cast<int>(seconds * 1000);
+      ++i;
+    } else {
+      std::fputs(kCameraUsage, err);
+      return 2;
+    }
+  }
+  auto found = camera::onvif::discover(options);
+  if (!found) {
+    std::fprintf(err, "sen3bot camera discover: %s\n", found.error().c_str());
+    return 1;
+  }
+  std::fputs("[", out);
+  for (std::size_t i = 0; i < found->size(); ++i) {
+    const auto& m = (*found)[i];
+    std::fputs(i == 0 ? "\n  {\"endpoint\":\"" : ",\n  {\"endpoint\":\"", out);
+    json_escape(out, m.endpoint);
+    std::fputs("\",\"xaddrs\":[", out);
+    for (std::size_t k = 0; k < m.xaddrs.size(); ++k) {
+      std::fputs(k == 0 ? "\"" : ",\"", out);
+      json_escape(out, m.xaddrs[k]);
+      std::fputs("\"", out);
+    }
+    std::fputs("],\"types\":\"", out);
+    json_escape(out, m.types);
+    std::fputs("\",\"scopes\":\"", out);
+    json_escape(out, m.scopes);
+    std::fputs("\"}", out);
+  }
+  std::fputs(found->empty() ? "]\n" : "\n]\n", out);
+  return 0;
+}
+
+int ptz_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  if (argc < 1) {
+    std::fputs(kCameraUsage, err);
+    return 2;
+  }
+  double pan = 0;
+  double tilt = 0;
+  double zoom = 0;
+  double seconds = 1;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string_view arg = argv[i];
+    char* end = nullptr;
+    const double v = std::strtod(argv[i + 1], &end);
+    if (end == argv[i + 1] || *end != '\0') {
+      std::fprintf(err, "sen3bot camera ptz: %s needs a number\n", argv[i]);
+      return 2;
+    }
+    if (arg == "--pan") pan = v;
+    else if (arg == "--tilt") tilt = v;
+    else if (arg == "--zoom") zoom = v;
+    else if (arg == "--seconds" && v > 0) seconds = v;
+    else {
+      std::fputs(kCameraUsage, err);
+      return 2;
+    }
+  }
+  auto config = parse_onvif_url(argv[0]);
+  if (!config) {
+    std::fprintf(err, "sen3bot camera ptz: %s\n", config.error().c_str());
+    return 2;
+  }
+  auto client = camera::onvif::OnvifClient::create(*config);
+  if (!client) {
+    std::fprintf(err, "sen3bot camera ptz: %s\n", client.error().c_str());
+    return 1;
+  }
+  if (auto s = (*client)->connect(); !s) {
+    std::fprintf(err, "sen3bot camera ptz: %s\n", s.error().c_str());
+    return 1;
+  }
+  auto profiles = (*client)->profiles();
+  if (!profiles) {
+    std::fprintf(err, "sen3bot camera ptz: %s\n", profiles.error().c_str());
+    return 1;
+  }
+  const camera::onvif::Profile* profile = nullptr;
+  for (const auto& p : *profiles) {
+    if (p.has_ptz && profile == nullptr) profile = &p;
+  }
+  if (profile == nullptr) {
+    std::fprintf(err, "sen3bot camera ptz: no profile has a PTZ configuration\n");
+    return 1;
+  }
+  const Status moved = (*client)->continuous_move(profile->token, pan, tilt, zoom, seconds);
+  if (moved) std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  // Always an explicit Stop: cheap cameras ignore the move's Timeout.
+  const Status stopped = (*client)->stop(profile->token);
+  std::fprintf(out, "{\"profile\":\"");
+  json_escape(out, profile->token);
+  std::fprintf(out, "\",\"pan\":%.3f,\"tilt\":%.3f,\"zoom\":%.3f,\"seconds\":%.3f,\"moved\":%s,\"stopped\":%s,\"auth\":\"%s\"}\n",
+               pan, tilt, zoom, seconds, moved ? "true" : "false", stopped ? "true" : "false",
+               camera::onvif::to_string((*client)->auth_mode()));
+  if (!moved) std::fprintf(err, "sen3bot camera ptz: %s\n", moved.error().c_str());
+  return moved && stopped ? 0 : 1;
+}
+
 }  // namespace
 
 int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (argc >= 1 && std::string_view(argv[0]) == "probe") return probe(argc - 1, argv + 1, out, err);
+  if (argc >= 1 && std::string_view(argv[0]) == "discover") return discover_command(argc - 1, argv + 1, out, err);
+  if (argc >= 1 && std::string_view(argv[0]) == "ptz") return ptz_command(argc - 1, argv + 1, out, err);
   std::fputs(kCameraUsage, err);
   return 2;
 }
