@@ -45,10 +45,13 @@ Result<OpenedLink> open_p2os_link(const P2osConfig& config) {
 P2osTask::P2osTask(const P2osConfig& config, hal::Clock& clock, tasks::Topic<BaseSetpoint>& setpoint_topic,
                    tasks::Topic<BaseState>& state_topic, LinkOpener opener)
     : config_(config),
+      reopen_config_(config),
       clock_(clock),
       setpoint_topic_(setpoint_topic),
       state_topic_(state_topic),
-      opener_(std::move(opener)) {}
+      opener_(std::move(opener)) {
+  reopen_config_.connect_timeout_ms = config.reopen_connect_timeout_ms;
+}
 
 P2osTask::~P2osTask() {
   if (driver_ != nullptr) {
@@ -67,12 +70,12 @@ Status P2osTask::init(std::pmr::memory_resource& arena) {
   } catch (const std::bad_alloc&) {
     return Error::format(Errc::capacity, "p2os task: the driver needs %zu bytes of arena", sizeof(P2osDriver));
   }
-  try_open(clock_.now());
+  try_open(config_, clock_.now());
   return Status::success();
 }
 
-void P2osTask::try_open(hal::Nanos now_ns) {
-  Result<OpenedLink> opened = opener_(config_);
+void P2osTask::try_open(const P2osConfig& config, hal::Nanos now_ns) {
+  Result<OpenedLink> opened = opener_(config);
   if (!opened) {
     open_error_ = opened.error();
     next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
@@ -98,7 +101,7 @@ void P2osTask::step(const tasks::StepContext& context) {
       link_ = OpenedLink{};
       next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
     }
-    if (now_ns >= next_open_ns_) try_open(now_ns);
+    if (now_ns >= next_open_ns_) try_open(reopen_config_, now_ns);
   }
   driver_->step(now_ns);
   const BaseState& state = driver_->state();

@@ -51,8 +51,11 @@ struct P2osConfig {
   int command_spacing_ms = 4;
   // A stream that failed is reopened after this delay (by the task).
   int reopen_delay_ms = 500;
-  // TCP connect timeout when (re)opening a tcp:// port.
-  int connect_timeout_ms = 200;
+  // TCP connect timeout for the first open (in the task's init, where blocking is fine).
+  int connect_timeout_ms = 2000;
+  // TCP connect timeout when the task reopens from step(): bounds how long a step can block
+  // while a simulator or bridge is unreachable.
+  int reopen_connect_timeout_ms = 20;
   // Ask for CONFIGpac after OPEN (limits and AutoBaud).
   bool request_config = true;
   // Ask for continuous ENCODERpacs after OPEN.

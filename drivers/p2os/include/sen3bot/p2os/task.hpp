@@ -33,7 +33,9 @@ class P2osTask final : public tasks::Task {
 
   // Builds the driver in `arena` and opens the port (a failed open is retried in step()).
   Status init(std::pmr::memory_resource& arena) override;
-  // Never blocks. Allocates only when a failed link is reopened (a new stream object).
+  // Does not allocate or block in steady state. Reopening a failed link allocates a new stream
+  // object and, for TCP, may block up to reopen_connect_timeout_ms; it happens at most once per
+  // reopen_delay_ms.
   void step(const tasks::StepContext& context) override;
   // Zero velocity, ENABLE 0, CLOSE; waits up to one second for them to go out.
   void shutdown() override;
@@ -42,9 +44,10 @@ class P2osTask final : public tasks::Task {
   [[nodiscard]] const std::optional<Error>& last_open_error() const noexcept { return open_error_; }
 
  private:
-  void try_open(hal::Nanos now_ns);
+  void try_open(const P2osConfig& config, hal::Nanos now_ns);
 
   P2osConfig config_;
+  P2osConfig reopen_config_;  // config_ with the short reopen connect timeout
   hal::Clock& clock_;
   tasks::Topic<BaseSetpoint>& setpoint_topic_;
   tasks::Topic<BaseState>& state_topic_;
