@@ -34,7 +34,7 @@ struct Args {
   int fov_deg = 180;
   int res_cdeg = 50;
   int scans = 3;
-  double timeout_s = 40;
+  double timeout_s = 60;
 };
 
 bool parse(int argc, char** argv, Args& a) {

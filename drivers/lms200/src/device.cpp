@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <type_traits>
 
 namespace sen3bot::lms200 {
 
@@ -15,8 +16,19 @@ constexpr std::size_t kMaxReadPerStep = 4 * TelegramParser::kCapacityBytes;
 
 }  // namespace
 
+Lms200Device::Settings Lms200Device::settings_of(const Lms200Config& c) noexcept {
+  Settings s{c.baud, c.variant, c.units, c.measuring_mode, c.lms_address, {}, c.probe_bauds, c.probe_timeout_ms,
+             c.reply_timeout_ms, c.config_write_timeout_ms, c.inter_byte_timeout_ms, c.baud_settle_ms,
+             c.nak_retry_delay_ms, c.max_tries, c.stale_scan_periods, c.restart_delay_ms, c.stop_to_9600};
+  // Shorter passwords are padded with spaces, as the LMS expects 8 bytes.
+  for (std::size_t i = 0; i < kPasswordBytes; ++i) s.password[i] = i < c.password.size() ? c.password[i] : ' ';
+  return s;
+}
+
+static_assert(std::is_trivially_destructible_v<Lms200Device>, "lives in task arenas");
+
 Lms200Device::Lms200Device(const Lms200Config& config, hal::ByteStream& stream, LineControl* line) noexcept
-    : config_(config), stream_(&stream), line_(line), parser_(Side::from_device, config.lms_address) {
+    : config_(settings_of(config)), stream_(&stream), line_(line), parser_(Side::from_device, config.lms_address) {
   // Probe order: the configured rate (a warm restart finds the LMS there), then power-on 9600,
   // then the others.
   auto add = [this](std::uint32_t b) {
@@ -171,7 +183,7 @@ void Lms200Device::enter(hal::Nanos now, Phase phase) noexcept {
       send(now, request_read_config(), kReplyReadConfig, reply);
       break;
     case Phase::enter_installation:
-      send(now, request_installation_mode(config_.password), kReplyModeChange, reply);
+      send(now, request_installation_mode({config_.password.data(), kPasswordBytes}), kReplyModeChange, reply);
       break;
     case Phase::write_config: {
       ConfigBlock block = config_block_;

@@ -10,11 +10,9 @@ Lms200Task::Lms200Task(const Lms200Config& config, hal::ByteStream& stream, Line
                        tasks::Topic<LaserScan>& topic)
     : config_(config), topic_(topic), external_stream_(&stream), external_line_(line) {}
 
-Lms200Task::~Lms200Task() {
-  // Both live in the arena (trivially destructible apart from the config's strings, whose
-  // storage the device copied from the global heap at init()).
-  if (device_ != nullptr) device_->~Lms200Device();
-}
+// The device and the scan live in the arena and are trivially destructible: nothing to run
+// here, and the arena may be gone already.
+Lms200Task::~Lms200Task() = default;
 
 Status Lms200Task::init(std::pmr::memory_resource& arena) {
   if (!valid_variant(config_.variant))

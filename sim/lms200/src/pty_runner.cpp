@@ -38,9 +38,10 @@ void Lms200PtyRunner::run() {
       std::lock_guard lock(mutex_);
       emulator_.step(clock.now());
     }
-    // 200 us steps keep 500 kbaud output smooth (10 bytes per step) without a busy loop.
+    // Wake on input at once, otherwise every 500 us: 25 bytes per write at 500 kbaud, and
+    // few enough wake-ups that a loaded machine (or qemu) still keeps up.
     pollfd p{pty_->poll_fd(), POLLIN, 0};
-    timespec wait{0, 200'000};
+    timespec wait{0, 500'000};
     ::ppoll(&p, 1, &wait, nullptr);
     if (p.revents & (POLLHUP | POLLERR)) clock.sleep_until(clock.now() + hal::millis(1));
   }

@@ -121,7 +121,30 @@ class Lms200Device {
   bool switch_host_baud(hal::Nanos now, std::uint32_t baud) noexcept;
   hal::Nanos probe_timeout_ns(std::uint32_t baud) const noexcept;
 
-  Lms200Config config_;
+  // What the state machine keeps of Lms200Config: the same fields without strings, so the
+  // device is trivially destructible and may sit in an arena released without destructors.
+  struct Settings {
+    std::uint32_t baud;
+    Variant variant;
+    Units units;
+    MeasuringMode measuring_mode;
+    std::uint8_t lms_address;
+    std::array<char, kPasswordBytes> password;
+    bool probe_bauds;
+    std::int64_t probe_timeout_ms;
+    std::int64_t reply_timeout_ms;
+    std::int64_t config_write_timeout_ms;
+    std::int64_t inter_byte_timeout_ms;
+    std::int64_t baud_settle_ms;
+    std::int64_t nak_retry_delay_ms;
+    int max_tries;
+    int stale_scan_periods;
+    std::int64_t restart_delay_ms;
+    bool stop_to_9600;
+  };
+  static Settings settings_of(const Lms200Config& c) noexcept;
+
+  Settings config_;
   hal::ByteStream* stream_;
   LineControl* line_;
   TelegramParser parser_;
