@@ -218,3 +218,50 @@ TEST(HostileServer, UnsupportedTransportFallsBackToUdp) {
 
 }  // namespace
 }  // namespace sen3bot::camera
+
+namespace sen3bot::camera {
+namespace {
+
+// rtsp-streaming-server answers GET_PARAMETER with 501 and Thingino with 454-like errors:
+// the client must switch to OPTIONS for its keep-alives and keep the session.
+TEST(HostileServer, KeepAliveFallsBackToOptionsAfter501) {
+  std::atomic<int> get_parameter{0};
+  std::atomic<int> options_after_play{0};
+  std::atomic<bool> playing{false};
+  ScriptedServer server([&](const std::string& method, std::uint32_t cseq) -> std::string {
+    if (method == "DESCRIBE") return ok(cseq, "", kJpegSdp);
+    if (method == "SETUP") return ok(cseq, "Session: k1;timeout=2\r\nTransport: RTP/AVP/TCP;unicast;interleaved=0-1\r\n");
+    if (method == "PLAY") {
+      playing = true;
+      return ok(cseq);
+    }
+    if (method == "GET_PARAMETER") {
+      ++get_parameter;
+      return "RTSP/1.0 501 Not Implemented\r\nCSeq: " + std::to_string(cseq) + "\r\n\r\n";
+    }
+    if (method == "OPTIONS") {
+      if (playing) ++options_after_play;
+      return ok(cseq, "Public: OPTIONS, DESCRIBE, SETUP, PLAY, GET_PARAMETER\r\n");
+    }
+    return "";
+  });
+  RtspClientConfig config;
+  config.url = "rtsp://127.0.0.1:" + std::to_string(server.port()) + "/x";
+  config.no_media_timeout_ms = 60000;  // no media in this test; only the keep-alives matter
+  CountingSink sink;
+  auto client = RtspClient::create(config, sink);
+  ASSERT_TRUE(client.ok());
+  hal::PosixClock clock;
+  const hal::Nanos deadline = clock.now() + hal::millis(3500);
+  while (clock.now() < deadline) {
+    (*client)->step(clock.now());
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_EQ(get_parameter.load(), 1);  // tried once
+  EXPECT_GE(options_after_play.load(), 1);  // then OPTIONS
+  EXPECT_EQ((*client)->state(), ClientState::playing);
+  EXPECT_EQ((*client)->stats().reconnects, 0u);
+}
+
+}  // namespace
+}  // namespace sen3bot::camera

@@ -54,10 +54,8 @@ void Camera::on_frame(const EncodedFrame& frame) {
     decoder_ = std::move(*decoder);
     decoder_codec_ = frame.codec;
   }
-  const hal::Nanos before = clock_.now();
   if (decoder_->decode(frame, *pool_, clock_.now()) && frame.last_packet_ns > 0) {
     const hal::Nanos done = clock_.now();
-    (void)before;
     latencies_ms_[latency_count_ % kLatencySamples] = static_cast<double>(done - frame.last_packet_ns) / 1e6;
     ++latency_count_;
   }
