@@ -48,6 +48,7 @@ NATIVE_PACKAGES=(
   gstreamer1.0-plugins-good  # rtph264pay, rtpjpegpay
   gstreamer1.0-plugins-ugly  # x264enc
   ffmpeg                     # camera tests: ffprobe cross-checks what the peer streams
+  tshark                     # camera tests: the checked-in RTSP capture must dissect
 )
 
 # --- Raspberry Pi cross build (--cross) -------------------------------------------------------

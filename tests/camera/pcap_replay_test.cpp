@@ -2,6 +2,7 @@
 // through demux, depacketizer and decoder: the result must match what was recorded with it.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -23,6 +24,26 @@ TEST(PcapReplay, H264SessionDecodesIdentically) {
   EXPECT_EQ(summary.to_text(), expected.str());
   EXPECT_GT(summary.frames_decoded, 10u);
   EXPECT_EQ(summary.decode_errors, 0u);
+}
+
+}  // namespace
+}  // namespace sen3bot::camera
+
+namespace sen3bot::camera {
+namespace {
+
+// The capture is a real pcap: tshark's RTSP dissector finds the session's requests in it.
+TEST(PcapReplay, TsharkReadsTheCapture) {
+  const std::string path = std::string(SEN3BOT_SOURCE_DIR) + "/tests/data/camera/capture/gst_h264_tcp.pcap";
+  const std::string cmd = "tshark -r '" + path + "' -Y rtsp.request -T fields -e rtsp.method 2>/dev/null";
+  std::string out;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) out += buf;
+  const int status = ::pclose(pipe);
+  ASSERT_EQ(status, 0) << "tshark missing or failed (Debian package tshark)";
+  EXPECT_EQ(out, "OPTIONS\nDESCRIBE\nSETUP\nPLAY\n");
 }
 
 }  // namespace
