@@ -49,6 +49,7 @@ NATIVE_PACKAGES=(
   gstreamer1.0-plugins-ugly  # x264enc
   ffmpeg                     # camera tests: ffprobe cross-checks what the peer streams
   tshark                     # camera tests: the checked-in RTSP capture must dissect
+  libjpeg-turbo-progs        # camera tests: cjpeg makes restart-marker JPEGs for the type 65 peer
 )
 
 # --- Raspberry Pi cross build (--cross) -------------------------------------------------------

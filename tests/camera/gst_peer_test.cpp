@@ -6,9 +6,12 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <thread>
+
+#include <unistd.h>
 
 #include "peer_process.hpp"
 #include "udp_impair_proxy.hpp"
@@ -121,6 +124,25 @@ TEST(GstPeer, MjpegType1And0OverTcpAndUdp) {
       EXPECT_EQ(r.status.decoder.decode_errors, 0u) << mount;
     }
   }
+}
+
+// JPEG type 65: restart markers (DRI), from JPEGs made by cjpeg -restart, as the brief's peer.
+TEST(GstPeer, MjpegType65WithRestartMarkers) {
+  const std::string dir = "/tmp/sen3bot_camera_dri_" + std::to_string(::getpid());
+  const std::string make =
+      "set -e; mkdir -p " + dir + " && cd " + dir +
+      " && ffmpeg -v error -y -f lavfi -i testsrc=size=640x352:rate=15 -frames:v 15 -pix_fmt rgb24 -f image2 f%03d.ppm"
+      " && for f in f*.ppm; do cjpeg -quality 75 -sample 2x2 -restart 4 -outfile ${f%.ppm}.jpg $f; done"
+      " && ffmpeg -v error -y -stream_loop 20 -framerate 15 -i f%03d.jpg -c copy dri.mkv";
+  ASSERT_EQ(std::system(make.c_str()), 0) << "needs ffmpeg and cjpeg (libjpeg-turbo-progs)";
+  auto peer = start_server({"--dri-file", dir + "/dri.mkv"});
+  ASSERT_TRUE(peer->ready());
+  const auto r = run_camera(config_for(url(*peer, "/mjpeg_dri")), 10, 20000);
+  EXPECT_GE(r.frames, 10u) << r.status.last_error;
+  EXPECT_EQ(r.width_px, 640u);
+  EXPECT_EQ(r.height_px, 352u);
+  EXPECT_EQ(r.status.decoder.decode_errors, 0u);
+  (void)std::system(("rm -rf " + dir).c_str());
 }
 
 TEST(GstPeer, GreyAndDownscaledOutput) {
