@@ -77,11 +77,32 @@ constexpr const char* kUsage =
     "exit status: 0 success, 1 run-time failure, 2 bad command line or configuration.\n";
 
 std::atomic<tasks::Scheduler*> g_signal_target{nullptr};
+std::atomic<int> g_stop_signal{0};
 
-void on_stop_signal(int) {
-  // Only an atomic store: async-signal-safe.
+void on_stop_signal(int sig) {
+  // Only atomic stores: async-signal-safe.
+  g_stop_signal.store(sig);
   if (tasks::Scheduler* s = g_signal_target.load()) s->request_stop();
 }
+
+// SIGINT/SIGTERM stay blocked (pending) from the start of `run` until the run loop is ready
+// for them, so a stop request during start-up is never lost nor kills the process.
+class StopSignalsBlocked {
+ public:
+  StopSignalsBlocked() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set_, &previous_);
+  }
+  ~StopSignalsBlocked() { pthread_sigmask(SIG_SETMASK, &previous_, nullptr); }
+  StopSignalsBlocked(const StopSignalsBlocked&) = delete;
+  StopSignalsBlocked& operator=(const StopSignalsBlocked&) = delete;
+
+ private:
+  sigset_t set_;
+  sigset_t previous_;
+};
 
 struct RunOptions {
   std::string config_path;
@@ -156,12 +177,23 @@ int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& confi
   struct sigaction old_term {};
   sigaction(SIGINT, &action, &old_int);
   sigaction(SIGTERM, &action, &old_term);
+  g_stop_signal.store(0);
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);  // a pending stop is delivered here
 
   const hal::Nanos duration =
       config.duration_s > 0 ? static_cast<hal::Nanos>(config.duration_s * 1e9) : INT64_MAX / 2;
   const auto wall_start = std::chrono::steady_clock::now();
-  const Status s = scheduler.run_lockstep(clock, duration);
+  // Simulated seconds in slices: a stop signal ends the run at the end of the current slice.
+  const hal::Nanos end_ns = clock.now() + duration;
+  Status s = Status::success();
+  while (s && g_stop_signal.load() == 0 && clock.now() < end_ns)
+    s = scheduler.run_lockstep(clock, std::min<hal::Nanos>(end_ns - clock.now(), hal::seconds(1)));
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   sigaction(SIGINT, &old_int, nullptr);
   sigaction(SIGTERM, &old_term, nullptr);
@@ -170,6 +202,7 @@ int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& confi
     std::fprintf(err, "sen3bot: %s\n", s.error().c_str());
     return 1;
   }
+  if (const int sig = g_stop_signal.load(); sig != 0) std::fprintf(out, "stopped by %s\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
   const double sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
   std::fprintf(out, "simulated %.3f s in %.3f s of wall time (%.0fx real time)\n", sim_s, wall_s,
                wall_s > 0 ? sim_s / wall_s : 0.0);
@@ -177,6 +210,7 @@ int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& confi
 }
 
 int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  const StopSignalsBlocked blocked;
   RunOptions options;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -298,9 +332,9 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (command == "lms200-emulator") return lms200_emulator_command(argc - 2, argv + 2, out, err);
   if (command == "scan") return scan_command(argc - 2, argv + 2, out, err);
   if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
+  if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);
   std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
   return 2;
 }
 
 }  // namespace sen3bot::firmware
-  if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);

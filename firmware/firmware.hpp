@@ -60,14 +60,15 @@ class Firmware {
   tasks::Topic<p2os::BaseState> base_state_;
   tasks::Topic<lms200::LaserScan> laser_scan_;
   tasks::Topic<sim::GroundTruth> ground_truth_;
+  // One arena per running row, in table order; created once in init(). Declared before the
+  // tasks so it outlives them: their destructors release what they built inside it.
+  std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;
   // Created by init() from the configuration; a row whose task is absent does not run.
   std::unique_ptr<sim::Simulation> simulation_;
   std::unique_ptr<sim::SimulationTask> sim_task_;
   std::unique_ptr<p2os::P2osTask> base_task_;
   std::unique_ptr<lms200::Lms200Task> laser_task_;
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
-  // One arena per task-table row, in table order; created once in init().
-  std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;
   bool initialised_ = false;
 };
 
