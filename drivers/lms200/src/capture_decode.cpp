@@ -119,6 +119,10 @@ Result<CaptureDecodeSummary> decode_capture_json(const capture::CaptureFile& cap
   if (channel == nullptr) return Error(Errc::not_found, "lms200: the capture has no LMS200 channel");
   Decoder d;
   d.out = out;
+  // 0x06 / 0x15 mean ACK / NAK only while a request waits for its reply; elsewhere they are
+  // bytes of broken telegrams.
+  bool awaiting_reply = false;
+  std::uint64_t stray_bytes = 0;
   TelegramParser rx(Side::from_device);
   TelegramParser tx(Side::from_host);
   auto drain = [&](TelegramParser& p, double t_s, bool from_device) {
@@ -126,10 +130,14 @@ Result<CaptureDecodeSummary> decode_capture_json(const capture::CaptureFile& cap
     while (p.next(e)) {
       if (e.kind == TelegramParser::Kind::frame) {
         if (from_device) {
+          if (e.frame.code() != kReplyScan) awaiting_reply = false;
           d.reply(t_s, e.frame);
         } else {
+          awaiting_reply = true;
           d.request(t_s, e.frame);
         }
+      } else if (from_device && !awaiting_reply) {
+        ++stray_bytes;
       } else if (from_device) {
         const bool ack = e.kind == TelegramParser::Kind::ack;
         ++(ack ? d.summary.acks : d.summary.naks);
@@ -160,7 +168,7 @@ Result<CaptureDecodeSummary> decode_capture_json(const capture::CaptureFile& cap
     }
   }
   d.summary.crc_errors = rx.stats().crc_errors;
-  d.summary.garbage_bytes = rx.stats().garbage_bytes;
+  d.summary.garbage_bytes = rx.stats().garbage_bytes + stray_bytes;
   return d.summary;
 }
 
