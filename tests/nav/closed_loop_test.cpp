@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -35,7 +36,9 @@ struct Outcome {
 
 // blind_forward replaces the controller by a constant forward request (a planner that does
 // not see the person): only the safety task stands between the robot and the person.
-enum class Scenario { plain, person_crossing, blind_forward };
+// box_before_planning / box_during_motion are the thesis' cases 2 and 3: a 0.4 m box on the
+// waypoint route, seen before the first plan, or appearing while the robot drives.
+enum class Scenario { plain, person_crossing, blind_forward, box_before_planning, box_during_motion };
 
 Outcome run(Scenario scenario) {
   auto map_result = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
@@ -104,6 +107,17 @@ Outcome run(Scenario scenario) {
   scan.angle_min_rad = static_cast<float>(-M_PI / 2.0);
   scan.increment_rad = static_cast<float>(M_PI / 360.0);
   scan.range_max_m = 8.0f;
+  if (scenario == Scenario::box_before_planning || scenario == Scenario::box_during_motion) {
+    world::MoverScript box;
+    // Case 2: on the route below the door, there from the start. Case 3: on the route above
+    // the door, appearing when the robot is about 2 m short of it.
+    const bool during = scenario == Scenario::box_during_motion;
+    box.path = {during ? world::Point2D{3.35, 5.86} : world::Point2D{2.8, 3.3}};
+    box.size_m = 0.4;
+    box.shape = world::MoverShape::square;
+    box.appear_time_s = during ? 4.0 : 0.0;
+    truth.add_mover(box);
+  }
   base_topic.publish({false, true}, 0);
   goal_topic.publish({4.0, 7.0, 1, true}, 0);
   double sum_err2 = 0.0;
@@ -127,7 +141,8 @@ Outcome run(Scenario scenario) {
       mem::testing::AllocationScope scope;
       const tasks::StepContext ctx{now, now, static_cast<std::uint64_t>(tick)};
       localization.step(ctx);
-      if (tick % 10 == 0) planner.step(ctx);
+      // The first plan waits for the first scan (tick 2), so a box already there is in it.
+      if (tick % 10 == 2) planner.step(ctx);
       if (scenario == Scenario::blind_forward) {
         request_topic.publish({0.4, 0.0, now}, now);
       } else if (tick % 2 == 0) {
@@ -152,6 +167,13 @@ Outcome run(Scenario scenario) {
       }
     }
     tasks::Sample<ControllerStatus> status;
+    if (std::getenv("LOOP_TRACE") != nullptr && tick % 20 == 0 && controller_topic.read(status)) {
+      tasks::Sample<PathMessage> p;
+      (void)path_topic.read(p);
+      std::printf("t=%.1f robot %.2f %.2f %.2f ctrl %s plan %s exp %u wp %u len %.2f\n", static_cast<double>(now) * 1e-9,
+                  robot.x_m, robot.y_m, robot.theta_rad, to_string(status.value.status), to_string(p.value.status),
+                  p.value.expansions, p.value.waypoints_passed, p.value.length_m);
+    }
     if (controller_topic.read(status) && status.value.status == DwaStatus::reached) {
       outcome.reached = true;
       outcome.time_s = static_cast<double>(now) * 1e-9;
@@ -162,7 +184,8 @@ Outcome run(Scenario scenario) {
     // inside the braking corridor, but not blocking every arc to the left, so the local
     // planner may still ask to move and the safety filter has to stop it. The person stands
     // there for two seconds, then walks off to the right.
-    if (scenario != Scenario::plain && !person_added && robot.y_m > 3.0) {
+    if ((scenario == Scenario::person_crossing || scenario == Scenario::blind_forward) && !person_added &&
+        robot.y_m > 3.0) {
       world::MoverScript person;
       const double ahead = 0.2275 + 0.3 + 0.2;  // 0.3 m from the front edge to the person's edge
       const double right = scenario == Scenario::blind_forward ? 0.0 : 0.3;
@@ -200,7 +223,10 @@ Outcome run(Scenario scenario) {
     odom.x_m += ds * std::cos(odom.theta_rad + dth / 2.0);
     odom.y_m += ds * std::sin(odom.theta_rad + dth / 2.0);
     odom.theta_rad = normalize_angle(odom.theta_rad + dth);
-    if (truth.collides(robot, footprint)) ++outcome.collisions;
+    if (truth.collides(robot, footprint)) {
+      if (outcome.collisions == 0 && std::getenv("LOOP_TRACE") != nullptr) std::printf("first collision t=%.2f at %.3f %.3f %.3f v %.2f\n", static_cast<double>(now) * 1e-9, robot.x_m, robot.y_m, robot.theta_rad, v);
+      ++outcome.collisions;
+    }
   }
   outcome.rms_error_m = err_samples > 0 ? std::sqrt(sum_err2 / err_samples) : 1e9;
   outcome.plans = planner.plans();
@@ -235,6 +261,19 @@ TEST(ClosedLoop, SafetyAloneStopsABlindForwardRequestForAPerson) {
   EXPECT_TRUE(o.safety_stopped_for_obstacle);
   EXPECT_EQ(o.forward_in_stop_zone, 0);
   EXPECT_EQ(o.collisions, 0);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(ClosedLoop, ThesisCase2BoxSeenBeforePlanning) {
+  const Outcome o = run(Scenario::box_before_planning);
+  EXPECT_TRUE(o.reached);
+  EXPECT_EQ(o.collisions, 0);
+  EXPECT_EQ(o.step_allocations, 0u);
 }
 
 }  // namespace
