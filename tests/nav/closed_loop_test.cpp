@@ -37,7 +37,8 @@ struct Outcome {
 // blind_forward replaces the controller by a constant forward request (a planner that does
 // not see the person): only the safety task stands between the robot and the person.
 // box_before_planning / box_during_motion are the thesis' cases 2 and 3: a 0.4 m box on the
-// waypoint route, seen before the first plan, or appearing while the robot drives.
+// waypoint route, seen before the first plan, or appearing while the robot drives (case 3
+// has no test yet: the robot can still wedge itself between that box and the middle wall).
 enum class Scenario { plain, person_crossing, blind_forward, box_before_planning, box_during_motion };
 
 Outcome run(Scenario scenario) {

@@ -105,9 +105,10 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   Scene slow;
   slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.04 + 0.16 / 1.2 + 0.175);
   slow.view = slow.msg.view();
+  slow.in.requested.w_radps = 0.0;
   out = f.filter(slow.in);
   EXPECT_TRUE(out.reasons & kSafetySlowed);
-  EXPECT_NEAR(out.command.v_mps, 0.4 * 0.5, 1e-6);
+  EXPECT_NEAR(out.command.v_mps, 0.4 * 0.5, 0.4 * 0.02 / 0.35);  // within one sweep step
 }
 
 TEST(Safety, NeverRaisesSpeed) {
@@ -126,6 +127,25 @@ TEST(Safety, NeverRaisesSpeed) {
     EXPECT_GE(out.command.v_mps * s.in.requested.v_mps, 0.0);
     EXPECT_GE(out.command.w_radps * s.in.requested.w_radps, 0.0);
   }
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(Safety, FollowsTheCommandedArc) {
+  SafetyFilter f;
+  Scene s;
+  s.msg.ranges_m[90] = 0.45f;  // straight ahead, 0.22 m past the front edge
+  s.view = s.msg.view();
+  s.in.requested = {0.1, 0.0, s.in.now_ns};
+  EXPECT_TRUE(f.filter(s.in).reasons & kSafetyObstacle);
+  s.in.requested = {0.1, 1.0, s.in.now_ns};  // a tight left arc (0.1 m radius) misses it
+  const SafetyOutput out = f.filter(s.in);
+  EXPECT_FALSE(out.reasons & kSafetyObstacle);
+  EXPECT_GT(out.command.v_mps, 0.0);
 }
 
 }  // namespace

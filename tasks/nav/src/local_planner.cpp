@@ -126,6 +126,24 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
   }
   r.admissible = true;
   r.end = p;
+  // Slow rollouts are short; keep checking along the same arc until min_clear_distance_m,
+  // so the planner does not pick an arc the safety filter would stop.
+  if (v > 0.0) {
+    Pose2D q = p;
+    double travelled = v * config_.sim_time_s;
+    const double step = std::max(0.02, v * dt);
+    const double w_per_m = w / v;
+    while (travelled < config_.min_clear_distance_m) {
+      q.x_m += step * std::cos(q.theta_rad + 0.5 * w_per_m * step);
+      q.y_m += step * std::sin(q.theta_rad + 0.5 * w_per_m * step);
+      q.theta_rad += w_per_m * step;
+      travelled += step;
+      if (footprint_collides(q, costmap)) {
+        r.admissible = false;
+        return r;
+      }
+    }
+  }
   return r;
 }
 

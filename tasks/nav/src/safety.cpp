@@ -20,7 +20,7 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
   turn_radius_m_ = fp.circumscribed_radius_m() + config.lateral_margin_m;
 }
 
-SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
+SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
   SafetyOutput out;
   out.command = in.requested;
   out.nearest_ahead_m = std::numeric_limits<double>::infinity();
@@ -38,14 +38,19 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
     return out;
   }
 
-  // Laser points in the robot frame: the free distance ahead in the corridor, and whether
-  // anything is inside the turning circle.
-  bool inside_turn_circle = false;
+  double v = in.requested.v_mps;
+  double w = in.requested.w_radps;
+  const double speed = std::max({0.0, in.measured_v_mps, v});
+  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_mps2);
+  out.stop_distance_m = stop;
+
+  // Laser points in the robot frame, once.
   const ScanView& scan = *in.scan;
   const double mc = std::cos(config_.laser_mount.theta_rad);
   const double ms = std::sin(config_.laser_mount.theta_rad);
-  const double corridor = half_width_m_ + config_.lateral_margin_m;
-  for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
+  std::size_t n = 0;
+  bool inside_turn_circle = false;
+  for (std::size_t i = 0; i < scan.ranges_m.size() && n < kMaxPoints; ++i) {
     const double r = scan.ranges_m[i];
     if (!std::isfinite(r) || r < scan.range_min_m || r >= scan.range_max_m) continue;
     const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
@@ -54,21 +59,44 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
     const double x = config_.laser_mount.x_m + mc * sx - ms * sy;
     const double y = config_.laser_mount.y_m + ms * sx + mc * sy;
     if (std::hypot(x, y) < turn_radius_m_) inside_turn_circle = true;
-    if (std::abs(y) <= corridor && x >= 0.0) out.nearest_ahead_m = std::min(out.nearest_ahead_m, std::max(0.0, x - front_m_));
+    points_x_[n] = x;
+    points_y_[n] = y;
+    ++n;
   }
 
-  double v = in.requested.v_mps;
-  double w = in.requested.w_radps;
-  const double speed = std::max({0.0, in.measured_v_mps, v});
-  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_mps2);
-  out.stop_distance_m = stop;
+  // Sweep the front half of the body (widened by the lateral margin) forward along the
+  // commanded arc in kSweepStepM steps, up to the end of the slow zone: the first arc length
+  // at which a point would be inside it is the free travel ahead.
   if (v > 0.0) {
+    const double curvature = w / v;
+    const double reach = stop + config_.slow_distance_m;
+    const double half_width = half_width_m_ + config_.lateral_margin_m;
+    for (double travelled = 0.0; travelled <= reach + 1e-9 && !std::isfinite(out.nearest_ahead_m);
+         travelled += kSweepStepM) {
+      const double heading = curvature * travelled;
+      const bool straight = std::abs(curvature) < 1e-9;
+      const double px = straight ? travelled : std::sin(heading) / curvature;
+      const double py = straight ? 0.0 : (1.0 - std::cos(heading)) / curvature;
+      const double c = std::cos(heading);
+      const double s = std::sin(heading);
+      for (std::size_t k = 0; k < n; ++k) {
+        const double dx = points_x_[k] - px;
+        const double dy = points_y_[k] - py;
+        const double bx = c * dx + s * dy;  // the point in the body frame at this step
+        const double by = -s * dx + c * dy;
+        if (bx >= 0.0 && bx <= front_m_ && std::abs(by) <= half_width) {
+          out.nearest_ahead_m = travelled;
+          break;
+        }
+      }
+    }
     if (out.nearest_ahead_m <= stop) {
       v = 0.0;
       out.reasons |= kSafetyObstacle;
     } else if (out.nearest_ahead_m < stop + config_.slow_distance_m) {
       const double scale = (out.nearest_ahead_m - stop) / config_.slow_distance_m;
       v *= scale;
+      w *= scale;  // keep the arc that was checked
       out.reasons |= kSafetySlowed;
     }
   } else if (v < -config_.max_reverse_mps) {

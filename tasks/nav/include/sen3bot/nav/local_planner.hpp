@@ -50,6 +50,9 @@ struct DwaConfig {
   double sim_step_s = 0.1;
   Footprint footprint = Footprint::pioneer();
   double footprint_padding_m = 0.05;  // one cell of margin around the footprint
+  // Forward arcs are checked at least this far even when slow (match the safety filter's
+  // stop zone, so the planner does not choose what the filter would stop).
+  double min_clear_distance_m = 0.35;
   // Footprint cells are checked only where the centre cell's cost is at least this (the
   // inflation radius must reach the circumscribed radius for that to be safe).
   std::uint8_t footprint_check_min_cost = 1;

@@ -5,14 +5,16 @@
 //  * odometry is older than odom_timeout_s (or none arrived),
 //  * the e-stop is pressed or the motors are reported off,
 //  * localization is lost,
-//  * a laser point lies inside the stop zone along the direction of motion: ahead of the
-//    footprint's front edge by less than the stop distance, within the footprint's half
-//    width plus lateral_margin_m. The stop distance grows with the measured speed v:
+//  * a laser point lies inside the stop zone along the direction of motion: the front half of
+//    the body (its width plus lateral_margin_m a side) swept forward along the commanded arc
+//    would reach it within the stop distance. That distance grows with the speed v:
 //    stop_distance_m + v * reaction_s + v^2 / (2 decel_mps2) (the base cannot stop at once).
-//    Up to slow_distance_m beyond that the forward speed is scaled down linearly. Turning on the spot is refused when a point is inside the
+//    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
+//    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_mps (the back-off recovery's speed).
+#include <array>
 #include <cstdint>
 #include <type_traits>
 
@@ -69,7 +71,7 @@ struct SafetyInputs {
 struct SafetyOutput {
   VelocityCommand command;
   std::uint32_t reasons = kSafetyNone;
-  double nearest_ahead_m = 0.0;  // free distance ahead of the front edge in the corridor
+  double nearest_ahead_m = 0.0;  // free travel along the commanded arc (+inf: clear to the slow zone's end)
   double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
 };
 static_assert(std::is_trivially_copyable_v<SafetyOutput>);
@@ -77,11 +79,17 @@ static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 class SafetyFilter {
  public:
   explicit SafetyFilter(const SafetyConfig& config = {}) noexcept;
-  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) const noexcept;
+  // Not const: the scan's points go to a member buffer (no allocation, no big stack frame).
+  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) noexcept;
   [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
 
  private:
+  static constexpr std::size_t kMaxPoints = ScanMessage::kMaxBeams;
+  static constexpr double kSweepStepM = 0.02;
+
   SafetyConfig config_;
+  std::array<double, kMaxPoints> points_x_{};
+  std::array<double, kMaxPoints> points_y_{};
   double front_m_ = 0.0;
   double half_width_m_ = 0.0;
   double turn_radius_m_ = 0.0;
