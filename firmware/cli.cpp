@@ -74,7 +74,8 @@ constexpr const char* kUsage =
     "  --help, -h\n"
     "        Print this text.\n"
     "\n"
-    "exit status: 0 success, 1 run-time failure, 2 bad command line or configuration.\n";
+    "exit status: 0 success, 1 run-time failure, 2 bad command line or configuration,\n"
+    "3 the mission failed (a goal not reached).\n";
 
 std::atomic<tasks::Scheduler*> g_signal_target{nullptr};
 std::atomic<int> g_stop_signal{0};
@@ -158,6 +159,7 @@ int run_realtime(Firmware& fw, const FirmwareConfig& config, std::FILE* out, std
     }
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     if (config.duration_s > 0 && elapsed >= config.duration_s) break;
+    if (fw.mission() != nullptr && fw.mission()->finished()) break;
   }
   scheduler.request_stop();
   scheduler.join();
@@ -190,7 +192,7 @@ int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& confi
   // Simulated seconds in slices: a stop signal ends the run at the end of the current slice.
   const hal::Nanos end_ns = clock.now() + duration;
   Status s = Status::success();
-  while (s && g_stop_signal.load() == 0 && clock.now() < end_ns)
+  while (s && g_stop_signal.load() == 0 && clock.now() < end_ns && (fw.mission() == nullptr || !fw.mission()->finished()))
     s = scheduler.run_lockstep(clock, std::min<hal::Nanos>(end_ns - clock.now(), hal::seconds(1)));
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
@@ -286,8 +288,14 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   fw.print_memory(out);
   std::fflush(out);
 
-  const int rc = realtime ? run_realtime(fw, config, out, err) : run_lockstep(fw, sim_clock, config, out, err);
+  int rc = realtime ? run_realtime(fw, config, out, err) : run_lockstep(fw, sim_clock, config, out, err);
   fw.shutdown();
+  if (const MissionTask* mission = fw.mission(); mission != nullptr) {
+    std::fprintf(out, "\n");
+    mission->print_report(out);
+    // A mission that ran to its end and failed is a failed run; one stopped early is not.
+    if (mission->report().state == MissionState::failed && rc == 0) rc = 3;
+  }
   std::fprintf(out, "\ntask statistics:\n");
   fw.scheduler().print_stats(out);
   std::fflush(out);

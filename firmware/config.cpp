@@ -284,10 +284,39 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
   }
 }
 
+void read_navigation(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "max_v_m_s", "max_w_rad_s",
+                "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s"});
+  NavigationSection& n = c.navigation;
+  n.enabled = true;
+  n.map_path = relative_to(r.file(), r.text("map"));
+  if (r.has("waypoints")) n.waypoints_path = relative_to(r.file(), r.text("waypoints"));
+  if (r.has("initial_pose")) n.initial_pose = read_pose(r.child("initial_pose"));
+  if (r.has("initial_std_m")) n.initial_std_xy_m = r.number("initial_std_m", 0.0, 10.0);
+  if (r.has("particles")) {
+    const Reader p = r.child("particles");
+    p.allow_only({"min", "max"});
+    n.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
+    n.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
+    if (n.max_particles < n.min_particles) p.fail("max", "must be at least min", YAML::Node());
+  }
+  if (r.has("max_v_m_s")) n.max_v_m_s = r.number("max_v_m_s", 0.05, 2.0);
+  if (r.has("max_w_rad_s")) n.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
+  if (r.has("goal_tolerance_m")) n.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
+  if (r.has("stop_distance_m")) n.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
+  const std::vector<Reader> goals = r.sequence("goals");
+  if (goals.empty() || goals.size() > MissionConfig::kMaxGoals)
+    r.fail("goals", "expected 1 to " + std::to_string(MissionConfig::kMaxGoals) + " points", YAML::Node());
+  for (std::size_t i = 0; i < goals.size(); ++i) n.mission.goals[i] = goals[i].point();
+  n.mission.goal_count = goals.size();
+  if (r.has("start_delay_s")) n.mission.start_delay_s = r.number("start_delay_s", 0.0, 600.0);
+  if (r.has("goal_timeout_s")) n.mission.goal_timeout_s = r.number("goal_timeout_s", 1.0, 86400.0);
+}
+
 FirmwareConfig read(const Reader& top, const std::string& source) {
   FirmwareConfig c;
   c.source_path = source;
-  top.allow_only({"robot", "run", "realtime", "threads", "tasks", "devices", "sim"});
+  top.allow_only({"robot", "run", "realtime", "threads", "tasks", "devices", "sim", "navigation"});
 
   const Reader robot = top.child("robot");
   robot.allow_only({"name", "laser_mount"});
@@ -341,6 +370,7 @@ FirmwareConfig read(const Reader& top, const std::string& source) {
 
   if (top.has("sim")) read_sim(top.child("sim"), c);
   if (top.has("devices")) read_devices(top.child("devices"), c);
+  if (top.has("navigation")) read_navigation(top.child("navigation"), c);
   c.sim.world.laser_mount = c.laser_mount;
   return c;
 }

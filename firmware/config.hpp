@@ -12,6 +12,7 @@
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "sen3bot/sim/simulation.hpp"
+#include "mission.hpp"
 
 namespace sen3bot::firmware {
 
@@ -41,6 +42,22 @@ struct SimSection {
   sim::SimulationConfig world;
 };
 
+// Localization, planners and safety over one map, and the mission's goals.
+struct NavigationSection {
+  bool enabled = false;        // a `navigation` section is present
+  std::string map_path;        // ROS map_server YAML
+  std::string waypoints_path;  // optional: "x y" per line, map frame (the supervisory path)
+  nav::Pose2D initial_pose;    // localization's starting estimate
+  double initial_std_xy_m = 0.25;
+  std::size_t min_particles = 500;
+  std::size_t max_particles = 2000;
+  double max_v_m_s = 0.5;
+  double max_w_rad_s = 1.2;
+  double goal_tolerance_m = 0.15;
+  double stop_distance_m = 0.25;
+  MissionConfig mission;
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
@@ -55,6 +72,7 @@ struct FirmwareConfig {
   std::int64_t telemetry_status_period_ms = 10'000;
   DevicesConfig devices;
   SimSection sim;
+  NavigationSection navigation;
 };
 
 Result<FirmwareConfig> load_config(const std::string& path);

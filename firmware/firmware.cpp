@@ -37,7 +37,73 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "sim") return sim_task_.get();
   if (name == "base") return base_task_.get();
   if (name == "laser") return laser_task_.get();
+  if (name == "bridge") return bridge_task_.get();
+  if (name == "localization") return localization_task_.get();
+  if (name == "planner") return planner_task_.get();
+  if (name == "controller") return controller_task_.get();
+  if (name == "safety") return safety_task_.get();
+  if (name == "mission") return mission_task_.get();
   return nullptr;
+}
+
+namespace {
+
+// The time between two LMS200 scans: the telegram's transmission at the line rate, or the
+// mirror's period for the resolution when the line is faster.
+double expected_scan_period_s(const lms200::Lms200Config& laser) {
+  const double values = laser.variant.angle_deg * 100.0 / laser.variant.resolution_cdeg + 1.0;
+  const double telegram_bytes = 2.0 * values + 10.0;  // header, count word, status, CRC
+  const double line_s = telegram_bytes * 10.0 / laser.baud;
+  const double mirror_s = (laser.variant.resolution_cdeg >= 100 ? 1.0 : laser.variant.resolution_cdeg >= 50 ? 2.0 : 4.0) / 75.0;
+  return std::max(line_s, mirror_s);
+}
+
+}  // namespace
+
+Status Firmware::create_navigation() {
+  const char* file = config_.source_path.c_str();
+  const NavigationSection& n = config_.navigation;
+  Result<nav::OccupancyMap> map = nav::load_map(n.map_path);
+  if (!map) return Error::format(map.error().code(), "%s: navigation.map: %s", file, map.error().c_str());
+  map_ = std::move(*map);
+  if (!n.waypoints_path.empty()) {
+    Result<std::vector<nav::Point2D>> waypoints = nav::load_waypoints(n.waypoints_path);
+    if (!waypoints)
+      return Error::format(waypoints.error().code(), "%s: navigation.waypoints: %s", file, waypoints.error().c_str());
+    waypoints_ = std::move(*waypoints);
+  }
+  const nav::SensorMount mount{config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
+
+  nav::LocalizationTaskConfig localization;
+  localization.mcl.min_particles = n.min_particles;
+  localization.mcl.max_particles = n.max_particles;
+  localization.mcl.initial_pose = n.initial_pose;
+  localization.mcl.initial_std_xy_m = n.initial_std_xy_m;
+  localization.mcl.laser_mount = mount;
+  localization_task_ = std::make_unique<nav::LocalizationTask>(localization, map_, nav_scan_, nav_odometry_, nav_pose_);
+
+  nav::PlannerTaskConfig planner;
+  planner.laser_mount = mount;
+  planner_task_ = std::make_unique<nav::PlannerTask>(planner, map_, waypoints_, nav_goal_, nav_pose_, nav_scan_, nav_path_);
+
+  nav::ControllerTaskConfig controller;
+  controller.laser_mount = mount;
+  controller.dwa.max_v_mps = n.max_v_m_s;
+  controller.dwa.max_w_radps = n.max_w_rad_s;
+  controller.dwa.goal_tolerance_m = n.goal_tolerance_m;
+  controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
+                                                           nav_request_, nav_controller_);
+
+  nav::SafetyTaskConfig safety;
+  safety.safety.stop_distance_m = n.stop_distance_m;
+  safety.safety.laser_mount = mount;
+  if (config_.devices.has_laser) safety.safety.scan_period_s = expected_scan_period_s(config_.devices.laser);
+  safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
+                                                   nav_pose_, nav_command_, nav_safety_);
+
+  mission_task_ = std::make_unique<MissionTask>(
+      n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_, ground_truth_});
+  return Status::success();
 }
 
 Status Firmware::create_tasks() {
@@ -81,6 +147,12 @@ Status Firmware::create_tasks() {
       laser_task_ = std::make_unique<lms200::Lms200Task>(laser, laser_scan_);
     }
   }
+  if (config_.devices.has_base || config_.devices.has_laser)
+    bridge_task_ = std::make_unique<BridgeTask>(BridgeTopics{laser_scan_, base_state_, nav_command_, nav_scan_,
+                                                             nav_odometry_, nav_base_flags_, base_setpoint_});
+  if (config_.navigation.enabled) {
+    if (Status s = create_navigation(); !s) return s;
+  }
   for (const tasks::TaskSpec& row : kTaskTable)
     if (task_named(row.name) != nullptr) rows_.push_back(&row);
   return Status::success();
@@ -103,7 +175,9 @@ Status Firmware::init() {
     if (task_named(name) == nullptr)
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),
-                           name == "sim" ? "needs a sim section" : "needs its device under devices");
+                           name == "sim"                               ? "needs a sim section"
+                           : name == "base" || name == "laser" || name == "bridge" ? "needs its device under devices"
+                                                                                    : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {
     if (Status s = scheduler_.add(*row, *task_named(row->name)); !s) return s;

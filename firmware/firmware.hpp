@@ -18,6 +18,12 @@
 #include "sen3bot/p2os/task.hpp"
 #include "sen3bot/p2os/types.hpp"
 #include "sen3bot/sim/simulation.hpp"
+#include "sen3bot/nav/map.hpp"
+#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/nav/nav_tasks.hpp"
+#include "sen3bot/nav/waypoints.hpp"
+#include "bridge.hpp"
+#include "mission.hpp"
 
 namespace sen3bot::firmware {
 
@@ -44,10 +50,14 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<sim::GroundTruth>& ground_truth() const { return ground_truth_; }
   // Null without a `sim` section.
   [[nodiscard]] sim::Simulation* simulation() { return simulation_.get(); }
+  // Null without a `navigation` section.
+  [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
+  [[nodiscard]] const tasks::Topic<nav::PoseEstimate>& pose_estimate() const { return nav_pose_; }
 
  private:
   tasks::Task* task_named(std::string_view name);
   Status create_tasks();
+  Status create_navigation();
 
   const FirmwareConfig& config_;
   hal::Clock& clock_;
@@ -60,6 +70,20 @@ class Firmware {
   tasks::Topic<p2os::BaseState> base_state_;
   tasks::Topic<lms200::LaserScan> laser_scan_;
   tasks::Topic<sim::GroundTruth> ground_truth_;
+  // Navigation's bus (nav_tasks.hpp has the data flow).
+  tasks::Topic<nav::ScanMessage> nav_scan_;
+  tasks::Topic<nav::Odometry> nav_odometry_;
+  tasks::Topic<nav::BaseFlags> nav_base_flags_;
+  tasks::Topic<nav::PoseEstimate> nav_pose_;
+  tasks::Topic<nav::NavGoal> nav_goal_;
+  tasks::Topic<nav::PathMessage> nav_path_;
+  tasks::Topic<nav::VelocityCommand> nav_request_;
+  tasks::Topic<nav::VelocityCommand> nav_command_;
+  tasks::Topic<nav::ControllerStatus> nav_controller_;
+  tasks::Topic<nav::SafetyOutput> nav_safety_;
+  // Outlive the navigation tasks, which keep references.
+  nav::OccupancyMap map_;
+  std::vector<nav::Point2D> waypoints_;
   // One arena per running row, in table order; created once in init(). Declared before the
   // tasks so it outlives them: their destructors release what they built inside it.
   std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;
@@ -68,6 +92,12 @@ class Firmware {
   std::unique_ptr<sim::SimulationTask> sim_task_;
   std::unique_ptr<p2os::P2osTask> base_task_;
   std::unique_ptr<lms200::Lms200Task> laser_task_;
+  std::unique_ptr<BridgeTask> bridge_task_;
+  std::unique_ptr<nav::LocalizationTask> localization_task_;
+  std::unique_ptr<nav::PlannerTask> planner_task_;
+  std::unique_ptr<nav::ControllerTask> controller_task_;
+  std::unique_ptr<nav::SafetyTask> safety_task_;
+  std::unique_ptr<MissionTask> mission_task_;
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;
 };

@@ -10,13 +10,20 @@ namespace sen3bot::firmware {
 
 // Threads: "control" runs the real-time control loop tasks, "io" the device links, "sim" the
 // simulated robot (only with a `sim` section), "background" whatever may block (logs, files,
-// network). A row runs when its task is configured: the devices under `devices`, the
-// simulated robot under `sim`; the rest always.
+// network). A row runs when its task is configured: the devices (and the bridge between them
+// and navigation) under `devices`, the simulated robot under `sim`, localization, planners,
+// safety and the mission under `navigation`; the rest always. Budgets are for the Pi 3.
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
     tasks::TaskSpec{"sim",          5'000,     2'000,     50,       "sim"},
     tasks::TaskSpec{"base",         10'000,    500,       70,       "io"},
     tasks::TaskSpec{"laser",        5'000,     500,       70,       "io"},
+    tasks::TaskSpec{"bridge",       10'000,    200,       75,       "control"},
+    tasks::TaskSpec{"safety",       50'000,    1'000,     72,       "control"},
+    tasks::TaskSpec{"localization", 50'000,    15'000,    65,       "control"},
+    tasks::TaskSpec{"controller",   100'000,   10'000,    62,       "control"},
+    tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
+    tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
 };

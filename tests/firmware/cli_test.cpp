@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "task_table.hpp"
 
 namespace sen3bot::firmware {
 namespace {
@@ -84,15 +85,28 @@ TEST(Cli, RunRejectsBadArguments) {
 }
 
 TEST(Cli, LockstepRunPrintsStatusAndStatistics) {
-  Outcome o = run({"run", "--config", kSim, "--duration", "30"});
+  // A duration shorter than the mission: the run ends on time, the mission is reported as
+  // still driving, and that is not a failure.
+  Outcome o = run({"run", "--config", kSim, "--duration", "12"});
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("lockstep simulated clock"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("memory budgets"), std::string::npos);
-  EXPECT_NE(o.out.find("status  5 tasks"), std::string::npos) << o.out;
-  EXPECT_NE(o.out.find("simulated 30.000 s"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("status  " + std::to_string(kTaskTable.size()) + " tasks"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("simulated 12.000 s"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("task statistics"), std::string::npos);
-  // health at 10 Hz for 30 s.
-  EXPECT_NE(o.out.find("health         control        100000      500  60       300"), std::string::npos) << o.out;
+  // health at 10 Hz for 12 s.
+  EXPECT_NE(o.out.find("health         control        100000      500  60       120"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("mission driving: 0 of 2 goals reached"), std::string::npos) << o.out;
+}
+
+TEST(Cli, TheMainJobCompletesTheSimulatedMission) {
+  // README's main job: both goals reached through the real drivers and emulators, nothing
+  // hit while the robot was moving, and the run ends when the mission does.
+  Outcome o = run({"run", "--config", kSim});
+  ASSERT_EQ(o.code, 0) << o.out << o.err;
+  EXPECT_NE(o.out.find("mission complete: 2 of 2 goals reached"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("(0 while the robot moved)"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("simulated 120.000 s"), std::string::npos) << o.out;
 }
 
 TEST(Cli, RealTimeRunStopsCleanlyOnSigint) {

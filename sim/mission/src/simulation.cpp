@@ -13,6 +13,7 @@ constexpr double kClearanceLimitM = 1.5;  // clearance/person distances are capp
 // The clearance search is the costliest part of a step; 20 Hz is plenty for a report.
 constexpr hal::Nanos kClearancePeriodNs = 50'000'000;
 constexpr double kNanosPerSecond = 1e9;
+constexpr double kMovingSpeedM_s = 0.02;
 
 nav::Pose2D compose(const nav::Pose2D& a, const nav::Pose2D& b) {
   const double c = std::cos(a.theta_rad);
@@ -150,7 +151,11 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   }
   truth_.nearest_person_m = nearest;
   const bool contact = world_->collides(pose, config_.footprint);
-  if (contact && !truth_.in_contact) ++truth_.contacts;
+  if (contact && !truth_.in_contact) {
+    ++truth_.contacts;
+    // A person walking into a robot that has stopped is not the robot's doing.
+    if (std::abs(truth_.speed_m_s) > kMovingSpeedM_s) ++truth_.moving_contacts;
+  }
   truth_.in_contact = contact;
 }
 

@@ -52,6 +52,7 @@ struct GroundTruth {
   double clearance_m = 0;           // footprint to the nearest obstacle or mover (capped, 20 Hz)
   double nearest_person_m = 0;      // robot centre to the nearest visible person (capped)
   std::uint64_t contacts = 0;       // times the footprint started to overlap something
+  std::uint64_t moving_contacts = 0;  // of those, while the robot itself was moving
   bool in_contact = false;
 };
 static_assert(std::is_trivially_copyable_v<GroundTruth>);

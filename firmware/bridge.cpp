@@ -1,0 +1,67 @@
+#include "bridge.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "sen3bot/lms200/protocol.hpp"
+
+namespace sen3bot::firmware {
+
+namespace {
+// The LMS200 cannot measure closer than a few centimetres (its window and the mirror).
+constexpr float kLaserRangeMinM = 0.02f;
+}  // namespace
+
+void to_nav_scan(const lms200::LaserScan& in, nav::ScanMessage& out) noexcept {
+  const std::size_t count = std::min<std::size_t>(in.count, nav::ScanMessage::kMaxBeams);
+  out.count = static_cast<std::uint16_t>(count);
+  out.angle_min_rad = in.angle_min_rad;
+  out.increment_rad = in.angle_increment_rad;
+  out.range_min_m = kLaserRangeMinM;
+  out.range_max_m = in.range_max_m;
+  out.stamp_ns = in.stamp_ns;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (in.valid(i)) {
+      out.ranges_m[i] = in.ranges_m[i];
+    } else if (in.invalid_reason[i] == static_cast<std::uint8_t>(lms200::InvalidReason::over_maximum)) {
+      out.ranges_m[i] = in.range_max_m;
+    } else {
+      out.ranges_m[i] = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+}
+
+nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
+  nav::Odometry odom;
+  odom.x_m = in.x_m;
+  odom.y_m = in.y_m;
+  odom.theta_rad = in.theta_rad;
+  odom.v_mps = in.v_m_s;
+  odom.w_radps = in.omega_rad_s;
+  odom.stamp_ns = in.sip_stamp_ns;
+  odom.valid = in.link == p2os::LinkState::connected && in.sip_count > 0;
+  return odom;
+}
+
+void BridgeTask::step(const tasks::StepContext& context) {
+  if (topics_.laser.read(laser_) && laser_.sequence != laser_seq_) {
+    laser_seq_ = laser_.sequence;
+    to_nav_scan(laser_.value, scan_);
+    topics_.scan.publish(scan_, context.start_ns);
+  }
+  tasks::Sample<p2os::BaseState> base;
+  if (topics_.base.read(base) && base.sequence != base_seq_) {
+    base_seq_ = base.sequence;
+    topics_.odometry.publish(to_nav_odometry(base.value), context.start_ns);
+    topics_.base_flags.publish(nav::BaseFlags{base.value.estop, base.value.motors_enabled}, context.start_ns);
+  }
+  // Only fresh commands are forwarded: if the safety task stops publishing, the base driver's
+  // own command timeout stops the robot.
+  tasks::Sample<nav::VelocityCommand> command;
+  if (topics_.command.read(command) && command.sequence != command_seq_) {
+    command_seq_ = command.sequence;
+    topics_.setpoint.publish(p2os::BaseSetpoint{command.value.v_mps, command.value.w_radps, true}, context.start_ns);
+  }
+}
+
+}  // namespace sen3bot::firmware

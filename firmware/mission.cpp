@@ -1,0 +1,120 @@
+#include "mission.hpp"
+
+#include <cmath>
+
+namespace sen3bot::firmware {
+
+const char* to_string(MissionState state) noexcept {
+  switch (state) {
+    case MissionState::waiting: return "waiting";
+    case MissionState::driving: return "driving";
+    case MissionState::complete: return "complete";
+    case MissionState::failed: return "failed";
+  }
+  return "?";
+}
+
+Status MissionTask::init(std::pmr::memory_resource&) {
+  if (config_.goal_count == 0 || config_.goal_count > MissionConfig::kMaxGoals)
+    return Error::format(Errc::config, "mission: needs 1 to %zu goals, got %zu", MissionConfig::kMaxGoals,
+                         config_.goal_count);
+  return Status::success();
+}
+
+void MissionTask::start_goal(std::size_t index, hal::Nanos now_ns) {
+  goal_index_ = index;
+  goal_start_ns_ = now_ns;
+  first_plan_for_goal_ = 0;
+  const nav::Point2D g = config_.goals[index];
+  topics_.goal.publish(nav::NavGoal{g.x_m, g.y_m, ++goal_id_, true}, now_ns);
+  report_.state = MissionState::driving;
+}
+
+void MissionTask::step(const tasks::StepContext& context) {
+  const hal::Nanos now = context.start_ns;
+  if (start_ns_ < 0) start_ns_ = now;
+  if (finished()) return;
+
+  tasks::Sample<nav::PoseEstimate> pose;
+  const bool have_pose = topics_.pose.read(pose) && pose.value.valid;
+  tasks::Sample<sim::GroundTruth> truth;
+  if (topics_.truth.read(truth)) {
+    report_.simulated = true;
+    report_.contacts = truth.value.contacts;
+    report_.moving_contacts = truth.value.moving_contacts;
+    report_.min_clearance_m = std::min(report_.min_clearance_m, truth.value.clearance_m);
+    report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.value.nearest_person_m);
+    if (have_pose && report_.state == MissionState::driving)
+      report_.localization_error_max_m =
+          std::max(report_.localization_error_max_m, std::hypot(pose.value.pose.x_m - truth.value.pose.x_m,
+                                                                pose.value.pose.y_m - truth.value.pose.y_m));
+  }
+  if (have_pose) {
+    if (have_last_pose_ && report_.state == MissionState::driving)
+      report_.path_length_m += std::hypot(pose.value.pose.x_m - last_pose_.x_m, pose.value.pose.y_m - last_pose_.y_m);
+    last_pose_ = pose.value.pose;
+    have_last_pose_ = true;
+  }
+  tasks::Sample<nav::SafetyOutput> safety;
+  if (topics_.safety.read(safety) && safety.sequence != safety_seq_) {
+    safety_seq_ = safety.sequence;
+    if ((safety.value.reasons & ~nav::kSafetyReverseCapped) != nav::kSafetyNone) ++report_.safety_limited_steps;
+  }
+
+  if (report_.state == MissionState::waiting) {
+    if (have_pose && now - start_ns_ >= static_cast<hal::Nanos>(config_.start_delay_s * 1e9)) start_goal(0, now);
+    return;
+  }
+
+  tasks::Sample<nav::PathMessage> path;
+  if (topics_.path.read(path) && path.value.goal_id == goal_id_ && path.value.plan_id != last_plan_id_) {
+    last_plan_id_ = path.value.plan_id;
+    ++report_.plans;
+    if (path.value.status != nav::PlanStatus::ok) ++report_.plan_failures;
+    if (first_plan_for_goal_ == 0) first_plan_for_goal_ = path.value.plan_id;
+  }
+  tasks::Sample<nav::ControllerStatus> controller;
+  if (!topics_.controller.read(controller)) return;
+  report_.recoveries = controller.value.recoveries.total();
+  const bool on_this_goal = first_plan_for_goal_ != 0 && controller.value.plan_id >= first_plan_for_goal_;
+  const double elapsed_s = static_cast<double>(now - goal_start_ns_) * 1e-9;
+  if (on_this_goal && controller.value.status == nav::DwaStatus::reached) {
+    report_.goal_time_s[goal_index_] = elapsed_s;
+    ++report_.goals_reached;
+    if (goal_index_ + 1 < config_.goal_count) {
+      start_goal(goal_index_ + 1, now);
+    } else {
+      topics_.goal.publish(nav::NavGoal{0, 0, ++goal_id_, false}, now);
+      report_.state = MissionState::complete;
+      finished_.store(true, std::memory_order_release);
+    }
+  } else if ((on_this_goal && controller.value.status == nav::DwaStatus::failed) || elapsed_s > config_.goal_timeout_s) {
+    topics_.goal.publish(nav::NavGoal{0, 0, ++goal_id_, false}, now);
+    report_.state = MissionState::failed;
+    finished_.store(true, std::memory_order_release);
+  }
+}
+
+void MissionTask::print_report(std::FILE* out) const {
+  const MissionReport& r = report_;
+  std::fprintf(out, "mission %s: %zu of %zu goals reached\n", to_string(r.state), r.goals_reached, config_.goal_count);
+  for (std::size_t i = 0; i < config_.goal_count; ++i) {
+    const nav::Point2D g = config_.goals[i];
+    if (i < r.goals_reached)
+      std::fprintf(out, "  goal %zu (%.2f, %.2f) m: reached in %.1f s\n", i + 1, g.x_m, g.y_m, r.goal_time_s[i]);
+    else
+      std::fprintf(out, "  goal %zu (%.2f, %.2f) m: not reached\n", i + 1, g.x_m, g.y_m);
+  }
+  std::fprintf(out, "  driven %.2f m, %u plans (%u failed), %u recoveries, %llu safety-limited steps\n",
+               r.path_length_m, r.plans, r.plan_failures, r.recoveries,
+               static_cast<unsigned long long>(r.safety_limited_steps));
+  if (r.simulated)
+    std::fprintf(out,
+                 "  ground truth: %llu contacts (%llu while the robot moved), min clearance %.2f m, "
+                 "closest person %.2f m, localization error max %.2f m\n",
+                 static_cast<unsigned long long>(r.contacts), static_cast<unsigned long long>(r.moving_contacts),
+                 r.min_clearance_m, r.min_person_distance_m,
+                 r.localization_error_max_m);
+}
+
+}  // namespace sen3bot::firmware

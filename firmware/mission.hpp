@@ -1,0 +1,84 @@
+#pragma once
+// The mission: hand the navigation its goals one after another, watch the controller reach
+// them, and keep the numbers a run is judged by (time per goal, recoveries, safety stops and,
+// in simulation, contacts and the closest approach to a person).
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+
+#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/sim/simulation.hpp"
+#include "sen3bot/tasks/task.hpp"
+#include "sen3bot/tasks/topic.hpp"
+
+namespace sen3bot::firmware {
+
+struct MissionConfig {
+  static constexpr std::size_t kMaxGoals = 16;
+  std::array<nav::Point2D, kMaxGoals> goals{};  // map frame, visited in order
+  std::size_t goal_count = 0;
+  double start_delay_s = 2.0;     // let the drivers connect and localization settle first
+  double goal_timeout_s = 120.0;  // a goal not reached by then fails the mission
+};
+
+enum class MissionState : std::uint8_t { waiting, driving, complete, failed };
+const char* to_string(MissionState state) noexcept;
+
+struct MissionTopics {
+  tasks::Topic<nav::NavGoal>& goal;
+  const tasks::Topic<nav::ControllerStatus>& controller;
+  const tasks::Topic<nav::PathMessage>& path;
+  const tasks::Topic<nav::PoseEstimate>& pose;
+  const tasks::Topic<nav::SafetyOutput>& safety;
+  const tasks::Topic<sim::GroundTruth>& truth;  // never published on the real robot
+};
+
+struct MissionReport {
+  MissionState state = MissionState::waiting;
+  std::size_t goals_reached = 0;
+  std::array<double, MissionConfig::kMaxGoals> goal_time_s{};  // from the goal's start
+  std::uint32_t plans = 0;
+  std::uint32_t plan_failures = 0;
+  std::uint64_t safety_limited_steps = 0;  // steps where safety lowered the requested speed
+  std::uint32_t recoveries = 0;
+  double path_length_m = 0;                // estimated pose, summed
+  double localization_error_max_m = 0;     // simulation only: estimate vs truth
+  double min_clearance_m = 1e9;            // simulation only
+  double min_person_distance_m = 1e9;      // simulation only
+  std::uint64_t contacts = 0;              // simulation only
+  std::uint64_t moving_contacts = 0;       // simulation only: contacts while the robot moved
+  bool simulated = false;
+};
+
+class MissionTask final : public tasks::Task {
+ public:
+  MissionTask(const MissionConfig& config, const MissionTopics& topics) : config_(config), topics_(topics) {}
+  Status init(std::pmr::memory_resource&) override;
+  void step(const tasks::StepContext& context) override;
+
+  // Readable from any thread: the run ends when the mission is over.
+  [[nodiscard]] bool finished() const noexcept { return finished_.load(std::memory_order_acquire); }
+  // Call after the scheduler stopped.
+  [[nodiscard]] const MissionReport& report() const noexcept { return report_; }
+  void print_report(std::FILE* out) const;
+
+ private:
+  void start_goal(std::size_t index, hal::Nanos now_ns);
+
+  MissionConfig config_;
+  MissionTopics topics_;
+  MissionReport report_;
+  std::atomic<bool> finished_{false};
+  std::size_t goal_index_ = 0;
+  std::uint32_t goal_id_ = 0;
+  hal::Nanos start_ns_ = -1;
+  hal::Nanos goal_start_ns_ = 0;
+  std::uint32_t last_plan_id_ = 0;
+  bool have_last_pose_ = false;
+  nav::Pose2D last_pose_;
+  std::uint32_t first_plan_for_goal_ = 0;
+  std::uint64_t safety_seq_ = 0;
+};
+
+}  // namespace sen3bot::firmware
