@@ -65,6 +65,8 @@ Outcome run(Scenario scenario) {
   tasks::Topic<VelocityCommand> command_topic;
   tasks::Topic<SafetyOutput> safety_topic;
 
+  // Arenas before tasks: they must outlive them.
+  mem::BudgetArena arenas[4] = {{"localization", 2 << 20}, {"planner", 2 << 20}, {"controller", 1 << 20}, {"safety", 1024}};
   LocalizationTaskConfig lc;
   lc.mcl.initial_pose = {2.5, 2.0, M_PI / 2.0};
   lc.mcl.initial_std_xy_m = 0.1;
@@ -88,7 +90,6 @@ Outcome run(Scenario scenario) {
   PlannerTask planner(pc, map, *waypoints, goal_topic, pose_topic, scan_topic, path_topic);
   ControllerTask controller(cc, map, pose_topic, odom_topic, scan_topic, path_topic, request_topic, controller_topic);
   SafetyTask safety(sc, request_topic, scan_topic, odom_topic, base_topic, pose_topic, command_topic, safety_topic);
-  mem::BudgetArena arenas[4] = {{"localization", 2 << 20}, {"planner", 2 << 20}, {"controller", 1 << 20}, {"safety", 1024}};
   tasks::Task* all[4] = {&localization, &planner, &controller, &safety};
   for (int i = 0; i < 4; ++i) {
     const Status s = all[i]->init(arenas[i]);

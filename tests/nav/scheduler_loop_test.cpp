@@ -104,6 +104,12 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   tasks::Topic<VelocityCommand> command;
   tasks::Topic<SafetyOutput> safety_status;
 
+  // Arenas: the measured sizes plus headroom (docs/navigation.md),
+  // declared before the tasks so they outlive them.
+  mem::BudgetArena safety_arena("safety", 1024);
+  mem::BudgetArena localization_arena("localization", 1 << 20);
+  mem::BudgetArena controller_arena("controller", 512 << 10);
+  mem::BudgetArena planner_arena("planner", 2 << 20);
   LocalizationTaskConfig lc;
   lc.mcl.initial_pose = {2.5, 2.0, M_PI / 2.0};
   lc.mcl.initial_std_xy_m = 0.1;
@@ -127,11 +133,6 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   ControllerTask controller(cc, *map, pose, odom, scan, path, request, controller_status);
   PlannerTask planner(pc, *map, *waypoints, goal, pose, scan, path);
 
-  // Arenas: the measured sizes plus headroom (docs/navigation.md).
-  mem::BudgetArena safety_arena("safety", 1024);
-  mem::BudgetArena localization_arena("localization", 1 << 20);
-  mem::BudgetArena controller_arena("controller", 512 << 10);
-  mem::BudgetArena planner_arena("planner", 2 << 20);
   ASSERT_TRUE(safety.init(safety_arena));
   ASSERT_TRUE(localization.init(localization_arena));
   ASSERT_TRUE(controller.init(controller_arena));

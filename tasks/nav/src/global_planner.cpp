@@ -45,7 +45,12 @@ Status GlobalPlanner::init(const GlobalPlannerConfig& config, std::pmr::memory_r
   }
   config_ = config;
   return guarded("global planner", [&]() -> Status {
-    if (Status s = open_.init(config.max_cells, &resource); !s) return s;
+    // Caller-owned storage: the heap then never hands memory back to the arena, so the
+    // planner may outlive its arena's bookkeeping (destruction order does not matter).
+    using Heap = mem::BoundedIndexHeap<Priority>;
+    auto nodes = allocate_array<Heap::Node>(resource, config.max_cells);
+    auto positions = allocate_array<Heap::Key>(resource, config.max_cells);
+    if (Status s = open_.init(nodes, positions); !s) return s;
     g_ = allocate_array<float>(resource, config.max_cells);
     parent_dir_ = allocate_array<std::uint8_t>(resource, config.max_cells);
     stage_ = allocate_array<std::uint16_t>(resource, config.max_cells);
