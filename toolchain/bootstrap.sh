@@ -31,7 +31,7 @@ NATIVE_PACKAGES=(
   libopencv-imgproc-dev
   libopencv-imgcodecs-dev
   rt-tests                   # cyclictest, compared against by the jitter benchmark
-  clang                      # optional libFuzzer build (SEN3BOT_LIBFUZZER=ON)
+  clang                      # the bounded libFuzzer run of the test command (SEN3BOT_LIBFUZZER=ON)
   libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14
   libmrpt-hwdrivers-dev      # lms200 tests: MRPT's CSickLaserSerial, a third-party LMS200 client
   libssl-dev                 # camera: MD5 for RTSP Digest auth (libcrypto)

@@ -3,7 +3,9 @@
 #   toolchain/sen3bot.sh mission   install what is missing, build, run the simulated robot
 #   toolchain/sen3bot.sh test      install what is missing, build, run every test suite:
 #                                  native (-Werror), ASan+UBSan, and aarch64 under qemu-user
-# Environment: SEN3BOT_SKIP_SANITIZE=1 / SEN3BOT_SKIP_CROSS=1 leave those suites out;
+#                                  and a bounded coverage-guided fuzzing run of every parser
+# Environment: SEN3BOT_SKIP_SANITIZE=1 / SEN3BOT_SKIP_CROSS=1 / SEN3BOT_SKIP_FUZZ=1 leave those
+# suites out; SEN3BOT_FUZZ_SECONDS is the libFuzzer time per parser (default 20);
 # SEN3BOT_JOBS sets build parallelism (default: number of CPUs).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -40,6 +42,32 @@ case "${1:-}" in
       configure_and_build build-sanitize -DSEN3BOT_SANITIZE=ON -DSEN3BOT_BENCH=OFF
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
         ctest --test-dir build-sanitize --output-on-failure -j "$jobs"
+    fi
+    if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then
+      fuzz_s=${SEN3BOT_FUZZ_SECONDS:-20}
+      section "coverage-guided fuzzing: libFuzzer + ASan + UBSan, ${fuzz_s} s per parser"
+      # Everything instrumented for coverage, so the parsers' own branches guide the search.
+      CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DSEN3BOT_LIBFUZZER=ON -DSEN3BOT_BENCH=OFF \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+        -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined" >/dev/null
+      mapfile -t fuzz_targets < build-fuzz/fuzz_targets.txt
+      targets=()
+      for line in "${fuzz_targets[@]}"; do [[ -n "$line" ]] && targets+=("${line%% *}"); done
+      cmake --build build-fuzz -j "$jobs" --target "${targets[@]}"
+      for line in "${fuzz_targets[@]}"; do
+        [[ -n "$line" ]] || continue
+        binary=$(find build-fuzz -type f -name "${line%% *}" | head -n 1)
+        seeds=${line#* }
+        work=$(mktemp -d)  # new inputs go here; the checked-in corpus stays as it is
+        echo "fuzz: ${line%% *} (seeds: ${seeds#"$root"/})"
+        "$binary" -max_total_time="$fuzz_s" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+          -artifact_prefix="$work/" "$work" "$seeds" 2>&1 | grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb|==|SUMMARY|.*(crash|leak|timeout)-)' || true
+        if compgen -G "$work/crash-*" >/dev/null || compgen -G "$work/leak-*" >/dev/null || compgen -G "$work/timeout-*" >/dev/null; then
+          echo "fuzz: ${line%% *} found a failing input (kept in $work)" >&2
+          exit 1
+        fi
+        rm -rf "$work"
+      done
     fi
     if [[ "${SEN3BOT_SKIP_CROSS:-0}" != 1 ]]; then
       section "aarch64 cross build, tests under qemu-aarch64"
