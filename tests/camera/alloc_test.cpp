@@ -88,3 +88,56 @@ TEST(CameraAllocation, FramePathAllocatesNothingInSteadyState) {
 
 }  // namespace
 }  // namespace sen3bot::camera
+
+#include <atomic>
+#include <thread>
+
+#include "sen3bot/tasks/task.hpp"
+
+namespace sen3bot::camera {
+namespace {
+
+// A real-time task reading the newest frame each step, as camera-laser fusion will: no
+// allocation in step(), while a decoder-like thread publishes.
+class FrameConsumerTask final : public tasks::Task {
+ public:
+  explicit FrameConsumerTask(FramePool& pool) : reader_(pool) {}
+  Status init(std::pmr::memory_resource&) override { return {}; }
+  void step(const tasks::StepContext&) override {
+    if (FrameHandle f = reader_.newer()) {
+      checksum_ += f.ref().data[0];
+      ++frames_;
+    }
+  }
+  FrameReader reader_;
+  std::uint64_t frames_ = 0;
+  std::uint64_t checksum_ = 0;
+};
+
+TEST(CameraAllocation, RealTimeReaderTaskAllocatesNothing) {
+  auto pool = FramePool::create(4, 32, 32, PixelFormat::gray8);
+  ASSERT_TRUE(pool.ok());
+  FrameConsumerTask task(**pool);
+  std::atomic<bool> done{false};
+  // Warm-up publish so the first step already has something to read.
+  (*pool)->publish((*pool)->begin_write(), 32, 32, 0, 0, 0);
+  std::thread writer([&] {
+    while (!done) {
+      const int slot = (*pool)->begin_write();
+      if (slot >= 0) (*pool)->publish(slot, 32, 32, 0, 0, 0);
+      std::this_thread::yield();
+    }
+  });
+  AllocationScope scope;
+  for (std::uint64_t cycle = 0; cycle < 200'000; ++cycle) task.step(tasks::StepContext{0, 0, cycle});
+  const auto allocations = scope.allocations();
+  done = true;
+  writer.join();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(task.frames_, 0u);
+  (void)task.reader_.newer();  // at most one frame published after the last step
+  EXPECT_FALSE(task.reader_.newer());
+}
+
+}  // namespace
+}  // namespace sen3bot::camera

@@ -106,4 +106,29 @@ class FramePool {
   std::uint64_t next_sequence_ = 1;
 };
 
+// For a real-time task: hands out a frame only when a newer one than last time exists.
+// Holds no pin between calls unless the caller keeps the handle. No blocking, no allocation.
+class FrameReader {
+ public:
+  explicit FrameReader(FramePool& pool) : pool_(&pool) {}
+
+  // The newest frame if it is newer than the last one returned; empty otherwise.
+  FrameHandle newer() {
+    if (pool_->latest_sequence() <= last_sequence_) return {};
+    FrameHandle frame = pool_->acquire_latest();
+    if (!frame || frame.ref().sequence <= last_sequence_) return {};
+    if (last_sequence_ != 0) skipped_ += frame.ref().sequence - last_sequence_ - 1;
+    last_sequence_ = frame.ref().sequence;
+    return frame;
+  }
+  [[nodiscard]] std::uint64_t last_sequence() const { return last_sequence_; }
+  // Frames published but never seen by this reader (it ran slower than the camera).
+  [[nodiscard]] std::uint64_t skipped() const { return skipped_; }
+
+ private:
+  FramePool* pool_;
+  std::uint64_t last_sequence_ = 0;
+  std::uint64_t skipped_ = 0;
+};
+
 }  // namespace sen3bot::camera
