@@ -212,6 +212,7 @@ TEST(Lms200Lockstep, CorruptTelegramsNeverBecomeScans) {
   f.corrupt_crc_every = 3;
   f.truncate_every = 5;
   f.false_header_every = 4;
+  f.oversize_len_every = 2;
   rig.emulator.set_faults(f);
   const std::uint64_t sent_before = rig.emulator.counters().scans_sent;
   const std::uint64_t got_before = rig.device.counters().scans;
@@ -232,6 +233,30 @@ TEST(Lms200Lockstep, CorruptTelegramsNeverBecomeScans) {
   EXPECT_NEAR(static_cast<double>(got), static_cast<double>(sent - broken), 2.0);
   EXPECT_GT(rig.device.parser_stats().crc_errors, 0u);
   EXPECT_EQ(rig.device.phase(), Lms200Device::Phase::streaming);
+}
+
+TEST(Lms200Lockstep, WarmRestartFindsAScannerStillStreaming) {
+  Rig rig(EmulatorOptions{}, driver_config(500000, {180, 50}, Units::mm));
+  rig.device.start(rig.now);
+  ASSERT_TRUE(rig.until_streaming());
+  rig.run_for(hal::millis(200));
+  // A new driver instance (process restart) while the scanner keeps streaming at 500000.
+  Lms200Device again(driver_config(500000, {180, 50}, Units::mm), rig.pipe.a(), &rig.line);
+  again.start(rig.now);
+  for (int i = 0; i < 5000 && again.phase() != Lms200Device::Phase::streaming; ++i) {
+    rig.emulator.step(rig.now);
+    again.step(rig.now);
+    rig.now += hal::millis(1);
+  }
+  ASSERT_EQ(again.phase(), Lms200Device::Phase::streaming) << again.last_error().c_str();
+  EXPECT_EQ(again.counters().errors, 0u);
+  EXPECT_EQ(again.counters().config_writes, 0u);
+  for (int i = 0; i < 200; ++i) {
+    rig.emulator.step(rig.now);
+    again.step(rig.now);
+    rig.now += hal::millis(1);
+  }
+  EXPECT_GE(again.counters().scans, 6u);
 }
 
 TEST(Lms200Lockstep, StaleDataRestartsTheSequence) {

@@ -202,6 +202,11 @@ void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number) noex
     const std::uint8_t fake[] = {kStx, static_cast<std::uint8_t>(kReplyAddressFlag | options_.address), 0xD6, 0x02};
     enqueue(fake);
   }
+  if (f.oversize_len_every != 0 && k % f.oversize_len_every == 0) {
+    // A LEN no LMS200 telegram has; clients that trust it overrun their buffers.
+    const std::uint8_t fake[] = {kStx, static_cast<std::uint8_t>(kReplyAddressFlag | options_.address), 0x36, 0x03};
+    enqueue(fake);
+  }
   if (f.corrupt_crc_every != 0 && k % f.corrupt_crc_every == 0) frame_[frame_size - 1] ^= 0x5A;
   if (f.truncate_every != 0 && k % f.truncate_every == 0) frame_size /= 2;
   enqueue({frame_.data(), frame_size});

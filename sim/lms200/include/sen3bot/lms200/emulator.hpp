@@ -126,6 +126,7 @@ struct FaultPlan {
   std::uint32_t false_header_every = 0;    // "02 80" with a plausible LEN in front of the telegram
   std::uint32_t invalid_values_every = 0;  // every 10th value replaced by an error code (>= 8183)
   std::uint32_t dazzle_every = 0;          // dazzle flag on every 10th value
+  std::uint32_t oversize_len_every = 0;    // "02 80" with LEN 822 (> 814) in front of the telegram
   bool silent = false;                     // sends nothing and ignores requests (cable pulled)
   bool suppress_ack = false;               // no 0x06 before replies
 };
