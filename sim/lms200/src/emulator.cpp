@@ -224,7 +224,7 @@ void Lms200Emulator::handle(hal::Nanos now, FrameView request) noexcept {
   const auto p = request.payload();
   const std::uint8_t cmd = p[0];
   if (counters_.requests < EmulatorCounters::kLoggedRequests)
-    counters_.request_log[counters_.requests] = static_cast<std::uint16_t>((cmd << 8) | (p.size() > 1 ? p[1] : 0));
+    counters_.request_log[static_cast<std::size_t>(counters_.requests)] = static_cast<std::uint16_t>((cmd << 8) | (p.size() > 1 ? p[1] : 0));
   ++counters_.requests;
   auto reject = [this] {
     ++counters_.rejected;
