@@ -363,7 +363,9 @@ void Lms200Device::on_reply(hal::Nanos now, FrameView frame) noexcept {
         case Phase::leave_installation: return enter(now, Phase::start_stream);
         case Phase::start_stream: return enter(now, Phase::streaming);
         case Phase::stop_monitoring:
-          if (config_.stop_to_9600 && baud_ != 9600) return enter(now, Phase::stop_baud);
+          // Without control of the host's rate (a fixed-rate bridge) the scanner must stay
+          // where the next session will look for it.
+          if (config_.stop_to_9600 && baud_ != 9600 && line_ != nullptr) return enter(now, Phase::stop_baud);
           phase_ = Phase::stopped;
           return;
         case Phase::stop_baud:

@@ -41,6 +41,7 @@ struct Lms200Config {
   int stale_scan_periods = 3;                // no scan for this many expected intervals -> error
   std::int64_t restart_delay_ms = 500;       // after an error, before probing again
   bool stop_to_9600 = true;                  // clean stop leaves the LMS at its power-on rate
+                                             // (only when the host's rate can follow)
 };
 
 // Changes the host side's baud rate (SerialPort::set_baud, or a simulated line).
