@@ -40,6 +40,13 @@ constexpr const char* kUsage =
     "        --duration overrides run.duration_s (0: until a signal); --clock overrides\n"
     "        run.clock: 'realtime' runs on the monotonic clock with one thread per task\n"
     "        group, 'lockstep' runs simulated time as fast as the CPU allows.\n"
+    "  sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "        Run a named scenario on the simulated robot (sen3bot sim --list shows\n"
+    "        them), each case a whole firmware run from config/sim.yaml; with --report\n"
+    "        write DIR/report.json and a PNG per case (map, safe path, plan, driven\n"
+    "        path, obstacles). Exit status 3 when a case misses its goal or collides.\n"
+    "  sim --list\n"
+    "        List the scenarios and their cases.\n"
     "  capture dump FILE\n"
     "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
     "  decode p2os CAPTURE\n"
@@ -342,6 +349,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (command == "scan") return scan_command(argc - 2, argv + 2, out, err);
   if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
   if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);
+  if (command == "sim") return sim_command(argc - 2, argv + 2, out, err);
   std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
   return 2;
 }

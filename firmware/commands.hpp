@@ -22,4 +22,6 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]
 int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
 }  // namespace sen3bot::firmware

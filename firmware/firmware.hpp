@@ -53,6 +53,8 @@ class Firmware {
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
   [[nodiscard]] const tasks::Topic<nav::PoseEstimate>& pose_estimate() const { return nav_pose_; }
+  [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
+  [[nodiscard]] std::span<const nav::Point2D> waypoints() const { return waypoints_; }
 
  private:
   tasks::Task* task_named(std::string_view name);

@@ -21,6 +21,15 @@ Status MissionTask::init(std::pmr::memory_resource&) {
   return Status::success();
 }
 
+void MissionTask::record_track(nav::Point2D p) noexcept {
+  constexpr double kTrackSpacingM = 0.05;
+  if (track_count_ > 0) {
+    const nav::Point2D& last = track_[track_count_ - 1];
+    if (std::hypot(p.x_m - last.x_m, p.y_m - last.y_m) < kTrackSpacingM) return;
+  }
+  if (track_count_ < kMaxTrack) track_[track_count_++] = p;
+}
+
 void MissionTask::start_goal(std::size_t index, hal::Nanos now_ns) {
   goal_index_ = index;
   goal_start_ns_ = now_ns;
@@ -44,12 +53,19 @@ void MissionTask::step(const tasks::StepContext& context) {
     report_.moving_contacts = truth.value.moving_contacts;
     report_.min_clearance_m = std::min(report_.min_clearance_m, truth.value.clearance_m);
     report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.value.nearest_person_m);
+    const nav::Pose2D& p = truth.value.pose;
+    if (have_truth_pose_ && report_.state == MissionState::driving)
+      report_.true_path_length_m += std::hypot(p.x_m - last_truth_pose_.x_m, p.y_m - last_truth_pose_.y_m);
+    last_truth_pose_ = p;
+    have_truth_pose_ = true;
+    record_track({p.x_m, p.y_m});
     if (have_pose && report_.state == MissionState::driving)
       report_.localization_error_max_m =
           std::max(report_.localization_error_max_m, std::hypot(pose.value.pose.x_m - truth.value.pose.x_m,
                                                                 pose.value.pose.y_m - truth.value.pose.y_m));
   }
   if (have_pose) {
+    if (!have_truth_pose_) record_track({pose.value.pose.x_m, pose.value.pose.y_m});
     if (have_last_pose_ && report_.state == MissionState::driving)
       report_.path_length_m += std::hypot(pose.value.pose.x_m - last_pose_.x_m, pose.value.pose.y_m - last_pose_.y_m);
     last_pose_ = pose.value.pose;
@@ -71,7 +87,10 @@ void MissionTask::step(const tasks::StepContext& context) {
     last_plan_id_ = path.value.plan_id;
     ++report_.plans;
     if (path.value.status != nav::PlanStatus::ok) ++report_.plan_failures;
-    if (first_plan_for_goal_ == 0) first_plan_for_goal_ = path.value.plan_id;
+    if (first_plan_for_goal_ == 0) {
+      first_plan_for_goal_ = path.value.plan_id;
+      first_plans_[goal_index_] = path.value;
+    }
   }
   tasks::Sample<nav::ControllerStatus> controller;
   if (!topics_.controller.read(controller)) return;

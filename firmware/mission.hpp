@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
+#include <span>
 
 #include "sen3bot/nav/messages.hpp"
 #include "sen3bot/sim/simulation.hpp"
@@ -43,6 +44,7 @@ struct MissionReport {
   std::uint64_t safety_limited_steps = 0;  // steps where safety lowered the requested speed
   std::uint32_t recoveries = 0;
   double path_length_m = 0;                // estimated pose, summed
+  double true_path_length_m = 0;           // simulation only: ground truth, summed
   double localization_error_max_m = 0;     // simulation only: estimate vs truth
   double min_clearance_m = 1e9;            // simulation only
   double min_person_distance_m = 1e9;      // simulation only
@@ -63,8 +65,15 @@ class MissionTask final : public tasks::Task {
   [[nodiscard]] const MissionReport& report() const noexcept { return report_; }
   void print_report(std::FILE* out) const;
 
+  // The driven path (ground truth in simulation, else the estimate), a point per 5 cm moved,
+  // and the first plan made for each goal: what a report draws.
+  static constexpr std::size_t kMaxTrack = 4096;
+  [[nodiscard]] std::span<const nav::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+  [[nodiscard]] const nav::PathMessage& first_plan(std::size_t goal) const noexcept { return first_plans_[goal]; }
+
  private:
   void start_goal(std::size_t index, hal::Nanos now_ns);
+  void record_track(nav::Point2D p) noexcept;
 
   MissionConfig config_;
   MissionTopics topics_;
@@ -78,6 +87,11 @@ class MissionTask final : public tasks::Task {
   bool have_last_pose_ = false;
   nav::Pose2D last_pose_;
   std::uint32_t first_plan_for_goal_ = 0;
+  bool have_truth_pose_ = false;
+  nav::Pose2D last_truth_pose_;
+  std::array<nav::Point2D, kMaxTrack> track_{};
+  std::size_t track_count_ = 0;
+  std::array<nav::PathMessage, MissionConfig::kMaxGoals> first_plans_{};
   std::uint64_t safety_seq_ = 0;
 };
 

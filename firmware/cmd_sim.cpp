@@ -1,0 +1,377 @@
+// `sen3bot sim`: named scenarios on the simulated robot, each case a whole firmware run in
+// lockstep (or real) time, with a report folder: a PNG of the map with the safe path, the
+// plans, the driven path and the obstacles, and a JSON summary with per-task statistics.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <numbers>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "commands.hpp"
+#include "config.hpp"
+#include "firmware.hpp"
+
+namespace sen3bot::firmware {
+
+namespace {
+
+struct Case {
+  const char* name;
+  const char* description;
+  std::vector<world::MoverScript> movers;
+};
+
+struct Scenario {
+  const char* name;
+  const char* description;
+  nav::Pose2D start;
+  std::vector<nav::Point2D> goals;
+  const char* waypoints;  // relative to the base configuration's folder; "" keeps the base's
+  std::vector<Case> cases;
+};
+
+world::MoverScript box_at(double x_m, double y_m, double appear_s) {
+  world::MoverScript box;
+  box.path = {{x_m, y_m}};
+  box.size_m = 0.4;  // the thesis' obstacle: a 40 cm box
+  box.shape = world::MoverShape::square;
+  box.appear_time_s = appear_s;
+  return box;
+}
+
+world::MoverScript person_walking(std::vector<nav::Point2D> path, double speed_mps, double start_s) {
+  world::MoverScript person;
+  person.path = std::move(path);
+  person.speed_mps = speed_mps;
+  person.size_m = 0.45;
+  person.start_time_s = start_s;
+  person.person = true;
+  return person;
+}
+
+std::vector<Scenario> scenarios() {
+  const nav::Pose2D thesis_start{4.0, 7.0, -std::numbers::pi / 2};
+  return {
+      {"thesis-sgp",
+       "the thesis' supervised-planning test: (4, 7) m to (2.5, 2) m on the lab map along the safe path",
+       thesis_start,
+       {{2.5, 2.0}},
+       "maps/lab_waypoints_thesis.txt",
+       {{"no-obstacle", "nothing unexpected on the way", {}},
+        {"obstacle-before-planning", "a 40 cm box on the safe path, there from the start", {box_at(3.3, 5.8, 0.0)}},
+        {"obstacle-during-motion", "a 40 cm box that appears on the safe path while the robot drives",
+         {box_at(2.85, 3.9, 9.0)}}}},
+      {"person-crossing",
+       "the main mission: (2.5, 2) m to (4, 7) m and back while a worker crosses the upper area",
+       {2.5, 2.0, std::numbers::pi / 2},
+       {{4.0, 7.0}, {2.5, 2.0}},
+       "",
+       {{"worker", "a person walking across the robot's way, back and forth",
+         {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
+  };
+}
+
+struct CaseResult {
+  std::string name;
+  MissionReport report;
+  double sim_time_s = 0;
+  double wall_time_s = 0;
+  std::vector<tasks::TaskStats> stats;
+};
+
+cv::Point to_pixel(const nav::OccupancyMap& map, double x_m, double y_m, int scale) {
+  double gx = 0, gy = 0;
+  map.world_to_grid(x_m, y_m, gx, gy);
+  return {static_cast<int>(std::lround(gx * scale)), static_cast<int>(std::lround((map.height() - gy) * scale))};
+}
+
+// The map as the thesis figures show it: free white, occupied black, the safe path's waypoints,
+// the first global plan per goal, the driven path, and the obstacles where they stood.
+bool write_png(const std::string& path, const Firmware& fw, const sim::SimulationConfig& sim, const MissionTask& mission) {
+  const nav::OccupancyMap& map = fw.map();
+  constexpr int kScale = 4;
+  cv::Mat image(map.height() * kScale, map.width() * kScale, CV_8UC3);
+  for (int row = 0; row < map.height(); ++row)
+    for (int col = 0; col < map.width(); ++col) {
+      const std::int8_t v = map.at(col, row);
+      const cv::Scalar colour = v < 0 ? cv::Scalar(160, 160, 160) : v >= 50 ? cv::Scalar(0, 0, 0) : cv::Scalar(255, 255, 255);
+      const int y = (map.height() - 1 - row) * kScale;
+      cv::rectangle(image, cv::Rect(col * kScale, y, kScale, kScale), colour, cv::FILLED);
+    }
+  for (const world::MoverScript& m : sim.movers) {
+    const nav::Point2D c = m.path.front();
+    const cv::Scalar colour = m.person ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 90, 200);
+    const int half = static_cast<int>(std::lround(m.size_m / 2 / map.resolution_m() * kScale));
+    if (m.shape == world::MoverShape::square) {
+      const cv::Point p = to_pixel(map, c.x_m, c.y_m, kScale);
+      cv::rectangle(image, cv::Rect(p.x - half, p.y - half, 2 * half, 2 * half), colour, cv::FILLED);
+    }
+    for (std::size_t i = 1; i < m.path.size(); ++i)
+      cv::line(image, to_pixel(map, m.path[i - 1].x_m, m.path[i - 1].y_m, kScale),
+               to_pixel(map, m.path[i].x_m, m.path[i].y_m, kScale), colour, 2 * half, cv::LINE_AA);
+  }
+  for (const nav::Point2D& w : fw.waypoints())
+    cv::circle(image, to_pixel(map, w.x_m, w.y_m, kScale), 4, cv::Scalar(255, 80, 0), cv::FILLED, cv::LINE_AA);
+  for (std::size_t g = 0; g < mission.report().goals_reached + 1 && g < MissionConfig::kMaxGoals; ++g) {
+    const nav::PathMessage& plan = mission.first_plan(g);
+    for (std::size_t i = 1; i < plan.count; ++i)
+      cv::line(image, to_pixel(map, plan.points[i - 1].x_m, plan.points[i - 1].y_m, kScale),
+               to_pixel(map, plan.points[i].x_m, plan.points[i].y_m, kScale), cv::Scalar(0, 170, 0), 2, cv::LINE_AA);
+  }
+  const std::span<const nav::Point2D> track = mission.track();
+  for (std::size_t i = 1; i < track.size(); ++i)
+    cv::line(image, to_pixel(map, track[i - 1].x_m, track[i - 1].y_m, kScale),
+             to_pixel(map, track[i].x_m, track[i].y_m, kScale), cv::Scalar(0, 0, 230), 2, cv::LINE_AA);
+  return cv::imwrite(path, image);
+}
+
+void write_json_string(std::FILE* f, std::string_view s) {
+  std::fputc('"', f);
+  for (const char c : s) {
+    if (c == '"' || c == '\\') std::fputc('\\', f);
+    std::fputc(c, f);
+  }
+  std::fputc('"', f);
+}
+
+bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t seed, const std::vector<CaseResult>& results) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  std::fprintf(f, "{\n  \"scenario\": ");
+  write_json_string(f, scenario.name);
+  std::fprintf(f, ",\n  \"seed\": %llu,\n  \"cases\": [", static_cast<unsigned long long>(seed));
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const CaseResult& c = results[i];
+    const MissionReport& r = c.report;
+    double time_s = 0;
+    for (std::size_t g = 0; g < r.goals_reached; ++g) time_s += r.goal_time_s[g];
+    std::fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
+    write_json_string(f, c.name);
+    std::fprintf(f,
+                 ", \"reached\": %s, \"collisions\": %llu, \"contacts\": %llu, \"time_s\": %.2f, "
+                 "\"path_length_m\": %.3f, \"min_clearance_m\": %.3f, \"recoveries\": %u, \"replans\": %u, "
+                 "\"plan_failures\": %u, \"safety_limited_steps\": %llu, \"localization_error_max_m\": %.3f, "
+                 "\"simulated_s\": %.2f, \"wall_s\": %.3f,\n     \"tasks\": [",
+                 r.state == MissionState::complete ? "true" : "false",
+                 static_cast<unsigned long long>(r.moving_contacts), static_cast<unsigned long long>(r.contacts), time_s,
+                 r.true_path_length_m, r.min_clearance_m, r.recoveries, r.plans > 0 ? r.plans - 1 : 0, r.plan_failures,
+                 static_cast<unsigned long long>(r.safety_limited_steps), r.localization_error_max_m, c.sim_time_s,
+                 c.wall_time_s);
+    for (std::size_t t = 0; t < c.stats.size(); ++t) {
+      const tasks::TaskStats& s = c.stats[t];
+      std::fprintf(f, "%s\n       {\"name\": ", t ? "," : "");
+      write_json_string(f, s.name);
+      std::fprintf(f,
+                   ", \"period_us\": %lld, \"budget_us\": %lld, \"runs\": %llu, \"overruns\": %llu, \"slips\": %llu, "
+                   "\"skips\": %llu, \"exec_mean_us\": %.1f, \"exec_max_us\": %.1f, \"jitter_p99_us\": %.1f}",
+                   static_cast<long long>(s.period_us), static_cast<long long>(s.budget_us),
+                   static_cast<unsigned long long>(s.runs), static_cast<unsigned long long>(s.overruns),
+                   static_cast<unsigned long long>(s.slips), static_cast<unsigned long long>(s.skips),
+                   static_cast<double>(s.exec_mean_ns) / 1e3, static_cast<double>(s.exec_max_ns) / 1e3,
+                   static_cast<double>(s.jitter_p99_ns) / 1e3);
+    }
+    std::fprintf(f, "]}");
+  }
+  std::fprintf(f, "\n  ]\n}\n");
+  return std::fclose(f) == 0;
+}
+
+// One case: a whole firmware over the simulated robot, until the mission ends or times out.
+int run_case(const FirmwareConfig& config, bool realtime, const std::string& label, const std::string& report_dir,
+             CaseResult& result, std::FILE* out, std::FILE* err) {
+  hal::PosixClock posix_clock;
+  hal::SimClock sim_clock;
+  hal::Clock& clock = realtime ? static_cast<hal::Clock&>(posix_clock) : static_cast<hal::Clock&>(sim_clock);
+  std::FILE* quiet = std::fopen("/dev/null", "w");  // the per-task status lines of `run`
+  if (quiet == nullptr) quiet = out;
+  Firmware fw(config, clock, quiet);
+  if (Status s = fw.init(); !s) {
+    std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
+    if (quiet != out) std::fclose(quiet);
+    return 1;
+  }
+  tasks::Scheduler& scheduler = fw.scheduler();
+  const MissionTask& mission = *fw.mission();
+  const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
+  const auto wall_start = std::chrono::steady_clock::now();
+  double sim_s = 0;
+  double next_progress_s = 0;
+  auto progress = [&] {
+    tasks::Sample<sim::GroundTruth> truth;
+    fw.ground_truth().read(truth);
+    std::fprintf(out, "  %-28s t=%6.1f s  pose (%5.2f, %5.2f) m  goals %zu  %s\n", label.c_str(), sim_s,
+                 truth.value.pose.x_m, truth.value.pose.y_m, mission.report().goals_reached,
+                 to_string(mission.report().state));
+    std::fflush(out);
+  };
+  if (realtime) {
+    if (Status s = scheduler.start(); !s) {
+      std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
+      if (quiet != out) std::fclose(quiet);
+      return 1;
+    }
+    while (!mission.finished() && sim_s < limit_s) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      sim_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      if (sim_s >= next_progress_s) {
+        progress();
+        next_progress_s += 5.0;
+      }
+    }
+  } else {
+    while (!mission.finished() && sim_s < limit_s) {
+      if (Status s = scheduler.run_lockstep(sim_clock, hal::millis(500)); !s) {
+        std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
+        if (quiet != out) std::fclose(quiet);
+        return 1;
+      }
+      sim_s = hal::to_seconds(sim_clock.now() - scheduler.start_time_ns());
+      if (sim_s >= next_progress_s) {
+        progress();
+        next_progress_s += 5.0;
+      }
+    }
+  }
+  fw.shutdown();
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.sim_time_s = sim_s;
+  result.report = mission.report();
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
+  mission.print_report(out);
+  if (!report_dir.empty()) {
+    const std::string png = report_dir + "/" + result.name + ".png";
+    if (!write_png(png, fw, config.sim.world, mission)) std::fprintf(err, "sen3bot sim: cannot write %s\n", png.c_str());
+  }
+  if (quiet != out) std::fclose(quiet);
+  return 0;
+}
+
+constexpr const char* kSimUsage =
+    "usage: sen3bot sim --list\n"
+    "       sen3bot sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n";
+
+}  // namespace
+
+int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  std::string scenario_name, report_dir, config_path = "config/sim.yaml";
+  bool realtime = false, list = false, have_seed = false;
+  unsigned long long seed = 0;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--list") {
+      list = true;
+    } else if (arg == "--realtime") {
+      realtime = true;
+    } else if (arg == "--scenario" && has_value) {
+      scenario_name = argv[++i];
+    } else if (arg == "--config" && has_value) {
+      config_path = argv[++i];
+    } else if (arg == "--report" && has_value) {
+      report_dir = argv[++i];
+    } else if (arg == "--seed" && has_value) {
+      char* end = nullptr;
+      seed = std::strtoull(argv[++i], &end, 10);
+      if (end == argv[i] || *end != '\0') {
+        std::fprintf(err, "sen3bot sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
+        return 2;
+      }
+      have_seed = true;
+    } else {
+      std::fprintf(err, "sen3bot sim: unknown or incomplete option '%s'\n%s", argv[i], kSimUsage);
+      return 2;
+    }
+  }
+  const std::vector<Scenario> all = scenarios();
+  if (list) {
+    for (const Scenario& s : all) {
+      std::fprintf(out, "%s: %s\n", s.name, s.description);
+      for (const Case& c : s.cases) std::fprintf(out, "  %s: %s\n", c.name, c.description);
+    }
+    return 0;
+  }
+  const Scenario* scenario = nullptr;
+  for (const Scenario& s : all)
+    if (scenario_name == s.name) scenario = &s;
+  if (scenario == nullptr) {
+    std::fprintf(err, "sen3bot sim: %s '%s' (sen3bot sim --list shows them)\n%s",
+                 scenario_name.empty() ? "--scenario is required" : "no scenario named", scenario_name.c_str(), kSimUsage);
+    return 2;
+  }
+
+  Result<FirmwareConfig> loaded = load_config(config_path);
+  if (!loaded) {
+    std::fprintf(err, "sen3bot sim: %s\n", loaded.error().c_str());
+    return 2;
+  }
+  FirmwareConfig base = std::move(*loaded);
+  if (!base.sim.enabled || !base.navigation.enabled) {
+    std::fprintf(err, "sen3bot sim: %s: needs a sim and a navigation section\n", config_path.c_str());
+    return 2;
+  }
+  if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    std::fprintf(err, "sen3bot sim: cannot create %s: %s\n", report_dir.c_str(), std::strerror(errno));
+    return 1;
+  }
+
+  std::fprintf(out, "scenario %s (%zu cases, %s time%s)\n", scenario->name, scenario->cases.size(),
+               realtime ? "real" : "lockstep simulated", have_seed ? "" : ", seed from the configuration");
+  std::vector<CaseResult> results;
+  int rc = 0;
+  for (std::size_t i = 0; i < scenario->cases.size(); ++i) {
+    const Case& c = scenario->cases[i];
+    FirmwareConfig config = base;
+    config.clock = realtime ? ClockMode::realtime : ClockMode::lockstep;
+    config.sim.world.start_pose = scenario->start;
+    config.sim.world.movers = c.movers;
+    if (have_seed) {
+      config.sim.world.seed = seed;
+      config.sim.world.base.noise_seed = static_cast<std::uint32_t>(seed);
+    }
+    config.navigation.initial_pose = scenario->start;
+    config.navigation.mission.goal_count = scenario->goals.size();
+    for (std::size_t g = 0; g < scenario->goals.size(); ++g) config.navigation.mission.goals[g] = scenario->goals[g];
+    if (scenario->waypoints[0] != '\0') {
+      const std::size_t slash = config_path.find_last_of('/');
+      const std::string folder = slash == std::string::npos ? "" : config_path.substr(0, slash + 1);
+      config.navigation.waypoints_path = folder + scenario->waypoints;
+    }
+    std::fprintf(out, "\ncase %zu/%zu %s: %s\n", i + 1, scenario->cases.size(), c.name, c.description);
+    CaseResult& result = results.emplace_back();
+    result.name = c.name;
+    if (run_case(config, realtime, c.name, report_dir, result, out, err) != 0) return 1;
+    if (result.report.state != MissionState::complete || result.report.moving_contacts != 0) rc = 3;
+  }
+
+  std::fprintf(out, "\nsummary of %s:\n", scenario->name);
+  for (const CaseResult& r : results) {
+    double time_s = 0;
+    for (std::size_t g = 0; g < r.report.goals_reached; ++g) time_s += r.report.goal_time_s[g];
+    std::fprintf(out, "  %-26s %-11s collisions %llu  time %5.1f s  path %5.2f m  clearance %.2f m  replans %u  recoveries %u\n",
+                 r.name.c_str(), r.report.state == MissionState::complete ? "reached" : "NOT REACHED",
+                 static_cast<unsigned long long>(r.report.moving_contacts), time_s, r.report.true_path_length_m,
+                 r.report.min_clearance_m, r.report.plans > 0 ? r.report.plans - 1 : 0, r.report.recoveries);
+  }
+  if (!report_dir.empty()) {
+    const std::string json = report_dir + "/report.json";
+    if (!write_json(json, *scenario, have_seed ? seed : base.sim.world.seed, results)) {
+      std::fprintf(err, "sen3bot sim: cannot write %s\n", json.c_str());
+      return 1;
+    }
+    std::fprintf(out, "report: %s (report.json and one PNG per case)\n", report_dir.c_str());
+  }
+  return rc;
+}
+
+}  // namespace sen3bot::firmware
