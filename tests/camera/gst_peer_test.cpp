@@ -109,6 +109,10 @@ TEST(GstPeer, H264At1280x720OverUdpWithLargeBuffer) {
   EXPECT_GE(r.frames, 15u) << r.status.last_error;
   EXPECT_EQ(r.status.stream.transport, RtpTransport::udp);
   EXPECT_EQ(r.width_px, 1280u);
+  // With 4 MiB of SO_RCVBUF the I-frame bursts fit (0 lost in 3 of 3 runs in the brief);
+  // Linux's default 208 KiB lost packets in 2 of 3.
+  EXPECT_EQ(r.status.rtsp.rtp_lost, 0u);
+  EXPECT_EQ(r.status.decoder.decode_errors, 0u);
 }
 
 TEST(GstPeer, MjpegType1And0OverTcpAndUdp) {
