@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sen3bot/nav/arena.hpp"
 
@@ -44,6 +45,7 @@ Status GlobalPlanner::init(const GlobalPlannerConfig& config, std::pmr::memory_r
     return Error::format(Errc::config, "global planner: max_cells must be > 0, max_waypoints < 65535");
   }
   config_ = config;
+  blocked_cost_ = config.blocked_cost;
   return guarded("global planner", [&]() -> Status {
     // Caller-owned storage: the heap then never hands memory back to the arena, so the
     // planner may outlive its arena's bookkeeping (destruction order does not matter).
@@ -63,7 +65,32 @@ Status GlobalPlanner::init(const GlobalPlannerConfig& config, std::pmr::memory_r
 
 bool GlobalPlanner::passable(std::uint8_t cost) const noexcept {
   if (cost == kNoInformationCost) return config_.allow_unknown;
-  return cost < config_.blocked_cost;
+  return cost < blocked_cost_;
+}
+
+bool GlobalPlanner::enterable(std::uint8_t from_cost, std::uint8_t cost) const noexcept {
+  if (passable(cost)) return true;
+  // The escape rule: from a cell inside the clearance band (blocked_cost .. 252), steps that
+  // do not climb the inflation gradient stay allowed, so a robot that ended up close to
+  // something can still plan its way out.
+  return cost < kInscribedCost && from_cost < kInscribedCost && !passable(from_cost) && cost <= from_cost;
+}
+
+double GlobalPlanner::path_cost(const Costmap2D& costmap, std::span<const GridCell> path) const noexcept {
+  constexpr double kBlocked = std::numeric_limits<double>::infinity();
+  if (path.empty()) return kBlocked;
+  double total = 0.0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    if (!costmap.in_bounds(path[i].col, path[i].row)) return kBlocked;
+    if (i == 0) continue;
+    const int dc = path[i].col - path[i - 1].col;
+    const int dr = path[i].row - path[i - 1].row;
+    if (dc < -1 || dc > 1 || dr < -1 || dr > 1 || (dc == 0 && dr == 0)) return kBlocked;  // not a cell path
+    const std::uint8_t cost = costmap.at(path[i].col, path[i].row);
+    if (!enterable(costmap.at(path[i - 1].col, path[i - 1].row), cost)) return kBlocked;
+    total += step_cost(cost, dc != 0 && dr != 0);
+  }
+  return total;
 }
 
 float GlobalPlanner::step_cost(std::uint8_t cost, bool diagonal) const noexcept {
@@ -91,11 +118,17 @@ PlanResult GlobalPlanner::plan(const Costmap2D& costmap, GridCell start, GridCel
     result.status = PlanStatus::goal_outside;
     return result;
   }
-  if (!passable(costmap.at(start.col, start.row))) {
+  // A goal inside the clearance band (but not in collision) lowers the bar for this plan to
+  // just above the goal's cost; a start inside it plans out by the escape rule.
+  blocked_cost_ = config_.blocked_cost;
+  const std::uint8_t goal_cost = costmap.at(goal.col, goal.row);
+  if (!passable(goal_cost) && goal_cost < kInscribedCost) blocked_cost_ = static_cast<std::uint8_t>(goal_cost + 1);
+  const std::uint8_t start_cost = costmap.at(start.col, start.row);
+  if (!passable(start_cost) && !(start_cost < kInscribedCost)) {
     result.status = PlanStatus::start_blocked;
     return result;
   }
-  if (!passable(costmap.at(goal.col, goal.row))) {
+  if (!passable(goal_cost)) {
     result.status = PlanStatus::goal_blocked;
     return result;
   }
@@ -158,6 +191,7 @@ PlanResult GlobalPlanner::plan(const Costmap2D& costmap, GridCell start, GridCel
     const int cr = static_cast<int>(cur / static_cast<std::size_t>(w));
     const float g_cur = g_[cur];
     const std::uint16_t stage_cur = stage_[cur];
+    const std::uint8_t cur_cost = costmap.at(cc, cr);
     for (std::uint8_t dir = 0; dir < 8; ++dir) {
       const int nc = cc + kDc[dir];
       const int nr = cr + kDr[dir];
@@ -165,9 +199,9 @@ PlanResult GlobalPlanner::plan(const Costmap2D& costmap, GridCell start, GridCel
       const std::size_t next = costmap.index(nc, nr);
       if (state_[next] == kClosed) continue;
       const std::uint8_t cost = costmap.at(nc, nr);
-      if (!passable(cost)) continue;
+      if (!enterable(cur_cost, cost)) continue;
       const bool diagonal = dir >= 4;
-      if (diagonal && (!passable(costmap.at(nc, cr)) || !passable(costmap.at(cc, nr)))) continue;  // no corner cutting
+      if (diagonal && (!enterable(cur_cost, costmap.at(nc, cr)) || !enterable(cur_cost, costmap.at(cc, nr)))) continue;  // no corner cutting
       const float g_new = g_cur + step_cost(cost, diagonal);
       const std::uint16_t stage_new = advance(stage_cur, next);
       if (state_[next] == kOpen) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "sen3bot/nav/arena.hpp"
 
@@ -42,18 +43,62 @@ Status PlannerTask::init(std::pmr::memory_resource& arena) {
     if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
     if (Status s = costmap_.init_over_map(map_, arena); !s) return s;
     GlobalPlannerConfig planner = config_.planner;
+    if (config_.plan_clearance_m > 0.0) {
+      const std::uint8_t bar = InflationLayer::cost_at(config_.plan_clearance_m, config_.inflation);
+      if (bar == kFreeCost) {
+        return Error::format(Errc::config, "planner task: plan_clearance_m %g must lie inside the inflation radius %g",
+                             config_.plan_clearance_m, config_.inflation.inflation_radius_m);
+      }
+      planner.blocked_cost = std::min(planner.blocked_cost, bar);
+    }
     planner.max_cells = std::max(planner.max_cells, costmap_.costmap().size());
     planner.max_waypoints = std::max(planner.max_waypoints, waypoints_in_.size());
     if (Status s = planner_.init(planner, arena); !s) return s;
     waypoints_ = allocate_array<Point2D>(arena, waypoints_in_.size());
     std::copy(waypoints_in_.begin(), waypoints_in_.end(), waypoints_.begin());
     cells_ = allocate_array<GridCell>(arena, costmap_.costmap().size());
+    kept_cells_ = allocate_array<GridCell>(arena, 4 * PathMessage::kMaxPoints);
     costmap_.update({});
     return Status::success();
   });
 }
 
-void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns) noexcept {
+double PlannerTask::remaining_cost(const Pose2D& pose) noexcept {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (!have_plan_ || message_.count == 0) return kNone;
+  std::size_t nearest = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < message_.count; ++i) {
+    const double d = std::hypot(message_.points[i].x_m - pose.x_m, message_.points[i].y_m - pose.y_m);
+    if (d < best) {
+      best = d;
+      nearest = i;
+    }
+  }
+  if (best > config_.keep_off_plan_m) return kNone;
+  // The rest of the plan as an 8-connected cell path (thinned points are joined cell by cell).
+  const Costmap2D& grid = costmap_.costmap();
+  std::size_t n = 0;
+  for (std::size_t i = nearest; i < message_.count; ++i) {
+    GridCell target;
+    if (!grid.world_to_cell(message_.points[i].x_m, message_.points[i].y_m, target.col, target.row)) return kNone;
+    if (n == 0) {
+      kept_cells_[n++] = target;
+      continue;
+    }
+    GridCell at = kept_cells_[n - 1];
+    while (!(at == target)) {
+      at.col += (target.col > at.col) - (target.col < at.col);
+      at.row += (target.row > at.row) - (target.row < at.row);
+      if (n >= kept_cells_.size()) return kNone;
+      kept_cells_[n++] = at;
+    }
+  }
+  const double along = planner_.path_cost(grid, kept_cells_.first(n));
+  return along + best / grid.resolution_m();
+}
+
+void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns, bool new_goal) noexcept {
   // Waypoints behind the robot are dropped so a re-plan from mid-route is not pulled back.
   std::size_t nearest = waypoints_.size();
   double best = config_.waypoint_pass_m;
@@ -69,6 +114,17 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
   const PlanResult r = planner_.plan_world(costmap_.costmap(), {pose.x_m, pose.y_m}, {goal.x_m, goal.y_m},
                                            waypoints_.subspan(next_waypoint_), cells_);
   const auto end = std::chrono::steady_clock::now();
+  last_plan_ns_ = now_ns;
+  if (!new_goal) {
+    // Hysteresis: keep following the current plan unless it is blocked, left behind, or
+    // clearly dearer than the new one. A failed re-plan never replaces a usable plan.
+    const double kept = remaining_cost(pose);
+    if (std::isfinite(kept) && (!r.ok() || r.cost >= config_.keep_cost_ratio * kept)) {
+      ++kept_;
+      return;
+    }
+  }
+  have_plan_ = r.ok();
   message_.plan_id = ++plan_id_;
   message_.goal_id = goal.id;
   message_.status = r.status;
@@ -97,7 +153,6 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
     message_.points[message_.count - 1] = {static_cast<float>(goal.x_m), static_cast<float>(goal.y_m)};
   }
   path_.publish(message_, now_ns);
-  last_plan_ns_ = now_ns;
 }
 
 void PlannerTask::step(const tasks::StepContext& context) {
@@ -119,6 +174,7 @@ void PlannerTask::step(const tasks::StepContext& context) {
   if (!goal.value.active) {
     if (goal_active_) {
       message_ = PathMessage{};
+      have_plan_ = false;
       message_.plan_id = ++plan_id_;
       message_.goal_id = goal.value.id;
       path_.publish(message_, context.start_ns);
@@ -130,11 +186,13 @@ void PlannerTask::step(const tasks::StepContext& context) {
   const bool new_goal = !goal_active_ || goal.value.id != goal_id_;
   const bool due = config_.replan_period_s > 0.0 &&
                    static_cast<double>(context.start_ns - last_plan_ns_) >= config_.replan_period_s * 1e9;
+  // Between periodic re-plans, a plan that a new scan shows blocked is replaced at once.
+  const bool blocked = !new_goal && !due && scan != nullptr && have_plan_ && !std::isfinite(remaining_cost(pose.value.pose));
   if (new_goal) next_waypoint_ = 0;
-  if (new_goal || due) {
+  if (new_goal || due || blocked) {
     goal_active_ = true;
     goal_id_ = goal.value.id;
-    plan(goal.value, pose.value.pose, context.start_ns);
+    plan(goal.value, pose.value.pose, context.start_ns, new_goal);
   }
 }
 

@@ -7,6 +7,10 @@
 //   L * (1 + cost_weight * c / 252)     (L alone with unit_cost)
 // Cells with cost >= blocked_cost (253: inscribed and lethal) are impassable; 255 (unknown)
 // is passable at cost 252 only with allow_unknown. A diagonal step needs both side cells free.
+// A blocked_cost below 253 keeps plans out of gaps the local planner's padded footprint cannot
+// pass (the clearance band blocked_cost..252). From a start inside that band the search may
+// step to cells of equal or lower cost (downhill out of it, the escape rule); a goal inside
+// it raises the bar to just above the goal's cost for that plan.
 // The heuristic is the Euclidean distance in cells: admissible and consistent for these
 // steps, so with no waypoints this is plain, optimal A*.
 //
@@ -90,6 +94,12 @@ class GlobalPlanner {
   PlanResult plan_world(const Costmap2D& costmap, Point2D start, Point2D goal, std::span<const Point2D> waypoints,
                         std::span<GridCell> path) noexcept;
 
+  // The search's cost (in cells) of following a cell path from its first cell to its last,
+  // on this costmap; infinity when a step is not 8-adjacent, leaves the costmap or enters a
+  // cell the search could not (blocked, with the same escape rule). Used to compare a kept
+  // plan with a new one.
+  [[nodiscard]] double path_cost(const Costmap2D& costmap, std::span<const GridCell> path) const noexcept;
+
   [[nodiscard]] const GlobalPlannerConfig& config() const noexcept { return config_; }
 
  private:
@@ -102,9 +112,11 @@ class GlobalPlanner {
   };
 
   [[nodiscard]] bool passable(std::uint8_t cost) const noexcept;
+  [[nodiscard]] bool enterable(std::uint8_t from_cost, std::uint8_t cost) const noexcept;
   [[nodiscard]] float step_cost(std::uint8_t cost, bool diagonal) const noexcept;
 
   GlobalPlannerConfig config_;
+  std::uint8_t blocked_cost_ = kInscribedCost;  // this plan's bar (config_.blocked_cost, or raised for the goal)
   mem::BoundedIndexHeap<Priority> open_;
   std::span<float> g_;
   std::span<std::uint8_t> parent_dir_;  // 0..7 neighbour the cell was reached from, 255 start

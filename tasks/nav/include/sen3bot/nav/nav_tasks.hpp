@@ -65,6 +65,15 @@ struct PlannerTaskConfig {
   bool use_scan = true;          // mark laser obstacles in the global costmap (thesis case 2)
   double replan_period_s = 1.0;  // 0: plan only when the goal changes
   double waypoint_pass_m = 0.5;  // waypoints behind the nearest one within this are dropped
+  // Plans keep the robot's centre at least this far from obstacles (0: planner.blocked_cost
+  // as given). It becomes planner.blocked_cost through the inflation curve, so no plan leads
+  // through a gap the local planner's padded footprint (half-width 0.19 + 0.05 m) cannot pass.
+  double plan_clearance_m = 0.28;
+  // Hysteresis: a periodic re-plan replaces the plan being followed only when that plan is
+  // blocked now, the robot is farther than keep_off_plan_m from it, or the new plan costs less
+  // than keep_cost_ratio times what is left of it. A new goal always gets a new plan.
+  double keep_cost_ratio = 0.85;
+  double keep_off_plan_m = 0.6;
   SensorMount laser_mount;
 };
 
@@ -79,9 +88,14 @@ class PlannerTask final : public tasks::Task {
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
   [[nodiscard]] std::uint32_t plans() const noexcept { return plan_id_; }
+  // Periodic re-plans that kept the current plan (hysteresis).
+  [[nodiscard]] std::uint32_t plans_kept() const noexcept { return kept_; }
 
  private:
-  void plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns) noexcept;
+  void plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns, bool new_goal) noexcept;
+  // What following the published plan from the robot's position still costs on the current
+  // costmap (planner units); infinity when it is blocked, or the robot is off it.
+  [[nodiscard]] double remaining_cost(const Pose2D& pose) noexcept;
 
   PlannerTaskConfig config_;
   const OccupancyMap& map_;
@@ -97,6 +111,9 @@ class PlannerTask final : public tasks::Task {
   GlobalPlanner planner_;
   std::span<Point2D> waypoints_;
   std::span<GridCell> cells_;
+  std::span<GridCell> kept_cells_;  // the published plan as a cell path, for remaining_cost()
+  bool have_plan_ = false;          // message_ holds a usable plan for the active goal
+  std::uint32_t kept_ = 0;
   std::size_t next_waypoint_ = 0;
   std::uint32_t plan_id_ = 0;
   std::uint32_t goal_id_ = 0;
