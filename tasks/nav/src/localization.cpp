@@ -382,6 +382,10 @@ void MonteCarloLocalization::compute_estimate() noexcept {
 }
 
 bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan) noexcept {
+  return update(odom, scan, Pose2D{odom.x_m, odom.y_m, odom.theta_rad});
+}
+
+bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept {
   const Pose2D now{odom.x_m, odom.y_m, odom.theta_rad};
   odom_latest_ = now;
   if (!have_odom_) {
@@ -391,41 +395,37 @@ bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan) 
     return false;
   }
   if (scan == nullptr) return false;
-  const double moved = std::hypot(now.x_m - odom_at_update_.x_m, now.y_m - odom_at_update_.y_m);
-  const double turned = std::abs(normalize_angle(now.theta_rad - odom_at_update_.theta_rad));
+  // The filter moves to where odometry was when the scan was taken and weighs the scan there.
+  const Pose2D at = odom_at_scan;
+  const double moved = std::hypot(at.x_m - odom_at_update_.x_m, at.y_m - odom_at_update_.y_m);
+  const double turned = std::abs(normalize_angle(at.theta_rad - odom_at_update_.theta_rad));
   const bool by_time = config_.update_max_interval_s > 0.0 &&
                        static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= config_.update_max_interval_s;
   const bool first = estimate_.updates == 0;
   if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time)) return false;
-  motion_update(odom_at_update_, now);
+  motion_update(odom_at_update_, at);
   sensor_update(*scan);
   if (++updates_since_resample_ >= config_.resample_interval) {
     resample();
     updates_since_resample_ = 0;
   }
   compute_estimate();
-  odom_at_update_ = now;
+  odom_at_update_ = at;
   last_update_ns_ = odom.stamp_ns;
   ++estimate_.updates;
   estimate_.stamp_ns = odom.stamp_ns;
   return true;
 }
 
+Pose2D MonteCarloLocalization::pose_at_odometry(const Pose2D& odom_pose) const noexcept {
+  // The filter pose carried by the odometry moved since the last update.
+  return apply_motion(estimate_.pose, relative_pose(odom_at_update_, odom_pose));
+}
+
 PoseEstimate MonteCarloLocalization::estimate() const noexcept {
   PoseEstimate e = estimate_;
   if (!have_odom_) return e;
-  // Carry the filter pose forward by the odometry moved since the last update.
-  const double c0 = std::cos(odom_at_update_.theta_rad);
-  const double s0 = std::sin(odom_at_update_.theta_rad);
-  const double dx = odom_latest_.x_m - odom_at_update_.x_m;
-  const double dy = odom_latest_.y_m - odom_at_update_.y_m;
-  const double fx = c0 * dx + s0 * dy;  // in the robot frame at the last update
-  const double fy = -s0 * dx + c0 * dy;
-  const double c = std::cos(e.pose.theta_rad);
-  const double s = std::sin(e.pose.theta_rad);
-  e.pose.x_m += c * fx - s * fy;
-  e.pose.y_m += s * fx + c * fy;
-  e.pose.theta_rad = normalize_angle(e.pose.theta_rad + odom_latest_.theta_rad - odom_at_update_.theta_rad);
+  e.pose = pose_at_odometry(odom_latest_);
   return e;
 }
 

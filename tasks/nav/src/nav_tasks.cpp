@@ -8,6 +8,16 @@
 #include "sen3bot/nav/arena.hpp"
 
 namespace sen3bot::nav {
+namespace {
+
+// Where the laser was when the scan was taken: from the pose localization found for that very
+// scan when it has one, else from the newest pose.
+Pose2D sensor_pose_for(const PoseEstimate& pose, const ScanView& scan, const SensorMount& mount) noexcept {
+  const bool same_scan = pose.scan_stamp_ns != 0 && pose.scan_stamp_ns == scan.stamp_ns;
+  return compose(same_scan ? pose.scan_pose : pose.pose, mount);
+}
+
+}  // namespace
 
 // --- LocalizationTask --------------------------------------------------------------------------
 
@@ -19,6 +29,7 @@ void LocalizationTask::step(const tasks::StepContext& context) {
   if (global_request_.exchange(false, std::memory_order_relaxed)) mcl_.global_initialize();
   tasks::Sample<Odometry> odom;
   if (!odom_.read(odom) || !odom.value.valid) return;
+  history_.push(odom.value);
   const ScanView* scan = nullptr;
   ScanView view;
   if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
@@ -26,9 +37,18 @@ void LocalizationTask::step(const tasks::StepContext& context) {
     view = scan_sample_.value.view();
     scan = &view;
   }
-  (void)mcl_.update(odom.value, scan);
+  // A scan is weighed at the odometry pose of its stamp (when odometry reaches back that far).
+  Pose2D at_scan{odom.value.x_m, odom.value.y_m, odom.value.theta_rad};
+  if (scan != nullptr) (void)history_.pose_at(scan->stamp_ns, at_scan);
+  (void)mcl_.update(odom.value, scan, at_scan);
+  if (scan != nullptr && mcl_.estimate().valid) {
+    scan_pose_ = mcl_.pose_at_odometry(at_scan);
+    scan_stamp_ns_ = scan->stamp_ns;
+  }
   PoseEstimate e = mcl_.estimate();
   e.stamp_ns = context.start_ns;
+  e.scan_pose = scan_pose_;
+  e.scan_stamp_ns = scan_stamp_ns_;
   estimate_.publish(e, context.start_ns);
 }
 
@@ -166,8 +186,7 @@ void PlannerTask::step(const tasks::StepContext& context) {
     scan = &view;
   }
   if (have_pose && scan != nullptr) {
-    const Pose2D sensor = compose(pose.value.pose, config_.laser_mount);
-    costmap_.update({pose.value.pose, sensor, scan});
+    costmap_.update({pose.value.pose, sensor_pose_for(pose.value, *scan, config_.laser_mount), scan});
   }
   tasks::Sample<NavGoal> goal;
   if (!goal_.read(goal)) return;
@@ -237,7 +256,8 @@ void ControllerTask::step(const tasks::StepContext& context) {
       view = scan_sample_.value.view();
       scan = &view;
     }
-    const Pose2D sensor = compose(pose.value.pose, config_.laser_mount);
+    const Pose2D sensor = scan != nullptr ? sensor_pose_for(pose.value, *scan, config_.laser_mount)
+                                          : compose(pose.value.pose, config_.laser_mount);
     costmap_.update({pose.value.pose, sensor, scan});
     const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_mps, odom.value.w_radps, costmap_.costmap());
     command.v_mps = c.v_mps;

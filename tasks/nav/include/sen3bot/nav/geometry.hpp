@@ -25,6 +25,22 @@ inline double normalize_angle(double a_rad) noexcept {
   return a_rad - std::numbers::pi;
 }
 
+// a^-1 * b: the motion from pose a to pose b, in a's frame.
+inline Pose2D relative_pose(const Pose2D& a, const Pose2D& b) noexcept {
+  const double c = std::cos(a.theta_rad);
+  const double s = std::sin(a.theta_rad);
+  const double dx = b.x_m - a.x_m;
+  const double dy = b.y_m - a.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy, normalize_angle(b.theta_rad - a.theta_rad)};
+}
+
+// a * d: pose a moved by d (given in a's frame).
+inline Pose2D apply_motion(const Pose2D& a, const Pose2D& d) noexcept {
+  const double c = std::cos(a.theta_rad);
+  const double s = std::sin(a.theta_rad);
+  return {a.x_m + c * d.x_m - s * d.y_m, a.y_m + s * d.x_m + c * d.y_m, normalize_angle(a.theta_rad + d.theta_rad)};
+}
+
 // The robot outline in the robot frame (x forward, y left): a convex polygon of up to
 // kMaxVertices corners, or a circle when vertex_count is 0.
 struct Footprint {

@@ -78,6 +78,10 @@ struct PoseEstimate {
   bool valid = false;           // initialised
   bool lost = false;            // spread above lost_std_xy_m
   hal::Nanos stamp_ns = 0;
+  // Where the robot was when the newest scan the filter was given was taken (map frame), and
+  // that scan's stamp (0: none). The costmaps place that scan from here, not from pose.
+  Pose2D scan_pose;
+  hal::Nanos scan_stamp_ns = 0;
 };
 static_assert(std::is_trivially_copyable_v<PoseEstimate>);
 
@@ -100,6 +104,12 @@ class MonteCarloLocalization {
 
   // Feeds odometry and (optionally) a scan. Returns true when a filter update ran.
   bool update(const Odometry& odom, const ScanView* scan) noexcept;
+  // The same for a scan taken when odometry read odom_at_scan (an older pose than odom's, from
+  // an OdometryHistory): the update happens at the scan's pose, and estimate() carries the
+  // result forward to odom.
+  bool update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept;
+  // The filter pose carried to an odometry pose (estimate() does this for the newest one).
+  [[nodiscard]] Pose2D pose_at_odometry(const Pose2D& odom_pose) const noexcept;
 
   [[nodiscard]] PoseEstimate estimate() const noexcept;
   [[nodiscard]] std::size_t particle_count() const noexcept { return count_; }

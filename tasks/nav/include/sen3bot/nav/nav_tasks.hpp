@@ -20,6 +20,7 @@
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
 #include "sen3bot/nav/messages.hpp"
+#include "sen3bot/nav/odometry_history.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
@@ -53,6 +54,9 @@ class LocalizationTask final : public tasks::Task {
   std::atomic<bool> global_request_{false};
   std::uint64_t scan_seq_ = 0;
   tasks::Sample<ScanMessage> scan_sample_;
+  OdometryHistory history_;       // to take each scan at the pose it was measured from
+  Pose2D scan_pose_;              // the filter pose at the newest scan (published)
+  hal::Nanos scan_stamp_ns_ = 0;
 };
 
 // --- Global planner ---------------------------------------------------------------------------
