@@ -71,7 +71,7 @@ std::vector<Scenario> scenarios() {
        {{"no-obstacle", "nothing unexpected on the way", {}},
         {"obstacle-before-planning", "a 40 cm box on the safe path, there from the start", {box_at(3.3, 5.8, 0.0)}},
         {"obstacle-during-motion", "a 40 cm box that appears on the safe path while the robot drives",
-         {box_at(2.85, 3.9, 9.0)}}}},
+         {box_at(2.81, 3.25, 8.2)}}}},
       {"person-crossing",
        "the main mission: (2.5, 2) m to (4, 7) m and back while a worker crosses the upper area",
        {2.5, 2.0, std::numbers::pi / 2},
