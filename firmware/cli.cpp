@@ -47,6 +47,10 @@ constexpr const char* kUsage =
     "        path, obstacles). Exit status 3 when a case misses its goal or collides.\n"
     "  sim --list\n"
     "        List the scenarios and their cases.\n"
+    "  plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]\n"
+    "        One global plan (A* with waypoint attraction) on the map's costmap, as\n"
+    "        JSON: length_m, cells, expansions, time_ms, path [[x, y], ...] in metres.\n"
+    "        --unit-cost plans on the bare occupancy grid (no inflation, no footprint).\n"
     "  capture dump FILE\n"
     "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
     "  decode p2os CAPTURE\n"
@@ -350,6 +354,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
   if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);
   if (command == "sim") return sim_command(argc - 2, argv + 2, out, err);
+  if (command == "plan") return plan_command(argc - 2, argv + 2, out, err);
   std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
   return 2;
 }

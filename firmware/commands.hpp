@@ -23,5 +23,7 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]
+int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 }  // namespace sen3bot::firmware
