@@ -161,3 +161,82 @@ TEST(GlobalPlanner, EqualsPlainAStarFarFromTheWaypoints) {
 
 }  // namespace
 }  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+// Two walls with a 0.5 m gap between them (x 1.0-1.5 m at 0.05 m) across a 3 x 2 m room,
+// inflated as the planner task does: the gap is wide enough for the inscribed radius but not
+// for the padded footprint, so a clearance bar of 0.28 m sends the plan around.
+struct GapRoom {
+  mem::BudgetArena arena{"gap", 4 << 20};
+  Costmap2D costmap;
+  InflationLayerConfig inflation;
+  GapRoom() {
+    EXPECT_TRUE(costmap.init(60, 40, 0.05, arena));
+    costmap.fill(kFreeCost);
+    for (int c = 0; c < 60; ++c) {
+      if (c >= 20 && c < 30) continue;  // the 0.5 m gap
+      if (c < 45) costmap.set(c, 20, kLethalCost);  // the wall stops 0.75 m short of the right side
+    }
+    InflationLayer layer(inflation);
+    EXPECT_TRUE(layer.init(costmap, arena));
+    layer.inflate(costmap);
+  }
+};
+
+TEST(GlobalPlanner, ClearanceBandKeepsPlansOutOfNarrowGaps) {
+  GapRoom room;
+  Fixture fx;
+  GlobalPlannerConfig cfg;
+  cfg.max_cells = room.costmap.size();
+  ASSERT_TRUE(fx.planner.init(cfg, fx.arena));
+  const PlanResult through = fx.planner.plan(room.costmap, {25, 5}, {25, 35}, {}, fx.path);
+  ASSERT_TRUE(through.ok());
+  EXPECT_LT(through.length_m, 1.7);  // straight through the gap
+  // The same with the task's clearance bar: around the end of the wall instead.
+  cfg.blocked_cost = InflationLayer::cost_at(0.28, room.inflation);
+  ASSERT_TRUE(fx.planner.init(cfg, fx.arena));
+  const PlanResult around = fx.planner.plan(room.costmap, {25, 5}, {25, 35}, {}, fx.path);
+  ASSERT_TRUE(around.ok()) << to_string(around.status);
+  EXPECT_GT(around.length_m, 2.5);
+  for (std::size_t i = 0; i < around.cells; ++i)
+    if (fx.path[i].row == 20) {
+      EXPECT_GE(fx.path[i].col, 45) << i;  // crosses the wall's line past its end
+    }
+  // Its cost, re-evaluated along the path, is the search's own.
+  EXPECT_NEAR(fx.planner.path_cost(room.costmap, std::span<const GridCell>(fx.path.data(), around.cells)), around.cost,
+              1e-3 * around.cost);
+}
+
+TEST(GlobalPlanner, EscapesFromAStartInsideTheClearanceBand) {
+  GapRoom room;
+  Fixture fx;
+  GlobalPlannerConfig cfg;
+  cfg.max_cells = room.costmap.size();
+  cfg.blocked_cost = InflationLayer::cost_at(0.28, room.inflation);
+  ASSERT_TRUE(fx.planner.init(cfg, fx.arena));
+  // 0.2 m below the wall: inside the band, not in collision.
+  const GridCell start{10, 16};
+  ASSERT_GE(room.costmap.at(start.col, start.row), cfg.blocked_cost);
+  ASSERT_LT(room.costmap.at(start.col, start.row), kInscribedCost);
+  const PlanResult r = fx.planner.plan(room.costmap, start, {10, 2}, {}, fx.path);
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  // Out of the band downhill, never climbing it.
+  for (std::size_t i = 1; i < r.cells; ++i) {
+    const std::uint8_t before = room.costmap.at(fx.path[i - 1].col, fx.path[i - 1].row);
+    const std::uint8_t now = room.costmap.at(fx.path[i].col, fx.path[i].row);
+    if (now >= cfg.blocked_cost) {
+      EXPECT_LE(now, before) << i;
+    }
+  }
+  // A path through a lethal cell, or not 8-connected, has no cost.
+  std::vector<GridCell> bad = {{25, 18}, {25, 19}, {25, 20}, {25, 21}};
+  room.costmap.set(25, 20, kLethalCost);
+  EXPECT_TRUE(std::isinf(fx.planner.path_cost(room.costmap, bad)));
+  std::vector<GridCell> jump = {{40, 5}, {42, 5}};
+  EXPECT_TRUE(std::isinf(fx.planner.path_cost(room.costmap, jump)));
+}
+
+}  // namespace
+}  // namespace sen3bot::nav

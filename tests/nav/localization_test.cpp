@@ -172,3 +172,50 @@ TEST(Mcl, GlobalInitializationIsReportedLost) {
 
 }  // namespace
 }  // namespace sen3bot::nav
+
+#include "sen3bot/nav/odometry_history.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(OdometryHistory, InterpolatesBetweenSamplesAndExtrapolatesALittle) {
+  OdometryHistory h;
+  Pose2D p;
+  EXPECT_FALSE(h.pose_at(0, p));
+  // 0.5 m/s straight along x, then turning, one sample per 100 ms.
+  for (int i = 0; i < 10; ++i) h.push({0.05 * i, 0.0, i < 5 ? 0.0 : 0.1 * (i - 4), 0.5, i < 5 ? 0.0 : 1.0, i * 100'000'000LL, true});
+  h.push({9.0, 9.0, 0.0, 0.0, 0.0, 500'000'000LL, true});  // older than the newest: ignored
+  h.push({9.0, 9.0, 0.0, 0.0, 0.0, 0, false});             // not valid: ignored
+  EXPECT_EQ(h.size(), 10u);
+  ASSERT_TRUE(h.pose_at(125'000'000LL, p));
+  EXPECT_NEAR(p.x_m, 0.0625, 1e-9);
+  EXPECT_NEAR(p.theta_rad, 0.0, 1e-12);
+  ASSERT_TRUE(h.pose_at(650'000'000LL, p));
+  EXPECT_NEAR(p.theta_rad, 0.25, 1e-9);
+  // 0.1 s past the newest sample (0.45 m, 0.5 rad, 0.5 m/s, 1 rad/s).
+  ASSERT_TRUE(h.pose_at(1'000'000'000LL, p));
+  EXPECT_NEAR(p.theta_rad, 0.6, 1e-9);
+  EXPECT_NEAR(p.x_m, 0.45 + 0.05 * std::cos(0.55), 1e-9);
+  EXPECT_FALSE(h.pose_at(2'000'000'000LL, p));  // too far ahead
+  EXPECT_FALSE(h.pose_at(-1, p));               // older than every sample
+  // The ring keeps the newest kCapacity samples.
+  for (int i = 10; i < 10 + static_cast<int>(OdometryHistory::kCapacity); ++i)
+    h.push({0.05 * i, 0.0, 0.0, 0.5, 0.0, i * 100'000'000LL, true});
+  EXPECT_EQ(h.size(), OdometryHistory::kCapacity);
+  EXPECT_FALSE(h.pose_at(900'000'000LL, p));
+  ASSERT_TRUE(h.pose_at(1'050'000'000LL, p));
+  EXPECT_NEAR(p.x_m, 0.525, 1e-9);
+}
+
+TEST(OdometryHistory, RelativeAndApplyInvertEachOther) {
+  const Pose2D a{1.0, -2.0, 2.5};
+  const Pose2D b{-0.5, 0.7, -2.9};
+  const Pose2D d = relative_pose(a, b);
+  const Pose2D back = apply_motion(a, d);
+  EXPECT_NEAR(back.x_m, b.x_m, 1e-12);
+  EXPECT_NEAR(back.y_m, b.y_m, 1e-12);
+  EXPECT_NEAR(normalize_angle(back.theta_rad - b.theta_rad), 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
