@@ -138,6 +138,8 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
     const double max_d = config.likelihood_max_dist_m;
     pz_far_ = static_cast<float>(config.z_hit * std::exp(-max_d * max_d / two_sigma2) + config.z_rand / range_max);
     log_pz_far_ = std::log(pz_far_);
+    const double skip_d = std::min(max_d, config.beam_skip_distance_m);
+    pz_skip_ = static_cast<float>(config.z_hit * std::exp(-skip_d * skip_d / two_sigma2) + config.z_rand / range_max);
     for (int r = 0; r < height_; ++r) {
       const std::size_t row = static_cast<std::size_t>(r) * width_;
       for (int c = 0; c < width_; ++c) f[static_cast<std::size_t>(c)] = squared[row + c];
@@ -262,6 +264,31 @@ void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
     ++n;
   }
   if (n == 0) return;
+  if (config_.beam_skip && count_ > 0) {
+    // Per beam, how many particles put its end point near a mapped obstacle.
+    std::uint32_t near[512] = {};
+    for (std::size_t i = 0; i < count_; ++i) {
+      const Particle& p = particles_[i];
+      const double c = std::cos(p.theta_rad);
+      const double s = std::sin(p.theta_rad);
+      for (std::size_t k = 0; k < n; ++k) {
+        if (likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]) >= pz_skip_) ++near[k];
+      }
+    }
+    const double needed = config_.beam_skip_threshold * static_cast<double>(count_);
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < n; ++k) kept += static_cast<double>(near[k]) >= needed ? 1 : 0;
+    if (static_cast<double>(n - kept) <= config_.beam_skip_error_threshold * static_cast<double>(n) && kept > 0) {
+      std::size_t m = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (static_cast<double>(near[k]) < needed) continue;
+        bx[m] = bx[k];
+        by[m] = by[k];
+        ++m;
+      }
+      n = m;
+    }
+  }
   // Log-likelihood per particle first, then weights relative to the best one, so the
   // product over beams cannot underflow.
   double best = -std::numeric_limits<double>::infinity();

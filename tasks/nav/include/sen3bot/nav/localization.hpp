@@ -49,6 +49,15 @@ struct MclConfig {
   MclBeamModel beam_model = MclBeamModel::product;
   double product_exponent = 0.5;
   int occupied_threshold = 65;  // map occupancy (0..100) counted as an obstacle
+  // Beam skipping (AMCL's do_beamskip): a beam that ends farther than beam_skip_distance_m
+  // from every mapped obstacle for all but a beam_skip_threshold share of the particles sees
+  // something the map does not have (a box, a person) and is left out for every particle.
+  // When more than beam_skip_error_threshold of the beams would go, none is skipped (then the
+  // filter, not the world, is probably wrong).
+  bool beam_skip = true;
+  double beam_skip_distance_m = 0.5;
+  double beam_skip_threshold = 0.3;
+  double beam_skip_error_threshold = 0.9;
   // Odometry noise (AMCL's alpha1..alpha4): rotation from rotation, rotation from
   // translation, translation from translation, translation from rotation.
   double alpha1 = 0.2;
@@ -140,6 +149,7 @@ class MonteCarloLocalization {
   double origin_x_m_ = 0.0;
   double origin_y_m_ = 0.0;
   float pz_far_ = 0.0f;
+  float pz_skip_ = 0.0f;  // likelihood at beam_skip_distance_m
   float log_pz_far_ = 0.0f;
   std::span<float> field_;
   std::span<float> log_field_;
