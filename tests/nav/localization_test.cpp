@@ -178,6 +178,61 @@ TEST(Mcl, GlobalInitializationIsReportedLost) {
 namespace sen3bot::nav {
 namespace {
 
+// Turning on the spot right in front of an unmapped 0.4 m box, a quarter of the scan on it:
+// beam skipping leaves those beams out, so the estimate stays where the robot is.
+double worst_error_turning_at_a_box(bool beam_skip, bool with_box = true) {
+  auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  EXPECT_TRUE(map.ok());
+  world::WorldConfig wc;
+  wc.range_noise_sigma_m = 0.01;
+  world::World truth(*map, wc);
+  world::MoverScript box;
+  box.path = {{2.85, 3.9}};
+  box.size_m = 0.4;
+  box.shape = world::MoverShape::square;
+  if (with_box) truth.add_mover(box);
+  truth.set_time(0.0);
+  MclConfig cfg;
+  cfg.beam_skip = beam_skip;
+  cfg.initial_pose = {3.05, 4.5, -M_PI / 2.0};
+  cfg.initial_std_xy_m = 0.05;
+  cfg.initial_std_theta_rad = 0.05;
+  cfg.update_min_a_rad = 0.1;
+  cfg.laser_mount = {0.16, 0.0, 0.0};
+  mem::BudgetArena arena("mcl", MonteCarloLocalization::storage_bytes(cfg, *map));
+  MonteCarloLocalization mcl;
+  EXPECT_TRUE(mcl.init(cfg, *map, arena));
+  ScanMessage msg;
+  msg.count = 361;
+  msg.angle_min_rad = static_cast<float>(-M_PI / 2.0);
+  msg.increment_rad = static_cast<float>(M_PI / 360.0);
+  msg.range_max_m = 8.0f;
+  double worst = 0.0;
+  Pose2D pose = cfg.initial_pose;
+  for (int k = 0; k <= 60; ++k) {  // 0.05 rad steps: -90 deg round to -262 deg
+    pose.theta_rad = normalize_angle(-M_PI / 2.0 - 0.05 * k);
+    const Pose2D sensor = compose(pose, cfg.laser_mount);
+    truth.noisy_scan(sensor, msg.angle_min_rad, msg.increment_rad, msg.count, msg.range_max_m,
+                     std::span<float>(msg.ranges_m.data(), msg.count));
+    const ScanView view = msg.view();
+    (void)mcl.update({pose.x_m, pose.y_m, pose.theta_rad, 0.0, -0.5, k * 100'000'000LL, true}, &view);
+    const PoseEstimate e = mcl.estimate();
+    worst = std::max(worst, std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m));
+  }
+  return worst;
+}
+
+TEST(Mcl, BeamSkippingIgnoresAnUnmappedBoxCloseAhead) {
+  const double with = worst_error_turning_at_a_box(true);
+  const double without = worst_error_turning_at_a_box(false);
+  const double no_box = worst_error_turning_at_a_box(true, false);
+  std::printf("turning 0.4 m from an unmapped box: worst error %.3f m with beam skipping, %.3f m without (%.3f m with no box)\n",
+              with, without, no_box);
+  EXPECT_LT(with, 0.05);
+  EXPECT_GT(without, 0.1);  // the box drags the estimate when every beam counts
+  EXPECT_LT(no_box, 0.05);
+}
+
 TEST(OdometryHistory, InterpolatesBetweenSamplesAndExtrapolatesALittle) {
   OdometryHistory h;
   Pose2D p;
