@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The two README commands.
 #   toolchain/sen3bot.sh mission   install what is missing, build, run the simulated robot
+#                                  through the thesis' three cases (report in build/report)
 #   toolchain/sen3bot.sh test      install what is missing, build, run every test suite:
 #                                  native (-Werror), ASan+UBSan, and aarch64 under qemu-user
 #                                  and a bounded coverage-guided fuzzing run of every parser
@@ -27,8 +28,8 @@ case "${1:-}" in
     toolchain/bootstrap.sh
     section "building"
     configure_and_build build
-    section "running the simulated robot"
-    exec build/firmware/sen3bot run --config config/sim.yaml
+    section "running the simulated robot: the thesis' supervised-planning cases"
+    exec build/firmware/sen3bot sim --scenario thesis-sgp --report build/report
     ;;
   test)
     start=$SECONDS
