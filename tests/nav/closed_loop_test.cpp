@@ -37,8 +37,7 @@ struct Outcome {
 // blind_forward replaces the controller by a constant forward request (a planner that does
 // not see the person): only the safety task stands between the robot and the person.
 // box_before_planning / box_during_motion are the thesis' cases 2 and 3: a 0.4 m box on the
-// waypoint route, seen before the first plan, or appearing while the robot drives (case 3
-// has no test yet: the robot can still wedge itself between that box and the middle wall).
+// waypoint route, seen before the first plan, or appearing while the robot drives.
 enum class Scenario { plain, person_crossing, blind_forward, box_before_planning, box_during_motion };
 
 Outcome run(Scenario scenario) {
@@ -273,6 +272,19 @@ namespace {
 
 TEST(ClosedLoop, ThesisCase2BoxSeenBeforePlanning) {
   const Outcome o = run(Scenario::box_before_planning);
+  EXPECT_TRUE(o.reached);
+  EXPECT_EQ(o.collisions, 0);
+  EXPECT_EQ(o.step_allocations, 0u);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+TEST(ClosedLoop, ThesisCase3BoxAppearsDuringMotion) {
+  const Outcome o = run(Scenario::box_during_motion);
   EXPECT_TRUE(o.reached);
   EXPECT_EQ(o.collisions, 0);
   EXPECT_EQ(o.step_allocations, 0u);

@@ -40,36 +40,42 @@ Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& reso
     goal_distance_ = allocate_array<std::uint16_t>(resource, config.max_costmap_cells);
     path_distance_ = allocate_array<std::uint16_t>(resource, config.max_costmap_cells);
     queue_ = allocate_array<std::uint32_t>(resource, config.max_costmap_cells);
-    perimeter_ = allocate_array<Point2D>(resource, kMaxPerimeterPoints);
-    std::size_t n = 0;
     // The checked outline is padded (each corner pushed out per axis, exact for the
-    // rectangular Pioneer), so an edge grazing a lethal cell's corner is not missed.
-    Footprint fp = config.footprint;
-    fp.circle_radius_m += config.footprint_padding_m;
-    for (std::size_t i = 0; i < fp.vertex_count; ++i) {
-      fp.vertices[i].x_m += std::copysign(config.footprint_padding_m, fp.vertices[i].x_m);
-      fp.vertices[i].y_m += std::copysign(config.footprint_padding_m, fp.vertices[i].y_m);
-    }
-    if (fp.vertex_count == 0) {
-      const double circumference = 2.0 * std::numbers::pi * fp.circle_radius_m;
-      const auto steps = std::clamp<std::size_t>(static_cast<std::size_t>(circumference / kPerimeterStepM) + 1, 8, kMaxPerimeterPoints);
-      for (std::size_t i = 0; i < steps; ++i) {
-        const double a = 2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(steps);
-        perimeter_[n++] = {fp.circle_radius_m * std::cos(a), fp.circle_radius_m * std::sin(a)};
-      }
-    } else {
+    // rectangular Pioneer), so an edge grazing a lethal cell's corner is not missed. The bare
+    // outline is kept for escaping when the robot already stands within the padding.
+    const auto outline = [&](double padding) {
+      std::span<Point2D> out = allocate_array<Point2D>(resource, kMaxPerimeterPoints);
+      std::size_t n = 0;
+      Footprint fp = config.footprint;
+      fp.circle_radius_m += padding;
       for (std::size_t i = 0; i < fp.vertex_count; ++i) {
-        const Point2D a = fp.vertices[i];
-        const Point2D b = fp.vertices[(i + 1) % fp.vertex_count];
-        const double len = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
-        const auto steps = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / kPerimeterStepM)));
-        for (std::size_t k = 0; k < steps && n < kMaxPerimeterPoints; ++k) {
-          const double t = static_cast<double>(k) / static_cast<double>(steps);
-          perimeter_[n++] = {a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m)};
+        fp.vertices[i].x_m += std::copysign(padding, fp.vertices[i].x_m);
+        fp.vertices[i].y_m += std::copysign(padding, fp.vertices[i].y_m);
+      }
+      if (fp.vertex_count == 0) {
+        const double circumference = 2.0 * std::numbers::pi * fp.circle_radius_m;
+        const auto steps = std::clamp<std::size_t>(static_cast<std::size_t>(circumference / kPerimeterStepM) + 1, 8, kMaxPerimeterPoints);
+        for (std::size_t i = 0; i < steps; ++i) {
+          const double ang = 2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(steps);
+          out[n++] = {fp.circle_radius_m * std::cos(ang), fp.circle_radius_m * std::sin(ang)};
+        }
+      } else {
+        for (std::size_t i = 0; i < fp.vertex_count; ++i) {
+          const Point2D va = fp.vertices[i];
+          const Point2D vb = fp.vertices[(i + 1) % fp.vertex_count];
+          const double len = std::hypot(vb.x_m - va.x_m, vb.y_m - va.y_m);
+          const auto steps = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / kPerimeterStepM)));
+          for (std::size_t k = 0; k < steps && n < kMaxPerimeterPoints; ++k) {
+            const double t = static_cast<double>(k) / static_cast<double>(steps);
+            out[n++] = {va.x_m + t * (vb.x_m - va.x_m), va.y_m + t * (vb.y_m - va.y_m)};
+          }
         }
       }
-    }
-    perimeter_ = perimeter_.first(n);
+      return out.first(n);
+    };
+    padded_ = outline(config.footprint_padding_m);
+    bare_ = outline(0.0);
+    check_ = padded_;
     return Status::success();
   });
 }
@@ -88,9 +94,13 @@ void DwaPlanner::set_path(std::span<const PathPoint> path) noexcept {
 void DwaPlanner::clear_path() noexcept { path_count_ = 0; }
 
 bool DwaPlanner::footprint_collides(const Pose2D& pose, const Costmap2D& costmap) const noexcept {
+  return outline_hits(pose, costmap, padded_);
+}
+
+bool DwaPlanner::outline_hits(const Pose2D& pose, const Costmap2D& costmap, std::span<const Point2D> outline) const noexcept {
   const double c = std::cos(pose.theta_rad);
   const double s = std::sin(pose.theta_rad);
-  for (const Point2D& p : perimeter_) {
+  for (const Point2D& p : outline) {
     int col = 0;
     int row = 0;
     if (!costmap.world_to_cell(pose.x_m + c * p.x_m - s * p.y_m, pose.y_m + s * p.x_m + c * p.y_m, col, row)) return true;
@@ -121,7 +131,7 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
     if (!costmap.world_to_cell(p.x_m, p.y_m, col, row)) return r;
     const std::uint8_t cost = costmap.at(col, row);
     if (cost >= kInscribedCost) return r;  // the centre inside the inscribed radius: certain collision
-    if (cost >= config_.footprint_check_min_cost && footprint_collides(p, costmap)) return r;
+    if (cost >= config_.footprint_check_min_cost && outline_hits(p, costmap, check_)) return r;
     r.max_cost = std::max(r.max_cost, cost);
   }
   r.admissible = true;
@@ -138,7 +148,7 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
       q.y_m += step * std::sin(q.theta_rad + 0.5 * w_per_m * step);
       q.theta_rad += w_per_m * step;
       travelled += step;
-      if (footprint_collides(q, costmap)) {
+      if (outline_hits(q, costmap, check_)) {
         r.admissible = false;
         return r;
       }
@@ -278,6 +288,11 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps,
   }
   update_window(pose);
   skip_blocked_part(costmap);
+  // Already within the padding of something (the robot squeezed past it, or it came closer):
+  // the padded outline would reject every move, even away from it, so this cycle checks the
+  // bare footprint. The clearance term still prefers moving away.
+  escaping_ = outline_hits(pose, costmap, padded_);
+  check_ = escaping_ ? bare_ : padded_;
 
   const double dt = config_.control_period_s;
   const double v_cap = std::min(config_.max_v_mps, config_.max_v_mps * std::max(0.1, out.distance_to_goal_m / config_.slow_down_radius_m));
@@ -366,7 +381,7 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
         const double bearing = normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad);
         const double w = bearing >= 0.0 ? config_.rotate_w_radps : -config_.rotate_w_radps;
         const Pose2D ahead{pose.x_m, pose.y_m, pose.theta_rad + w * dt * 3.0};
-        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !footprint_collides(ahead, costmap)) {
+        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !outline_hits(ahead, costmap, check_)) {
           out.status = DwaStatus::rotating;
           out.v_mps = 0.0;
           out.w_radps = w;
@@ -378,7 +393,7 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
       case DwaStatus::backing_off: {
         const double back = config_.backoff_v_mps * dt * 3.0;
         const Pose2D behind{pose.x_m + back * std::cos(pose.theta_rad), pose.y_m + back * std::sin(pose.theta_rad), pose.theta_rad};
-        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !footprint_collides(behind, costmap)) {
+        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !outline_hits(behind, costmap, check_)) {
           out.status = DwaStatus::backing_off;
           out.v_mps = config_.backoff_v_mps;
           out.w_radps = 0.0;

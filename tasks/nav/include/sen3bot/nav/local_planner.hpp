@@ -117,10 +117,13 @@ class DwaPlanner {
   // One control period: pose in the map frame, current body velocities, the local costmap.
   DwaCommand compute(const Pose2D& pose, double v_mps, double w_radps, const Costmap2D& costmap) noexcept;
 
-  // True when the footprint at pose touches a lethal or unknown cell (or leaves the costmap).
+  // True when the padded footprint at pose touches a lethal or unknown cell (or leaves the
+  // costmap). When the robot already stands that close, a cycle checks the bare footprint
+  // instead, so it can move away (escaping()).
   [[nodiscard]] bool footprint_collides(const Pose2D& pose, const Costmap2D& costmap) const noexcept;
 
   [[nodiscard]] const RecoveryCounts& recoveries() const noexcept { return recoveries_; }
+  [[nodiscard]] bool escaping() const noexcept { return escaping_; }
   [[nodiscard]] const DwaConfig& config() const noexcept { return config_; }
   // The pruned window of the last compute(): path indices [begin, end].
   [[nodiscard]] std::size_t window_begin() const noexcept { return window_begin_; }
@@ -147,7 +150,13 @@ class DwaPlanner {
   std::span<std::uint16_t> goal_distance_;  // cells from the target, through free space
   std::span<std::uint16_t> path_distance_;  // cells from the pruned path window
   std::span<std::uint32_t> queue_;
-  std::span<Point2D> perimeter_;  // footprint outline sampled every half cell (robot frame)
+  [[nodiscard]] bool outline_hits(const Pose2D& pose, const Costmap2D& costmap,
+                                  std::span<const Point2D> outline) const noexcept;
+
+  std::span<Point2D> padded_;        // footprint outline + padding, every half cell (robot frame)
+  std::span<Point2D> bare_;          // the footprint outline itself
+  std::span<const Point2D> check_;   // the outline this cycle checks (bare while escaping)
+  bool escaping_ = false;
   std::size_t path_count_ = 0;
   std::size_t window_begin_ = 0;
   std::size_t window_end_ = 0;
