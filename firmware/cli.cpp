@@ -201,7 +201,8 @@ int run_lockstep(Firmware& fw, hal::SimClock& clock, const FirmwareConfig& confi
   const hal::Nanos duration =
       config.duration_s > 0 ? static_cast<hal::Nanos>(config.duration_s * 1e9) : INT64_MAX / 2;
   const auto wall_start = std::chrono::steady_clock::now();
-  // Simulated seconds in slices: a stop signal ends the run at the end of the current slice.
+  // Simulated time in one-second slices, so the end of the mission is seen within a second; a
+  // stop signal cuts the current slice short (the handler asks the scheduler to stop).
   const hal::Nanos end_ns = clock.now() + duration;
   Status s = Status::success();
   while (s && g_stop_signal.load() == 0 && clock.now() < end_ns && (fw.mission() == nullptr || !fw.mission()->finished()))
