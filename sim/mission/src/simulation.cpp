@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "sen3bot/nav/map.hpp"
+#include "sen3bot/nav/scan.hpp"
 
 namespace sen3bot::sim {
 
@@ -14,12 +15,6 @@ constexpr double kClearanceLimitM = 1.5;  // clearance/person distances are capp
 constexpr hal::Nanos kClearancePeriodNs = 50'000'000;
 constexpr double kNanosPerSecond = 1e9;
 constexpr double kMovingSpeedM_s = 0.02;
-
-nav::Pose2D compose(const nav::Pose2D& a, const nav::Pose2D& b) {
-  const double c = std::cos(a.theta_rad);
-  const double s = std::sin(a.theta_rad);
-  return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, nav::normalize_angle(a.theta_rad + b.theta_rad)};
-}
 
 nav::Pose2D to_nav(const p2os::Pose2& p) { return {p.x_m, p.y_m, p.theta_rad}; }
 
@@ -132,7 +127,8 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   (void)base_.step(base_stream, now_ns);
 
   const nav::Pose2D pose = to_nav(base_.ground_truth());
-  const nav::Pose2D sensor = compose(pose, config_.laser_mount);
+  const nav::Pose2D& m = config_.laser_mount;
+  const nav::Pose2D sensor = nav::compose(pose, nav::SensorMount{m.x_m, m.y_m, m.theta_rad});
   ranges_->set_sensor_pose(sensor.x_m, sensor.y_m, sensor.theta_rad);
   laser_->step(now_ns);
 
