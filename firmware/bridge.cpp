@@ -36,8 +36,8 @@ nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
   odom.x_m = in.x_m;
   odom.y_m = in.y_m;
   odom.theta_rad = in.theta_rad;
-  odom.v_mps = in.v_m_s;
-  odom.w_radps = in.omega_rad_s;
+  odom.v_m_s = in.v_m_s;
+  odom.w_rad_s = in.omega_rad_s;
   odom.stamp_ns = in.sip_stamp_ns;
   odom.valid = in.link == p2os::LinkState::connected && in.sip_count > 0;
   return odom;
@@ -60,7 +60,7 @@ void BridgeTask::step(const tasks::StepContext& context) {
   tasks::Sample<nav::VelocityCommand> command;
   if (topics_.command.read(command) && command.sequence != command_seq_) {
     command_seq_ = command.sequence;
-    topics_.setpoint.publish(p2os::BaseSetpoint{command.value.v_mps, command.value.w_radps, true}, context.start_ns);
+    topics_.setpoint.publish(p2os::BaseSetpoint{command.value.v_m_s, command.value.w_rad_s, true}, context.start_ns);
   }
 }
 

@@ -50,10 +50,10 @@ world::MoverScript box_at(double x_m, double y_m, double appear_s) {
   return box;
 }
 
-world::MoverScript person_walking(std::vector<nav::Point2D> path, double speed_mps, double start_s) {
+world::MoverScript person_walking(std::vector<nav::Point2D> path, double speed_m_s, double start_s) {
   world::MoverScript person;
   person.path = std::move(path);
-  person.speed_mps = speed_mps;
+  person.speed_m_s = speed_m_s;
   person.size_m = 0.45;
   person.start_time_s = start_s;
   person.person = true;

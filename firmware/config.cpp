@@ -186,7 +186,7 @@ world::MoverScript read_mover(const Reader& r, bool person) {
   m.shape = person ? world::MoverShape::circle : world::MoverShape::square;
   for (const Reader& point : r.sequence("path")) m.path.push_back(point.point());
   if (m.path.empty()) r.fail("path", "needs at least one point", YAML::Node());
-  if (r.has("speed_m_s")) m.speed_mps = r.number("speed_m_s", 0.0, 5.0);
+  if (r.has("speed_m_s")) m.speed_m_s = r.number("speed_m_s", 0.0, 5.0);
   if (r.has("size_m")) m.size_m = r.number("size_m", 0.05, 5.0);
   if (r.has("loop")) m.loop = r.boolean("loop");
   if (r.has("start_s")) m.start_time_s = r.number("start_s", 0.0, 1e7);

@@ -88,8 +88,8 @@ Status Firmware::create_navigation() {
 
   nav::ControllerTaskConfig controller;
   controller.laser_mount = mount;
-  controller.dwa.max_v_mps = n.max_v_m_s;
-  controller.dwa.max_w_radps = n.max_w_rad_s;
+  controller.dwa.max_v_m_s = n.max_v_m_s;
+  controller.dwa.max_w_rad_s = n.max_w_rad_s;
   controller.dwa.goal_tolerance_m = n.goal_tolerance_m;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
                                                            nav_request_, nav_controller_);

@@ -163,7 +163,7 @@ Outcome run(Scenario scenario) {
     if (safety_topic.read(safe)) {
       if ((safe.value.reasons & kSafetyObstacle) != 0) outcome.safety_stopped_for_obstacle = true;
       // Whoever decided it, nothing moves forward into the stop zone.
-      if (safe.value.nearest_ahead_m <= safe.value.stop_distance_m && safe.value.command.v_mps > 0.0) {
+      if (safe.value.nearest_ahead_m <= safe.value.stop_distance_m && safe.value.command.v_m_s > 0.0) {
         ++outcome.forward_in_stop_zone;
       }
     }
@@ -195,7 +195,7 @@ Outcome run(Scenario scenario) {
       const double px = robot.x_m + ahead * c + right * s;
       const double py = robot.y_m + ahead * s - right * c;
       person.path = {{px, py}, {px + 3.0 * s, py - 3.0 * c}};
-      person.speed_mps = 0.6;
+      person.speed_m_s = 0.6;
       person.size_m = 0.4;
       person.person = true;
       person.appear_time_s = static_cast<double>(now) * 1e-9;
@@ -209,8 +209,8 @@ Outcome run(Scenario scenario) {
     double v_cmd = 0.0;
     double w_cmd = 0.0;
     if (command_topic.read(cmd)) {
-      v_cmd = cmd.value.v_mps;
-      w_cmd = cmd.value.w_radps;
+      v_cmd = cmd.value.v_m_s;
+      w_cmd = cmd.value.w_rad_s;
     }
     const double dt = static_cast<double>(kTickNs) * 1e-9;
     v += std::clamp(v_cmd - v, -0.6 * dt, 0.6 * dt);

@@ -58,13 +58,13 @@ DriveResult drive(const OccupancyMap& map, DwaPlanner& dwa, Pose2D pose, int max
     const DwaCommand cmd = dwa.compute(pose, v, w, cm.costmap());
     run.last = cmd.status;
     run.final_pose = pose;
-    if (std::getenv("DWA_TRACE") != nullptr && run.steps % 5 == 0) std::printf("%d %.2f %.2f %.2f v %.2f w %.2f %s adm %u\n", run.steps, pose.x_m, pose.y_m, pose.theta_rad, cmd.v_mps, cmd.w_radps, to_string(cmd.status), cmd.admissible);
+    if (std::getenv("DWA_TRACE") != nullptr && run.steps % 5 == 0) std::printf("%d %.2f %.2f %.2f v %.2f w %.2f %s adm %u\n", run.steps, pose.x_m, pose.y_m, pose.theta_rad, cmd.v_m_s, cmd.w_rad_s, to_string(cmd.status), cmd.admissible);
     if (cmd.status == DwaStatus::reached) {
       run.reached = true;
       break;
     }
-    v = cmd.v_mps;
-    w = cmd.w_radps;
+    v = cmd.v_m_s;
+    w = cmd.w_rad_s;
     pose.x_m += v * dt * std::cos(pose.theta_rad + w * dt / 2.0);
     pose.y_m += v * dt * std::sin(pose.theta_rad + w * dt / 2.0);
     pose.theta_rad = normalize_angle(pose.theta_rad + w * dt);

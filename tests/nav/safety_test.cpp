@@ -33,8 +33,8 @@ TEST(Safety, PassesACommandWhenAllIsWell) {
   Scene s;
   const SafetyOutput out = SafetyFilter().filter(s.in);
   EXPECT_EQ(out.reasons, kSafetyNone);
-  EXPECT_DOUBLE_EQ(out.command.v_mps, 0.4);
-  EXPECT_DOUBLE_EQ(out.command.w_radps, 0.2);
+  EXPECT_DOUBLE_EQ(out.command.v_m_s, 0.4);
+  EXPECT_DOUBLE_EQ(out.command.w_rad_s, 0.2);
 }
 
 TEST(Safety, StopsOnAStaleLaserScan) {
@@ -47,8 +47,8 @@ TEST(Safety, StopsOnAStaleLaserScan) {
   s.in.odom_stamp_ns = s.in.now_ns;
   const SafetyOutput out = f.filter(s.in);
   EXPECT_TRUE(out.reasons & kSafetyScanStale);
-  EXPECT_EQ(out.command.v_mps, 0.0);
-  EXPECT_EQ(out.command.w_radps, 0.0);
+  EXPECT_EQ(out.command.v_m_s, 0.0);
+  EXPECT_EQ(out.command.w_rad_s, 0.0);
   s.in.scan = nullptr;
   EXPECT_TRUE(f.filter(s.in).reasons & kSafetyScanStale);
 }
@@ -59,7 +59,7 @@ TEST(Safety, StopsOnEstopMotorsOdometryAndLostLocalization) {
     Scene s;
     s.in.estop = true;
     EXPECT_EQ(f.filter(s.in).reasons, kSafetyEstop);
-    EXPECT_EQ(f.filter(s.in).command.v_mps, 0.0);
+    EXPECT_EQ(f.filter(s.in).command.v_m_s, 0.0);
   }
   {
     Scene s;
@@ -76,7 +76,7 @@ TEST(Safety, StopsOnEstopMotorsOdometryAndLostLocalization) {
     s.in.localization_lost = true;
     const SafetyOutput out = f.filter(s.in);
     EXPECT_EQ(out.reasons, kSafetyLocalizationLost);
-    EXPECT_EQ(out.command.w_radps, 0.0);
+    EXPECT_EQ(out.command.w_rad_s, 0.0);
   }
 }
 
@@ -88,27 +88,27 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   s.view = s.msg.view();
   SafetyOutput out = f.filter(s.in);
   EXPECT_TRUE(out.reasons & kSafetyObstacle);
-  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_EQ(out.command.v_m_s, 0.0);
   // Reversing away is still allowed.
-  s.in.requested.v_mps = -0.05;
+  s.in.requested.v_m_s = -0.05;
   out = f.filter(s.in);
-  EXPECT_DOUBLE_EQ(out.command.v_mps, -0.05);
+  EXPECT_DOUBLE_EQ(out.command.v_m_s, -0.05);
   // The same point 60 degrees to the side is outside the corridor.
   Scene side;
   side.msg.ranges_m[150] = 0.9f;
   side.view = side.msg.view();
   out = f.filter(side.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
-  EXPECT_DOUBLE_EQ(out.command.v_mps, 0.4);
+  EXPECT_DOUBLE_EQ(out.command.v_m_s, 0.4);
   // In the slow zone the speed is scaled, not zeroed. Requested 0.4 m/s: stop distance
   // 0.25 + 0.04 + 0.1333 = 0.4233 m; half way into the 0.35 m slow zone halves the speed.
   Scene slow;
   slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.04 + 0.16 / 1.2 + 0.175);
   slow.view = slow.msg.view();
-  slow.in.requested.w_radps = 0.0;
+  slow.in.requested.w_rad_s = 0.0;
   out = f.filter(slow.in);
   EXPECT_TRUE(out.reasons & kSafetySlowed);
-  EXPECT_NEAR(out.command.v_mps, 0.4 * 0.5, 0.4 * 0.02 / 0.35);  // within one sweep step
+  EXPECT_NEAR(out.command.v_m_s, 0.4 * 0.5, 0.4 * 0.02 / 0.35);  // within one sweep step
 }
 
 TEST(Safety, NeverRaisesSpeed) {
@@ -122,10 +122,10 @@ TEST(Safety, NeverRaisesSpeed) {
     s.view = s.msg.view();
     s.in.requested = {v(rng), v(rng) * 2.0, s.in.now_ns};
     const SafetyOutput out = f.filter(s.in);
-    EXPECT_LE(std::abs(out.command.v_mps), std::abs(s.in.requested.v_mps));
-    EXPECT_LE(std::abs(out.command.w_radps), std::abs(s.in.requested.w_radps));
-    EXPECT_GE(out.command.v_mps * s.in.requested.v_mps, 0.0);
-    EXPECT_GE(out.command.w_radps * s.in.requested.w_radps, 0.0);
+    EXPECT_LE(std::abs(out.command.v_m_s), std::abs(s.in.requested.v_m_s));
+    EXPECT_LE(std::abs(out.command.w_rad_s), std::abs(s.in.requested.w_rad_s));
+    EXPECT_GE(out.command.v_m_s * s.in.requested.v_m_s, 0.0);
+    EXPECT_GE(out.command.w_rad_s * s.in.requested.w_rad_s, 0.0);
   }
 }
 
@@ -145,7 +145,7 @@ TEST(Safety, FollowsTheCommandedArc) {
   s.in.requested = {0.1, 1.0, s.in.now_ns};  // a tight left arc (0.1 m radius) misses it
   const SafetyOutput out = f.filter(s.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
-  EXPECT_GT(out.command.v_mps, 0.0);
+  EXPECT_GT(out.command.v_m_s, 0.0);
 }
 
 }  // namespace

@@ -36,8 +36,8 @@ class SimulatedRobot final : public tasks::Task {
     last_ns_ = now;
     tasks::Sample<VelocityCommand> cmd;
     const bool have = command_.read(cmd);
-    const double v_cmd = have ? cmd.value.v_mps : 0.0;
-    const double w_cmd = have ? cmd.value.w_radps : 0.0;
+    const double v_cmd = have ? cmd.value.v_m_s : 0.0;
+    const double w_cmd = have ? cmd.value.w_rad_s : 0.0;
     v_ += std::clamp(v_cmd - v_, -0.6 * dt, 0.6 * dt);
     w_ += std::clamp(w_cmd - w_, -2.0 * dt, 2.0 * dt);
     const double th_mid = robot_.theta_rad + w_ * dt / 2.0;

@@ -40,7 +40,7 @@ TEST(World, MoversWalkPolylinesDeterministically) {
   World w(room());
   MoverScript person;
   person.path = {{1.0, 1.0}, {3.0, 1.0}};
-  person.speed_mps = 0.5;
+  person.speed_m_s = 0.5;
   person.person = true;
   const auto id = w.add_mover(person);
   w.set_time(2.0);
@@ -50,7 +50,7 @@ TEST(World, MoversWalkPolylinesDeterministically) {
   MoverScript loop = person;
   loop.path = {{1.0, 1.0}, {2.0, 1.0}, {2.0, 2.0}};
   loop.loop = true;
-  loop.speed_mps = 1.0;
+  loop.speed_m_s = 1.0;
   const auto id2 = w.add_mover(loop);
   w.set_time(2.0 + std::sqrt(2.0) + 0.25);  // once round plus 0.25 m
   EXPECT_NEAR(w.mover_position(id2).x_m, 1.25, 1e-9);

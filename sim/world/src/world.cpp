@@ -163,8 +163,8 @@ std::size_t World::add_mover(const MoverScript& script) {
 Point2D World::position_at(const Mover& mover, double time_s) noexcept {
   const auto& path = mover.script.path;
   const double total = mover.cumulative_m.back();
-  if (path.size() < 2 || mover.script.speed_mps <= 0.0 || total <= 0.0) return path.front();
-  const double walked = std::max(0.0, time_s - mover.script.start_time_s) * mover.script.speed_mps;
+  if (path.size() < 2 || mover.script.speed_m_s <= 0.0 || total <= 0.0) return path.front();
+  const double walked = std::max(0.0, time_s - mover.script.start_time_s) * mover.script.speed_m_s;
   double s = 0.0;
   if (mover.script.loop) {
     s = std::fmod(walked, total);

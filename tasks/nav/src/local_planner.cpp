@@ -273,7 +273,7 @@ void DwaPlanner::skip_blocked_part(const Costmap2D& costmap) noexcept {
   target_index_ = i;
 }
 
-DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps, const Costmap2D& costmap) noexcept {
+DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap) noexcept {
   DwaCommand out;
   if (path_count_ == 0) return out;
   const PathPoint goal = path_[path_count_ - 1];
@@ -295,12 +295,12 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps,
   check_ = escaping_ ? bare_ : padded_;
 
   const double dt = config_.control_period_s;
-  const double v_cap = std::min(config_.max_v_mps, config_.max_v_mps * std::max(0.1, out.distance_to_goal_m / config_.slow_down_radius_m));
-  double v_lo = std::max(0.0, v_mps - config_.acc_v_mps2 * dt);
-  double v_hi = std::min(v_cap, v_mps + config_.acc_v_mps2 * dt);
+  const double v_cap = std::min(config_.max_v_m_s, config_.max_v_m_s * std::max(0.1, out.distance_to_goal_m / config_.slow_down_radius_m));
+  double v_lo = std::max(0.0, v_m_s - config_.acc_v_m_s2 * dt);
+  double v_hi = std::min(v_cap, v_m_s + config_.acc_v_m_s2 * dt);
   if (v_hi < v_lo) v_lo = v_hi = std::max(0.0, std::min(v_cap, v_lo));  // over the cap: brake
-  const double w_lo = std::max(-config_.max_w_radps, w_radps - config_.acc_w_radps2 * dt);
-  const double w_hi = std::min(config_.max_w_radps, w_radps + config_.acc_w_radps2 * dt);
+  const double w_lo = std::max(-config_.max_w_rad_s, w_rad_s - config_.acc_w_rad_s2 * dt);
+  const double w_hi = std::min(config_.max_w_rad_s, w_rad_s + config_.acc_w_rad_s2 * dt);
   const PathPoint target = path_[target_index_];
   if (costmap.size() > goal_distance_.size()) {
     out.status = DwaStatus::failed;  // a costmap larger than init() sized for: a configuration error
@@ -321,7 +321,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps,
       const double bearing = std::atan2(target.y_m - r.end.y_m, target.x_m - r.end.x_m);
       const double heading = 1.0 - std::abs(normalize_angle(bearing - r.end.theta_rad)) / std::numbers::pi;
       const double clearance = 1.0 - r.max_cost / static_cast<double>(kInscribedCost);
-      const double velocity = v / config_.max_v_mps;
+      const double velocity = v / config_.max_v_m_s;
       // While the window is blocked the LP is going around: only the target pulls.
       const double path_distance =
           window_blocked_ ? 0.0 : grid_distance_m(path_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
@@ -331,8 +331,8 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps,
                            config_.goal_weight * goal_distance;
       if (score > best_score) {  // strict: the first best sample wins ties
         best_score = score;
-        out.v_mps = v;
-        out.w_radps = w;
+        out.v_m_s = v;
+        out.w_rad_s = w;
       }
     }
   }
@@ -340,16 +340,16 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_mps, double w_radps,
   // then recover instead of spinning in front of an obstacle.
   const double target_bearing =
       std::abs(normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad));
-  const bool progress = out.v_mps >= config_.min_progress_v_mps ||
-                        (out.w_radps != 0.0 && target_bearing > config_.align_angle_rad);
+  const bool progress = out.v_m_s >= config_.min_progress_v_m_s ||
+                        (out.w_rad_s != 0.0 && target_bearing > config_.align_angle_rad);
   if (out.admissible > 0 && progress) {
     out.status = DwaStatus::tracking;
     recovery_state_ = DwaStatus::tracking;
     recovery_cycles_ = 0;
     return out;
   }
-  out.v_mps = 0.0;
-  out.w_radps = 0.0;
+  out.v_m_s = 0.0;
+  out.w_rad_s = 0.0;
   return recover(pose, costmap, out);
 }
 
@@ -370,8 +370,8 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
       case DwaStatus::waiting:
         if (recovery_ticks_ <= ticks_for(config_.wait_s)) {
           out.status = DwaStatus::waiting;
-          out.v_mps = 0.0;
-          out.w_radps = 0.0;
+          out.v_m_s = 0.0;
+          out.w_rad_s = 0.0;
           return out;
         }
         enter(DwaStatus::rotating);
@@ -379,38 +379,38 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
       case DwaStatus::rotating: {
         const PathPoint target = path_[target_index_];
         const double bearing = normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad);
-        const double w = bearing >= 0.0 ? config_.rotate_w_radps : -config_.rotate_w_radps;
+        const double w = bearing >= 0.0 ? config_.rotate_w_rad_s : -config_.rotate_w_rad_s;
         const Pose2D ahead{pose.x_m, pose.y_m, pose.theta_rad + w * dt * 3.0};
         if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !outline_hits(ahead, costmap, check_)) {
           out.status = DwaStatus::rotating;
-          out.v_mps = 0.0;
-          out.w_radps = w;
+          out.v_m_s = 0.0;
+          out.w_rad_s = w;
           return out;
         }
         enter(DwaStatus::backing_off);
         continue;
       }
       case DwaStatus::backing_off: {
-        const double back = config_.backoff_v_mps * dt * 3.0;
+        const double back = config_.backoff_v_m_s * dt * 3.0;
         const Pose2D behind{pose.x_m + back * std::cos(pose.theta_rad), pose.y_m + back * std::sin(pose.theta_rad), pose.theta_rad};
         if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !outline_hits(behind, costmap, check_)) {
           out.status = DwaStatus::backing_off;
-          out.v_mps = config_.backoff_v_mps;
-          out.w_radps = 0.0;
+          out.v_m_s = config_.backoff_v_m_s;
+          out.w_rad_s = 0.0;
           return out;
         }
         if (++recovery_cycles_ >= config_.max_recovery_cycles) {
           recovery_state_ = DwaStatus::failed;
           out.status = DwaStatus::failed;
-          out.v_mps = 0.0;
-          out.w_radps = 0.0;
+          out.v_m_s = 0.0;
+          out.w_rad_s = 0.0;
           return out;
         }
         // Back to sampling: the next compute() tries the window again before waiting.
         recovery_state_ = DwaStatus::tracking;
         out.status = DwaStatus::waiting;
-        out.v_mps = 0.0;
-        out.w_radps = 0.0;
+        out.v_m_s = 0.0;
+        out.w_rad_s = 0.0;
         return out;
       }
       default:
@@ -418,8 +418,8 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
         continue;
     }
   }
-  out.v_mps = 0.0;
-  out.w_radps = 0.0;
+  out.v_m_s = 0.0;
+  out.w_rad_s = 0.0;
   return out;
 }
 

@@ -259,9 +259,9 @@ void ControllerTask::step(const tasks::StepContext& context) {
     const Pose2D sensor = scan != nullptr ? sensor_pose_for(pose.value, *scan, config_.laser_mount)
                                           : compose(pose.value.pose, config_.laser_mount);
     costmap_.update({pose.value.pose, sensor, scan});
-    const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_mps, odom.value.w_radps, costmap_.costmap());
-    command.v_mps = c.v_mps;
-    command.w_radps = c.w_radps;
+    const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap());
+    command.v_m_s = c.v_m_s;
+    command.w_rad_s = c.w_rad_s;
     status.status = c.status;
     status.distance_to_goal_m = c.distance_to_goal_m;
     status.admissible = c.admissible;
@@ -292,7 +292,7 @@ void SafetyTask::step(const tasks::StepContext& context) {
   tasks::Sample<Odometry> odom;
   if (odom_.read(odom) && odom.value.valid) {
     in.odom_stamp_ns = odom.value.stamp_ns;
-    in.measured_v_mps = odom.value.v_mps;
+    in.measured_v_m_s = odom.value.v_m_s;
   }
   tasks::Sample<BaseFlags> base;
   if (base_.read(base)) {
@@ -304,8 +304,8 @@ void SafetyTask::step(const tasks::StepContext& context) {
   tasks::Sample<PoseEstimate> pose;
   in.localization_lost = !pose_.read(pose) || !pose.value.valid || pose.value.lost;
   const SafetyOutput out = filter_.filter(in);
-  if ((in.requested.v_mps != 0.0 || in.requested.w_radps != 0.0) && out.command.v_mps == 0.0 &&
-      out.command.w_radps == 0.0) {
+  if ((in.requested.v_m_s != 0.0 || in.requested.w_rad_s != 0.0) && out.command.v_m_s == 0.0 &&
+      out.command.w_rad_s == 0.0) {
     ++stops_;
   }
   VelocityCommand command = out.command;

@@ -32,16 +32,16 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
   if (in.estop) out.reasons |= kSafetyEstop;
   if (!in.motors_enabled) out.reasons |= kSafetyMotorsOff;
   if (in.localization_lost) out.reasons |= kSafetyLocalizationLost;
-  if (out.reasons != kSafetyNone || !std::isfinite(in.requested.v_mps) || !std::isfinite(in.requested.w_radps)) {
-    out.command.v_mps = 0.0;
-    out.command.w_radps = 0.0;
+  if (out.reasons != kSafetyNone || !std::isfinite(in.requested.v_m_s) || !std::isfinite(in.requested.w_rad_s)) {
+    out.command.v_m_s = 0.0;
+    out.command.w_rad_s = 0.0;
     return out;
   }
 
-  double v = in.requested.v_mps;
-  double w = in.requested.w_radps;
-  const double speed = std::max({0.0, in.measured_v_mps, v});
-  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_mps2);
+  double v = in.requested.v_m_s;
+  double w = in.requested.w_rad_s;
+  const double speed = std::max({0.0, in.measured_v_m_s, v});
+  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_m_s2);
   out.stop_distance_m = stop;
 
   // Laser points in the robot frame, once.
@@ -99,16 +99,16 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
       w *= scale;  // keep the arc that was checked
       out.reasons |= kSafetySlowed;
     }
-  } else if (v < -config_.max_reverse_mps) {
-    v = -config_.max_reverse_mps;
+  } else if (v < -config_.max_reverse_m_s) {
+    v = -config_.max_reverse_m_s;
     out.reasons |= kSafetyReverseCapped;
   }
   if (w != 0.0 && inside_turn_circle && std::abs(v) < 1e-9) {
     w = 0.0;
     out.reasons |= kSafetyObstacle;
   }
-  out.command.v_mps = v;
-  out.command.w_radps = w;
+  out.command.v_m_s = v;
+  out.command.w_rad_s = w;
   return out;
 }
 

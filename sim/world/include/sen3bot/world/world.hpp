@@ -23,11 +23,11 @@ using nav::Pose2D;
 enum class MoverShape : std::uint8_t { circle, square };
 
 // One scripted obstacle. With one vertex (or speed 0) it stands still. Otherwise it walks
-// the polyline at speed_mps from start_time_s on, back and forth (ping-pong) or around
+// the polyline at speed_m_s from start_time_s on, back and forth (ping-pong) or around
 // (loop, closing the last vertex to the first).
 struct MoverScript {
   std::vector<Point2D> path;
-  double speed_mps = 0.0;
+  double speed_m_s = 0.0;
   double size_m = 0.4;      // circle diameter or square side
   MoverShape shape = MoverShape::circle;
   bool loop = false;

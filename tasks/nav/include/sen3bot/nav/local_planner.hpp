@@ -39,10 +39,10 @@ struct PathPoint {
 
 struct DwaConfig {
   // Pioneer 3-DX limits (navigation.md): 1.2 m/s and 300 deg/s; indoors we stay lower.
-  double max_v_mps = 0.5;
-  double max_w_radps = 1.2;
-  double acc_v_mps2 = 0.6;
-  double acc_w_radps2 = 2.0;
+  double max_v_m_s = 0.5;
+  double max_w_rad_s = 1.2;
+  double acc_v_m_s2 = 0.6;
+  double acc_w_rad_s2 = 2.0;
   double control_period_s = 0.1;   // the task's period: sizes the dynamic window
   int v_samples = 20;
   int w_samples = 21;              // 20 x 21 = 420 rollouts
@@ -63,7 +63,7 @@ struct DwaConfig {
   double goal_weight = 1.0;
   double prune_distance_m = 1.0;
   double blocked_lookahead_m = 2.0;  // how far past the window a blocked path may move the target
-  double min_progress_v_mps = 0.02;  // slower than this counts as not moving...
+  double min_progress_v_m_s = 0.02;  // slower than this counts as not moving...
   double align_angle_rad = 0.6;      // ...unless turning towards a target farther off than this
   double goal_tolerance_m = 0.15;
   double slow_down_radius_m = 0.6;  // v is capped proportionally inside this radius of the goal
@@ -72,9 +72,9 @@ struct DwaConfig {
   // Recoveries.
   double wait_s = 1.0;
   double rotate_s = 1.5;
-  double rotate_w_radps = 0.6;
+  double rotate_w_rad_s = 0.6;
   double backoff_s = 1.0;
-  double backoff_v_mps = -0.1;
+  double backoff_v_m_s = -0.1;
   int max_recovery_cycles = 3;
 };
 
@@ -90,8 +90,8 @@ enum class DwaStatus : std::uint8_t {
 const char* to_string(DwaStatus status) noexcept;
 
 struct DwaCommand {
-  double v_mps = 0.0;
-  double w_radps = 0.0;
+  double v_m_s = 0.0;
+  double w_rad_s = 0.0;
   DwaStatus status = DwaStatus::idle;
   std::uint32_t admissible = 0;  // rollouts that passed the collision check
   std::uint32_t evaluated = 0;
@@ -115,7 +115,7 @@ class DwaPlanner {
   [[nodiscard]] std::size_t path_size() const noexcept { return path_count_; }
 
   // One control period: pose in the map frame, current body velocities, the local costmap.
-  DwaCommand compute(const Pose2D& pose, double v_mps, double w_radps, const Costmap2D& costmap) noexcept;
+  DwaCommand compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap) noexcept;
 
   // True when the padded footprint at pose touches a lethal or unknown cell (or leaves the
   // costmap). When the robot already stands that close, a cycle checks the bare footprint

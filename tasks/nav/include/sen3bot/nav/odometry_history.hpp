@@ -41,9 +41,9 @@ class OdometryHistory {
     if (t_ns >= last.stamp_ns) {
       const double dt = static_cast<double>(t_ns - last.stamp_ns) * 1e-9;
       if (dt > kMaxExtrapolationS) return false;
-      const double th = last.theta_rad + 0.5 * last.w_radps * dt;
-      out = {last.x_m + last.v_mps * dt * std::cos(th), last.y_m + last.v_mps * dt * std::sin(th),
-             normalize_angle(last.theta_rad + last.w_radps * dt)};
+      const double th = last.theta_rad + 0.5 * last.w_rad_s * dt;
+      out = {last.x_m + last.v_m_s * dt * std::cos(th), last.y_m + last.v_m_s * dt * std::sin(th),
+             normalize_angle(last.theta_rad + last.w_rad_s * dt)};
       return true;
     }
     for (std::size_t k = count_ - 1; k > 0; --k) {

@@ -8,12 +8,12 @@
 //  * a laser point lies inside the stop zone along the direction of motion: the front half of
 //    the body (its width plus lateral_margin_m a side) swept forward along the commanded arc
 //    would reach it within the stop distance. That distance grows with the speed v:
-//    stop_distance_m + v * reaction_s + v^2 / (2 decel_mps2) (the base cannot stop at once).
+//    stop_distance_m + v * reaction_s + v^2 / (2 decel_m_s2) (the base cannot stop at once).
 //    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
 //    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
-// max_reverse_mps (the back-off recovery's speed).
+// max_reverse_m_s (the back-off recovery's speed).
 #include <array>
 #include <cstdint>
 #include <type_traits>
@@ -25,8 +25,8 @@
 namespace sen3bot::nav {
 
 struct VelocityCommand {
-  double v_mps = 0.0;
-  double w_radps = 0.0;
+  double v_m_s = 0.0;
+  double w_rad_s = 0.0;
   hal::Nanos stamp_ns = 0;
 };
 static_assert(std::is_trivially_copyable_v<VelocityCommand>);
@@ -38,9 +38,9 @@ struct SafetyConfig {
   double stop_distance_m = 0.25;
   double slow_distance_m = 0.35;    // the slow zone's depth beyond the stop distance
   double reaction_s = 0.1;          // command to wheels: one control period
-  double decel_mps2 = 0.6;          // the base's braking deceleration
+  double decel_m_s2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
-  double max_reverse_mps = 0.1;
+  double max_reverse_m_s = 0.1;
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;
 };
@@ -64,7 +64,7 @@ struct SafetyInputs {
   bool estop = false;
   bool motors_enabled = true;
   bool localization_lost = false;
-  double measured_v_mps = 0.0;     // odometry speed, for the braking distance
+  double measured_v_m_s = 0.0;     // odometry speed, for the braking distance
   hal::Nanos now_ns = 0;
 };
 

@@ -47,8 +47,8 @@ struct Odometry {
   double x_m = 0.0;
   double y_m = 0.0;
   double theta_rad = 0.0;
-  double v_mps = 0.0;
-  double w_radps = 0.0;
+  double v_m_s = 0.0;
+  double w_rad_s = 0.0;
   hal::Nanos stamp_ns = 0;
   bool valid = false;
 };
