@@ -1,4 +1,4 @@
-// LMS200 command-line entry points: decode lms200, lms200-emulator, scan.
+// LMS200 command-line entry points: decode lms200, scan.
 #include <signal.h>
 
 #include <atomic>
@@ -12,62 +12,14 @@
 
 #include "commands.hpp"
 #include "sen3bot/capture/reader.hpp"
-#include "sen3bot/hal/serial.hpp"
+#include "sen3bot/hal/board.hpp"
 #include "sen3bot/lms200/capture_decode.hpp"
 #include "sen3bot/lms200/device.hpp"
-#include "sen3bot/lms200/emulator.hpp"
-#include "sen3bot/lms200/pty_runner.hpp"
-#include "sen3bot/lms200/task.hpp"
-#include "sen3bot/nav/map.hpp"
-#include "sen3bot/world/world.hpp"
+#include "cli_util.hpp"
 
 namespace sen3bot::firmware {
 
 namespace {
-
-std::atomic<bool> g_lms200_stop{false};
-void on_lms200_signal(int) { g_lms200_stop.store(true); }
-
-// SIGINT/SIGTERM set g_lms200_stop while this object lives.
-class StopSignals {
- public:
-  StopSignals() {
-    g_lms200_stop.store(false);
-    struct sigaction action {};
-    action.sa_handler = on_lms200_signal;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
-};
-
-bool parse_u32(std::string_view text, std::uint32_t& out) {
-  const std::string s(text);
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long v = std::strtoul(s.c_str(), &end, 0);
-  if (errno != 0 || end == s.c_str() || *end != '\0' || v > 0xFFFFFFFFul) return false;
-  out = static_cast<std::uint32_t>(v);
-  return true;
-}
-
-bool parse_double(std::string_view text, double& out) {
-  const std::string s(text);
-  char* end = nullptr;
-  errno = 0;
-  out = std::strtod(s.c_str(), &end);
-  return errno == 0 && end != s.c_str() && *end == '\0' && std::isfinite(out);
-}
 
 // "180/0.5" -> {180, 50}
 bool parse_variant(std::string_view text, lms200::Variant& out) {
@@ -80,23 +32,6 @@ bool parse_variant(std::string_view text, lms200::Variant& out) {
   out.resolution_cdeg = static_cast<std::uint16_t>(std::lround(res_deg * 100));
   return lms200::valid_variant(out);
 }
-
-// A sen3bot::world ray caster (ROS map_server map) as the emulator's range source.
-class MapRanges final : public lms200::RangeSource {
- public:
-  explicit MapRanges(const nav::OccupancyMap& map) : world_(map) {}
-  void ranges(hal::Nanos, const lms200::ScanGeometry& g, std::span<float> out_m) override {
-    const lms200::SensorPose p = sensor_pose();
-    world_.scan({p.x_m, p.y_m, p.theta_rad}, g.angle_min_rad, g.angle_increment_rad, g.count, g.range_max_m + 1.0,
-                out_m);
-    // World reports max_range for "nothing hit"; the scanner reports that as out of range.
-    for (std::size_t i = 0; i < std::min(g.count, out_m.size()); ++i)
-      if (out_m[i] > g.range_max_m) out_m[i] = INFINITY;
-  }
-
- private:
-  world::World world_;
-};
 
 void print_scan_json(const lms200::LaserScan& s, std::FILE* out) {
   std::fprintf(out,
@@ -137,88 +72,6 @@ int decode_lms200_command(int argc, char** argv, std::FILE* out, std::FILE* err)
                summary->requests, summary->replies, summary->scans, summary->acks, summary->naks,
                static_cast<unsigned long long>(summary->crc_errors),
                static_cast<unsigned long long>(summary->garbage_bytes));
-  return 0;
-}
-
-int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  std::string link;
-  std::string map_path;
-  double pose[3] = {0, 0, 0};
-  bool have_pose = false;
-  lms200::EmulatorOptions options;
-  for (int i = 0; i < argc; ++i) {
-    const std::string_view arg = argv[i];
-    if (i + 1 >= argc) {
-      std::fprintf(err, "sen3bot lms200-emulator: %s needs a value\n", argv[i]);
-      return 2;
-    }
-    const std::string_view value = argv[++i];
-    std::uint32_t number = 0;
-    if (arg == "--pty") {
-      link = value;
-    } else if (arg == "--map") {
-      map_path = value;
-    } else if (arg == "--pose") {
-      const std::string v(value);
-      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &pose[0], &pose[1], &pose[2]) != 3) {
-        std::fprintf(err, "sen3bot lms200-emulator: --pose: expected X,Y,TH (m, m, rad), got '%s'\n", v.c_str());
-        return 2;
-      }
-      have_pose = true;
-    } else if (arg == "--status" && parse_u32(value, number) && number <= 0xFF) {
-      options.status = static_cast<std::uint8_t>(number);
-    } else if (arg == "--baud" && parse_u32(value, number) && lms200::baud_mode(number)) {
-      options.initial_baud = number;
-    } else {
-      std::fprintf(err, "sen3bot lms200-emulator: bad option '%s %s' (see sen3bot --help)\n", argv[i - 1], argv[i]);
-      return 2;
-    }
-  }
-  if (link.empty()) {
-    std::fprintf(err, "sen3bot lms200-emulator: --pty LINK is required\n");
-    return 2;
-  }
-  std::unique_ptr<lms200::RangeSource> world;
-  if (!map_path.empty()) {
-    Result<nav::OccupancyMap> map = nav::load_map(map_path);
-    if (!map) {
-      std::fprintf(err, "sen3bot lms200-emulator: %s\n", map.error().c_str());
-      return 2;
-    }
-    world = std::make_unique<MapRanges>(*map);
-  } else {
-    // The built-in test room: 8 m x 6 m with a 1 m box; the sensor at its centre.
-    world = std::make_unique<lms200::WallWorld>(lms200::WallWorld::room_with_box(8.0, 6.0, 6.0, 3.0, 1.0));
-  }
-  if (have_pose) world->set_sensor_pose(pose[0], pose[1], pose[2]);
-
-  Result<std::unique_ptr<lms200::Lms200PtyRunner>> runner = lms200::Lms200PtyRunner::open(options, *world);
-  if (!runner) {
-    std::fprintf(err, "sen3bot lms200-emulator: %s\n", runner.error().c_str());
-    return 1;
-  }
-  if (Status s = (*runner)->link(link); !s) {
-    std::fprintf(err, "sen3bot lms200-emulator: %s\n", s.error().c_str());
-    return 1;
-  }
-  StopSignals signals;
-  (*runner)->start();
-  const lms200::SensorPose p = world->sensor_pose();
-  std::fprintf(out, "lms200 emulator on %s -> %.*s at %u baud, status 0x%02x, %s, pose %.3f,%.3f,%.3f; until SIGINT\n",
-               link.c_str(), static_cast<int>((*runner)->slave_path().size()), (*runner)->slave_path().data(),
-               options.initial_baud, options.status, map_path.empty() ? "built-in room" : map_path.c_str(), p.x_m,
-               p.y_m, p.theta_rad);
-  std::fflush(out);
-  hal::PosixClock clock;
-  while (!g_lms200_stop.load()) clock.sleep_until(clock.now() + hal::millis(50));
-  (*runner)->stop();
-  (*runner)->with_emulator([out](lms200::Lms200Emulator& e) {
-    const lms200::EmulatorCounters& c = e.counters();
-    std::fprintf(out, "requests %llu, scans sent %llu (skipped %llu), baud changes %llu, config writes %llu\n",
-                 static_cast<unsigned long long>(c.requests), static_cast<unsigned long long>(c.scans_sent),
-                 static_cast<unsigned long long>(c.scans_skipped), static_cast<unsigned long long>(c.baud_changes),
-                 static_cast<unsigned long long>(c.config_writes));
-  });
   return 0;
 }
 
@@ -266,21 +119,20 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::fprintf(err, "sen3bot scan: --port DEV is required\n");
     return 2;
   }
-  Result<std::unique_ptr<hal::ByteStream>> stream = hal::open_byte_stream(config.port, config.baud);
-  if (!stream) {
-    std::fprintf(err, "sen3bot scan: %s\n", stream.error().c_str());
+  hal::PosixBoard board;
+  Result<hal::Link> link = board.open_link("laser", hal::LinkRequest{config.port, config.baud});
+  if (!link) {
+    std::fprintf(err, "sen3bot scan: %s\n", link.error().c_str());
     return 1;
   }
-  std::unique_ptr<lms200::SerialLineControl> line;
-  if (auto* serial = dynamic_cast<hal::SerialPort*>(stream->get())) line = std::make_unique<lms200::SerialLineControl>(*serial);
-  lms200::Lms200Device device(config, **stream, line.get());
-  StopSignals signals;
+  lms200::Lms200Device device(config, *link->stream, link->baud_control);
+  StopOnSignal signals;
   hal::PosixClock clock;
   const hal::Nanos give_up = clock.now() + static_cast<hal::Nanos>(timeout_s * 1e9);
   device.start(clock.now());
   std::uint32_t printed = 0;
   lms200::LaserScan scan;
-  while (printed < count && clock.now() < give_up && !g_lms200_stop.load()) {
+  while (printed < count && clock.now() < give_up && !StopOnSignal::requested() != 0) {
     device.step(clock.now());
     if (device.take_new_scan(scan)) {
       print_scan_json(scan, out);

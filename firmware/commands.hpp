@@ -8,21 +8,16 @@ namespace sen3bot::firmware {
 
 // sen3bot decode p2os CAPTURE
 int decode_p2os_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-// sen3bot p2os-emulator (--pty LINK | --tcp PORT)
-int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot drive --port DEV|tcp://HOST:PORT --vel M_S --rvel RAD_S --seconds S
 int drive_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 // sen3bot decode lms200 CAPTURE
 int decode_lms200_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-// sen3bot lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]
-int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot scan --port DEV --baud B --variant A/R --units cm|mm --count N
 int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]
 int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
-int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]
 int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -11,7 +12,6 @@
 #include "sen3bot/lms200/device.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/p2os/driver.hpp"
-#include "sen3bot/sim/simulation.hpp"
 #include "mission.hpp"
 
 namespace sen3bot::firmware {
@@ -27,19 +27,13 @@ struct TaskConfig {
   std::size_t arena_bytes = 0;  // the task's whole memory budget for init()
 };
 
-// A device's `port: sim` connects its driver to the simulated robot of the `sim` section.
+// Each device's port is handed to the board as it is: a device path or tcp://host:port on the
+// robot, or a name the simulated board answers ("sim").
 struct DevicesConfig {
   bool has_base = false;   // devices.base present
   bool has_laser = false;  // devices.laser present
   p2os::P2osConfig base;
-  bool base_simulated = false;
   lms200::Lms200Config laser;
-  bool laser_simulated = false;
-};
-
-struct SimSection {
-  bool enabled = false;     // a `sim` section is present
-  sim::SimulationConfig world;
 };
 
 // Localization, planners and safety over one map, and the mission's goals.
@@ -58,6 +52,12 @@ struct NavigationSection {
   MissionConfig mission;
 };
 
+// The robot computer's discrete I/O, as Linux GPIO lines "/dev/gpiochipN:LINE" (empty: none).
+struct BoardIo {
+  std::string estop_input;   // the e-stop chain, active when pressed or open
+  std::string light_output;  // the warning light
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
@@ -70,12 +70,15 @@ struct FirmwareConfig {
   std::map<std::string, TaskConfig, std::less<>> tasks;
   int health_stall_periods = 3;
   std::int64_t telemetry_status_period_ms = 10'000;
+  BoardIo board;
   DevicesConfig devices;
-  SimSection sim;
   NavigationSection navigation;
 };
 
-Result<FirmwareConfig> load_config(const std::string& path);
-Result<FirmwareConfig> parse_config(std::string_view yaml_text, const std::string& source_name);
+// `board_sections` are top-level sections that belong to the board the firmware runs on (the
+// simulator's `sim`): accepted and left to the board to read. Any other unknown key is an error.
+Result<FirmwareConfig> load_config(const std::string& path, std::span<const std::string_view> board_sections = {});
+Result<FirmwareConfig> parse_config(std::string_view yaml_text, const std::string& source_name,
+                                    std::span<const std::string_view> board_sections = {});
 
 }  // namespace sen3bot::firmware

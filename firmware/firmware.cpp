@@ -4,40 +4,23 @@
 
 namespace sen3bot::firmware {
 
-namespace {
 
-// The driver's view of a simulated link it does not own (the pipe belongs to the simulation).
-class BorrowedStream final : public hal::ByteStream {
- public:
-  explicit BorrowedStream(hal::ByteStream& stream) : stream_(stream) {}
-  Result<std::size_t> read(std::span<std::uint8_t> out) override { return stream_.read(out); }
-  Result<std::size_t> write(std::span<const std::uint8_t> data) override { return stream_.write(data); }
-  [[nodiscard]] int poll_fd() const override { return stream_.poll_fd(); }
-  [[nodiscard]] std::string_view name() const override { return stream_.name(); }
-
- private:
-  hal::ByteStream& stream_;
-};
-
-}  // namespace
-
-Firmware::Firmware(const FirmwareConfig& config, hal::Clock& clock, std::FILE* out)
+Firmware::Firmware(const FirmwareConfig& config, hal::Board& board, std::FILE* out)
     : config_(config),
-      clock_(clock),
+      board_(board),
       out_(out),
-      scheduler_(clock),
-      health_(scheduler_, bus_, clock, tasks::HealthConfig{config.health_stall_periods}),
-      telemetry_(scheduler_, bus_, clock, out, tasks::TelemetryConfig{config.telemetry_status_period_ms, 512}) {}
+      scheduler_(board.clock()),
+      health_(scheduler_, bus_, board.clock(), tasks::HealthConfig{config.health_stall_periods}),
+      telemetry_(scheduler_, bus_, board.clock(), out,
+                 tasks::TelemetryConfig{config.telemetry_status_period_ms, 512}) {}
 
 Firmware::~Firmware() { shutdown(); }
 
 tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "health") return &health_;
   if (name == "telemetry") return &telemetry_;
-  if (name == "sim") return sim_task_.get();
   if (name == "base") return base_task_.get();
   if (name == "laser") return laser_task_.get();
-  if (name == "bridge") return bridge_task_.get();
   if (name == "localization") return localization_task_.get();
   if (name == "planner") return planner_task_.get();
   if (name == "controller") return controller_task_.get();
@@ -45,20 +28,6 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "mission") return mission_task_.get();
   return nullptr;
 }
-
-namespace {
-
-// The time between two LMS200 scans: the telegram's transmission at the line rate, or the
-// mirror's period for the resolution when the line is faster.
-double expected_scan_period_s(const lms200::Lms200Config& laser) {
-  const double values = laser.variant.angle_deg * 100.0 / laser.variant.resolution_cdeg + 1.0;
-  const double telegram_bytes = 2.0 * values + 10.0;  // header, count word, status, CRC
-  const double line_s = telegram_bytes * 10.0 / laser.baud;
-  const double mirror_s = (laser.variant.resolution_cdeg >= 100 ? 1.0 : laser.variant.resolution_cdeg >= 50 ? 2.0 : 4.0) / 75.0;
-  return std::max(line_s, mirror_s);
-}
-
-}  // namespace
 
 Status Firmware::create_navigation() {
   const char* file = config_.source_path.c_str();
@@ -97,59 +66,23 @@ Status Firmware::create_navigation() {
   nav::SafetyTaskConfig safety;
   safety.safety.stop_distance_m = n.stop_distance_m;
   safety.safety.laser_mount = mount;
-  if (config_.devices.has_laser) safety.safety.scan_period_s = expected_scan_period_s(config_.devices.laser);
+  if (config_.devices.has_laser)
+    safety.safety.scan_period_s =
+        hal::to_seconds(lms200::scan_interval_ns(config_.devices.laser.variant, config_.devices.laser.baud));
+  safety.safety.reaction_s = hal::to_seconds(kSenseToActBudgetNs);
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
                                                    nav_pose_, nav_command_, nav_safety_);
 
   mission_task_ = std::make_unique<MissionTask>(
-      n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_, ground_truth_});
+      n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});
   return Status::success();
 }
 
 Status Firmware::create_tasks() {
-  const char* file = config_.source_path.c_str();
-  const bool lockstep = config_.clock == ClockMode::lockstep;
-  if (config_.sim.enabled) {
-    sim::SimulationConfig world = config_.sim.world;
-    // Lockstep runs on one thread in simulated time: in-memory links. Real time: real ptys.
-    world.link = lockstep ? sim::LinkKind::memory : sim::LinkKind::pty;
-    Result<std::unique_ptr<sim::Simulation>> created = sim::Simulation::create(world);
-    if (!created) return Error::format(created.error().code(), "%s: sim: %s", file, created.error().c_str());
-    simulation_ = std::move(*created);
-    sim_task_ = std::make_unique<sim::SimulationTask>(*simulation_, ground_truth_);
-  }
-  if (config_.devices.has_base) {
-    p2os::P2osConfig base = config_.devices.base;
-    if (config_.devices.base_simulated) {
-      if (lockstep) {
-        hal::ByteStream* stream = simulation_->base_driver_stream();
-        base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_,
-                                                      [stream](const p2os::P2osConfig&) -> Result<p2os::OpenedLink> {
-                                                        p2os::OpenedLink link;
-                                                        link.stream = std::make_unique<BorrowedStream>(*stream);
-                                                        return link;
-                                                      });
-      } else {
-        base.port = simulation_->base_device_path();
-        base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_);
-      }
-    } else {
-      base_task_ = std::make_unique<p2os::P2osTask>(base, clock_, base_setpoint_, base_state_);
-    }
-  }
-  if (config_.devices.has_laser) {
-    lms200::Lms200Config laser = config_.devices.laser;
-    if (config_.devices.laser_simulated && lockstep) {
-      laser_task_ = std::make_unique<lms200::Lms200Task>(laser, *simulation_->laser_driver_stream(),
-                                                         simulation_->laser_driver_line(), laser_scan_);
-    } else {
-      if (config_.devices.laser_simulated) laser.port = simulation_->laser_device_path();
-      laser_task_ = std::make_unique<lms200::Lms200Task>(laser, laser_scan_);
-    }
-  }
-  if (config_.devices.has_base || config_.devices.has_laser)
-    bridge_task_ = std::make_unique<BridgeTask>(BridgeTopics{laser_scan_, base_state_, nav_command_, nav_scan_,
-                                                             nav_odometry_, nav_base_flags_, base_setpoint_});
+  if (config_.devices.has_base)
+    base_task_ = std::make_unique<BaseTask>(config_.devices.base, board_,
+                                            BaseTopics{nav_command_, nav_odometry_, nav_base_flags_});
+  if (config_.devices.has_laser) laser_task_ = std::make_unique<LaserTask>(config_.devices.laser, board_, nav_scan_);
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
   }
@@ -175,9 +108,8 @@ Status Firmware::init() {
     if (task_named(name) == nullptr)
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),
-                           name == "sim"                               ? "needs a sim section"
-                           : name == "base" || name == "laser" || name == "bridge" ? "needs its device under devices"
-                                                                                    : "needs a navigation section");
+                           name == "base" || name == "laser" ? "needs its device under devices"
+                                                             : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {
     if (Status s = scheduler_.add(*row, *task_named(row->name)); !s) return s;

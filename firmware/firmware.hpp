@@ -1,35 +1,32 @@
 #pragma once
 // Composition: the bus, the tasks of the task table with their arenas, and the scheduler that
-// runs them. Everything is sized here, once, from the configuration.
+// runs them, over a board (the robot computer's, or a simulated one: the firmware cannot tell).
+// Everything is sized here, once, from the configuration.
 #include <cstdio>
 #include <memory>
 #include <memory_resource>
 #include <vector>
 
 #include "config.hpp"
-#include "sen3bot/hal/clock.hpp"
+#include "sen3bot/hal/board.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
 #include "sen3bot/tasks/bus.hpp"
 #include "sen3bot/tasks/health.hpp"
 #include "sen3bot/tasks/scheduler.hpp"
 #include "sen3bot/tasks/telemetry.hpp"
-#include "sen3bot/lms200/scan.hpp"
-#include "sen3bot/lms200/task.hpp"
-#include "sen3bot/p2os/task.hpp"
-#include "sen3bot/p2os/types.hpp"
-#include "sen3bot/sim/simulation.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav/messages.hpp"
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
-#include "bridge.hpp"
+#include "base_task.hpp"
+#include "laser_task.hpp"
 #include "mission.hpp"
 
 namespace sen3bot::firmware {
 
 class Firmware {
  public:
-  Firmware(const FirmwareConfig& config, hal::Clock& clock, std::FILE* out);
+  Firmware(const FirmwareConfig& config, hal::Board& board, std::FILE* out);
   ~Firmware();
 
   // Adds every row of the task table to the scheduler and runs each task's init() inside its
@@ -43,13 +40,14 @@ class Firmware {
   [[nodiscard]] const mem::BudgetArena& arena(std::size_t task_index) const { return *arenas_[task_index]; }
   void print_memory(std::FILE* out) const;
 
-  // The devices' messages, for the command line's reports and for tests.
-  [[nodiscard]] tasks::Topic<p2os::BaseSetpoint>& base_setpoint() { return base_setpoint_; }
-  [[nodiscard]] const tasks::Topic<p2os::BaseState>& base_state() const { return base_state_; }
-  [[nodiscard]] const tasks::Topic<lms200::LaserScan>& laser_scan() const { return laser_scan_; }
-  [[nodiscard]] const tasks::Topic<sim::GroundTruth>& ground_truth() const { return ground_truth_; }
-  // Null without a `sim` section.
-  [[nodiscard]] sim::Simulation* simulation() { return simulation_.get(); }
+  // The bus's messages, for the command line's reports, a simulator's referee and tests.
+  [[nodiscard]] const tasks::Topic<nav::ScanMessage>& scan() const { return nav_scan_; }
+  [[nodiscard]] const tasks::Topic<nav::Odometry>& odometry() const { return nav_odometry_; }
+  [[nodiscard]] const tasks::Topic<nav::VelocityCommand>& command() const { return nav_command_; }
+  [[nodiscard]] const tasks::Topic<nav::SafetyOutput>& safety_output() const { return nav_safety_; }
+  // Null without the device.
+  [[nodiscard]] const BaseTask* base() const { return base_task_.get(); }
+  [[nodiscard]] const LaserTask* laser() const { return laser_task_.get(); }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
   [[nodiscard]] const tasks::Topic<nav::PoseEstimate>& pose_estimate() const { return nav_pose_; }
@@ -62,16 +60,12 @@ class Firmware {
   Status create_navigation();
 
   const FirmwareConfig& config_;
-  hal::Clock& clock_;
+  hal::Board& board_;
   std::FILE* out_;
   tasks::Bus bus_;
   tasks::Scheduler scheduler_;
   tasks::HealthTask health_;
   tasks::TelemetryTask telemetry_;
-  tasks::Topic<p2os::BaseSetpoint> base_setpoint_;
-  tasks::Topic<p2os::BaseState> base_state_;
-  tasks::Topic<lms200::LaserScan> laser_scan_;
-  tasks::Topic<sim::GroundTruth> ground_truth_;
   // Navigation's bus (nav_tasks.hpp has the data flow).
   tasks::Topic<nav::ScanMessage> nav_scan_;
   tasks::Topic<nav::Odometry> nav_odometry_;
@@ -90,11 +84,8 @@ class Firmware {
   // tasks so it outlives them: their destructors release what they built inside it.
   std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;
   // Created by init() from the configuration; a row whose task is absent does not run.
-  std::unique_ptr<sim::Simulation> simulation_;
-  std::unique_ptr<sim::SimulationTask> sim_task_;
-  std::unique_ptr<p2os::P2osTask> base_task_;
-  std::unique_ptr<lms200::Lms200Task> laser_task_;
-  std::unique_ptr<BridgeTask> bridge_task_;
+  std::unique_ptr<BaseTask> base_task_;
+  std::unique_ptr<LaserTask> laser_task_;
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;

@@ -46,26 +46,8 @@ void MissionTask::step(const tasks::StepContext& context) {
 
   tasks::Sample<nav::PoseEstimate> pose;
   const bool have_pose = topics_.pose.read(pose) && pose.value.valid;
-  tasks::Sample<sim::GroundTruth> truth;
-  if (topics_.truth.read(truth)) {
-    report_.simulated = true;
-    report_.contacts = truth.value.contacts;
-    report_.moving_contacts = truth.value.moving_contacts;
-    report_.min_clearance_m = std::min(report_.min_clearance_m, truth.value.clearance_m);
-    report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.value.nearest_person_m);
-    const nav::Pose2D& p = truth.value.pose;
-    if (have_truth_pose_ && report_.state == MissionState::driving)
-      report_.true_path_length_m += std::hypot(p.x_m - last_truth_pose_.x_m, p.y_m - last_truth_pose_.y_m);
-    last_truth_pose_ = p;
-    have_truth_pose_ = true;
-    record_track({p.x_m, p.y_m});
-    if (have_pose && report_.state == MissionState::driving)
-      report_.localization_error_max_m =
-          std::max(report_.localization_error_max_m, std::hypot(pose.value.pose.x_m - truth.value.pose.x_m,
-                                                                pose.value.pose.y_m - truth.value.pose.y_m));
-  }
   if (have_pose) {
-    if (!have_truth_pose_) record_track({pose.value.pose.x_m, pose.value.pose.y_m});
+    record_track({pose.value.pose.x_m, pose.value.pose.y_m});
     if (have_last_pose_ && report_.state == MissionState::driving)
       report_.path_length_m += std::hypot(pose.value.pose.x_m - last_pose_.x_m, pose.value.pose.y_m - last_pose_.y_m);
     last_pose_ = pose.value.pose;
@@ -127,13 +109,6 @@ void MissionTask::print_report(std::FILE* out) const {
   std::fprintf(out, "  driven %.2f m, %u plans (%u failed), %u recoveries, %llu safety-limited steps\n",
                r.path_length_m, r.plans, r.plan_failures, r.recoveries,
                static_cast<unsigned long long>(r.safety_limited_steps));
-  if (r.simulated)
-    std::fprintf(out,
-                 "  ground truth: %llu contacts (%llu while the robot moved), min clearance %.2f m, "
-                 "closest person %.2f m, localization error max %.2f m\n",
-                 static_cast<unsigned long long>(r.contacts), static_cast<unsigned long long>(r.moving_contacts),
-                 r.min_clearance_m, r.min_person_distance_m,
-                 r.localization_error_max_m);
 }
 
 }  // namespace sen3bot::firmware

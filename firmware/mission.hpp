@@ -1,7 +1,7 @@
 #pragma once
 // The mission: hand the navigation its goals one after another, watch the controller reach
-// them, and keep the numbers a run is judged by (time per goal, recoveries, safety stops and,
-// in simulation, contacts and the closest approach to a person).
+// them, and keep the numbers a run is judged by (time per goal, plans, recoveries, safety stops,
+// the estimated path). What really happened is for a referee outside the firmware to judge.
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -9,7 +9,6 @@
 #include <span>
 
 #include "sen3bot/nav/messages.hpp"
-#include "sen3bot/sim/simulation.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -32,7 +31,6 @@ struct MissionTopics {
   const tasks::Topic<nav::PathMessage>& path;
   const tasks::Topic<nav::PoseEstimate>& pose;
   const tasks::Topic<nav::SafetyOutput>& safety;
-  const tasks::Topic<sim::GroundTruth>& truth;  // never published on the real robot
 };
 
 struct MissionReport {
@@ -43,14 +41,7 @@ struct MissionReport {
   std::uint32_t plan_failures = 0;
   std::uint64_t safety_limited_steps = 0;  // steps where safety lowered the requested speed
   std::uint32_t recoveries = 0;
-  double path_length_m = 0;                // estimated pose, summed
-  double true_path_length_m = 0;           // simulation only: ground truth, summed
-  double localization_error_max_m = 0;     // simulation only: estimate vs truth
-  double min_clearance_m = 1e9;            // simulation only
-  double min_person_distance_m = 1e9;      // simulation only
-  std::uint64_t contacts = 0;              // simulation only
-  std::uint64_t moving_contacts = 0;       // simulation only: contacts while the robot moved
-  bool simulated = false;
+  double path_length_m = 0;                // estimated pose, summed while driving
 };
 
 class MissionTask final : public tasks::Task {
@@ -65,8 +56,8 @@ class MissionTask final : public tasks::Task {
   [[nodiscard]] const MissionReport& report() const noexcept { return report_; }
   void print_report(std::FILE* out) const;
 
-  // The driven path (ground truth in simulation, else the estimate), a point per 5 cm moved,
-  // and the first plan made for each goal: what a report draws.
+  // The driven path as estimated, a point per 5 cm moved, and the first plan made for each
+  // goal: what a report draws.
   static constexpr std::size_t kMaxTrack = 4096;
   [[nodiscard]] std::span<const nav::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
   [[nodiscard]] const nav::PathMessage& first_plan(std::size_t goal) const noexcept { return first_plans_[goal]; }
@@ -87,8 +78,6 @@ class MissionTask final : public tasks::Task {
   bool have_last_pose_ = false;
   nav::Pose2D last_pose_;
   std::uint32_t first_plan_for_goal_ = 0;
-  bool have_truth_pose_ = false;
-  nav::Pose2D last_truth_pose_;
   std::array<nav::Point2D, kMaxTrack> track_{};
   std::size_t track_count_ = 0;
   std::array<nav::PathMessage, MissionConfig::kMaxGoals> first_plans_{};

@@ -1,31 +1,48 @@
 #pragma once
 // The CPU budget of the robot computer, as one table. Every periodic piece of the firmware is
 // a row here: what runs, how often, how long it may take, how urgent it is, and on which
-// thread. The scheduler's statistics are reported against these numbers.
+// thread. The scheduler's statistics are reported against these numbers, and the docs and
+// tests take theirs from here.
 #include <array>
+#include <string_view>
 
+#include "sen3bot/hal/clock.hpp"
 #include "sen3bot/tasks/scheduler.hpp"
 
 namespace sen3bot::firmware {
 
-// Threads: "control" runs the real-time control loop tasks, "io" the device links, "sim" the
-// simulated robot (only with a `sim` section), "background" whatever may block (logs, files,
-// network). A row runs when its task is configured: the devices (and the bridge between them
-// and navigation) under `devices`, the simulated robot under `sim`, localization, planners,
-// safety and the mission under `navigation`; the rest always. Budgets are for the Pi 3.
+// Threads: "io" runs the reflex path from the laser to the wheels, "control" localization and
+// the local planner, "background" whatever may block (planning, logs, files, network). Within
+// a thread, due rows run highest priority first, so each thread's rows are ordered by the data
+// flow: on "io" a scan is read, checked by the safety filter and answered by the base in the
+// same cycle; on "control" localization feeds the controller. A row runs when its task is
+// configured: the devices under `devices`, localization, planners, safety and the mission
+// under `navigation`; the rest always. Budgets are for the Pi 3.
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
-    tasks::TaskSpec{"sim",          5'000,     2'000,     50,       "sim"},
-    tasks::TaskSpec{"base",         10'000,    500,       70,       "io"},
-    tasks::TaskSpec{"laser",        5'000,     500,       70,       "io"},
-    tasks::TaskSpec{"bridge",       10'000,    200,       75,       "control"},
-    tasks::TaskSpec{"safety",       50'000,    1'000,     72,       "control"},
-    tasks::TaskSpec{"localization", 50'000,    15'000,    65,       "control"},
-    tasks::TaskSpec{"controller",   100'000,   10'000,    62,       "control"},
+    tasks::TaskSpec{"laser",        5'000,     500,       74,       "io"},
+    tasks::TaskSpec{"safety",       10'000,    1'000,     73,       "io"},
+    tasks::TaskSpec{"base",         10'000,    500,       72,       "io"},
+    tasks::TaskSpec{"localization", 50'000,    15'000,    66,       "control"},
+    tasks::TaskSpec{"controller",   100'000,   10'000,    65,       "control"},
+    tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
-    tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
 };
+
+constexpr const tasks::TaskSpec& row(std::string_view name) {
+  for (const tasks::TaskSpec& spec : kTaskTable)
+    if (spec.name == name) return spec;
+  throw "no such row";  // a compile error where used in a constant expression
+}
+
+// The longest time from a scan being decoded (or a command being published) to the base
+// driver writing the velocity it asks for: the safety row's release is at most one safety
+// period away, and the base row follows it in the same cycle, or one base period later when
+// the two grids are out of phase. The safety filter adds it to the scan's age when it sizes
+// its stop zone; tests/sim/latency_test.cpp measures it on the wire.
+inline constexpr hal::Nanos kSenseToActBudgetNs =
+    hal::micros(row("safety").period_us + row("base").period_us + row("safety").budget_us + row("base").budget_us);
 
 }  // namespace sen3bot::firmware

@@ -10,8 +10,8 @@
 #include "sen3bot/hal/serial.hpp"
 #include "sen3bot/p2os/codec.hpp"
 #include "sen3bot/p2os/driver.hpp"
-#include "sen3bot/p2os/emulator.hpp"
-#include "sen3bot/p2os/emulator_runner.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
+#include "sen3bot/sim/p2os/emulator_runner.hpp"
 #include "sen3bot/p2os/odometry.hpp"
 
 namespace {

@@ -11,7 +11,7 @@
 
 #include "cli.hpp"
 #include "rig.hpp"
-#include "sen3bot/lms200/pty_runner.hpp"
+#include "sen3bot/sim/lms200/pty_runner.hpp"
 
 namespace sen3bot::lms200 {
 namespace {

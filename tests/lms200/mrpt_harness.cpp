@@ -19,7 +19,7 @@
 #include <algorithm>
 
 #include "rig.hpp"
-#include "sen3bot/lms200/pty_runner.hpp"
+#include "sen3bot/sim/lms200/pty_runner.hpp"
 
 namespace {
 

@@ -9,7 +9,7 @@
 
 #include "rig.hpp"
 #include "sen3bot/hal/serial.hpp"
-#include "sen3bot/lms200/pty_runner.hpp"
+#include "sen3bot/sim/lms200/pty_runner.hpp"
 #include "sen3bot/lms200/task.hpp"
 
 namespace sen3bot::lms200 {

@@ -8,7 +8,7 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/memory_stream.hpp"
 #include "sen3bot/lms200/device.hpp"
-#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/sim/lms200/emulator.hpp"
 
 namespace sen3bot::lms200::testing {
 

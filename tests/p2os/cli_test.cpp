@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "sen3bot/p2os/emulator_runner.hpp"
+#include "sen3bot/sim/p2os/emulator_runner.hpp"
 
 namespace sen3bot::firmware {
 namespace {

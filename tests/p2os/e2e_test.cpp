@@ -8,7 +8,7 @@
 
 #include "lockstep_harness.hpp"
 #include "sen3bot/hal/serial.hpp"
-#include "sen3bot/p2os/emulator_runner.hpp"
+#include "sen3bot/sim/p2os/emulator_runner.hpp"
 #include "sen3bot/p2os/task.hpp"
 
 namespace sen3bot::p2os {

@@ -8,7 +8,7 @@
 #include "sen3bot/hal/memory_stream.hpp"
 #include "sen3bot/p2os/codec.hpp"
 #include "sen3bot/p2os/describe.hpp"
-#include "sen3bot/p2os/emulator.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/memory_stream.hpp"
 #include "sen3bot/p2os/driver.hpp"
-#include "sen3bot/p2os/emulator.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
 
 namespace sen3bot::p2os::test {
 

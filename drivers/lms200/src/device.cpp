@@ -74,10 +74,12 @@ const char* Lms200Device::phase_name() const noexcept {
   return "?";
 }
 
-hal::Nanos Lms200Device::expected_scan_interval_ns() const noexcept {
-  const std::size_t frame = 2u * value_count(config_.variant) + 10u;
-  return std::max<hal::Nanos>(scan_period_ns(config_.variant), transmission_ns(frame, baud_));
+hal::Nanos scan_interval_ns(Variant variant, std::uint32_t baud) noexcept {
+  const std::size_t frame = 2u * value_count(variant) + 10u;
+  return std::max<hal::Nanos>(scan_period_ns(variant), transmission_ns(frame, baud));
 }
+
+hal::Nanos Lms200Device::expected_scan_interval_ns() const noexcept { return scan_interval_ns(config_.variant, baud_); }
 
 hal::Nanos Lms200Device::probe_timeout_ns(std::uint32_t baud) const noexcept {
   // A streaming LMS answers after the telegram it is sending.

@@ -1,4 +1,4 @@
-#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/sim/lms200/emulator.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "sen3bot/lms200/pty_runner.hpp"
+#include "sen3bot/sim/lms200/pty_runner.hpp"
 
 #include <poll.h>
 

@@ -1,4 +1,4 @@
-#include "sen3bot/p2os/emulator.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
 
 #include <algorithm>
 #include <cmath>

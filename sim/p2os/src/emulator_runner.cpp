@@ -1,4 +1,4 @@
-#include "sen3bot/p2os/emulator_runner.hpp"
+#include "sen3bot/sim/p2os/emulator_runner.hpp"
 
 #include <poll.h>
 

@@ -29,4 +29,11 @@ class ByteStream {
   [[nodiscard]] virtual std::string_view name() const = 0;
 };
 
+// Changes the host side's line rate of an open link (a serial port, or a simulated line).
+class BaudControl {
+ public:
+  virtual ~BaudControl() = default;
+  virtual Status set_baud(std::uint32_t baud) = 0;
+};
+
 }  // namespace sen3bot::hal

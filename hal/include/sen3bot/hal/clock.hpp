@@ -47,17 +47,29 @@ class SimClock final : public Clock {
   void sleep_until(Nanos deadline_ns) override { advance_to(deadline_ns); }
   [[nodiscard]] bool simulated() const override { return true; }
 
+  // Whatever lives on its own grid of simulated instants (a simulated world that steps every
+  // few milliseconds) is told before time moves, so it can catch up to `to_ns` first. Called
+  // on the advancing thread, also when time stays where it is.
+  class Listener {
+   public:
+    virtual ~Listener() = default;
+    virtual void before_advance(Nanos now_ns, Nanos to_ns) = 0;
+  };
+  void set_listener(Listener* listener) noexcept { listener_ = listener; }
+
   // Time never goes backwards: advancing to the past is a no-op.
   void advance_to(Nanos t_ns) {
     Nanos current = now_ns_.load(std::memory_order_relaxed);
+    if (listener_ != nullptr && t_ns >= current) listener_->before_advance(current, t_ns);
     while (t_ns > current &&
            !now_ns_.compare_exchange_weak(current, t_ns, std::memory_order_acq_rel)) {
     }
   }
-  void advance_by(Nanos dt_ns) { now_ns_.fetch_add(dt_ns > 0 ? dt_ns : 0, std::memory_order_acq_rel); }
+  void advance_by(Nanos dt_ns) { advance_to(now() + (dt_ns > 0 ? dt_ns : 0)); }
 
  private:
   std::atomic<Nanos> now_ns_;
+  Listener* listener_ = nullptr;
 };
 
 }  // namespace sen3bot::hal

@@ -44,7 +44,7 @@ struct SerialOptions {
 // Every configuration is one tcsetattr (or TCSETS2 for non-standard rates) followed by a
 // read-back that is compared with what was asked; a mismatch is an Error naming the port
 // and the setting that differs.
-class SerialPort final : public ByteStream {
+class SerialPort final : public ByteStream, public BaudControl {
  public:
   static Result<std::unique_ptr<SerialPort>> open(std::string_view path, std::uint32_t baud,
                                                   SerialOptions options = {});
@@ -61,7 +61,7 @@ class SerialPort final : public ByteStream {
 
   // Reconfigures the line to a new rate (drivers probe baud rates). Applies immediately
   // (TCSANOW): call drain() first if output is still queued at the old rate.
-  Status set_baud(std::uint32_t baud);
+  Status set_baud(std::uint32_t baud) override;
   // The output rate the kernel currently reports for this port.
   [[nodiscard]] Result<std::uint32_t> baud() const;
   [[nodiscard]] Result<SerialLineSettings> line_settings() const;

@@ -45,11 +45,11 @@ struct Lms200Config {
 };
 
 // Changes the host side's baud rate (SerialPort::set_baud, or a simulated line).
-class LineControl {
- public:
-  virtual ~LineControl() = default;
-  virtual Status set_baud(std::uint32_t baud) = 0;
-};
+using LineControl = hal::BaudControl;
+
+// The time between two streamed scans: the telegram's transmission at `baud`, or the mirror's
+// period for the variant when the line is faster.
+[[nodiscard]] hal::Nanos scan_interval_ns(Variant variant, std::uint32_t baud) noexcept;
 
 struct DeviceCounters {
   std::uint64_t scans = 0;

@@ -71,11 +71,7 @@ struct P2osConfig {
 
 // Lets the driver change the link rate (baud probing, HOSTBAUD). Implemented over a
 // SerialPort by the task; absent for TCP, pty-less tests and replays.
-class BaudControl {
- public:
-  virtual ~BaudControl() = default;
-  virtual Status set_baud(std::uint32_t baud) = 0;
-};
+using BaudControl = hal::BaudControl;
 
 class P2osDriver {
  public:

@@ -4,7 +4,7 @@
 // With advance_movers, each scan first moves the scripted movers to the scan's time.
 #include <span>
 
-#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/sim/lms200/emulator.hpp"
 #include "sen3bot/world/world.hpp"
 
 namespace sen3bot::world {

@@ -1,4 +1,4 @@
-// `sen3bot sim`: named scenarios on the simulated robot, each case a whole firmware run in
+// `sen3bot-sim sim`: named scenarios on the simulated robot, each case a whole firmware run in
 // lockstep (or real) time, with a report folder: a PNG of the map with the safe path, the
 // plans, the driven path and the obstacles, and a JSON summary with per-task statistics.
 #include <sys/stat.h>
@@ -18,11 +18,22 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "commands.hpp"
+#include "cli_util.hpp"
 #include "config.hpp"
+#include "config_reader.hpp"
 #include "firmware.hpp"
+#include "sen3bot/sim/sim_board.hpp"
+#include "sen3bot/sim/sim_config.hpp"
+#include "sim_commands.hpp"
 
-namespace sen3bot::firmware {
+namespace sen3bot::sim {
+
+using firmware::Firmware;
+using firmware::FirmwareConfig;
+using firmware::MissionConfig;
+using firmware::MissionReport;
+using firmware::MissionState;
+using firmware::MissionTask;
 
 namespace {
 
@@ -85,6 +96,7 @@ std::vector<Scenario> scenarios() {
 struct CaseResult {
   std::string name;
   MissionReport report;
+  RefereeReport truth;
   double sim_time_s = 0;
   double wall_time_s = 0;
   std::vector<tasks::TaskStats> stats;
@@ -98,7 +110,8 @@ cv::Point to_pixel(const nav::OccupancyMap& map, double x_m, double y_m, int sca
 
 // The map as the thesis figures show it: free white, occupied black, the safe path's waypoints,
 // the first global plan per goal, the driven path, and the obstacles where they stood.
-bool write_png(const std::string& path, const Firmware& fw, const sim::SimulationConfig& sim, const MissionTask& mission) {
+bool write_png(const std::string& path, const Firmware& fw, const SimulationConfig& sim, const MissionTask& mission,
+               const Referee& referee) {
   const nav::OccupancyMap& map = fw.map();
   constexpr int kScale = 4;
   cv::Mat image(map.height() * kScale, map.width() * kScale, CV_8UC3);
@@ -129,7 +142,7 @@ bool write_png(const std::string& path, const Firmware& fw, const sim::Simulatio
       cv::line(image, to_pixel(map, plan.points[i - 1].x_m, plan.points[i - 1].y_m, kScale),
                to_pixel(map, plan.points[i].x_m, plan.points[i].y_m, kScale), cv::Scalar(0, 170, 0), 2, cv::LINE_AA);
   }
-  const std::span<const nav::Point2D> track = mission.track();
+  const std::span<const nav::Point2D> track = referee.track();
   for (std::size_t i = 1; i < track.size(); ++i)
     cv::line(image, to_pixel(map, track[i - 1].x_m, track[i - 1].y_m, kScale),
              to_pixel(map, track[i].x_m, track[i].y_m, kScale), cv::Scalar(0, 0, 230), 2, cv::LINE_AA);
@@ -154,6 +167,7 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
   for (std::size_t i = 0; i < results.size(); ++i) {
     const CaseResult& c = results[i];
     const MissionReport& r = c.report;
+    const RefereeReport& truth = c.truth;
     double time_s = 0;
     for (std::size_t g = 0; g < r.goals_reached; ++g) time_s += r.goal_time_s[g];
     std::fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
@@ -164,9 +178,10 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                  "\"plan_failures\": %u, \"safety_limited_steps\": %llu, \"localization_error_max_m\": %.3f, "
                  "\"simulated_s\": %.2f, \"wall_s\": %.3f,\n     \"tasks\": [",
                  r.state == MissionState::complete ? "true" : "false",
-                 static_cast<unsigned long long>(r.moving_contacts), static_cast<unsigned long long>(r.contacts), time_s,
-                 r.true_path_length_m, r.min_clearance_m, r.recoveries, r.plans > 0 ? r.plans - 1 : 0, r.plan_failures,
-                 static_cast<unsigned long long>(r.safety_limited_steps), r.localization_error_max_m, c.sim_time_s,
+                 static_cast<unsigned long long>(truth.moving_contacts), static_cast<unsigned long long>(truth.contacts),
+                 time_s, truth.true_path_length_m, truth.min_clearance_m, r.recoveries, r.plans > 0 ? r.plans - 1 : 0,
+                 r.plan_failures, static_cast<unsigned long long>(r.safety_limited_steps),
+                 truth.localization_error_max_m, c.sim_time_s,
                  c.wall_time_s);
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
@@ -188,19 +203,27 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
 }
 
 // One case: a whole firmware over the simulated robot, until the mission ends or times out.
-int run_case(const FirmwareConfig& config, bool realtime, const std::string& label, const std::string& report_dir,
-             CaseResult& result, std::FILE* out, std::FILE* err) {
-  hal::PosixClock posix_clock;
-  hal::SimClock sim_clock;
-  hal::Clock& clock = realtime ? static_cast<hal::Clock&>(posix_clock) : static_cast<hal::Clock&>(sim_clock);
-  std::FILE* quiet = std::fopen("/dev/null", "w");  // the per-task status lines of `run`
-  if (quiet == nullptr) quiet = out;
-  Firmware fw(config, clock, quiet);
-  if (Status s = fw.init(); !s) {
-    std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
-    if (quiet != out) std::fclose(quiet);
+int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool realtime, const std::string& label,
+             const std::string& report_dir, CaseResult& result, std::FILE* out, std::FILE* err) {
+  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, !realtime);
+  if (!created) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", label.c_str(), created.error().c_str());
     return 1;
   }
+  SimBoard& board = **created;
+  std::FILE* quiet = std::fopen("/dev/null", "w");  // the per-task status lines of `run`
+  if (quiet == nullptr) quiet = out;
+  Firmware fw(config, board, quiet);
+  board.referee().watch_estimate(&fw.pose_estimate());
+  auto fail = [&](const Error& e) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", label.c_str(), e.c_str());
+    fw.shutdown();
+    board.stop();
+    if (quiet != out) std::fclose(quiet);
+    return 1;
+  };
+  if (Status s = board.start(); !s) return fail(s.error());
+  if (Status s = fw.init(); !s) return fail(s.error());
   tasks::Scheduler& scheduler = fw.scheduler();
   const MissionTask& mission = *fw.mission();
   const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
@@ -208,19 +231,16 @@ int run_case(const FirmwareConfig& config, bool realtime, const std::string& lab
   double sim_s = 0;
   double next_progress_s = 0;
   auto progress = [&] {
-    tasks::Sample<sim::GroundTruth> truth;
-    fw.ground_truth().read(truth);
+    // The estimate: in real time the world steps on the board's own thread.
+    tasks::Sample<nav::PoseEstimate> pose;
+    fw.pose_estimate().read(pose);
     std::fprintf(out, "  %-28s t=%6.1f s  pose (%5.2f, %5.2f) m  goals %zu  %s\n", label.c_str(), sim_s,
-                 truth.value.pose.x_m, truth.value.pose.y_m, mission.report().goals_reached,
+                 pose.value.pose.x_m, pose.value.pose.y_m, mission.report().goals_reached,
                  to_string(mission.report().state));
     std::fflush(out);
   };
   if (realtime) {
-    if (Status s = scheduler.start(); !s) {
-      std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
-      if (quiet != out) std::fclose(quiet);
-      return 1;
-    }
+    if (Status s = scheduler.start(); !s) return fail(s.error());
     while (!mission.finished() && sim_s < limit_s) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       sim_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -230,13 +250,10 @@ int run_case(const FirmwareConfig& config, bool realtime, const std::string& lab
       }
     }
   } else {
+    hal::SimClock& clock = *board.lockstep_clock();
     while (!mission.finished() && sim_s < limit_s) {
-      if (Status s = scheduler.run_lockstep(sim_clock, hal::millis(500)); !s) {
-        std::fprintf(err, "sen3bot sim: %s: %s\n", label.c_str(), s.error().c_str());
-        if (quiet != out) std::fclose(quiet);
-        return 1;
-      }
-      sim_s = hal::to_seconds(sim_clock.now() - scheduler.start_time_ns());
+      if (Status s = scheduler.run_lockstep(clock, hal::millis(500)); !s) return fail(s.error());
+      sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
       if (sim_s >= next_progress_s) {
         progress();
         next_progress_s += 5.0;
@@ -244,22 +261,26 @@ int run_case(const FirmwareConfig& config, bool realtime, const std::string& lab
     }
   }
   fw.shutdown();
+  board.stop();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   result.sim_time_s = sim_s;
   result.report = mission.report();
+  result.truth = board.referee().report();
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
   mission.print_report(out);
+  board.referee().print(out);
   if (!report_dir.empty()) {
     const std::string png = report_dir + "/" + result.name + ".png";
-    if (!write_png(png, fw, config.sim.world, mission)) std::fprintf(err, "sen3bot sim: cannot write %s\n", png.c_str());
+    if (!write_png(png, fw, world, mission, board.referee()))
+      std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
   }
   if (quiet != out) std::fclose(quiet);
   return 0;
 }
 
 constexpr const char* kSimUsage =
-    "usage: sen3bot sim --list\n"
-    "       sen3bot sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n";
+    "usage: sen3bot-sim sim --list\n"
+    "       sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n";
 
 }  // namespace
 
@@ -284,12 +305,12 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       char* end = nullptr;
       seed = std::strtoull(argv[++i], &end, 10);
       if (end == argv[i] || *end != '\0') {
-        std::fprintf(err, "sen3bot sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
+        std::fprintf(err, "sen3bot-sim sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
         return 2;
       }
       have_seed = true;
     } else {
-      std::fprintf(err, "sen3bot sim: unknown or incomplete option '%s'\n%s", argv[i], kSimUsage);
+      std::fprintf(err, "sen3bot-sim sim: unknown or incomplete option '%s'\n%s", argv[i], kSimUsage);
       return 2;
     }
   }
@@ -305,23 +326,34 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   for (const Scenario& s : all)
     if (scenario_name == s.name) scenario = &s;
   if (scenario == nullptr) {
-    std::fprintf(err, "sen3bot sim: %s '%s' (sen3bot sim --list shows them)\n%s",
+    std::fprintf(err, "sen3bot-sim sim: %s '%s' (sen3bot-sim sim --list shows them)\n%s",
                  scenario_name.empty() ? "--scenario is required" : "no scenario named", scenario_name.c_str(), kSimUsage);
     return 2;
   }
 
-  Result<FirmwareConfig> loaded = load_config(config_path);
+  Result<std::string> text = firmware::config::read_text(config_path);
+  if (!text) {
+    std::fprintf(err, "sen3bot-sim sim: %s\n", text.error().c_str());
+    return 2;
+  }
+  const std::string_view sections[] = {kSimSection};
+  Result<FirmwareConfig> loaded = firmware::parse_config(*text, config_path, sections);
   if (!loaded) {
-    std::fprintf(err, "sen3bot sim: %s\n", loaded.error().c_str());
+    std::fprintf(err, "sen3bot-sim sim: %s\n", loaded.error().c_str());
     return 2;
   }
   FirmwareConfig base = std::move(*loaded);
-  if (!base.sim.enabled || !base.navigation.enabled) {
-    std::fprintf(err, "sen3bot sim: %s: needs a sim and a navigation section\n", config_path.c_str());
+  Result<SimulationConfig> base_world = parse_sim_config(*text, config_path, base.laser_mount);
+  if (!base_world) {
+    std::fprintf(err, "sen3bot-sim sim: %s\n", base_world.error().c_str());
+    return 2;
+  }
+  if (!base.navigation.enabled) {
+    std::fprintf(err, "sen3bot-sim sim: %s: needs a navigation section\n", config_path.c_str());
     return 2;
   }
   if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST) {
-    std::fprintf(err, "sen3bot sim: cannot create %s: %s\n", report_dir.c_str(), std::strerror(errno));
+    std::fprintf(err, "sen3bot-sim sim: cannot create %s: %s\n", report_dir.c_str(), std::strerror(errno));
     return 1;
   }
 
@@ -332,12 +364,13 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   for (std::size_t i = 0; i < scenario->cases.size(); ++i) {
     const Case& c = scenario->cases[i];
     FirmwareConfig config = base;
-    config.clock = realtime ? ClockMode::realtime : ClockMode::lockstep;
-    config.sim.world.start_pose = scenario->start;
-    config.sim.world.movers = c.movers;
+    config.clock = realtime ? firmware::ClockMode::realtime : firmware::ClockMode::lockstep;
+    SimulationConfig world = *base_world;
+    world.start_pose = scenario->start;
+    world.movers = c.movers;
     if (have_seed) {
-      config.sim.world.seed = seed;
-      config.sim.world.base.noise_seed = static_cast<std::uint32_t>(seed);
+      world.seed = seed;
+      world.base.noise_seed = static_cast<std::uint32_t>(seed);
     }
     config.navigation.initial_pose = scenario->start;
     config.navigation.mission.goal_count = scenario->goals.size();
@@ -350,8 +383,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::fprintf(out, "\ncase %zu/%zu %s: %s\n", i + 1, scenario->cases.size(), c.name, c.description);
     CaseResult& result = results.emplace_back();
     result.name = c.name;
-    if (run_case(config, realtime, c.name, report_dir, result, out, err) != 0) return 1;
-    if (result.report.state != MissionState::complete || result.report.moving_contacts != 0) rc = 3;
+    if (run_case(config, world, realtime, c.name, report_dir, result, out, err) != 0) return 1;
+    if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0) rc = 3;
   }
 
   std::fprintf(out, "\nsummary of %s:\n", scenario->name);
@@ -360,13 +393,13 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     for (std::size_t g = 0; g < r.report.goals_reached; ++g) time_s += r.report.goal_time_s[g];
     std::fprintf(out, "  %-26s %-11s collisions %llu  time %5.1f s  path %5.2f m  clearance %.2f m  replans %u  recoveries %u\n",
                  r.name.c_str(), r.report.state == MissionState::complete ? "reached" : "NOT REACHED",
-                 static_cast<unsigned long long>(r.report.moving_contacts), time_s, r.report.true_path_length_m,
-                 r.report.min_clearance_m, r.report.plans > 0 ? r.report.plans - 1 : 0, r.report.recoveries);
+                 static_cast<unsigned long long>(r.truth.moving_contacts), time_s, r.truth.true_path_length_m,
+                 r.truth.min_clearance_m, r.report.plans > 0 ? r.report.plans - 1 : 0, r.report.recoveries);
   }
   if (!report_dir.empty()) {
     const std::string json = report_dir + "/report.json";
-    if (!write_json(json, *scenario, have_seed ? seed : base.sim.world.seed, results)) {
-      std::fprintf(err, "sen3bot sim: cannot write %s\n", json.c_str());
+    if (!write_json(json, *scenario, have_seed ? seed : base_world->seed, results)) {
+      std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", json.c_str());
       return 1;
     }
     std::fprintf(out, "report: %s (report.json and one PNG per case)\n", report_dir.c_str());
@@ -374,4 +407,4 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return rc;
 }
 
-}  // namespace sen3bot::firmware
+}  // namespace sen3bot::sim

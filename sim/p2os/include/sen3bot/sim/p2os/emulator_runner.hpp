@@ -13,7 +13,7 @@
 #include "sen3bot/hal/pty.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/hal/tcp.hpp"
-#include "sen3bot/p2os/emulator.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
 
 namespace sen3bot::p2os {
 

@@ -155,9 +155,4 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   truth_.in_contact = contact;
 }
 
-void SimulationTask::step(const tasks::StepContext& context) {
-  simulation_.step(context.release_ns);
-  truth_topic_.publish(simulation_.truth(), context.release_ns);
-}
-
 }  // namespace sen3bot::sim

@@ -1,4 +1,4 @@
-#include "bridge.hpp"
+#include "adapters.hpp"
 
 #include <cmath>
 #include <limits>
@@ -43,25 +43,6 @@ nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
   return odom;
 }
 
-void BridgeTask::step(const tasks::StepContext& context) {
-  if (topics_.laser.read(laser_) && laser_.sequence != laser_seq_) {
-    laser_seq_ = laser_.sequence;
-    to_nav_scan(laser_.value, scan_);
-    topics_.scan.publish(scan_, context.start_ns);
-  }
-  tasks::Sample<p2os::BaseState> base;
-  if (topics_.base.read(base) && base.sequence != base_seq_) {
-    base_seq_ = base.sequence;
-    topics_.odometry.publish(to_nav_odometry(base.value), context.start_ns);
-    topics_.base_flags.publish(nav::BaseFlags{base.value.estop, base.value.motors_enabled}, context.start_ns);
-  }
-  // Only fresh commands are forwarded: if the safety task stops publishing, the base driver's
-  // own command timeout stops the robot.
-  tasks::Sample<nav::VelocityCommand> command;
-  if (topics_.command.read(command) && command.sequence != command_seq_) {
-    command_seq_ = command.sequence;
-    topics_.setpoint.publish(p2os::BaseSetpoint{command.value.v_m_s, command.value.w_rad_s, true}, context.start_ns);
-  }
-}
+nav::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept { return nav::BaseFlags{in.estop, in.motors_enabled}; }
 
 }  // namespace sen3bot::firmware

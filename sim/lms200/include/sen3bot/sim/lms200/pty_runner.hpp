@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "sen3bot/hal/pty.hpp"
-#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/sim/lms200/emulator.hpp"
 
 namespace sen3bot::lms200 {
 

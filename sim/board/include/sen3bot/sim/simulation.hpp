@@ -3,9 +3,9 @@
 // Pioneer (ARCOS) and LMS200 emulators on the far ends of the drivers' byte streams, and the
 // bookkeeping a mission report needs (true pose, contacts, clearance).
 //
-// The firmware under test does not know it is simulated: its drivers talk to the emulators
-// through in-memory pipes (lockstep: one thread, deterministic for a seed) or through real
-// pseudo-terminals whose slave paths the drivers open as serial ports (real time).
+// The firmware does not know it is simulated: SimBoard (sim_board.hpp) hands its drivers the
+// emulators' ends as links: in-memory pipes (lockstep: one thread, deterministic for a seed) or
+// real pseudo-terminals whose slave paths are opened as serial ports (real time).
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -15,11 +15,9 @@
 #include "sen3bot/hal/memory_stream.hpp"
 #include "sen3bot/hal/pty.hpp"
 #include "sen3bot/hal/result.hpp"
-#include "sen3bot/lms200/emulator.hpp"
+#include "sen3bot/sim/lms200/emulator.hpp"
 #include "sen3bot/nav/geometry.hpp"
-#include "sen3bot/p2os/emulator.hpp"
-#include "sen3bot/tasks/task.hpp"
-#include "sen3bot/tasks/topic.hpp"
+#include "sen3bot/sim/p2os/emulator.hpp"
 #include "sen3bot/world/world.hpp"
 
 namespace sen3bot::sim {
@@ -106,19 +104,6 @@ class Simulation {
   std::unique_ptr<PtyLine> laser_pty_line_;
   GroundTruth truth_;
   hal::Nanos next_clearance_ns_ = 0;
-};
-
-// The simulation as a scheduler task: one step per period, GroundTruth published each step.
-class SimulationTask final : public tasks::Task {
- public:
-  SimulationTask(Simulation& simulation, tasks::Topic<GroundTruth>& truth_topic)
-      : simulation_(simulation), truth_topic_(truth_topic) {}
-  Status init(std::pmr::memory_resource&) override { return Status::success(); }
-  void step(const tasks::StepContext& context) override;
-
- private:
-  Simulation& simulation_;
-  tasks::Topic<GroundTruth>& truth_topic_;
 };
 
 }  // namespace sen3bot::sim

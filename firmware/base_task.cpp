@@ -1,0 +1,85 @@
+#include "base_task.hpp"
+
+#include <new>
+
+#include "adapters.hpp"
+
+namespace sen3bot::firmware {
+
+BaseTask::BaseTask(const p2os::P2osConfig& config, hal::Board& board, const BaseTopics& topics)
+    : config_(config), board_(board), topics_(topics) {}
+
+BaseTask::~BaseTask() {
+  if (driver_ != nullptr) {
+    driver_->detach();
+    driver_->~P2osDriver();
+    arena_->deallocate(driver_, sizeof(p2os::P2osDriver), alignof(p2os::P2osDriver));
+  }
+}
+
+Status BaseTask::init(std::pmr::memory_resource& arena) {
+  if (driver_ != nullptr) return Error(Errc::invalid_argument, "base task: init called twice");
+  try {
+    void* memory = arena.allocate(sizeof(p2os::P2osDriver), alignof(p2os::P2osDriver));
+    driver_ = new (memory) p2os::P2osDriver(config_);
+    arena_ = &arena;
+  } catch (const std::bad_alloc&) {
+    return Error::format(Errc::capacity, "base task: the driver needs %zu bytes of arena", sizeof(p2os::P2osDriver));
+  }
+  try_open(config_.connect_timeout_ms, board_.clock().now());
+  return Status::success();
+}
+
+void BaseTask::try_open(int connect_timeout_ms, hal::Nanos now_ns) {
+  Result<hal::Link> opened = board_.open_link("base", hal::LinkRequest{config_.port, config_.baud, connect_timeout_ms});
+  if (!opened) {
+    open_error_ = opened.error();
+    next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
+    return;
+  }
+  open_error_.reset();
+  link_ = std::move(*opened);
+  driver_->attach(*link_.stream, now_ns, link_.baud_control, link_.baud);
+}
+
+void BaseTask::publish(hal::Nanos now_ns) {
+  const p2os::BaseState& state = driver_->state();
+  topics_.odometry.publish(to_nav_odometry(state), now_ns);
+  topics_.flags.publish(to_base_flags(state), now_ns);
+  last_published_link_ = state.link;
+}
+
+void BaseTask::step(const tasks::StepContext& context) {
+  if (driver_ == nullptr) return;
+  const hal::Nanos now_ns = context.start_ns;
+  tasks::Sample<nav::VelocityCommand> command;
+  if (topics_.command.read(command) && command.sequence != last_command_sequence_) {
+    last_command_sequence_ = command.sequence;
+    driver_->set_setpoint(p2os::BaseSetpoint{command.value.v_m_s, command.value.w_rad_s, true}, now_ns);
+  }
+  if (!driver_->attached() && !driver_->closed()) {
+    if (link_.stream) {
+      // The stream failed: drop it and try again after the reopen delay.
+      open_error_ = driver_->stream_error();
+      link_ = hal::Link{};
+      next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
+    }
+    if (now_ns >= next_open_ns_) try_open(config_.reopen_connect_timeout_ms, now_ns);
+  }
+  driver_->step(now_ns);
+  if (driver_->take_new_sip() || driver_->state().link != last_published_link_) publish(now_ns);
+}
+
+void BaseTask::shutdown() {
+  if (driver_ == nullptr || !driver_->attached()) return;
+  hal::Clock& clock = board_.clock();
+  driver_->request_close(clock.now());
+  const hal::Nanos give_up_ns = clock.now() + hal::seconds(1);
+  while (!driver_->closed() && driver_->attached() && clock.now() < give_up_ns) {
+    driver_->step(clock.now());
+    clock.sleep_until(clock.now() + hal::millis(2));
+  }
+  publish(clock.now());
+}
+
+}  // namespace sen3bot::firmware

@@ -1,0 +1,57 @@
+#include "cli_util.hpp"
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace sen3bot::firmware {
+
+namespace {
+
+std::atomic<int> g_stop_signal{0};
+void on_stop_signal(int sig) { g_stop_signal.store(sig); }  // async-signal-safe: one atomic store
+
+template <typename T>
+bool parse_unsigned(std::string_view text, T& out, unsigned long long max) {
+  const std::string s(text);
+  if (s.empty() || s.front() == '-' || s.front() == '+') return false;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(s.c_str(), &end, 0);
+  if (errno != 0 || end == s.c_str() || *end != '\0' || v > max) return false;
+  out = static_cast<T>(v);
+  return true;
+}
+
+}  // namespace
+
+bool parse_double(std::string_view text, double& out) {
+  const std::string s(text);
+  char* end = nullptr;
+  errno = 0;
+  out = std::strtod(s.c_str(), &end);
+  return errno == 0 && end != s.c_str() && *end == '\0' && std::isfinite(out);
+}
+
+bool parse_u32(std::string_view text, std::uint32_t& out) { return parse_unsigned(text, out, 0xFFFFFFFFull); }
+bool parse_u64(std::string_view text, std::uint64_t& out) { return parse_unsigned(text, out, ~0ull); }
+
+StopOnSignal::StopOnSignal() {
+  g_stop_signal.store(0);
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, &old_int_);
+  sigaction(SIGTERM, &action, &old_term_);
+}
+
+StopOnSignal::~StopOnSignal() {
+  sigaction(SIGINT, &old_int_, nullptr);
+  sigaction(SIGTERM, &old_term_, nullptr);
+}
+
+int StopOnSignal::requested() noexcept { return g_stop_signal.load(); }
+
+}  // namespace sen3bot::firmware

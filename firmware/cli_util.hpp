@@ -1,0 +1,34 @@
+#pragma once
+// Small pieces every command of both binaries shares: strict number parsing and a scope that
+// turns SIGINT/SIGTERM into a stop request.
+#include <signal.h>
+
+#include <cstdint>
+#include <string_view>
+
+namespace sen3bot::firmware {
+
+// The whole text must be a finite number (no trailing characters, no NaN or infinity).
+bool parse_double(std::string_view text, double& out);
+// Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
+bool parse_u32(std::string_view text, std::uint32_t& out);
+bool parse_u64(std::string_view text, std::uint64_t& out);
+
+// SIGINT/SIGTERM set a flag while this object lives; the previous handlers come back after.
+// One at a time per process.
+class StopOnSignal {
+ public:
+  StopOnSignal();
+  ~StopOnSignal();
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+
+  // The signal that asked to stop, or 0.
+  [[nodiscard]] static int requested() noexcept;
+
+ private:
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+};
+
+}  // namespace sen3bot::firmware

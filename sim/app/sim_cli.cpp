@@ -1,0 +1,118 @@
+#include <cstdio>
+#include <string>
+#include <string_view>
+
+#include "config.hpp"
+#include "config_reader.hpp"
+#include "firmware.hpp"
+#include "runner.hpp"
+#include "sen3bot/sim/sim_board.hpp"
+#include "sen3bot/sim/sim_config.hpp"
+#include "sim_commands.hpp"
+
+#ifndef SEN3BOT_VERSION
+#define SEN3BOT_VERSION "unknown"
+#endif
+
+namespace sen3bot::sim {
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: sen3bot-sim <command> [options]\n"
+    "\n"
+    "The Sen3Bot firmware on a simulated robot: the same task table and drivers as the\n"
+    "robot's sen3bot, over a simulated board whose devices are wire-exact emulators\n"
+    "driven by a ground-truth world; and the emulators on their own for other clients.\n"
+    "\n"
+    "commands:\n"
+    "  run --config FILE [--duration S] [--clock lockstep|realtime]\n"
+    "        Load the configuration (its `sim` section is the simulated robot), run the\n"
+    "        firmware until SIGINT or SIGTERM, the configured duration or the end of the\n"
+    "        mission, then print the mission report, what the ground truth says and the\n"
+    "        task statistics. --duration overrides run.duration_s (0: until a signal);\n"
+    "        --clock overrides run.clock: 'lockstep' runs simulated time as fast as the\n"
+    "        CPU allows over in-memory links, 'realtime' runs on the monotonic clock\n"
+    "        with one thread per task group, the drivers on real ptys.\n"
+    "  sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "        Run a named scenario (sen3bot-sim sim --list shows them), each case a whole\n"
+    "        firmware run from config/sim.yaml; with --report write DIR/report.json and\n"
+    "        a PNG per case (map, safe path, plan, driven path, obstacles). Exit status 3\n"
+    "        when a case misses its goal or collides.\n"
+    "  sim --list\n"
+    "        List the scenarios and their cases.\n"
+    "  p2os-emulator (--pty LINK | --tcp PORT) [--name NAME]\n"
+    "        Run the Pioneer 3-DX (ARCOS) emulator until SIGINT: on a pseudo-terminal\n"
+    "        whose slave is symlinked at LINK, or on a TCP port (MobileSim style).\n"
+    "  lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]\n"
+    "        Run the LMS200 emulator until SIGINT on a pseudo-terminal symlinked at LINK;\n"
+    "        ranges from a ROS map_server map (default: a built-in 8 m x 6 m room).\n"
+    "  version\n"
+    "        Print the version.\n"
+    "  --help, -h\n"
+    "        Print this text.\n"
+    "\n"
+    "exit status: 0 success, 1 run-time failure, 2 bad command line or configuration,\n"
+    "3 the mission failed (a goal not reached, or a collision in a scenario).\n";
+
+}  // namespace
+
+int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  const firmware::StopSignalsBlocked blocked;
+  firmware::RunOptions options;
+  if (int rc = firmware::parse_run_options(argc, argv, "sen3bot-sim", options, err); rc != 0) return rc;
+  Result<std::string> text = firmware::config::read_text(options.config_path);
+  if (!text) {
+    std::fprintf(err, "sen3bot-sim: %s\n", text.error().c_str());
+    return 2;
+  }
+  const std::string_view sections[] = {kSimSection};
+  Result<firmware::FirmwareConfig> loaded = firmware::parse_config(*text, options.config_path, sections);
+  if (!loaded) {
+    std::fprintf(err, "sen3bot-sim: %s\n", loaded.error().c_str());
+    return 2;
+  }
+  firmware::FirmwareConfig& config = *loaded;
+  firmware::apply(options, config);
+  Result<SimulationConfig> world = parse_sim_config(*text, options.config_path, config.laser_mount);
+  if (!world) {
+    std::fprintf(err, "sen3bot-sim: %s\n", world.error().c_str());
+    return 2;
+  }
+  Result<std::unique_ptr<SimBoard>> board = SimBoard::create(*world, config.clock == firmware::ClockMode::lockstep);
+  if (!board) {
+    std::fprintf(err, "sen3bot-sim: %s: sim: %s\n", options.config_path.c_str(), board.error().c_str());
+    return 1;
+  }
+  firmware::Firmware fw(config, **board, out);
+  (*board)->referee().watch_estimate(&fw.pose_estimate());
+  const int rc = firmware::run_firmware(fw, **board, config, out, err);
+  std::fprintf(out, "\n");
+  (*board)->referee().print(out);
+  std::fflush(out);
+  return rc;
+}
+
+int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  if (argc < 2) {
+    std::fputs(kUsage, err);
+    return 2;
+  }
+  const std::string_view command = argv[1];
+  if (command == "--help" || command == "-h" || command == "help") {
+    std::fputs(kUsage, out);
+    return 0;
+  }
+  if (command == "version" || command == "--version") {
+    std::fprintf(out, "sen3bot-sim %s\n", SEN3BOT_VERSION);
+    return 0;
+  }
+  if (command == "run") return run_command(argc - 2, argv + 2, out, err);
+  if (command == "sim") return sim_command(argc - 2, argv + 2, out, err);
+  if (command == "p2os-emulator") return p2os_emulator_command(argc - 2, argv + 2, out, err);
+  if (command == "lms200-emulator") return lms200_emulator_command(argc - 2, argv + 2, out, err);
+  std::fprintf(err, "sen3bot-sim: unknown command '%s'\n\n%s", argv[1], kUsage);
+  return 2;
+}
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,20 @@
+#pragma once
+// The simulator's commands; sim_cli.cpp dispatches to them. Each takes the arguments after its
+// command word and returns the exit status (0 success, 1 run-time failure, 2 bad command line,
+// 3 a mission or a scenario case failed).
+#include <cstdio>
+
+namespace sen3bot::sim {
+
+// The whole command line of sen3bot-sim.
+int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim run --config FILE [--duration S] [--clock lockstep|realtime]
+int run_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]
+int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME]
+int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]
+int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,50 @@
+#pragma once
+// The referee: judges a run from the ground truth, outside the firmware. It sees every world
+// step and, when given one, the firmware's pose estimate, and keeps what a report says about
+// the real world: contacts, clearance, the closest person, the true path and how far the
+// estimate strayed from the truth.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <span>
+
+#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/sim/simulation.hpp"
+#include "sen3bot/tasks/topic.hpp"
+
+namespace sen3bot::sim {
+
+struct RefereeReport {
+  std::uint64_t contacts = 0;         // times the footprint started to overlap something
+  std::uint64_t moving_contacts = 0;  // of those, while the robot moved: collisions
+  double min_clearance_m = 1e9;
+  double min_person_distance_m = 1e9;
+  double true_path_length_m = 0;
+  double localization_error_max_m = 0;  // estimate vs truth, while the robot moved
+};
+
+class Referee {
+ public:
+  static constexpr std::size_t kMaxTrack = 4096;
+
+  // The firmware's pose estimate, compared with the truth at every step; null: not judged.
+  void watch_estimate(const tasks::Topic<nav::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
+  // Every world step; never allocates.
+  void observe(const GroundTruth& truth) noexcept;
+
+  [[nodiscard]] const RefereeReport& report() const noexcept { return report_; }
+  void print(std::FILE* out) const;
+  // The true driven path, a point per 5 cm moved.
+  [[nodiscard]] std::span<const nav::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+
+ private:
+  const tasks::Topic<nav::PoseEstimate>* estimate_ = nullptr;
+  RefereeReport report_;
+  bool have_last_ = false;
+  nav::Pose2D last_;
+  std::array<nav::Point2D, kMaxTrack> track_{};
+  std::size_t track_count_ = 0;
+};
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,79 @@
+#pragma once
+// The simulated board, as software-in-the-loop simulators do it: the firmware composes against
+// hal::Board exactly as on the robot, and this board answers with the simulated robot. Links
+// whose port is "sim" reach the emulators (in-memory pipes in lockstep, real ptys in real
+// time); any other port is opened on the host as the robot computer would, so a real device can
+// join a simulated run. The world steps on its own 5 ms grid: in lockstep as the firmware's
+// clock advances past each step, in real time on the board's own thread. The referee watches
+// every step.
+#include <atomic>
+#include <memory>
+#include <string_view>
+#include <thread>
+
+#include "sen3bot/hal/board.hpp"
+#include "sen3bot/sim/referee.hpp"
+#include "sen3bot/sim/simulation.hpp"
+
+namespace sen3bot::sim {
+
+// A discrete line a scenario drives (the e-stop) or reads (the light).
+class SimLine final : public hal::DigitalInput, public hal::DigitalOutput {
+ public:
+  Result<bool> read() override { return state_.load(std::memory_order_acquire); }
+  Status write(bool on) override {
+    state_.store(on, std::memory_order_release);
+    return Status::success();
+  }
+  [[nodiscard]] bool state() const noexcept { return state_.load(std::memory_order_acquire); }
+
+ private:
+  std::atomic<bool> state_{false};
+};
+
+class SimBoard final : public hal::Board, private hal::SimClock::Listener {
+ public:
+  static constexpr hal::Nanos kStepNs = hal::millis(5);
+
+  // Builds the world and the emulators (LinkKind from `lockstep`). Allocates; before the run.
+  static Result<std::unique_ptr<SimBoard>> create(const SimulationConfig& config, bool lockstep);
+  ~SimBoard() override;
+
+  [[nodiscard]] std::string_view name() const override { return "sim"; }
+  [[nodiscard]] hal::Clock& clock() override;
+  [[nodiscard]] hal::SimClock* lockstep_clock() noexcept override { return lockstep_ ? &sim_clock_ : nullptr; }
+  Result<hal::Link> open_link(std::string_view link, const hal::LinkRequest& request) override;
+  [[nodiscard]] hal::DigitalInput* input(std::string_view name) noexcept override {
+    return name == "estop" ? &estop_ : nullptr;
+  }
+  [[nodiscard]] hal::DigitalOutput* output(std::string_view name) noexcept override {
+    return name == "light" ? &light_ : nullptr;
+  }
+  Status start() override;
+  void stop() noexcept override;
+
+  [[nodiscard]] Simulation& simulation() noexcept { return *simulation_; }
+  [[nodiscard]] Referee& referee() noexcept { return referee_; }
+  [[nodiscard]] SimLine& estop() noexcept { return estop_; }
+  [[nodiscard]] SimLine& light() noexcept { return light_; }
+
+ private:
+  SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep);
+  void before_advance(hal::Nanos now_ns, hal::Nanos to_ns) override;
+  void step(hal::Nanos now_ns) noexcept;
+  void thread_main();
+
+  std::unique_ptr<Simulation> simulation_;
+  bool lockstep_;
+  hal::SimClock sim_clock_;
+  hal::PosixClock posix_clock_;
+  hal::PosixBoard host_;
+  Referee referee_;
+  SimLine estop_;
+  SimLine light_;
+  hal::Nanos next_step_ns_ = 0;
+  std::thread thread_;
+  std::atomic<bool> running_{false};
+};
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,42 @@
+#include "sen3bot/sim/referee.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sen3bot::sim {
+
+namespace {
+constexpr double kTrackSpacingM = 0.05;
+constexpr double kMovingSpeedM_s = 0.02;
+}  // namespace
+
+void Referee::observe(const GroundTruth& truth) noexcept {
+  report_.contacts = truth.contacts;
+  report_.moving_contacts = truth.moving_contacts;
+  report_.min_clearance_m = std::min(report_.min_clearance_m, truth.clearance_m);
+  report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.nearest_person_m);
+  const nav::Pose2D& p = truth.pose;
+  if (have_last_) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
+  last_ = p;
+  have_last_ = true;
+  if (track_count_ == 0 || std::hypot(p.x_m - track_[track_count_ - 1].x_m, p.y_m - track_[track_count_ - 1].y_m) >=
+                               kTrackSpacingM) {
+    if (track_count_ < kMaxTrack) track_[track_count_++] = {p.x_m, p.y_m};
+  }
+  tasks::Sample<nav::PoseEstimate> estimate;
+  if (estimate_ != nullptr && std::abs(truth.speed_m_s) > kMovingSpeedM_s && estimate_->read(estimate) &&
+      estimate.value.valid)
+    report_.localization_error_max_m = std::max(
+        report_.localization_error_max_m, std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m));
+}
+
+void Referee::print(std::FILE* out) const {
+  const RefereeReport& t = report_;
+  std::fprintf(out,
+               "  ground truth: %llu contacts (%llu while the robot moved), min clearance %.2f m, closest person "
+               "%.2f m, true path %.2f m, localization error max %.2f m\n",
+               static_cast<unsigned long long>(t.contacts), static_cast<unsigned long long>(t.moving_contacts),
+               t.min_clearance_m, t.min_person_distance_m, t.true_path_length_m, t.localization_error_max_m);
+}
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,103 @@
+#include "sen3bot/sim/sim_board.hpp"
+
+#include "sen3bot/hal/serial.hpp"
+
+namespace sen3bot::sim {
+
+namespace {
+
+// A driver's view of an in-memory link it does not own: the pipe belongs to the simulation.
+class BorrowedStream final : public hal::ByteStream {
+ public:
+  explicit BorrowedStream(hal::ByteStream& stream) : stream_(stream) {}
+  Result<std::size_t> read(std::span<std::uint8_t> out) override { return stream_.read(out); }
+  Result<std::size_t> write(std::span<const std::uint8_t> data) override { return stream_.write(data); }
+  [[nodiscard]] int poll_fd() const override { return stream_.poll_fd(); }
+  [[nodiscard]] std::string_view name() const override { return stream_.name(); }
+
+ private:
+  hal::ByteStream& stream_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<SimBoard>> SimBoard::create(const SimulationConfig& config, bool lockstep) {
+  SimulationConfig c = config;
+  c.link = lockstep ? LinkKind::memory : LinkKind::pty;
+  Result<std::unique_ptr<Simulation>> simulation = Simulation::create(c);
+  if (!simulation) return simulation.error();
+  return std::unique_ptr<SimBoard>(new SimBoard(std::move(*simulation), lockstep));
+}
+
+SimBoard::SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep)
+    : simulation_(std::move(simulation)), lockstep_(lockstep) {
+  if (lockstep_) sim_clock_.set_listener(this);
+}
+
+SimBoard::~SimBoard() {
+  stop();
+  sim_clock_.set_listener(nullptr);
+}
+
+hal::Clock& SimBoard::clock() {
+  if (lockstep_) return sim_clock_;
+  return posix_clock_;
+}
+
+Result<hal::Link> SimBoard::open_link(std::string_view link, const hal::LinkRequest& request) {
+  if (request.port != "sim") return host_.open_link(link, request);
+  Simulation& sim = *simulation_;
+  hal::Link opened;
+  if (link == "base" || link == "laser") {
+    const bool base = link == "base";
+    if (lockstep_) {
+      opened.stream = std::make_unique<BorrowedStream>(base ? *sim.base_driver_stream() : *sim.laser_driver_stream());
+      if (!base) opened.baud_control = sim.laser_driver_line();
+      opened.baud = request.baud;
+      return opened;
+    }
+    const std::string path = base ? sim.base_device_path() : sim.laser_device_path();
+    return host_.open_link(link, hal::LinkRequest{path, request.baud, request.connect_timeout_ms});
+  }
+  return Error::format(Errc::not_found, "sim board: no simulated device behind the '%.*s' link",
+                       static_cast<int>(link.size()), link.data());
+}
+
+void SimBoard::step(hal::Nanos now_ns) noexcept {
+  simulation_->step(now_ns);
+  referee_.observe(simulation_->truth());
+}
+
+void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {
+  while (next_step_ns_ <= to_ns) {
+    step(next_step_ns_);
+    next_step_ns_ += kStepNs;
+  }
+}
+
+Status SimBoard::start() {
+  if (lockstep_ || running_.load()) return Status::success();
+  running_.store(true);
+  thread_ = std::thread([this] { thread_main(); });
+  return Status::success();
+}
+
+void SimBoard::stop() noexcept {
+  if (!running_.exchange(false)) return;
+  if (thread_.joinable()) thread_.join();
+}
+
+// Real time: the world steps on its grid from the moment the board starts (t = 0 for movers).
+void SimBoard::thread_main() {
+  const hal::Nanos origin = posix_clock_.now();
+  hal::Nanos next = origin;
+  while (running_.load(std::memory_order_acquire)) {
+    step(next - origin);
+    next += kStepNs;
+    const hal::Nanos now = posix_clock_.now();
+    if (next < now) next = now;  // fell behind: carry on from now rather than in a burst
+    posix_clock_.sleep_until(next);
+  }
+}
+
+}  // namespace sen3bot::sim

@@ -1,0 +1,60 @@
+#include "sen3bot/sim/sim_config.hpp"
+
+#include "config_reader.hpp"
+
+namespace sen3bot::sim {
+
+namespace {
+
+using firmware::config::Reader;
+using firmware::config::read_pose;
+using firmware::config::relative_to;
+
+world::MoverScript read_mover(const Reader& r, bool person) {
+  r.allow_only({"path", "speed_m_s", "size_m", "loop", "start_s", "appear_s", "shape"});
+  world::MoverScript m;
+  m.person = person;
+  m.shape = person ? world::MoverShape::circle : world::MoverShape::square;
+  for (const Reader& point : r.sequence("path")) m.path.push_back(point.point());
+  if (m.path.empty()) r.fail("path", "needs at least one point", YAML::Node());
+  if (r.has("speed_m_s")) m.speed_m_s = r.number("speed_m_s", 0.0, 5.0);
+  if (r.has("size_m")) m.size_m = r.number("size_m", 0.05, 5.0);
+  if (r.has("loop")) m.loop = r.boolean("loop");
+  if (r.has("start_s")) m.start_time_s = r.number("start_s", 0.0, 1e7);
+  if (r.has("appear_s")) m.appear_time_s = r.number("appear_s", 0.0, 1e7);
+  if (r.has("shape")) {
+    const std::string shape = r.text("shape");
+    if (shape == "circle") m.shape = world::MoverShape::circle;
+    else if (shape == "square") m.shape = world::MoverShape::square;
+    else r.fail("shape", "expected circle or square, got '" + shape + "'", YAML::Node());
+  }
+  return m;
+}
+
+void read_sim(const Reader& r, SimulationConfig& w) {
+  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "people", "boxes", "laser_status"});
+  w.map_path = relative_to(r.file(), r.text("map"));
+  if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));
+  if (r.has("seed")) w.seed = static_cast<std::uint64_t>(r.integer("seed", 0, INT64_MAX));
+  if (r.has("range_noise_m")) w.range_noise_sigma_m = r.number("range_noise_m", 0.0, 1.0);
+  if (r.has("people"))
+    for (const Reader& m : r.sequence("people")) w.movers.push_back(read_mover(m, true));
+  if (r.has("boxes"))
+    for (const Reader& m : r.sequence("boxes")) w.movers.push_back(read_mover(m, false));
+  if (r.has("laser_status")) w.laser.status = static_cast<std::uint8_t>(r.integer("laser_status", 0, 255));
+  w.base.noise_seed = static_cast<std::uint32_t>(w.seed);
+}
+
+}  // namespace
+
+Result<SimulationConfig> parse_sim_config(std::string_view yaml_text, const std::string& source_name,
+                                          const nav::Pose2D& laser_mount) {
+  return firmware::config::parse<SimulationConfig>(yaml_text, source_name, [&](const Reader& top) {
+    SimulationConfig w;
+    read_sim(top.child(std::string(kSimSection)), w);
+    w.laser_mount = laser_mount;
+    return w;
+  });
+}
+
+}  // namespace sen3bot::sim
