@@ -44,10 +44,28 @@ TEST(Config, ParsesEveryKey) {
 }
 
 TEST(Config, TheShippedConfigurationsLoad) {
-  for (const char* name : {"/config/sim.yaml", "/config/robot.yaml"}) {
-    Result<FirmwareConfig> r = load_config(std::string(SEN3BOT_SOURCE_DIR) + name);
-    EXPECT_TRUE(r) << name << ": " << (r ? "" : r.error().c_str());
-  }
+  Result<FirmwareConfig> robot = load_config(SEN3BOT_SOURCE_DIR "/config/robot.yaml");
+  EXPECT_TRUE(robot) << (robot ? "" : robot.error().c_str());
+  // The simulated robot's section belongs to the simulated board: accepted only when the
+  // caller says so, and then left alone.
+  const std::string_view board_sections[] = {"sim"};
+  Result<FirmwareConfig> sim = load_config(SEN3BOT_SOURCE_DIR "/config/sim.yaml", board_sections);
+  EXPECT_TRUE(sim) << (sim ? "" : sim.error().c_str());
+  Result<FirmwareConfig> refused = load_config(SEN3BOT_SOURCE_DIR "/config/sim.yaml");
+  ASSERT_FALSE(refused);
+  EXPECT_NE(std::string(refused.error().message()).find("sim.yaml: sim: a simulated robot: run this configuration with sen3bot-sim"),
+            std::string::npos)
+      << refused.error().c_str();
+}
+
+TEST(Config, BoardIoLines) {
+  Result<FirmwareConfig> r = parse_config(std::string(kValid) + "board: { estop_input: /dev/gpiochip0:17, light_output: /dev/gpiochip0:27 }\n",
+                                          "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_EQ(r->board.estop_input, "/dev/gpiochip0:17");
+  EXPECT_EQ(r->board.light_output, "/dev/gpiochip0:27");
+  const std::string m = message_of(std::string(kValid) + "board: { estop: /dev/gpiochip0:17 }\n");
+  EXPECT_NE(m.find("board.estop: unknown key"), std::string::npos) << m;
 }
 
 TEST(Config, ErrorsNameTheFileTheKeyAndTheProblem) {

@@ -5,16 +5,13 @@
 
 #include "config.hpp"
 #include "firmware.hpp"
+#include "sim_rig.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {
 namespace {
 
-FirmwareConfig sim_config() {
-  Result<FirmwareConfig> r = load_config(SEN3BOT_SOURCE_DIR "/config/sim.yaml");
-  EXPECT_TRUE(r);
-  return *r;
-}
+FirmwareConfig sim_config() { return testing::load_sim_rig().config; }
 
 TEST(TaskTable, RowsAreValidAndNamesUnique) {
   for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
@@ -28,8 +25,8 @@ TEST(TaskTable, RowsAreValidAndNamesUnique) {
 
 TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
   FirmwareConfig config = sim_config();
-  hal::SimClock clock;
-  Firmware fw(config, clock, stdout);
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, stdout);
   ASSERT_TRUE(fw.init());
   ASSERT_EQ(fw.scheduler().task_count(), kTaskTable.size());
   for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
@@ -41,8 +38,8 @@ TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
 TEST(Firmware, AnExceededBudgetFailsInitNamingTaskArenaAndKey) {
   FirmwareConfig config = sim_config();
   config.tasks["telemetry"].arena_bytes = 64;  // its line buffer needs 512 B
-  hal::SimClock clock;
-  Firmware fw(config, clock, stdout);
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, stdout);
   const Status s = fw.init();
   ASSERT_FALSE(s);
   const std::string m(s.error().message());
@@ -55,9 +52,9 @@ TEST(Firmware, AnExceededBudgetFailsInitNamingTaskArenaAndKey) {
 TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
   FirmwareConfig config = sim_config();
   config.tasks.erase("health");
-  hal::SimClock clock;
+  testing::SimRig rig = testing::load_sim_rig();
   {
-    Firmware fw(config, clock, stdout);
+    Firmware fw(config, *rig.board, stdout);
     const Status s = fw.init();
     ASSERT_FALSE(s);
     EXPECT_NE(std::string(s.error().message()).find("tasks.health.arena_bytes: missing"), std::string::npos);
@@ -65,7 +62,7 @@ TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
   config = sim_config();
   config.tasks["navigator"].arena_bytes = 1024;
   {
-    Firmware fw(config, clock, stdout);
+    Firmware fw(config, *rig.board, stdout);
     const Status s = fw.init();
     ASSERT_FALSE(s);
     EXPECT_NE(std::string(s.error().message()).find("tasks.navigator: no such task"), std::string::npos);
@@ -73,7 +70,7 @@ TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
   config = sim_config();
   config.threads["gpu"] = ThreadConfig{};
   {
-    Firmware fw(config, clock, stdout);
+    Firmware fw(config, *rig.board, stdout);
     const Status s = fw.init();
     ASSERT_FALSE(s);
     EXPECT_NE(std::string(s.error().message()).find("threads.gpu: no task runs on this thread"), std::string::npos);
@@ -83,10 +80,10 @@ TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
 TEST(Firmware, ASimulatedMinuteKeepsEveryRateExactly) {
   FirmwareConfig config = sim_config();
   std::FILE* sink = std::fopen("/dev/null", "w");
-  hal::SimClock clock;
-  Firmware fw(config, clock, sink);
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, sink);
   ASSERT_TRUE(fw.init());
-  ASSERT_TRUE(fw.scheduler().run_lockstep(clock, hal::seconds(60)));
+  ASSERT_TRUE(fw.scheduler().run_lockstep(rig.clock(), hal::seconds(60)));
   for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
     const tasks::TaskStats s = fw.scheduler().stats(i);
     EXPECT_EQ(s.runs, static_cast<std::uint64_t>(60'000'000 / kTaskTable[i].period_us)) << s.name;

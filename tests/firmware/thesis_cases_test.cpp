@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
+#include "sim_commands.hpp"
 
 namespace sen3bot::firmware {
 namespace {
@@ -60,7 +60,7 @@ TEST(ThesisCases, AllThreeReachTheGoalWithoutCollision) {
                              const_cast<char*>("--report"), report.data()};
   std::FILE* out = std::tmpfile();
   std::FILE* err = std::tmpfile();
-  const int code = sim_command(static_cast<int>(argv.size()), argv.data(), out, err);
+  const int code = sim::sim_command(static_cast<int>(argv.size()), argv.data(), out, err);
   std::fclose(out);
   std::fclose(err);
   EXPECT_EQ(code, 0) << "a case was not reached or collided (sen3bot sim exits 3 then)";

@@ -9,6 +9,7 @@
 #include "alloc_counter.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
+#include "sim_rig.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {
@@ -18,14 +19,15 @@ constexpr std::uint64_t kSteadyStateTicks = 10'000;  // task runs in all
 constexpr std::uint64_t kSlowestTaskRuns = 100;
 
 TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
-  Result<FirmwareConfig> config = load_config(SEN3BOT_SOURCE_DIR "/config/sim.yaml");
-  ASSERT_TRUE(config) << config.error().c_str();
+  testing::SimRig rig = testing::load_sim_rig();
+  ASSERT_NE(rig.board, nullptr);
+  FirmwareConfig* config = &rig.config;
   config->telemetry_status_period_ms = 1'000;  // exercise the status path often
+  hal::SimClock& clock = rig.clock();
 
   std::FILE* sink = std::fopen("/dev/null", "w");
   ASSERT_NE(sink, nullptr);
-  hal::SimClock clock;
-  Firmware fw(*config, clock, sink);
+  Firmware fw(*config, *rig.board, sink);
   ASSERT_TRUE(fw.init());
   tasks::Scheduler& scheduler = fw.scheduler();
   ASSERT_EQ(scheduler.task_count(), kTaskTable.size());

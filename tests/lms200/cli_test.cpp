@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "sim_commands.hpp"
 #include "rig.hpp"
 #include "sen3bot/sim/lms200/pty_runner.hpp"
 
@@ -33,7 +34,10 @@ CliRun run_cli(std::vector<std::string> args) {
   std::FILE* out = open_memstream(&out_buffer, &out_size);
   std::FILE* err = open_memstream(&err_buffer, &err_size);
   CliRun r;
-  r.status = firmware::cli_main(static_cast<int>(argv.size()), argv.data(), out, err);
+  // The emulator is the simulator's command; the rest are the robot's.
+  const bool simulator = args.size() > 1 && args[1] == "lms200-emulator";
+  r.status = simulator ? sim::sim_cli_main(static_cast<int>(argv.size()), argv.data(), out, err)
+                       : firmware::cli_main(static_cast<int>(argv.size()), argv.data(), out, err);
   std::fclose(out);
   std::fclose(err);
   r.out.assign(out_buffer, out_size);

@@ -10,7 +10,6 @@
 #include "rig.hpp"
 #include "sen3bot/hal/serial.hpp"
 #include "sen3bot/sim/lms200/pty_runner.hpp"
-#include "sen3bot/lms200/task.hpp"
 
 namespace sen3bot::lms200 {
 namespace {
@@ -18,7 +17,6 @@ namespace {
 struct Session {
   std::unique_ptr<Lms200PtyRunner> runner;
   std::unique_ptr<hal::SerialPort> port;
-  std::unique_ptr<SerialLineControl> line;
   std::unique_ptr<Lms200Device> device;
   hal::PosixClock clock;
 
@@ -54,8 +52,7 @@ void open_session(Session& s, const EmulatorOptions& eo, RangeSource& world, con
   Result<std::unique_ptr<hal::SerialPort>> port = hal::SerialPort::open(s.runner->slave_path(), c.baud);
   ASSERT_TRUE(port.ok()) << port.error().c_str();
   s.port = std::move(*port);
-  s.line = std::make_unique<SerialLineControl>(*s.port);
-  s.device = std::make_unique<Lms200Device>(c, *s.port, s.line.get());
+  s.device = std::make_unique<Lms200Device>(c, *s.port, s.port.get());
   s.device->start(s.clock.now());
 }
 

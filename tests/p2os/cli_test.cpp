@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "sim_commands.hpp"
 #include "sen3bot/sim/p2os/emulator_runner.hpp"
 
 namespace sen3bot::firmware {
@@ -80,9 +81,9 @@ TEST(P2osCli, ArgumentErrors) {
   EXPECT_EQ(run(drive_command, {"--vel", "0.1"}).rc, 2);
   EXPECT_EQ(run(drive_command, {"--port", "tcp://127.0.0.1:1", "--vel", "abc", "--seconds", "1"}).rc, 2);
   EXPECT_EQ(run(drive_command, {"--port", "tcp://127.0.0.1:1", "--vel", "0", "--rvel", "0", "--seconds", "1"}).rc, 1);
-  EXPECT_EQ(run(p2os_emulator_command, {}).rc, 2);
-  EXPECT_EQ(run(p2os_emulator_command, {"--tcp", "70000"}).rc, 2);
-  EXPECT_EQ(run(p2os_emulator_command, {"--pty", "/tmp/x", "--tcp", "1"}).rc, 2);
+  EXPECT_EQ(run(sim::p2os_emulator_command, {}).rc, 2);
+  EXPECT_EQ(run(sim::p2os_emulator_command, {"--tcp", "70000"}).rc, 2);
+  EXPECT_EQ(run(sim::p2os_emulator_command, {"--pty", "/tmp/x", "--tcp", "1"}).rc, 2);
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <numbers>
 
 #include "lockstep_harness.hpp"
-#include "sen3bot/p2os/task.hpp"
 
 namespace sen3bot::p2os {
 namespace {
@@ -506,69 +505,6 @@ TEST(P2osLockstep, RevertsWhenTheRobotStaysSilentAfterHostbaud) {
 }
 
 // ---- The task wrapper ----
-
-class BorrowedStream final : public hal::ByteStream {
- public:
-  explicit BorrowedStream(hal::ByteStream& inner) : inner_(inner) {}
-  Result<std::size_t> read(std::span<std::uint8_t> out) override { return inner_.read(out); }
-  Result<std::size_t> write(std::span<const std::uint8_t> data) override { return inner_.write(data); }
-  [[nodiscard]] std::string_view name() const override { return inner_.name(); }
-
- private:
-  hal::ByteStream& inner_;
-};
-
-TEST(P2osTaskTest, PublishesStateEverySipAndFollowsSetpointTopic) {
-  hal::MemoryPipe pipe(16384);
-  P2osEmulator emu(test::fast_emulator_config());
-  hal::SimClock clock(hal::seconds(1));
-  tasks::Topic<BaseSetpoint> setpoints;
-  tasks::Topic<BaseState> states;
-  int opens = 0;
-  P2osTask task(P2osConfig{}, clock, setpoints, states, [&](const P2osConfig&) -> Result<OpenedLink> {
-    ++opens;
-    OpenedLink link;
-    link.stream = std::make_unique<BorrowedStream>(pipe.a());
-    return link;
-  });
-  std::array<std::byte, 64 * 1024> buffer;
-  std::pmr::monotonic_buffer_resource arena(buffer.data(), buffer.size(), std::pmr::null_memory_resource());
-  ASSERT_TRUE(task.init(arena));
-  EXPECT_EQ(opens, 1);
-  std::uint64_t cycle = 0;
-  auto run = [&](hal::Nanos d) {
-    const hal::Nanos end = clock.now() + d;
-    while (clock.now() < end) {
-      (void)emu.step(pipe.b(), clock.now());
-      if (cycle % 25 == 0) setpoints.publish(BaseSetpoint{0.25, 0, true}, clock.now());
-      task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
-      clock.advance_by(hal::millis(2));
-    }
-  };
-  run(hal::seconds(3));
-  tasks::Sample<BaseState> sample;
-  ASSERT_TRUE(states.read(sample));
-  EXPECT_EQ(sample.value.link, LinkState::connected);
-  EXPECT_GE(sample.value.sip_count, 25u);
-  EXPECT_GE(states.published(), sample.value.sip_count);
-  EXPECT_NEAR(sample.value.v_m_s, 0.25, 0.002);
-  EXPECT_NEAR(emu.velocity_m_s(), 0.25, 1e-9);
-  // The device vanishes: the task reopens after the delay.
-  pipe.b().disconnect();
-  run(hal::millis(100));
-  ASSERT_TRUE(states.read(sample));
-  EXPECT_EQ(sample.value.link, LinkState::disconnected);
-  pipe.reset();
-  emu.reset_session();
-  run(hal::seconds(2));
-  EXPECT_EQ(opens, 2);
-  ASSERT_TRUE(states.read(sample));
-  EXPECT_EQ(sample.value.link, LinkState::connected);
-  task.shutdown();
-  EXPECT_EQ(emu.state(), EmulatorState::open);  // shutdown only wrote; the emulator has not run since
-  (void)emu.step(pipe.b(), clock.now());
-  EXPECT_EQ(emu.state(), EmulatorState::sync_wait);
-}
 
 }  // namespace
 }  // namespace sen3bot::p2os

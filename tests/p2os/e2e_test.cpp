@@ -9,7 +9,7 @@
 #include "lockstep_harness.hpp"
 #include "sen3bot/hal/serial.hpp"
 #include "sen3bot/sim/p2os/emulator_runner.hpp"
-#include "sen3bot/p2os/task.hpp"
+#include "sen3bot/hal/board.hpp"
 
 namespace sen3bot::p2os {
 namespace {
@@ -149,7 +149,8 @@ TEST(P2osPty, ProbesTheRateThenSwitchesUpWithHostbaud) {
   config.sync_misses_per_baud = 1;
   config.sync_timeout_ms = 300;
   config.switch_to_baud = 38400;
-  auto link = open_p2os_link(config);
+  hal::PosixBoard board;
+  auto link = board.open_link("base", hal::LinkRequest{config.port, config.baud});
   ASSERT_TRUE(link) << link.error().c_str();
   P2osDriver driver(config);
   RealtimeLoop loop{driver, {}, {}};
@@ -165,55 +166,6 @@ TEST(P2osPty, ProbesTheRateThenSwitchesUpWithHostbaud) {
   const std::uint64_t sips = driver.state().sip_count;
   loop.run_for(hal::millis(500));
   EXPECT_GE(driver.state().sip_count, sips + 3);
-}
-
-TEST(P2osTcp, TaskConnectsDrivesAndReconnectsAfterDrop) {
-  auto runner = TcpEmulatorRunner::start(quick_robot(), 0);
-  ASSERT_TRUE(runner) << runner.error().c_str();
-  TcpEmulatorRunner& emu = **runner;
-  P2osConfig config;
-  config.port = "tcp://127.0.0.1:" + std::to_string(emu.port());
-  config.reopen_delay_ms = 100;
-  hal::PosixClock clock;
-  tasks::Topic<BaseSetpoint> setpoints;
-  tasks::Topic<BaseState> states;
-  P2osTask task(config, clock, setpoints, states);
-  std::array<std::byte, 64 * 1024> buffer;
-  std::pmr::monotonic_buffer_resource arena(buffer.data(), buffer.size(), std::pmr::null_memory_resource());
-  ASSERT_TRUE(task.init(arena));
-  std::uint64_t cycle = 0;
-  auto run_until = [&](const std::function<bool(const BaseState&)>& done, hal::Nanos max_ns) {
-    const hal::Nanos end = clock.now() + max_ns;
-    while (clock.now() < end) {
-      const hal::Nanos now = clock.now();
-      setpoints.publish(BaseSetpoint{0.4, 0, true}, now);
-      task.step(tasks::StepContext{now, now, cycle++});
-      tasks::Sample<BaseState> s;
-      if (states.read(s) && done(s.value)) return true;
-      clock.sleep_until(now + hal::millis(2));
-    }
-    return false;
-  };
-  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link == LinkState::connected; }, hal::seconds(5)));
-  ASSERT_TRUE(run_until([](const BaseState& s) { return s.v_m_s > 0.39; }, hal::seconds(3)));
-  const double x_before = task.driver()->state().x_m;
-  EXPECT_GT(x_before, 0.0);
-  emu.drop_client();
-  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link != LinkState::connected; }, hal::seconds(2)));
-  // A new TCP client gets a fresh session from the simulator; the task reopens by itself.
-  ASSERT_TRUE(run_until([](const BaseState& s) { return s.link == LinkState::connected && s.v_m_s > 0.39; },
-                        hal::seconds(5)));
-  EXPECT_GE(emu.clients_served(), 2u);
-  task.shutdown();
-  const bool closed = [&] {
-    for (int i = 0; i < 100; ++i) {
-      if (emu.with_emulator([](P2osEmulator& e) { return e.state() == EmulatorState::sync_wait; })) return true;
-      clock.sleep_until(clock.now() + hal::millis(10));
-    }
-    return false;
-  }();
-  EXPECT_TRUE(closed);
-  EXPECT_EQ(emu.with_emulator([](P2osEmulator& e) { return e.stats().bad_checksums; }), 0u);
 }
 
 }  // namespace
