@@ -5,6 +5,7 @@
 #include <array>
 
 #include "sen3bot/tasks/scheduler.hpp"
+#include "sen3bot/tasks/utilization.hpp"
 
 namespace sen3bot::firmware {
 
@@ -27,5 +28,6 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
 };
+static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 
 }  // namespace sen3bot::firmware
