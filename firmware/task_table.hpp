@@ -8,6 +8,7 @@
 
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/tasks/scheduler.hpp"
+#include "sen3bot/tasks/utilization.hpp"
 
 namespace sen3bot::firmware {
 
@@ -30,6 +31,7 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
 };
+static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 
 constexpr const tasks::TaskSpec& row(std::string_view name) {
   for (const tasks::TaskSpec& spec : kTaskTable)

@@ -20,6 +20,12 @@ Nanos PosixClock::now() const {
   return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
 }
 
+Nanos thread_cpu_time_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<Nanos>(ts.tv_sec) * kNanosPerSecond + ts.tv_nsec;
+}
+
 void PosixClock::sleep_until(Nanos deadline_ns) {
   const timespec deadline = to_timespec(deadline_ns);
   // Absolute deadline: a signal interrupting the sleep just resumes towards the same instant.

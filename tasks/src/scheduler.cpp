@@ -123,8 +123,12 @@ void Scheduler::run_slot(Slot& slot) {
   const hal::Nanos lateness = start - release;
   const std::uint64_t runs = c.runs.load(std::memory_order_relaxed);
 
+  // Read inside the clock readings, so in real time a step's CPU time never exceeds its exec.
+  const hal::Nanos cpu_start = hal::thread_cpu_time_ns();
+
   slot.task->step(StepContext{release, start, runs});
 
+  const hal::Nanos cpu = hal::thread_cpu_time_ns() - cpu_start;
   const hal::Nanos end = clock_.now();
   const hal::Nanos exec = end - start;
 
@@ -136,6 +140,12 @@ void Scheduler::run_slot(Slot& slot) {
     c.exec_min_ns.store(exec, std::memory_order_relaxed);
   if (exec > c.exec_max_ns.load(std::memory_order_relaxed)) c.exec_max_ns.store(exec, std::memory_order_relaxed);
   c.exec_total_ns.store(c.exec_total_ns.load(std::memory_order_relaxed) + exec, std::memory_order_relaxed);
+  if (cpu > slot.budget_ns)
+    c.cpu_overruns.store(c.cpu_overruns.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  if (runs == 0 || cpu < c.cpu_min_ns.load(std::memory_order_relaxed))
+    c.cpu_min_ns.store(cpu, std::memory_order_relaxed);
+  if (cpu > c.cpu_max_ns.load(std::memory_order_relaxed)) c.cpu_max_ns.store(cpu, std::memory_order_relaxed);
+  c.cpu_total_ns.store(c.cpu_total_ns.load(std::memory_order_relaxed) + cpu, std::memory_order_relaxed);
   c.last_start_ns.store(start, std::memory_order_relaxed);
   c.runs.store(runs + 1, std::memory_order_release);
 
@@ -235,11 +245,15 @@ TaskStats Scheduler::stats(std::size_t index) const {
   s.priority = slot.spec.priority;
   s.runs = c.runs.load(std::memory_order_acquire);
   s.overruns = c.overruns.load(std::memory_order_relaxed);
+  s.cpu_overruns = c.cpu_overruns.load(std::memory_order_relaxed);
   s.slips = c.slips.load(std::memory_order_relaxed);
   s.skips = c.skips.load(std::memory_order_relaxed);
   s.exec_min_ns = c.exec_min_ns.load(std::memory_order_relaxed);
   s.exec_max_ns = c.exec_max_ns.load(std::memory_order_relaxed);
   s.exec_mean_ns = s.runs ? c.exec_total_ns.load(std::memory_order_relaxed) / static_cast<std::int64_t>(s.runs) : 0;
+  s.cpu_min_ns = c.cpu_min_ns.load(std::memory_order_relaxed);
+  s.cpu_max_ns = c.cpu_max_ns.load(std::memory_order_relaxed);
+  s.cpu_mean_ns = s.runs ? c.cpu_total_ns.load(std::memory_order_relaxed) / static_cast<std::int64_t>(s.runs) : 0;
   s.jitter_p50_ns = c.release_jitter.percentile_ns(0.50);
   s.jitter_p99_ns = c.release_jitter.percentile_ns(0.99);
   s.jitter_max_ns = c.release_jitter.max_ns();
@@ -248,20 +262,28 @@ TaskStats Scheduler::stats(std::size_t index) const {
 }
 
 void Scheduler::print_stats(std::FILE* out) const {
-  std::fprintf(out, "%-14s %-11s %9s %8s %3s %9s %8s %6s %6s %24s %24s\n", "task", "thread", "period_us", "budget_us",
-               "pri", "runs", "overruns", "slips", "skips", "exec min/mean/max us", "jitter p50/p99/max us");
+  // Three durations in microseconds as one column, e.g. "12.0/15.3/40.1".
+  const auto triple = [](char (&buf)[48], std::int64_t a_ns, std::int64_t b_ns, std::int64_t c_ns) {
+    std::snprintf(buf, sizeof buf, "%.1f/%.1f/%.1f", static_cast<double>(a_ns) / 1e3, static_cast<double>(b_ns) / 1e3,
+                  static_cast<double>(c_ns) / 1e3);
+  };
+  std::fprintf(out, "%-14s %-11s %9s %8s %3s %9s %8s %8s %6s %6s %24s %24s %24s\n", "task", "thread", "period_us",
+               "budget_us", "pri", "runs", "overruns", "cpu_over", "slips", "skips", "exec min/mean/max us",
+               "cpu min/mean/max us", "jitter p50/p99/max us");
   for (std::size_t i = 0; i < task_count_; ++i) {
     const TaskStats s = stats(i);
     char exec[48];
+    char cpu[48];
     char jitter[48];
-    std::snprintf(exec, sizeof exec, "%.1f/%.1f/%.1f", static_cast<double>(s.exec_min_ns) / 1e3,
-                  static_cast<double>(s.exec_mean_ns) / 1e3, static_cast<double>(s.exec_max_ns) / 1e3);
-    std::snprintf(jitter, sizeof jitter, "%.1f/%.1f/%.1f", static_cast<double>(s.jitter_p50_ns) / 1e3,
-                  static_cast<double>(s.jitter_p99_ns) / 1e3, static_cast<double>(s.jitter_max_ns) / 1e3);
-    std::fprintf(out, "%-14.*s %-11.*s %9" PRId64 " %8" PRId64 " %3d %9" PRIu64 " %8" PRIu64 " %6" PRIu64
-                      " %6" PRIu64 " %24s %24s\n",
+    triple(exec, s.exec_min_ns, s.exec_mean_ns, s.exec_max_ns);
+    triple(cpu, s.cpu_min_ns, s.cpu_mean_ns, s.cpu_max_ns);
+    triple(jitter, s.jitter_p50_ns, s.jitter_p99_ns, s.jitter_max_ns);
+    std::fprintf(out,
+                 "%-14.*s %-11.*s %9" PRId64 " %8" PRId64 " %3d %9" PRIu64 " %8" PRIu64 " %8" PRIu64 " %6" PRIu64
+                 " %6" PRIu64 " %24s %24s %24s\n",
                  static_cast<int>(s.name.size()), s.name.data(), static_cast<int>(s.thread.size()), s.thread.data(),
-                 s.period_us, s.budget_us, s.priority, s.runs, s.overruns, s.slips, s.skips, exec, jitter);
+                 s.period_us, s.budget_us, s.priority, s.runs, s.overruns, s.cpu_overruns, s.slips, s.skips, exec, cpu,
+                 jitter);
   }
 }
 

@@ -1,13 +1,17 @@
-// The navigation tasks composed as the firmware composes them: topics, arenas, and a task
-// table on the fixed-rate scheduler, run in lockstep on a simulated clock. A simulation task
-// (highest priority) plays the Pioneer and the LMS200 in the ground-truth world.
+// The navigation tasks composed as the firmware composes them: topics, arenas, and the
+// firmware's own task table rows on the fixed-rate scheduler, run in lockstep on a simulated
+// clock. A simulation task (on the table's "sim" row) plays the Pioneer and the LMS200 in the
+// ground-truth world.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string_view>
 
 #include "alloc_counter.hpp"
+#include "firmware/task_table.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
@@ -17,8 +21,17 @@
 namespace sen3bot::nav {
 namespace {
 
+// The firmware's row of a named task. Evaluated at compile time, so a row renamed or removed
+// from the table fails the build instead of the test silently using other numbers.
+consteval tasks::TaskSpec firmware_row(std::string_view name) {
+  for (const tasks::TaskSpec& row : firmware::kTaskTable)
+    if (row.name == name) return row;
+  throw std::invalid_argument("no such row in firmware::kTaskTable");
+}
+
 // Stands in for the base and laser drivers: publishes odometry every step and a scan every
-// other step, and moves the robot by the safety task's command (acceleration-limited).
+// 100 ms (the rate the safety configuration below expects, whatever the sim row's period),
+// and moves the robot by the safety task's command (acceleration-limited).
 class SimulatedRobot final : public tasks::Task {
  public:
   SimulatedRobot(world::World& truth, const SensorMount& mount, tasks::Topic<ScanMessage>& scan,
@@ -53,7 +66,8 @@ class SimulatedRobot final : public tasks::Task {
     truth_.set_time(static_cast<double>(now) * 1e-9);
     base_.publish({false, true}, now);
     odom_.publish({odom_pose_.x_m, odom_pose_.y_m, odom_pose_.theta_rad, v_, w_, now, true}, now);
-    if (context.cycle % 2 == 0) {
+    if (last_scan_ns_ < 0 || now - last_scan_ns_ >= kScanPeriod_ns) {
+      last_scan_ns_ = now;
       truth_.noisy_scan(compose(robot_, mount_), msg_.angle_min_rad, msg_.increment_rad, msg_.count, msg_.range_max_m,
                         std::span<float>(msg_.ranges_m.data(), msg_.count));
       msg_.stamp_ns = now;
@@ -75,7 +89,9 @@ class SimulatedRobot final : public tasks::Task {
   Pose2D odom_pose_{2.5, 2.0, M_PI / 2.0};
   double v_ = 0.0;
   double w_ = 0.0;
+  static constexpr hal::Nanos kScanPeriod_ns = hal::millis(100);
   hal::Nanos last_ns_ = -1;
+  hal::Nanos last_scan_ns_ = -1;
   int collisions_ = 0;
   std::mt19937_64 rng_{7};
   std::normal_distribution<double> noise_{0.0, 0.01};
@@ -138,14 +154,14 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   ASSERT_TRUE(controller.init(controller_arena));
   ASSERT_TRUE(planner.init(planner_arena));
 
-  // The task table: name, period, budget, priority, thread.
+  // The firmware's rows for these tasks: period, budget, priority and thread as on the robot.
   hal::SimClock clock;
   tasks::Scheduler scheduler(clock);
-  ASSERT_TRUE(scheduler.add({"sim_robot", 50'000, 5'000, 90, "control"}, robot));
-  ASSERT_TRUE(scheduler.add({"nav_safety", 50'000, 1'000, 80, "control"}, safety));
-  ASSERT_TRUE(scheduler.add({"nav_localization", 50'000, 15'000, 70, "control"}, localization));
-  ASSERT_TRUE(scheduler.add({"nav_controller", 100'000, 10'000, 60, "control"}, controller));
-  ASSERT_TRUE(scheduler.add({"nav_planner", 500'000, 30'000, 10, "background"}, planner));
+  ASSERT_TRUE(scheduler.add(firmware_row("sim"), robot));
+  ASSERT_TRUE(scheduler.add(firmware_row("safety"), safety));
+  ASSERT_TRUE(scheduler.add(firmware_row("localization"), localization));
+  ASSERT_TRUE(scheduler.add(firmware_row("controller"), controller));
+  ASSERT_TRUE(scheduler.add(firmware_row("planner"), planner));
 
   goal.publish({4.0, 7.0, 1, true}, 0);
   mem::testing::AllocationScope scope;
@@ -160,6 +176,9 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   EXPECT_EQ(robot.collisions(), 0);
   EXPECT_EQ(allocations, 0u);
   EXPECT_LT(std::hypot(robot.pose().x_m - 4.0, robot.pose().y_m - 7.0), 0.25);
+  // The simulated clock never moved inside a step, yet every task's cost was measured.
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i)
+    EXPECT_GT(scheduler.stats(i).cpu_max_ns, 0) << scheduler.spec(i).name;
   scheduler.print_stats(stdout);
 }
 

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <ctime>
 #include <functional>
 #include <thread>
 
@@ -86,6 +87,60 @@ TEST(Scheduler, OverrunIsCountedWhenAStepExceedsItsBudget) {
   EXPECT_EQ(s.exec_min_ns, micros(300));
   EXPECT_EQ(s.exec_max_ns, micros(700));
   EXPECT_EQ(s.exec_mean_ns, (34 * micros(700) + 66 * micros(300)) / 100);
+}
+
+// Keeps the CPU busy for `ns` of process CPU time. It reads std::clock rather than the HAL's
+// thread clock so the measurement under test is checked against an independent one.
+void burn_cpu(hal::Nanos ns) {
+  const std::clock_t start = std::clock();
+  const auto ticks = static_cast<std::clock_t>(static_cast<double>(ns) * 1e-9 * CLOCKS_PER_SEC);
+  volatile std::uint64_t sink = 0;
+  while (std::clock() - start < ticks) sink = sink + 1;
+}
+
+TEST(Scheduler, LockstepMeasuresTheCpuTimeOfEachStep) {
+  hal::SimClock clock;
+  Scheduler scheduler(clock);
+  ScriptedTask burner([](const StepContext&) { burn_cpu(millis(2)); });
+  ScriptedTask idle;
+  ASSERT_TRUE(scheduler.add({"burner", 10'000, 5'000, 50, "control"}, burner));
+  ASSERT_TRUE(scheduler.add({"idle", 10'000, 5'000, 40, "control"}, idle));
+  ASSERT_TRUE(scheduler.run_lockstep(clock, millis(200)));
+
+  const TaskStats b = scheduler.stats(0);
+  EXPECT_EQ(b.runs, 20u);
+  // The simulated clock stood still: only the CPU time shows the work. Bounds are loose (other
+  // threads of a sanitizer runtime share the process clock) but far from zero.
+  EXPECT_EQ(b.exec_max_ns, 0);
+  EXPECT_GE(b.cpu_min_ns, millis(1));
+  EXPECT_GE(b.cpu_mean_ns, micros(1'500));
+  EXPECT_LE(b.cpu_mean_ns, millis(10));
+  EXPECT_LE(b.cpu_min_ns, b.cpu_mean_ns);
+  EXPECT_LE(b.cpu_mean_ns, b.cpu_max_ns);
+  EXPECT_EQ(b.cpu_overruns, 0u);
+
+  const TaskStats i = scheduler.stats(1);
+  EXPECT_EQ(i.runs, 20u);
+  EXPECT_LT(i.cpu_mean_ns, micros(200));
+  EXPECT_EQ(i.cpu_overruns, 0u);
+}
+
+TEST(Scheduler, LockstepCountsCpuOverrunsThatTheSimulatedClockCannotShow) {
+  hal::SimClock clock;
+  Scheduler scheduler(clock);
+  // Every other run burns 3 ms of CPU against a 1 ms budget; the others do nothing.
+  ScriptedTask task([](const StepContext& c) {
+    if (c.cycle % 2 == 0) burn_cpu(millis(3));
+  });
+  ASSERT_TRUE(scheduler.add({"worker", 10'000, 1'000, 50, "control"}, task));
+  ASSERT_TRUE(scheduler.run_lockstep(clock, millis(100)));
+  const TaskStats s = scheduler.stats(0);
+  EXPECT_EQ(s.runs, 10u);
+  EXPECT_EQ(s.cpu_overruns, 5u);  // cycles 0, 2, 4, 6, 8
+  EXPECT_EQ(s.overruns, 0u);      // on the simulated clock every step took no time
+  EXPECT_EQ(s.slips, 0u);
+  EXPECT_EQ(s.skips, 0u);
+  EXPECT_GT(s.cpu_max_ns, millis(1));
 }
 
 TEST(Scheduler, ALongStepSkipsTheMissedReleasesAndRephasesWithoutBursting) {
@@ -209,6 +264,8 @@ TEST(Scheduler, RealTimeThreadsKeepTheirRateAndNeverBurst) {
   // Every release up to the stop is either run or counted as skipped, never both.
   EXPECT_LE(f.runs + f.skips, static_cast<std::uint64_t>(elapsed / micros(2'000)) + 2);
   EXPECT_GE(scheduler.stats(1).runs, 1u);
+  // CPU time is read inside the wall-clock interval of each step, so it cannot exceed it.
+  EXPECT_LE(f.cpu_max_ns, f.exec_max_ns + micros(50));
 }
 
 }  // namespace

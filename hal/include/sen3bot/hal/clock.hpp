@@ -19,6 +19,12 @@ constexpr Nanos millis(std::int64_t ms) { return ms * kNanosPerMilli; }
 constexpr Nanos seconds(std::int64_t s) { return s * kNanosPerSecond; }
 constexpr double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
 
+// CPU time consumed so far by the calling thread (CLOCK_THREAD_CPUTIME_ID on POSIX). Unlike a
+// Clock it counts only time this thread spent running, so the difference around a call is the
+// work that call did: in lockstep, where the simulated clock stands still during a step, it is
+// the only measure of a step's cost, and in real time it leaves out preemption and sleeps.
+[[nodiscard]] Nanos thread_cpu_time_ns() noexcept;
+
 class Clock {
  public:
   virtual ~Clock() = default;

@@ -3,7 +3,9 @@
 // absolute deadlines (release_k = start + k * period) and runs the due ones in descending
 // priority. A task that starts a period or more late counts a slip; the releases it missed
 // are counted as skips and dropped (the task is re-phased onto its original grid, never run
-// in a burst to catch up). The same code runs in real time (one OS thread per group,
+// in a burst to catch up). Each step's cost is measured twice: on the scheduler's clock and
+// as the CPU time of the running thread; the latter is the only one a lockstep run can show,
+// because the simulated clock stands still during a step. The same code runs in real time (one OS thread per group,
 // clock_nanosleep) and in lockstep on a SimClock (all groups on the calling thread).
 #include <array>
 #include <atomic>
@@ -23,7 +25,8 @@ namespace sen3bot::tasks {
 struct TaskSpec {
   std::string_view name;
   std::int64_t period_us = 0;
-  std::int64_t budget_us = 0;  // execution time above this counts an overrun
+  // Execution time above this counts an overrun, CPU time above it a CPU overrun.
+  std::int64_t budget_us = 0;
   // 1..99 on the SCHED_FIFO scale, 0 for a task that needs no real-time priority. Within a
   // thread, due tasks run highest first; a thread runs at the highest priority of its tasks.
   int priority = 0;
@@ -34,12 +37,19 @@ struct TaskSpec {
 // any thread at any time (relaxed atomics: each field is individually consistent).
 struct TaskCounters {
   std::atomic<std::uint64_t> runs{0};
-  std::atomic<std::uint64_t> overruns{0};  // execution time > budget
-  std::atomic<std::uint64_t> slips{0};     // started >= one period after its release
-  std::atomic<std::uint64_t> skips{0};     // releases dropped while the task was late
+  std::atomic<std::uint64_t> overruns{0};      // execution time (scheduler's clock) > budget
+  std::atomic<std::uint64_t> cpu_overruns{0};  // CPU time of the step > budget
+  std::atomic<std::uint64_t> slips{0};         // started >= one period after its release
+  std::atomic<std::uint64_t> skips{0};         // releases dropped while the task was late
+  // Execution time on the scheduler's clock: wall time in real time, the simulated cost (what
+  // the step advanced the clock by) in lockstep.
   std::atomic<std::int64_t> exec_min_ns{0};
   std::atomic<std::int64_t> exec_max_ns{0};
   std::atomic<std::int64_t> exec_total_ns{0};
+  // CPU time the running thread spent in the step (hal::thread_cpu_time_ns), in both modes.
+  std::atomic<std::int64_t> cpu_min_ns{0};
+  std::atomic<std::int64_t> cpu_max_ns{0};
+  std::atomic<std::int64_t> cpu_total_ns{0};
   std::atomic<std::int64_t> last_start_ns{0};
   LatencyHistogram release_jitter;  // start - release
 };
@@ -53,11 +63,15 @@ struct TaskStats {
   int priority = 0;
   std::uint64_t runs = 0;
   std::uint64_t overruns = 0;
+  std::uint64_t cpu_overruns = 0;
   std::uint64_t slips = 0;
   std::uint64_t skips = 0;
   std::int64_t exec_min_ns = 0;
   std::int64_t exec_mean_ns = 0;
   std::int64_t exec_max_ns = 0;
+  std::int64_t cpu_min_ns = 0;
+  std::int64_t cpu_mean_ns = 0;
+  std::int64_t cpu_max_ns = 0;
   std::int64_t jitter_p50_ns = 0;
   std::int64_t jitter_p99_ns = 0;
   std::int64_t jitter_max_ns = 0;
