@@ -1,6 +1,6 @@
 // The navigation tasks composed as the firmware composes them: topics, arenas, and the
 // firmware's own task table rows on the fixed-rate scheduler, run in lockstep on a simulated
-// clock. A simulation task (on the table's "sim" row) plays the Pioneer and the LMS200 in the
+// clock. A stand-in for the device tasks (on the table's "base" row) plays the Pioneer and the LMS200 in the
 // ground-truth world.
 #include <gtest/gtest.h>
 
@@ -30,7 +30,7 @@ consteval tasks::TaskSpec firmware_row(std::string_view name) {
 }
 
 // Stands in for the base and laser drivers: publishes odometry every step and a scan every
-// 100 ms (the rate the safety configuration below expects, whatever the sim row's period),
+// 100 ms (the rate the safety configuration below expects, whatever the base row's period),
 // and moves the robot by the safety task's command (acceleration-limited).
 class SimulatedRobot final : public tasks::Task {
  public:
@@ -157,7 +157,7 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   // The firmware's rows for these tasks: period, budget, priority and thread as on the robot.
   hal::SimClock clock;
   tasks::Scheduler scheduler(clock);
-  ASSERT_TRUE(scheduler.add(firmware_row("sim"), robot));
+  ASSERT_TRUE(scheduler.add(firmware_row("base"), robot));
   ASSERT_TRUE(scheduler.add(firmware_row("safety"), safety));
   ASSERT_TRUE(scheduler.add(firmware_row("localization"), localization));
   ASSERT_TRUE(scheduler.add(firmware_row("controller"), controller));
