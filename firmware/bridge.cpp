@@ -12,8 +12,8 @@ namespace {
 constexpr float kLaserRangeMinM = 0.02f;
 }  // namespace
 
-void to_nav_scan(const lms200::LaserScan& in, nav::ScanMessage& out) noexcept {
-  const std::size_t count = std::min<std::size_t>(in.count, nav::ScanMessage::kMaxBeams);
+void to_nav_scan(const lms200::LaserScan& in, msg::ScanMessage& out) noexcept {
+  const std::size_t count = std::min<std::size_t>(in.count, msg::ScanMessage::kMaxBeams);
   out.count = static_cast<std::uint16_t>(count);
   out.angle_min_rad = in.angle_min_rad;
   out.increment_rad = in.angle_increment_rad;
@@ -31,8 +31,8 @@ void to_nav_scan(const lms200::LaserScan& in, nav::ScanMessage& out) noexcept {
   }
 }
 
-nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
-  nav::Odometry odom;
+msg::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
+  msg::Odometry odom;
   odom.x_m = in.x_m;
   odom.y_m = in.y_m;
   odom.theta_rad = in.theta_rad;
@@ -53,11 +53,11 @@ void BridgeTask::step(const tasks::StepContext& context) {
   if (topics_.base.read(base) && base.sequence != base_seq_) {
     base_seq_ = base.sequence;
     topics_.odometry.publish(to_nav_odometry(base.value), context.start_ns);
-    topics_.base_flags.publish(nav::BaseFlags{base.value.estop, base.value.motors_enabled}, context.start_ns);
+    topics_.base_flags.publish(msg::BaseFlags{base.value.estop, base.value.motors_enabled}, context.start_ns);
   }
   // Only fresh commands are forwarded: if the safety task stops publishing, the base driver's
   // own command timeout stops the robot.
-  tasks::Sample<nav::VelocityCommand> command;
+  tasks::Sample<msg::VelocityCommand> command;
   if (topics_.command.read(command) && command.sequence != command_seq_) {
     command_seq_ = command.sequence;
     topics_.setpoint.publish(p2os::BaseSetpoint{command.value.v_m_s, command.value.w_rad_s, true}, context.start_ns);

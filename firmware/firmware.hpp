@@ -19,7 +19,7 @@
 #include "sen3bot/p2os/types.hpp"
 #include "sen3bot/sim/simulation.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "bridge.hpp"

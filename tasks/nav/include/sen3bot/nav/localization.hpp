@@ -26,6 +26,7 @@
 #include <span>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav/scan.hpp"
@@ -76,23 +77,7 @@ struct MclConfig {
   std::uint64_t seed = 1;
 };
 
-struct PoseEstimate {
-  Pose2D pose;                  // map frame
-  double cov_xx = 0.0;          // m^2
-  double cov_xy = 0.0;
-  double cov_yy = 0.0;
-  double cov_tt = 0.0;          // rad^2
-  std::uint32_t particles = 0;
-  std::uint32_t updates = 0;
-  bool valid = false;           // initialised
-  bool lost = false;            // spread above lost_std_xy_m
-  hal::Nanos stamp_ns = 0;
-  // Where the robot was when the newest scan the filter was given was taken (map frame), and
-  // that scan's stamp (0: none). The costmaps place that scan from here, not from pose.
-  Pose2D scan_pose;
-  hal::Nanos scan_stamp_ns = 0;
-};
-static_assert(std::is_trivially_copyable_v<PoseEstimate>);
+using msg::PoseEstimate;
 
 // The standard-normal quantile: Phi^-1(p) for 0 < p < 1 (Acklam's rational approximation,
 // relative error below 1.2e-9).

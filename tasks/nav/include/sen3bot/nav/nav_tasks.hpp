@@ -15,17 +15,22 @@
 #include <cstdint>
 #include <span>
 
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
-#include "sen3bot/nav/messages.hpp"
 #include "sen3bot/nav/odometry_history.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
 namespace sen3bot::nav {
+
+using msg::BaseFlags;
+using msg::ControllerStatus;
+using msg::NavGoal;
+using msg::PathMessage;
 
 // --- Localization ----------------------------------------------------------------------------
 

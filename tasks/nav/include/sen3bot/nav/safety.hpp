@@ -16,20 +16,18 @@
 // max_reverse_m_s (the back-off recovery's speed).
 #include <array>
 #include <cstdint>
-#include <type_traits>
 
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/scan.hpp"
 
 namespace sen3bot::nav {
 
-struct VelocityCommand {
-  double v_m_s = 0.0;
-  double w_rad_s = 0.0;
-  hal::Nanos stamp_ns = 0;
-};
-static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+using msg::SafetyOutput;
+using msg::SafetyReason;
+using msg::VelocityCommand;
+using enum msg::SafetyReason;
 
 struct SafetyConfig {
   double scan_period_s = 0.2;      // LMS200 at 38.4 kbaud: about 5 scans/s
@@ -45,18 +43,6 @@ struct SafetyConfig {
   SensorMount laser_mount;
 };
 
-enum SafetyReason : std::uint32_t {
-  kSafetyNone = 0,
-  kSafetyScanStale = 1u << 0,
-  kSafetyOdomStale = 1u << 1,
-  kSafetyEstop = 1u << 2,
-  kSafetyMotorsOff = 1u << 3,
-  kSafetyLocalizationLost = 1u << 4,
-  kSafetyObstacle = 1u << 5,       // stopped for a point in the stop zone
-  kSafetySlowed = 1u << 6,         // scaled down in the slow zone
-  kSafetyReverseCapped = 1u << 7,
-};
-
 struct SafetyInputs {
   VelocityCommand requested;
   const ScanView* scan = nullptr;  // the newest scan, or null if none ever arrived
@@ -67,14 +53,6 @@ struct SafetyInputs {
   double measured_v_m_s = 0.0;     // odometry speed, for the braking distance
   hal::Nanos now_ns = 0;
 };
-
-struct SafetyOutput {
-  VelocityCommand command;
-  std::uint32_t reasons = kSafetyNone;
-  double nearest_ahead_m = 0.0;  // free travel along the commanded arc (+inf: clear to the slow zone's end)
-  double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
-};
-static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 
 class SafetyFilter {
  public:
