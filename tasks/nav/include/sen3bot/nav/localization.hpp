@@ -128,11 +128,7 @@ class MonteCarloLocalization {
   MclConfig config_;
   double z_ = 2.326;
   // Likelihood field over the map grid.
-  int width_ = 0;
-  int height_ = 0;
-  double resolution_m_ = 0.05;
-  double origin_x_m_ = 0.0;
-  double origin_y_m_ = 0.0;
+  GridGeometry grid_;
   float pz_far_ = 0.0f;
   float pz_skip_ = 0.0f;  // likelihood at beam_skip_distance_m
   float log_pz_far_ = 0.0f;
