@@ -12,7 +12,7 @@ constexpr hal::Nanos kSecond = 1'000'000'000;
 
 struct Scene {
   ScanMessage msg;
-  ScanView view;
+  ProjectedScan view;
   SafetyInputs in;
   Scene() {
     msg.count = 181;
@@ -21,7 +21,7 @@ struct Scene {
     msg.range_max_m = 8.0f;
     for (std::size_t i = 0; i < 181; ++i) msg.ranges_m[i] = 5.0f;
     msg.stamp_ns = 10 * kSecond;
-    view = msg.view();
+    view.assign(msg.view(), {});
     in.scan = &view;
     in.odom_stamp_ns = 10 * kSecond;
     in.now_ns = 10 * kSecond + kSecond / 10;
@@ -85,7 +85,7 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   Scene s;
   // A point 0.4 m straight ahead: 0.17 m past the front edge (0.2275 m), inside the stop zone.
   s.msg.ranges_m[90] = 0.4f;
-  s.view = s.msg.view();
+  s.view.assign(s.msg.view(), {});
   SafetyOutput out = f.filter(s.in);
   EXPECT_TRUE(out.reasons & kSafetyObstacle);
   EXPECT_EQ(out.command.v_m_s, 0.0);
@@ -96,7 +96,7 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   // The same point 60 degrees to the side is outside the corridor.
   Scene side;
   side.msg.ranges_m[150] = 0.9f;
-  side.view = side.msg.view();
+  side.view.assign(side.msg.view(), {});
   out = f.filter(side.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
   EXPECT_DOUBLE_EQ(out.command.v_m_s, 0.4);
@@ -104,7 +104,7 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   // 0.25 + 0.04 + 0.1333 = 0.4233 m; half way into the 0.35 m slow zone halves the speed.
   Scene slow;
   slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.04 + 0.16 / 1.2 + 0.175);
-  slow.view = slow.msg.view();
+  slow.view.assign(slow.msg.view(), {});
   slow.in.requested.w_rad_s = 0.0;
   out = f.filter(slow.in);
   EXPECT_TRUE(out.reasons & kSafetySlowed);
@@ -119,7 +119,7 @@ TEST(Safety, NeverRaisesSpeed) {
   for (int trial = 0; trial < 2000; ++trial) {
     Scene s;
     for (std::size_t i = 0; i < 181; ++i) s.msg.ranges_m[i] = r(rng);
-    s.view = s.msg.view();
+    s.view.assign(s.msg.view(), {});
     s.in.requested = {v(rng), v(rng) * 2.0, s.in.now_ns};
     const SafetyOutput out = f.filter(s.in);
     EXPECT_LE(std::abs(out.command.v_m_s), std::abs(s.in.requested.v_m_s));
@@ -139,7 +139,7 @@ TEST(Safety, FollowsTheCommandedArc) {
   SafetyFilter f;
   Scene s;
   s.msg.ranges_m[90] = 0.45f;  // straight ahead, 0.22 m past the front edge
-  s.view = s.msg.view();
+  s.view.assign(s.msg.view(), {});
   s.in.requested = {0.1, 0.0, s.in.now_ns};
   EXPECT_TRUE(f.filter(s.in).reasons & kSafetyObstacle);
   s.in.requested = {0.1, 1.0, s.in.now_ns};  // a tight left arc (0.1 m radius) misses it

@@ -195,23 +195,32 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
   grid_.set_origin(master.origin_x_m(), master.origin_y_m());
   const double res = grid_.resolution_m();
   if (inputs.scan != nullptr) {
-    const ScanView& scan = *inputs.scan;
-    const Pose2D& s = inputs.sensor_pose;
-    const double sx = (s.x_m - grid_.origin_x_m()) / res;
-    const double sy = (s.y_m - grid_.origin_y_m()) / res;
+    const ProjectedScan& scan = *inputs.scan;
+    // Beams are in the robot frame; the robot stood at scan_pose when the scan was taken.
+    const Pose2D& p = inputs.scan_pose;
+    const double pc = std::cos(p.theta_rad);
+    const double ps = std::sin(p.theta_rad);
+    const auto to_grid = [&](double x_m, double y_m, double& gx, double& gy) {
+      gx = (p.x_m + pc * x_m - ps * y_m - grid_.origin_x_m()) / res;
+      gy = (p.y_m + ps * x_m + pc * y_m - grid_.origin_y_m()) / res;
+    };
+    const SensorMount& mount = scan.mount();
+    double sx = 0.0;
+    double sy = 0.0;
+    to_grid(mount.x_m, mount.y_m, sx, sy);
     const int c0 = static_cast<int>(std::floor(sx));
     const int r0 = static_cast<int>(std::floor(sy));
     // Clearing first, then marking, so a ray never erases another beam's endpoint.
-    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      const double range = scan.ranges_m[i];
-      if (!std::isfinite(range) || range < scan.range_min_m) continue;
-      const bool no_return = range >= scan.range_max_m;
-      if (no_return && !config_.clear_no_return) continue;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      const bool no_return = scan.no_return(i);
+      if (!scan.valid(i) && !(no_return && config_.clear_no_return)) continue;
+      const double range = scan.range_m(i);
       const double clear_range = std::min(no_return ? config_.raytrace_max_range_m : range, config_.raytrace_max_range_m);
       if (clear_range <= config_.raytrace_min_range_m) continue;
-      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-      const double ex = sx + std::cos(angle) * clear_range / res;
-      const double ey = sy + std::sin(angle) * clear_range / res;
+      const Point2D& u = scan.direction(i);
+      double ex = 0.0;
+      double ey = 0.0;
+      to_grid(mount.x_m + u.x_m * clear_range, mount.y_m + u.y_m * clear_range, ex, ey);
       const int max_cells = static_cast<int>(std::ceil(2.0 * clear_range / res)) + 2;
       const int c1 = static_cast<int>(std::floor(ex));
       const int r1 = static_cast<int>(std::floor(ey));
@@ -219,14 +228,14 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
       // A ray cut short by the range limit clears its last cell too.
       if (clear_range < range && grid_.in_bounds(c1, r1)) grid_.set(c1, r1, kFreeCost);
     }
-    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      const double range = scan.ranges_m[i];
-      if (!std::isfinite(range) || range < scan.range_min_m || range >= scan.range_max_m) continue;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (!scan.valid(i)) continue;
+      const double range = scan.range_m(i);
       if (range > config_.obstacle_max_range_m || range < config_.obstacle_min_range_m) continue;
-      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+      const Point2D& e = scan.end(i);
       int c = 0;
       int r = 0;
-      if (grid_.world_to_cell(s.x_m + std::cos(angle) * range, s.y_m + std::sin(angle) * range, c, r)) {
+      if (grid_.world_to_cell(p.x_m + pc * e.x_m - ps * e.y_m, p.y_m + ps * e.x_m + pc * e.y_m, c, r)) {
         grid_.set(c, r, kLethalCost);
       }
     }

@@ -199,8 +199,8 @@ void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to)
   }
 }
 
-void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
-  const std::size_t beams = scan.ranges_m.size();
+void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
+  const std::size_t beams = scan.size();
   if (beams == 0) return;
   const std::size_t used = std::min(beams, config_.max_beams);
   const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
@@ -208,17 +208,11 @@ void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
   double bx[512];
   double by[512];
   std::size_t n = 0;
-  const double mc = std::cos(config_.laser_mount.theta_rad);
-  const double ms = std::sin(config_.laser_mount.theta_rad);
   for (std::size_t k = 0; k < used && n < 512; ++k) {
     const auto i = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
-    const double r = scan.ranges_m[i];
-    if (!std::isfinite(r) || r < scan.range_min_m || r >= scan.range_max_m) continue;
-    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-    const double sx = r * std::cos(a);
-    const double sy = r * std::sin(a);
-    bx[n] = config_.laser_mount.x_m + mc * sx - ms * sy;
-    by[n] = config_.laser_mount.y_m + ms * sx + mc * sy;
+    if (!scan.valid(i)) continue;
+    bx[n] = scan.end(i).x_m;
+    by[n] = scan.end(i).y_m;
     ++n;
   }
   if (n == 0) return;
@@ -366,11 +360,11 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m;
 }
 
-bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan) noexcept {
+bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan) noexcept {
   return update(odom, scan, Pose2D{odom.x_m, odom.y_m, odom.theta_rad});
 }
 
-bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept {
+bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan, const Pose2D& odom_at_scan) noexcept {
   const Pose2D now{odom.x_m, odom.y_m, odom.theta_rad};
   odom_latest_ = now;
   if (!have_odom_) {

@@ -19,7 +19,7 @@
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/grid_geometry.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/nav/scan.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 
 namespace sen3bot::nav {
 
@@ -64,9 +64,9 @@ class Costmap2D {
 
 // What one costmap update sees. scan may be null (no new scan this cycle).
 struct CostmapInputs {
-  Pose2D robot_pose;   // map frame
-  Pose2D sensor_pose;  // map frame
-  const ScanView* scan = nullptr;
+  Pose2D robot_pose;  // map frame
+  Pose2D scan_pose;   // map frame: where the robot was when the scan was taken
+  const ProjectedScan* scan = nullptr;
 };
 
 // A plug-in layer. Later layers (dynamic obstacles, people) implement this too.

@@ -29,6 +29,7 @@
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/scan.hpp"
 
 namespace sen3bot::nav {
@@ -73,7 +74,7 @@ struct MclConfig {
   double initial_std_xy_m = 0.25;
   double initial_std_theta_rad = 0.2;
   double lost_std_xy_m = 1.0;          // estimate reported lost above this position spread
-  SensorMount laser_mount;
+  SensorMount laser_mount;            // LocalizationTask projects scans with it
   std::uint64_t seed = 1;
 };
 
@@ -97,11 +98,11 @@ class MonteCarloLocalization {
   void global_initialize() noexcept;
 
   // Feeds odometry and (optionally) a scan. Returns true when a filter update ran.
-  bool update(const Odometry& odom, const ScanView* scan) noexcept;
+  bool update(const Odometry& odom, const ProjectedScan* scan) noexcept;
   // The same for a scan taken when odometry read odom_at_scan (an older pose than odom's, from
   // an OdometryHistory): the update happens at the scan's pose, and estimate() carries the
   // result forward to odom.
-  bool update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept;
+  bool update(const Odometry& odom, const ProjectedScan* scan, const Pose2D& odom_at_scan) noexcept;
   // The filter pose carried to an odometry pose (estimate() does this for the newest one).
   [[nodiscard]] Pose2D pose_at_odometry(const Pose2D& odom_pose) const noexcept;
 
@@ -119,7 +120,7 @@ class MonteCarloLocalization {
     double weight;
   };
   void motion_update(const Pose2D& from, const Pose2D& to) noexcept;
-  void sensor_update(const ScanView& scan) noexcept;
+  void sensor_update(const ProjectedScan& scan) noexcept;
   void resample() noexcept;
   void compute_estimate() noexcept;
   [[nodiscard]] float likelihood(double x_m, double y_m) const noexcept;

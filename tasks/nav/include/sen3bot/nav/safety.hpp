@@ -14,13 +14,12 @@
 //    circumscribed circle plus lateral_margin_m.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
-#include <array>
 #include <cstdint>
 
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
-#include "sen3bot/nav/scan.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 
 namespace sen3bot::nav {
 
@@ -40,12 +39,12 @@ struct SafetyConfig {
   double lateral_margin_m = 0.05;
   double max_reverse_m_s = 0.1;
   Footprint footprint = Footprint::pioneer();
-  SensorMount laser_mount;
+  SensorMount laser_mount;          // SafetyTask projects scans with it
 };
 
 struct SafetyInputs {
   VelocityCommand requested;
-  const ScanView* scan = nullptr;  // the newest scan, or null if none ever arrived
+  const ProjectedScan* scan = nullptr;  // the newest scan, or null if none ever arrived
   hal::Nanos odom_stamp_ns = -1;   // -1: never
   bool estop = false;
   bool motors_enabled = true;
@@ -57,17 +56,13 @@ struct SafetyInputs {
 class SafetyFilter {
  public:
   explicit SafetyFilter(const SafetyConfig& config = {}) noexcept;
-  // Not const: the scan's points go to a member buffer (no allocation, no big stack frame).
-  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) noexcept;
+  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) const noexcept;
   [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
 
  private:
-  static constexpr std::size_t kMaxPoints = ScanMessage::kMaxBeams;
   static constexpr double kSweepStepM = 0.02;
 
   SafetyConfig config_;
-  std::array<double, kMaxPoints> points_x_{};
-  std::array<double, kMaxPoints> points_y_{};
   double front_m_ = 0.0;
   double half_width_m_ = 0.0;
   double turn_radius_m_ = 0.0;
