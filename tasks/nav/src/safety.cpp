@@ -24,6 +24,8 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   SafetyOutput out;
   out.command = in.requested;
   out.nearest_ahead_m = std::numeric_limits<double>::infinity();
+  // A stamp ahead of now (clocks a little apart) counts as a fresh scan, never a negative age.
+  if (in.scan != nullptr) out.scan_age_s = std::max(0.0, static_cast<double>(in.now_ns - in.scan->stamp_ns()) * 1e-9);
   const double stale_scan_ns = config_.stale_scan_periods * config_.scan_period_s * 1e9;
   if (in.scan == nullptr || static_cast<double>(in.now_ns - in.scan->stamp_ns()) > stale_scan_ns) out.reasons |= kSafetyScanStale;
   if (in.odom_stamp_ns < 0 || static_cast<double>(in.now_ns - in.odom_stamp_ns) > config_.odom_timeout_s * 1e9) {
@@ -41,7 +43,8 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   double v = in.requested.v_m_s;
   double w = in.requested.w_rad_s;
   const double speed = std::max({0.0, in.measured_v_m_s, v});
-  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_m_s2);
+  const double stop = config_.stop_distance_m + speed * (config_.reaction_s + out.scan_age_s) +
+                      speed * speed / (2.0 * config_.decel_m_s2);
   out.stop_distance_m = stop;
 
   const std::span<const Point2D> points = in.scan->points();

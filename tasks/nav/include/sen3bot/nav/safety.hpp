@@ -8,7 +8,10 @@
 //  * a laser point lies inside the stop zone along the direction of motion: the front half of
 //    the body (its width plus lateral_margin_m a side) swept forward along the commanded arc
 //    would reach it within the stop distance. That distance grows with the speed v:
-//    stop_distance_m + v * reaction_s + v^2 / (2 decel_m_s2) (the base cannot stop at once).
+//      stop_distance_m + v * (reaction_s + scan_age_s) + v^2 / (2 decel_m_s2)
+//    The base cannot stop at once (the braking term), a command takes reaction_s to reach the
+//    wheels, and the robot has already moved for scan_age_s (now - the scan's stamp, at least
+//    0) towards what the scan shows: a scan may be up to stale_scan_periods periods old.
 //    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
 //    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
@@ -34,7 +37,9 @@ struct SafetyConfig {
   double odom_timeout_s = 0.3;
   double stop_distance_m = 0.25;
   double slow_distance_m = 0.35;    // the slow zone's depth beyond the stop distance
-  double reaction_s = 0.1;          // command to wheels: one control period
+  // Command to wheels. The composition sets it from the measured sense-to-act budget; the
+  // default is one control period.
+  double reaction_s = 0.1;
   double decel_m_s2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
   double max_reverse_m_s = 0.1;
