@@ -50,7 +50,7 @@ struct SafetyConfig {
 struct SafetyInputs {
   VelocityCommand requested;
   const ProjectedScan* scan = nullptr;  // the newest scan, or null if none ever arrived
-  hal::Nanos odom_stamp_ns = -1;   // -1: never
+  hal::Nanos odom_stamp_ns = -1;        // -1: never
   bool estop = false;
   bool motors_enabled = true;
   bool localization_lost = false;
