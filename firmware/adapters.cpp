@@ -12,8 +12,8 @@ namespace {
 constexpr float kLaserRangeMinM = 0.02f;
 }  // namespace
 
-void to_nav_scan(const lms200::LaserScan& in, nav::ScanMessage& out) noexcept {
-  const std::size_t count = std::min<std::size_t>(in.count, nav::ScanMessage::kMaxBeams);
+void to_nav_scan(const lms200::LaserScan& in, msg::ScanMessage& out) noexcept {
+  const std::size_t count = std::min<std::size_t>(in.count, msg::ScanMessage::kMaxBeams);
   out.count = static_cast<std::uint16_t>(count);
   out.angle_min_rad = in.angle_min_rad;
   out.increment_rad = in.angle_increment_rad;
@@ -31,8 +31,8 @@ void to_nav_scan(const lms200::LaserScan& in, nav::ScanMessage& out) noexcept {
   }
 }
 
-nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
-  nav::Odometry odom;
+msg::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
+  msg::Odometry odom;
   odom.x_m = in.x_m;
   odom.y_m = in.y_m;
   odom.theta_rad = in.theta_rad;
@@ -43,6 +43,6 @@ nav::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
   return odom;
 }
 
-nav::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept { return nav::BaseFlags{in.estop, in.motors_enabled}; }
+msg::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept { return msg::BaseFlags{in.estop, in.motors_enabled}; }
 
 }  // namespace sen3bot::firmware

@@ -52,7 +52,7 @@ void BaseTask::publish(hal::Nanos now_ns) {
 void BaseTask::step(const tasks::StepContext& context) {
   if (driver_ == nullptr) return;
   const hal::Nanos now_ns = context.start_ns;
-  tasks::Sample<nav::VelocityCommand> command;
+  tasks::Sample<msg::VelocityCommand> command;
   if (topics_.command.read(command) && command.sequence != last_command_sequence_) {
     last_command_sequence_ = command.sequence;
     driver_->set_setpoint(p2os::BaseSetpoint{command.value.v_m_s, command.value.w_rad_s, true}, now_ns);

@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "sen3bot/hal/board.hpp"
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "sen3bot/p2os/types.hpp"
 #include "sen3bot/tasks/task.hpp"
@@ -15,9 +15,9 @@
 namespace sen3bot::firmware {
 
 struct BaseTopics {
-  const tasks::Topic<nav::VelocityCommand>& command;  // the safety filter's output
-  tasks::Topic<nav::Odometry>& odometry;
-  tasks::Topic<nav::BaseFlags>& flags;
+  const tasks::Topic<msg::VelocityCommand>& command;  // the safety filter's output
+  tasks::Topic<msg::Odometry>& odometry;
+  tasks::Topic<msg::BaseFlags>& flags;
 };
 
 class BaseTask final : public tasks::Task {

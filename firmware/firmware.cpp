@@ -36,12 +36,12 @@ Status Firmware::create_navigation() {
   if (!map) return Error::format(map.error().code(), "%s: navigation.map: %s", file, map.error().c_str());
   map_ = std::move(*map);
   if (!n.waypoints_path.empty()) {
-    Result<std::vector<nav::Point2D>> waypoints = nav::load_waypoints(n.waypoints_path);
+    Result<std::vector<msg::Point2D>> waypoints = nav::load_waypoints(n.waypoints_path);
     if (!waypoints)
       return Error::format(waypoints.error().code(), "%s: navigation.waypoints: %s", file, waypoints.error().c_str());
     waypoints_ = std::move(*waypoints);
   }
-  const nav::SensorMount mount{config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
+  const msg::SensorMount mount{config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
 
   nav::LocalizationTaskConfig localization;
   localization.mcl.min_particles = n.min_particles;

@@ -15,7 +15,7 @@
 #include "sen3bot/tasks/scheduler.hpp"
 #include "sen3bot/tasks/telemetry.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "base_task.hpp"
@@ -41,18 +41,18 @@ class Firmware {
   void print_memory(std::FILE* out) const;
 
   // The bus's messages, for the command line's reports, a simulator's referee and tests.
-  [[nodiscard]] const tasks::Topic<nav::ScanMessage>& scan() const { return nav_scan_; }
-  [[nodiscard]] const tasks::Topic<nav::Odometry>& odometry() const { return nav_odometry_; }
-  [[nodiscard]] const tasks::Topic<nav::VelocityCommand>& command() const { return nav_command_; }
-  [[nodiscard]] const tasks::Topic<nav::SafetyOutput>& safety_output() const { return nav_safety_; }
+  [[nodiscard]] const tasks::Topic<msg::ScanMessage>& scan() const { return nav_scan_; }
+  [[nodiscard]] const tasks::Topic<msg::Odometry>& odometry() const { return nav_odometry_; }
+  [[nodiscard]] const tasks::Topic<msg::VelocityCommand>& command() const { return nav_command_; }
+  [[nodiscard]] const tasks::Topic<msg::SafetyOutput>& safety_output() const { return nav_safety_; }
   // Null without the device.
   [[nodiscard]] const BaseTask* base() const { return base_task_.get(); }
   [[nodiscard]] const LaserTask* laser() const { return laser_task_.get(); }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
-  [[nodiscard]] const tasks::Topic<nav::PoseEstimate>& pose_estimate() const { return nav_pose_; }
+  [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
-  [[nodiscard]] std::span<const nav::Point2D> waypoints() const { return waypoints_; }
+  [[nodiscard]] std::span<const msg::Point2D> waypoints() const { return waypoints_; }
 
  private:
   tasks::Task* task_named(std::string_view name);
@@ -67,19 +67,19 @@ class Firmware {
   tasks::HealthTask health_;
   tasks::TelemetryTask telemetry_;
   // Navigation's bus (nav_tasks.hpp has the data flow).
-  tasks::Topic<nav::ScanMessage> nav_scan_;
-  tasks::Topic<nav::Odometry> nav_odometry_;
-  tasks::Topic<nav::BaseFlags> nav_base_flags_;
-  tasks::Topic<nav::PoseEstimate> nav_pose_;
-  tasks::Topic<nav::NavGoal> nav_goal_;
-  tasks::Topic<nav::PathMessage> nav_path_;
-  tasks::Topic<nav::VelocityCommand> nav_request_;
-  tasks::Topic<nav::VelocityCommand> nav_command_;
-  tasks::Topic<nav::ControllerStatus> nav_controller_;
-  tasks::Topic<nav::SafetyOutput> nav_safety_;
+  tasks::Topic<msg::ScanMessage> nav_scan_;
+  tasks::Topic<msg::Odometry> nav_odometry_;
+  tasks::Topic<msg::BaseFlags> nav_base_flags_;
+  tasks::Topic<msg::PoseEstimate> nav_pose_;
+  tasks::Topic<msg::NavGoal> nav_goal_;
+  tasks::Topic<msg::PathMessage> nav_path_;
+  tasks::Topic<msg::VelocityCommand> nav_request_;
+  tasks::Topic<msg::VelocityCommand> nav_command_;
+  tasks::Topic<msg::ControllerStatus> nav_controller_;
+  tasks::Topic<msg::SafetyOutput> nav_safety_;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
-  std::vector<nav::Point2D> waypoints_;
+  std::vector<msg::Point2D> waypoints_;
   // One arena per running row, in table order; created once in init(). Declared before the
   // tasks so it outlives them: their destructors release what they built inside it.
   std::vector<std::unique_ptr<mem::BudgetArena>> arenas_;

@@ -7,7 +7,7 @@
 
 namespace sen3bot::firmware {
 
-LaserTask::LaserTask(const lms200::Lms200Config& config, hal::Board& board, tasks::Topic<nav::ScanMessage>& topic)
+LaserTask::LaserTask(const lms200::Lms200Config& config, hal::Board& board, tasks::Topic<msg::ScanMessage>& topic)
     : config_(config), board_(board), topic_(topic) {}
 
 // The device and the scans live in the arena and are trivially destructible: nothing to run
@@ -28,7 +28,7 @@ Status LaserTask::init(std::pmr::memory_resource& arena) {
     void* device_memory = arena.allocate(sizeof(lms200::Lms200Device), alignof(lms200::Lms200Device));
     device_ = new (device_memory) lms200::Lms200Device(config_, *link_.stream, link_.baud_control);
     scan_ = new (arena.allocate(sizeof(lms200::LaserScan), alignof(lms200::LaserScan))) lms200::LaserScan();
-    message_ = new (arena.allocate(sizeof(nav::ScanMessage), alignof(nav::ScanMessage))) nav::ScanMessage();
+    message_ = new (arena.allocate(sizeof(msg::ScanMessage), alignof(msg::ScanMessage))) msg::ScanMessage();
   } catch (const std::bad_alloc&) {
     return Error::format(Errc::capacity, "lms200: task arena too small (needs %zu bytes)", kArenaBytes);
   }

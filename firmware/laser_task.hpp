@@ -7,7 +7,7 @@
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/lms200/device.hpp"
 #include "sen3bot/lms200/scan.hpp"
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -15,7 +15,7 @@ namespace sen3bot::firmware {
 
 class LaserTask final : public tasks::Task {
  public:
-  LaserTask(const lms200::Lms200Config& config, hal::Board& board, tasks::Topic<nav::ScanMessage>& topic);
+  LaserTask(const lms200::Lms200Config& config, hal::Board& board, tasks::Topic<msg::ScanMessage>& topic);
   ~LaserTask() override;
 
   Status init(std::pmr::memory_resource& arena) override;
@@ -27,17 +27,17 @@ class LaserTask final : public tasks::Task {
   [[nodiscard]] const lms200::Lms200Device* device() const noexcept { return device_; }
   // Arena bytes init() needs, for sizing the task's budget.
   static constexpr std::size_t kArenaBytes =
-      sizeof(lms200::Lms200Device) + sizeof(lms200::LaserScan) + sizeof(nav::ScanMessage) + 256;
+      sizeof(lms200::Lms200Device) + sizeof(lms200::LaserScan) + sizeof(msg::ScanMessage) + 256;
 
  private:
   lms200::Lms200Config config_;
   hal::Board& board_;
-  tasks::Topic<nav::ScanMessage>& topic_;
+  tasks::Topic<msg::ScanMessage>& topic_;
   hal::Link link_;
   std::pmr::memory_resource* arena_ = nullptr;
   lms200::Lms200Device* device_ = nullptr;
   lms200::LaserScan* scan_ = nullptr;
-  nav::ScanMessage* message_ = nullptr;
+  msg::ScanMessage* message_ = nullptr;
   hal::Nanos next_reopen_ns_ = 0;
   bool started_ = false;
 };

@@ -21,10 +21,10 @@ Status MissionTask::init(std::pmr::memory_resource&) {
   return Status::success();
 }
 
-void MissionTask::record_track(nav::Point2D p) noexcept {
+void MissionTask::record_track(msg::Point2D p) noexcept {
   constexpr double kTrackSpacingM = 0.05;
   if (track_count_ > 0) {
-    const nav::Point2D& last = track_[track_count_ - 1];
+    const msg::Point2D& last = track_[track_count_ - 1];
     if (std::hypot(p.x_m - last.x_m, p.y_m - last.y_m) < kTrackSpacingM) return;
   }
   if (track_count_ < kMaxTrack) track_[track_count_++] = p;
@@ -34,8 +34,8 @@ void MissionTask::start_goal(std::size_t index, hal::Nanos now_ns) {
   goal_index_ = index;
   goal_start_ns_ = now_ns;
   first_plan_for_goal_ = 0;
-  const nav::Point2D g = config_.goals[index];
-  topics_.goal.publish(nav::NavGoal{g.x_m, g.y_m, ++goal_id_, true}, now_ns);
+  const msg::Point2D g = config_.goals[index];
+  topics_.goal.publish(msg::NavGoal{g.x_m, g.y_m, ++goal_id_, true}, now_ns);
   report_.state = MissionState::driving;
 }
 
@@ -44,7 +44,7 @@ void MissionTask::step(const tasks::StepContext& context) {
   if (start_ns_ < 0) start_ns_ = now;
   if (finished()) return;
 
-  tasks::Sample<nav::PoseEstimate> pose;
+  tasks::Sample<msg::PoseEstimate> pose;
   const bool have_pose = topics_.pose.read(pose) && pose.value.valid;
   if (have_pose) {
     record_track({pose.value.pose.x_m, pose.value.pose.y_m});
@@ -53,10 +53,10 @@ void MissionTask::step(const tasks::StepContext& context) {
     last_pose_ = pose.value.pose;
     have_last_pose_ = true;
   }
-  tasks::Sample<nav::SafetyOutput> safety;
+  tasks::Sample<msg::SafetyOutput> safety;
   if (topics_.safety.read(safety) && safety.sequence != safety_seq_) {
     safety_seq_ = safety.sequence;
-    if ((safety.value.reasons & ~nav::kSafetyReverseCapped) != nav::kSafetyNone) ++report_.safety_limited_steps;
+    if ((safety.value.reasons & ~msg::kSafetyReverseCapped) != msg::kSafetyNone) ++report_.safety_limited_steps;
   }
 
   if (report_.state == MissionState::waiting) {
@@ -64,33 +64,33 @@ void MissionTask::step(const tasks::StepContext& context) {
     return;
   }
 
-  tasks::Sample<nav::PathMessage> path;
+  tasks::Sample<msg::PathMessage> path;
   if (topics_.path.read(path) && path.value.goal_id == goal_id_ && path.value.plan_id != last_plan_id_) {
     last_plan_id_ = path.value.plan_id;
     ++report_.plans;
-    if (path.value.status != nav::PlanStatus::ok) ++report_.plan_failures;
+    if (path.value.status != msg::PlanStatus::ok) ++report_.plan_failures;
     if (first_plan_for_goal_ == 0) {
       first_plan_for_goal_ = path.value.plan_id;
       first_plans_[goal_index_] = path.value;
     }
   }
-  tasks::Sample<nav::ControllerStatus> controller;
+  tasks::Sample<msg::ControllerStatus> controller;
   if (!topics_.controller.read(controller)) return;
   report_.recoveries = controller.value.recoveries.total();
   const bool on_this_goal = first_plan_for_goal_ != 0 && controller.value.plan_id >= first_plan_for_goal_;
   const double elapsed_s = static_cast<double>(now - goal_start_ns_) * 1e-9;
-  if (on_this_goal && controller.value.status == nav::DwaStatus::reached) {
+  if (on_this_goal && controller.value.status == msg::DwaStatus::reached) {
     report_.goal_time_s[goal_index_] = elapsed_s;
     ++report_.goals_reached;
     if (goal_index_ + 1 < config_.goal_count) {
       start_goal(goal_index_ + 1, now);
     } else {
-      topics_.goal.publish(nav::NavGoal{0, 0, ++goal_id_, false}, now);
+      topics_.goal.publish(msg::NavGoal{0, 0, ++goal_id_, false}, now);
       report_.state = MissionState::complete;
       finished_.store(true, std::memory_order_release);
     }
-  } else if ((on_this_goal && controller.value.status == nav::DwaStatus::failed) || elapsed_s > config_.goal_timeout_s) {
-    topics_.goal.publish(nav::NavGoal{0, 0, ++goal_id_, false}, now);
+  } else if ((on_this_goal && controller.value.status == msg::DwaStatus::failed) || elapsed_s > config_.goal_timeout_s) {
+    topics_.goal.publish(msg::NavGoal{0, 0, ++goal_id_, false}, now);
     report_.state = MissionState::failed;
     finished_.store(true, std::memory_order_release);
   }
@@ -100,7 +100,7 @@ void MissionTask::print_report(std::FILE* out) const {
   const MissionReport& r = report_;
   std::fprintf(out, "mission %s: %zu of %zu goals reached\n", to_string(r.state), r.goals_reached, config_.goal_count);
   for (std::size_t i = 0; i < config_.goal_count; ++i) {
-    const nav::Point2D g = config_.goals[i];
+    const msg::Point2D g = config_.goals[i];
     if (i < r.goals_reached)
       std::fprintf(out, "  goal %zu (%.2f, %.2f) m: reached in %.1f s\n", i + 1, g.x_m, g.y_m, r.goal_time_s[i]);
     else

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <span>
 
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -16,7 +16,7 @@ namespace sen3bot::firmware {
 
 struct MissionConfig {
   static constexpr std::size_t kMaxGoals = 16;
-  std::array<nav::Point2D, kMaxGoals> goals{};  // map frame, visited in order
+  std::array<msg::Point2D, kMaxGoals> goals{};  // map frame, visited in order
   std::size_t goal_count = 0;
   double start_delay_s = 2.0;     // let the drivers connect and localization settle first
   double goal_timeout_s = 120.0;  // a goal not reached by then fails the mission
@@ -26,11 +26,11 @@ enum class MissionState : std::uint8_t { waiting, driving, complete, failed };
 const char* to_string(MissionState state) noexcept;
 
 struct MissionTopics {
-  tasks::Topic<nav::NavGoal>& goal;
-  const tasks::Topic<nav::ControllerStatus>& controller;
-  const tasks::Topic<nav::PathMessage>& path;
-  const tasks::Topic<nav::PoseEstimate>& pose;
-  const tasks::Topic<nav::SafetyOutput>& safety;
+  tasks::Topic<msg::NavGoal>& goal;
+  const tasks::Topic<msg::ControllerStatus>& controller;
+  const tasks::Topic<msg::PathMessage>& path;
+  const tasks::Topic<msg::PoseEstimate>& pose;
+  const tasks::Topic<msg::SafetyOutput>& safety;
 };
 
 struct MissionReport {
@@ -59,12 +59,12 @@ class MissionTask final : public tasks::Task {
   // The driven path as estimated, a point per 5 cm moved, and the first plan made for each
   // goal: what a report draws.
   static constexpr std::size_t kMaxTrack = 4096;
-  [[nodiscard]] std::span<const nav::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
-  [[nodiscard]] const nav::PathMessage& first_plan(std::size_t goal) const noexcept { return first_plans_[goal]; }
+  [[nodiscard]] std::span<const msg::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+  [[nodiscard]] const msg::PathMessage& first_plan(std::size_t goal) const noexcept { return first_plans_[goal]; }
 
  private:
   void start_goal(std::size_t index, hal::Nanos now_ns);
-  void record_track(nav::Point2D p) noexcept;
+  void record_track(msg::Point2D p) noexcept;
 
   MissionConfig config_;
   MissionTopics topics_;
@@ -76,11 +76,11 @@ class MissionTask final : public tasks::Task {
   hal::Nanos goal_start_ns_ = 0;
   std::uint32_t last_plan_id_ = 0;
   bool have_last_pose_ = false;
-  nav::Pose2D last_pose_;
+  msg::Pose2D last_pose_;
   std::uint32_t first_plan_for_goal_ = 0;
-  std::array<nav::Point2D, kMaxTrack> track_{};
+  std::array<msg::Point2D, kMaxTrack> track_{};
   std::size_t track_count_ = 0;
-  std::array<nav::PathMessage, MissionConfig::kMaxGoals> first_plans_{};
+  std::array<msg::PathMessage, MissionConfig::kMaxGoals> first_plans_{};
   std::uint64_t safety_seq_ = 0;
 };
 

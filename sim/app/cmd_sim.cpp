@@ -46,8 +46,8 @@ struct Case {
 struct Scenario {
   const char* name;
   const char* description;
-  nav::Pose2D start;
-  std::vector<nav::Point2D> goals;
+  msg::Pose2D start;
+  std::vector<msg::Point2D> goals;
   const char* waypoints;  // relative to the base configuration's folder; "" keeps the base's
   std::vector<Case> cases;
 };
@@ -61,7 +61,7 @@ world::MoverScript box_at(double x_m, double y_m, double appear_s) {
   return box;
 }
 
-world::MoverScript person_walking(std::vector<nav::Point2D> path, double speed_m_s, double start_s) {
+world::MoverScript person_walking(std::vector<msg::Point2D> path, double speed_m_s, double start_s) {
   world::MoverScript person;
   person.path = std::move(path);
   person.speed_m_s = speed_m_s;
@@ -72,7 +72,7 @@ world::MoverScript person_walking(std::vector<nav::Point2D> path, double speed_m
 }
 
 std::vector<Scenario> scenarios() {
-  const nav::Pose2D thesis_start{4.0, 7.0, -std::numbers::pi / 2};
+  const msg::Pose2D thesis_start{4.0, 7.0, -std::numbers::pi / 2};
   return {
       {"thesis-sgp",
        "the thesis' supervised-planning test: (4, 7) m to (2.5, 2) m on the lab map along the safe path",
@@ -123,7 +123,7 @@ bool write_png(const std::string& path, const Firmware& fw, const SimulationConf
       cv::rectangle(image, cv::Rect(col * kScale, y, kScale, kScale), colour, cv::FILLED);
     }
   for (const world::MoverScript& m : sim.movers) {
-    const nav::Point2D c = m.path.front();
+    const msg::Point2D c = m.path.front();
     const cv::Scalar colour = m.person ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 90, 200);
     const int half = static_cast<int>(std::lround(m.size_m / 2 / map.resolution_m() * kScale));
     if (m.shape == world::MoverShape::square) {
@@ -134,15 +134,15 @@ bool write_png(const std::string& path, const Firmware& fw, const SimulationConf
       cv::line(image, to_pixel(map, m.path[i - 1].x_m, m.path[i - 1].y_m, kScale),
                to_pixel(map, m.path[i].x_m, m.path[i].y_m, kScale), colour, 2 * half, cv::LINE_AA);
   }
-  for (const nav::Point2D& w : fw.waypoints())
+  for (const msg::Point2D& w : fw.waypoints())
     cv::circle(image, to_pixel(map, w.x_m, w.y_m, kScale), 4, cv::Scalar(255, 80, 0), cv::FILLED, cv::LINE_AA);
   for (std::size_t g = 0; g < mission.report().goals_reached + 1 && g < MissionConfig::kMaxGoals; ++g) {
-    const nav::PathMessage& plan = mission.first_plan(g);
+    const msg::PathMessage& plan = mission.first_plan(g);
     for (std::size_t i = 1; i < plan.count; ++i)
       cv::line(image, to_pixel(map, plan.points[i - 1].x_m, plan.points[i - 1].y_m, kScale),
                to_pixel(map, plan.points[i].x_m, plan.points[i].y_m, kScale), cv::Scalar(0, 170, 0), 2, cv::LINE_AA);
   }
-  const std::span<const nav::Point2D> track = referee.track();
+  const std::span<const msg::Point2D> track = referee.track();
   for (std::size_t i = 1; i < track.size(); ++i)
     cv::line(image, to_pixel(map, track[i - 1].x_m, track[i - 1].y_m, kScale),
              to_pixel(map, track[i].x_m, track[i].y_m, kScale), cv::Scalar(0, 0, 230), 2, cv::LINE_AA);
@@ -232,7 +232,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   double next_progress_s = 0;
   auto progress = [&] {
     // The estimate: in real time the world steps on the board's own thread.
-    tasks::Sample<nav::PoseEstimate> pose;
+    tasks::Sample<msg::PoseEstimate> pose;
     fw.pose_estimate().read(pose);
     std::fprintf(out, "  %-28s t=%6.1f s  pose (%5.2f, %5.2f) m  goals %zu  %s\n", label.c_str(), sim_s,
                  pose.value.pose.x_m, pose.value.pose.y_m, mission.report().goals_reached,

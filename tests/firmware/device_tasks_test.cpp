@@ -30,9 +30,9 @@ struct BaseRig {
   hal::MemoryPipe pipe{16384};
   p2os::P2osEmulator emulator{brisk_robot()};
   testing::PipeBoard board{hal::seconds(1)};
-  tasks::Topic<nav::VelocityCommand> command;
-  tasks::Topic<nav::Odometry> odometry;
-  tasks::Topic<nav::BaseFlags> flags;
+  tasks::Topic<msg::VelocityCommand> command;
+  tasks::Topic<msg::Odometry> odometry;
+  tasks::Topic<msg::BaseFlags> flags;
   BaseTask task{p2os::P2osConfig{}, board, BaseTopics{command, odometry, flags}};
   std::array<std::byte, 64 * 1024> buffer{};
   std::pmr::monotonic_buffer_resource arena{buffer.data(), buffer.size(), std::pmr::null_memory_resource()};
@@ -44,7 +44,7 @@ struct BaseRig {
     const hal::Nanos end = clock.now() + duration;
     while (clock.now() < end) {
       (void)emulator.step(pipe.b(), clock.now());
-      if (cycle % 25 == 0) command.publish(nav::VelocityCommand{v_m_s, 0.0}, clock.now());
+      if (cycle % 25 == 0) command.publish(msg::VelocityCommand{v_m_s, 0.0}, clock.now());
       task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
       clock.advance_by(hal::millis(2));
     }
@@ -56,7 +56,7 @@ TEST(BaseTask, PublishesOdometryEverySipAndFollowsTheCommand) {
   ASSERT_TRUE(rig.task.init(rig.arena));
   EXPECT_EQ(rig.board.opens("base"), 1);
   rig.run(hal::seconds(3), 0.25);
-  tasks::Sample<nav::Odometry> odom;
+  tasks::Sample<msg::Odometry> odom;
   ASSERT_TRUE(rig.odometry.read(odom));
   EXPECT_TRUE(odom.value.valid);
   const std::uint64_t sips = rig.task.driver()->state().sip_count;
@@ -65,7 +65,7 @@ TEST(BaseTask, PublishesOdometryEverySipAndFollowsTheCommand) {
   EXPECT_NEAR(odom.value.v_m_s, 0.25, 0.002);
   EXPECT_GT(odom.value.x_m, 0.3);
   EXPECT_NEAR(rig.emulator.velocity_m_s(), 0.25, 1e-9);
-  tasks::Sample<nav::BaseFlags> flags;
+  tasks::Sample<msg::BaseFlags> flags;
   ASSERT_TRUE(rig.flags.read(flags));
   EXPECT_TRUE(flags.value.motors_enabled);
   EXPECT_FALSE(flags.value.estop);
@@ -77,7 +77,7 @@ TEST(BaseTask, ReopensThroughTheBoardAfterTheLinkFails) {
   rig.run(hal::seconds(2), 0.2);
   rig.pipe.b().disconnect();
   rig.run(hal::millis(100), 0.2);
-  tasks::Sample<nav::Odometry> odom;
+  tasks::Sample<msg::Odometry> odom;
   ASSERT_TRUE(rig.odometry.read(odom));
   EXPECT_FALSE(odom.value.valid);  // the link went: the odometry says so at once
   rig.pipe.reset();
@@ -100,31 +100,31 @@ TEST(BaseTask, ConnectsToATcpSimulatorAndReconnectsAfterADrop) {
   config.port = "tcp://127.0.0.1:" + std::to_string(emu.port());
   config.reopen_delay_ms = 100;
   hal::PosixBoard board;
-  tasks::Topic<nav::VelocityCommand> command;
-  tasks::Topic<nav::Odometry> odometry;
-  tasks::Topic<nav::BaseFlags> flags;
+  tasks::Topic<msg::VelocityCommand> command;
+  tasks::Topic<msg::Odometry> odometry;
+  tasks::Topic<msg::BaseFlags> flags;
   BaseTask task(config, board, BaseTopics{command, odometry, flags});
   std::array<std::byte, 64 * 1024> buffer;
   std::pmr::monotonic_buffer_resource arena(buffer.data(), buffer.size(), std::pmr::null_memory_resource());
   ASSERT_TRUE(task.init(arena));
   hal::Clock& clock = board.clock();
   std::uint64_t cycle = 0;
-  auto run_until = [&](const std::function<bool(const nav::Odometry&)>& done, hal::Nanos max_ns) {
+  auto run_until = [&](const std::function<bool(const msg::Odometry&)>& done, hal::Nanos max_ns) {
     const hal::Nanos end = clock.now() + max_ns;
     while (clock.now() < end) {
       const hal::Nanos now = clock.now();
-      command.publish(nav::VelocityCommand{0.4, 0.0}, now);
+      command.publish(msg::VelocityCommand{0.4, 0.0}, now);
       task.step(tasks::StepContext{now, now, cycle++});
-      tasks::Sample<nav::Odometry> s;
+      tasks::Sample<msg::Odometry> s;
       if (odometry.read(s) && done(s.value)) return true;
       clock.sleep_until(now + hal::millis(2));
     }
     return false;
   };
-  ASSERT_TRUE(run_until([](const nav::Odometry& o) { return o.valid && o.v_m_s > 0.39; }, hal::seconds(5)));
+  ASSERT_TRUE(run_until([](const msg::Odometry& o) { return o.valid && o.v_m_s > 0.39; }, hal::seconds(5)));
   emu.drop_client();
-  ASSERT_TRUE(run_until([](const nav::Odometry& o) { return !o.valid; }, hal::seconds(2)));
-  ASSERT_TRUE(run_until([](const nav::Odometry& o) { return o.valid && o.v_m_s > 0.39; }, hal::seconds(5)));
+  ASSERT_TRUE(run_until([](const msg::Odometry& o) { return !o.valid; }, hal::seconds(2)));
+  ASSERT_TRUE(run_until([](const msg::Odometry& o) { return o.valid && o.v_m_s > 0.39; }, hal::seconds(5)));
   EXPECT_GE(emu.clients_served(), 2u);
   task.shutdown();
 }
@@ -136,7 +136,7 @@ TEST(LaserTask, PublishesNavigationScansFromTheBoardsLink) {
   lms200::Lms200Emulator emulator(lms200::EmulatorOptions{}, pipe.b(), world, &line);
   testing::PipeBoard board;
   board.attach("laser", pipe.a(), &line);
-  tasks::Topic<nav::ScanMessage> topic;
+  tasks::Topic<msg::ScanMessage> topic;
   lms200::Lms200Config c;
   c.port = "sim";
   c.baud = 500000;
@@ -153,7 +153,7 @@ TEST(LaserTask, PublishesNavigationScansFromTheBoardsLink) {
   }
   EXPECT_EQ(line.baud(), 500000u);  // the device switched the line through the board's control
   ASSERT_GT(topic.published(), 50u);
-  tasks::Sample<nav::ScanMessage> scan;
+  tasks::Sample<msg::ScanMessage> scan;
   ASSERT_TRUE(topic.read(scan));
   EXPECT_EQ(scan.value.count, 181);
   EXPECT_GT(scan.value.range_max_m, 7.0f);
@@ -165,7 +165,7 @@ TEST(LaserTask, PublishesNavigationScansFromTheBoardsLink) {
 
 TEST(LaserTask, RejectsABadVariantAndAMissingLink) {
   testing::PipeBoard board;
-  tasks::Topic<nav::ScanMessage> topic;
+  tasks::Topic<msg::ScanMessage> topic;
   std::vector<std::byte> budget(1 << 16);
   std::pmr::monotonic_buffer_resource arena(budget.data(), budget.size(), std::pmr::null_memory_resource());
   lms200::Lms200Config bad;

@@ -86,7 +86,8 @@ TEST(ObstacleLayer, MarksEndpointsAndClearsAlongRays) {
   cfg.rolling = true;
   ASSERT_TRUE(cm.init(cfg, arena));
   ScanMessage msg = ring_scan(1.0, 181);
-  ScanView view = msg.view();
+  ProjectedScan view;
+  view.assign(msg.view(), {});
   CostmapInputs in{{10.02, 10.02, 0.0}, {10.02, 10.02, 0.0}, &view};  // off cell boundaries
   cm.update(in);
   const Costmap2D& g = cm.costmap();
@@ -99,7 +100,7 @@ TEST(ObstacleLayer, MarksEndpointsAndClearsAlongRays) {
   EXPECT_EQ(g.at(c, r), kFreeCost);
   // The obstacle goes away: the same beams now report far returns and clear it.
   msg = ring_scan(2.0, 181);
-  view = msg.view();
+  view.assign(msg.view(), {});
   cm.update(in);
   ASSERT_TRUE(g.world_to_cell(11.02, 10.02, c, r));
   EXPECT_EQ(g.at(c, r), kFreeCost);
@@ -107,7 +108,7 @@ TEST(ObstacleLayer, MarksEndpointsAndClearsAlongRays) {
   EXPECT_EQ(g.at(c, r), kLethalCost);
   // Beyond obstacle_max_range (2.5 m): not marked.
   msg = ring_scan(2.8, 181);
-  view = msg.view();
+  view.assign(msg.view(), {});
   cm.update(in);
   ASSERT_TRUE(g.world_to_cell(12.82, 10.02, c, r));
   EXPECT_EQ(g.at(c, r), kFreeCost);
@@ -122,7 +123,8 @@ TEST(ObstacleLayer, MarksStayInPlaceWhenTheWindowRolls) {
   cfg.rolling = true;
   ASSERT_TRUE(cm.init(cfg, arena));
   ScanMessage msg = ring_scan(1.0, 3);
-  ScanView view = msg.view();
+  ProjectedScan view;
+  view.assign(msg.view(), {});
   cm.update({{10.02, 10.02, 0.0}, {10.02, 10.02, 0.0}, &view});
   cm.update({{10.73, 9.61, 0.0}, {10.73, 9.61, 0.0}, nullptr});
   int c = 0;
@@ -150,7 +152,8 @@ TEST(LayeredCostmap, RollingWindowCopiesTheStaticMapAndInflates) {
   cfg.lattice_y_m = -2.0;
   ASSERT_TRUE(cm.init(cfg, arena));
   ScanMessage msg = ring_scan(3.0, 361);
-  ScanView view = msg.view();
+  ProjectedScan view;
+  view.assign(msg.view(), {});
   const CostmapInputs in{{3.0, 3.0, 0.0}, {3.0, 3.0, 0.0}, &view};
   cm.update(in);
   const Costmap2D& g = cm.costmap();
@@ -167,7 +170,7 @@ TEST(LayeredCostmap, RollingWindowCopiesTheStaticMapAndInflates) {
   for (int i = 0; i < 200; ++i) {
     CostmapInputs moving = in;
     moving.robot_pose.x_m += 0.01 * i;
-    moving.sensor_pose.x_m += 0.01 * i;
+    moving.scan_pose.x_m += 0.01 * i;
     cm.update(moving);
   }
   EXPECT_EQ(scope.allocations(), 0u);

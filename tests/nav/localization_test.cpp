@@ -78,7 +78,8 @@ TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
     pose = next;
     t_ns += 100'000'000;
     truth.noisy_scan(pose, msg.angle_min_rad, msg.increment_rad, msg.count, msg.range_max_m, std::span<float>(msg.ranges_m.data(), msg.count));
-    const ScanView view = msg.view();
+    ProjectedScan view;
+    view.assign(msg.view(), cfg.laser_mount);
     const Odometry o{odom.x_m, odom.y_m, odom.theta_rad, 0.0, 0.0, t_ns, true};
     mem::testing::AllocationScope scope;
     const bool updated = mcl.update(o, &view);
@@ -214,7 +215,8 @@ double worst_error_turning_at_a_box(bool beam_skip, bool with_box = true) {
     const Pose2D sensor = compose(pose, cfg.laser_mount);
     truth.noisy_scan(sensor, msg.angle_min_rad, msg.increment_rad, msg.count, msg.range_max_m,
                      std::span<float>(msg.ranges_m.data(), msg.count));
-    const ScanView view = msg.view();
+    ProjectedScan view;
+    view.assign(msg.view(), cfg.laser_mount);
     (void)mcl.update({pose.x_m, pose.y_m, pose.theta_rad, 0.0, -0.5, k * 100'000'000LL, true}, &view);
     const PoseEstimate e = mcl.estimate();
     worst = std::max(worst, std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m));

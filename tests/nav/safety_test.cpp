@@ -12,7 +12,7 @@ constexpr hal::Nanos kSecond = 1'000'000'000;
 
 struct Scene {
   ScanMessage msg;
-  ScanView view;
+  ProjectedScan view;
   SafetyInputs in;
   Scene() {
     msg.count = 181;
@@ -21,7 +21,7 @@ struct Scene {
     msg.range_max_m = 8.0f;
     for (std::size_t i = 0; i < 181; ++i) msg.ranges_m[i] = 5.0f;
     msg.stamp_ns = 10 * kSecond;
-    view = msg.view();
+    view.assign(msg.view(), {});
     in.scan = &view;
     in.odom_stamp_ns = 10 * kSecond;
     in.now_ns = 10 * kSecond + kSecond / 10;
@@ -85,7 +85,7 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   Scene s;
   // A point 0.4 m straight ahead: 0.17 m past the front edge (0.2275 m), inside the stop zone.
   s.msg.ranges_m[90] = 0.4f;
-  s.view = s.msg.view();
+  s.view.assign(s.msg.view(), {});
   SafetyOutput out = f.filter(s.in);
   EXPECT_TRUE(out.reasons & kSafetyObstacle);
   EXPECT_EQ(out.command.v_m_s, 0.0);
@@ -96,15 +96,16 @@ TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   // The same point 60 degrees to the side is outside the corridor.
   Scene side;
   side.msg.ranges_m[150] = 0.9f;
-  side.view = side.msg.view();
+  side.view.assign(side.msg.view(), {});
   out = f.filter(side.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
   EXPECT_DOUBLE_EQ(out.command.v_m_s, 0.4);
-  // In the slow zone the speed is scaled, not zeroed. Requested 0.4 m/s: stop distance
-  // 0.25 + 0.04 + 0.1333 = 0.4233 m; half way into the 0.35 m slow zone halves the speed.
+  // In the slow zone the speed is scaled, not zeroed. Requested 0.4 m/s with a 0.1 s old
+  // scan: stop distance 0.25 + 0.4 * (0.1 + 0.1) + 0.1333 = 0.4633 m; half way into the
+  // 0.35 m slow zone halves the speed.
   Scene slow;
-  slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.04 + 0.16 / 1.2 + 0.175);
-  slow.view = slow.msg.view();
+  slow.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.25 + 0.08 + 0.16 / 1.2 + 0.175);
+  slow.view.assign(slow.msg.view(), {});
   slow.in.requested.w_rad_s = 0.0;
   out = f.filter(slow.in);
   EXPECT_TRUE(out.reasons & kSafetySlowed);
@@ -119,7 +120,7 @@ TEST(Safety, NeverRaisesSpeed) {
   for (int trial = 0; trial < 2000; ++trial) {
     Scene s;
     for (std::size_t i = 0; i < 181; ++i) s.msg.ranges_m[i] = r(rng);
-    s.view = s.msg.view();
+    s.view.assign(s.msg.view(), {});
     s.in.requested = {v(rng), v(rng) * 2.0, s.in.now_ns};
     const SafetyOutput out = f.filter(s.in);
     EXPECT_LE(std::abs(out.command.v_m_s), std::abs(s.in.requested.v_m_s));
@@ -139,13 +140,86 @@ TEST(Safety, FollowsTheCommandedArc) {
   SafetyFilter f;
   Scene s;
   s.msg.ranges_m[90] = 0.45f;  // straight ahead, 0.22 m past the front edge
-  s.view = s.msg.view();
+  s.view.assign(s.msg.view(), {});
   s.in.requested = {0.1, 0.0, s.in.now_ns};
   EXPECT_TRUE(f.filter(s.in).reasons & kSafetyObstacle);
   s.in.requested = {0.1, 1.0, s.in.now_ns};  // a tight left arc (0.1 m radius) misses it
   const SafetyOutput out = f.filter(s.in);
   EXPECT_FALSE(out.reasons & kSafetyObstacle);
   EXPECT_GT(out.command.v_m_s, 0.0);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+// The stop zone's depth the header documents.
+double expected_stop_m(const SafetyConfig& c, double v, double age_s) {
+  return c.stop_distance_m + v * (c.reaction_s + age_s) + v * v / (2.0 * c.decel_m_s2);
+}
+
+TEST(Safety, AnOldScanStopsWhereAFreshOneOnlySlows) {
+  SafetyFilter f;
+  Scene s;
+  // 0.52 m of free travel straight ahead (front edge at 0.2275 m). At 0.4 m/s a fresh scan
+  // gives a 0.4233 m stop zone; one 0.5 s old (the stale limit is 0.6 s) gives 0.6233 m.
+  s.msg.ranges_m[90] = static_cast<float>(0.2275 + 0.52);
+  s.in.requested = {0.4, 0.0, 0};
+  s.msg.stamp_ns = 20 * kSecond;
+  s.view.assign(s.msg.view(), {});
+  s.in.odom_stamp_ns = 20 * kSecond;
+
+  s.in.now_ns = 20 * kSecond;
+  SafetyOutput out = f.filter(s.in);
+  EXPECT_EQ(out.scan_age_s, 0.0);
+  EXPECT_FALSE(out.reasons & kSafetyObstacle);
+  EXPECT_TRUE(out.reasons & kSafetySlowed);
+  EXPECT_GT(out.command.v_m_s, 0.0);
+  EXPECT_LT(out.stop_distance_m, out.nearest_ahead_m);
+
+  s.in.now_ns = 20 * kSecond + kSecond / 2;
+  s.in.odom_stamp_ns = s.in.now_ns;
+  out = f.filter(s.in);
+  EXPECT_DOUBLE_EQ(out.scan_age_s, 0.5);
+  EXPECT_TRUE(out.reasons & kSafetyObstacle);
+  EXPECT_EQ(out.command.v_m_s, 0.0);
+  EXPECT_GE(out.stop_distance_m, out.nearest_ahead_m);
+}
+
+TEST(Safety, StopZoneDepthFollowsSpeedReactionAndScanAge) {
+  SafetyConfig config;
+  config.reaction_s = 0.15;
+  const SafetyFilter f(config);
+  for (const double age_s : {0.0, 0.1, 0.35, 0.55}) {
+    for (const double v : {0.0, 0.1, 0.25, 0.5, 0.8}) {
+      Scene s;  // nothing within 5 m: the command passes and reports the depth it used
+      s.in.now_ns = s.msg.stamp_ns + static_cast<hal::Nanos>(age_s * 1e9);
+      s.in.odom_stamp_ns = s.in.now_ns;
+      s.in.requested = {v, 0.0, s.in.now_ns};
+      const SafetyOutput out = f.filter(s.in);
+      ASSERT_EQ(out.reasons & kSafetyScanStale, 0u);
+      EXPECT_NEAR(out.scan_age_s, age_s, 1e-9);
+      EXPECT_NEAR(out.stop_distance_m, expected_stop_m(config, v, age_s), 1e-12) << "v " << v << " age " << age_s;
+    }
+  }
+  // The measured speed counts when it is the larger.
+  Scene s;
+  s.in.measured_v_m_s = 0.6;
+  s.in.requested = {0.2, 0.0, s.in.now_ns};
+  EXPECT_NEAR(f.filter(s.in).stop_distance_m, expected_stop_m(config, 0.6, 0.1), 1e-12);
+}
+
+TEST(Safety, AScanStampedAheadOfNowHasNoNegativeAge) {
+  SafetyFilter f;
+  Scene s;
+  s.in.now_ns = s.msg.stamp_ns - kSecond / 20;  // the laser's clock slightly ahead
+  s.in.odom_stamp_ns = s.in.now_ns;
+  s.in.requested = {0.3, 0.0, s.in.now_ns};
+  const SafetyOutput out = f.filter(s.in);
+  EXPECT_EQ(out.scan_age_s, 0.0);
+  EXPECT_NEAR(out.stop_distance_m, expected_stop_m(f.config(), 0.3, 0.0), 1e-12);
 }
 
 }  // namespace

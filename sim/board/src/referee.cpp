@@ -15,7 +15,7 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   report_.moving_contacts = truth.moving_contacts;
   report_.min_clearance_m = std::min(report_.min_clearance_m, truth.clearance_m);
   report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.nearest_person_m);
-  const nav::Pose2D& p = truth.pose;
+  const msg::Pose2D& p = truth.pose;
   if (have_last_) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
   last_ = p;
   have_last_ = true;
@@ -23,7 +23,7 @@ void Referee::observe(const GroundTruth& truth) noexcept {
                                kTrackSpacingM) {
     if (track_count_ < kMaxTrack) track_[track_count_++] = {p.x_m, p.y_m};
   }
-  tasks::Sample<nav::PoseEstimate> estimate;
+  tasks::Sample<msg::PoseEstimate> estimate;
   if (estimate_ != nullptr && std::abs(truth.speed_m_s) > kMovingSpeedM_s && estimate_->read(estimate) &&
       estimate.value.valid)
     report_.localization_error_max_m = std::max(

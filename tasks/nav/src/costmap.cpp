@@ -18,9 +18,7 @@ Status Costmap2D::init(int width, int height, double resolution_m, std::pmr::mem
   }
   return guarded("costmap", [&]() -> Status {
     cells_ = allocate_array<std::uint8_t>(resource, static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-    width_ = width;
-    height_ = height;
-    resolution_m_ = resolution_m;
+    geometry_ = GridGeometry(width, height, resolution_m, 0.0, 0.0);
     return Status::success();
   });
 }
@@ -197,23 +195,32 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
   grid_.set_origin(master.origin_x_m(), master.origin_y_m());
   const double res = grid_.resolution_m();
   if (inputs.scan != nullptr) {
-    const ScanView& scan = *inputs.scan;
-    const Pose2D& s = inputs.sensor_pose;
-    const double sx = (s.x_m - grid_.origin_x_m()) / res;
-    const double sy = (s.y_m - grid_.origin_y_m()) / res;
+    const ProjectedScan& scan = *inputs.scan;
+    // Beams are in the robot frame; the robot stood at scan_pose when the scan was taken.
+    const Pose2D& p = inputs.scan_pose;
+    const double pc = std::cos(p.theta_rad);
+    const double ps = std::sin(p.theta_rad);
+    const auto to_grid = [&](double x_m, double y_m, double& gx, double& gy) {
+      gx = (p.x_m + pc * x_m - ps * y_m - grid_.origin_x_m()) / res;
+      gy = (p.y_m + ps * x_m + pc * y_m - grid_.origin_y_m()) / res;
+    };
+    const SensorMount& mount = scan.mount();
+    double sx = 0.0;
+    double sy = 0.0;
+    to_grid(mount.x_m, mount.y_m, sx, sy);
     const int c0 = static_cast<int>(std::floor(sx));
     const int r0 = static_cast<int>(std::floor(sy));
     // Clearing first, then marking, so a ray never erases another beam's endpoint.
-    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      const double range = scan.ranges_m[i];
-      if (!std::isfinite(range) || range < scan.range_min_m) continue;
-      const bool no_return = range >= scan.range_max_m;
-      if (no_return && !config_.clear_no_return) continue;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      const bool no_return = scan.no_return(i);
+      if (!scan.valid(i) && !(no_return && config_.clear_no_return)) continue;
+      const double range = scan.range_m(i);
       const double clear_range = std::min(no_return ? config_.raytrace_max_range_m : range, config_.raytrace_max_range_m);
       if (clear_range <= config_.raytrace_min_range_m) continue;
-      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-      const double ex = sx + std::cos(angle) * clear_range / res;
-      const double ey = sy + std::sin(angle) * clear_range / res;
+      const Point2D& u = scan.direction(i);
+      double ex = 0.0;
+      double ey = 0.0;
+      to_grid(mount.x_m + u.x_m * clear_range, mount.y_m + u.y_m * clear_range, ex, ey);
       const int max_cells = static_cast<int>(std::ceil(2.0 * clear_range / res)) + 2;
       const int c1 = static_cast<int>(std::floor(ex));
       const int r1 = static_cast<int>(std::floor(ey));
@@ -221,14 +228,14 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
       // A ray cut short by the range limit clears its last cell too.
       if (clear_range < range && grid_.in_bounds(c1, r1)) grid_.set(c1, r1, kFreeCost);
     }
-    for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      const double range = scan.ranges_m[i];
-      if (!std::isfinite(range) || range < scan.range_min_m || range >= scan.range_max_m) continue;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (!scan.valid(i)) continue;
+      const double range = scan.range_m(i);
       if (range > config_.obstacle_max_range_m || range < config_.obstacle_min_range_m) continue;
-      const double angle = s.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+      const Point2D& e = scan.end(i);
       int c = 0;
       int r = 0;
-      if (grid_.world_to_cell(s.x_m + std::cos(angle) * range, s.y_m + std::sin(angle) * range, c, r)) {
+      if (grid_.world_to_cell(p.x_m + pc * e.x_m - ps * e.y_m, p.y_m + ps * e.x_m + pc * e.y_m, c, r)) {
         grid_.set(c, r, kLethalCost);
       }
     }
@@ -273,12 +280,9 @@ Status InflationLayer::init(const Costmap2D& master, std::pmr::memory_resource& 
   const double res = master.resolution_m();
   radius_cells_ = static_cast<int>(std::ceil(config_.inflation_radius_m / res));
   return guarded("inflation layer", [&]() -> Status {
-    const std::size_t line = static_cast<std::size_t>(std::max(master.width(), master.height())) + 1;
+    const auto line = static_cast<std::size_t>(std::max(master.width(), master.height()));
+    if (Status s = transform_.init(line, resource); !s) return s;
     distance2_ = allocate_array<float>(resource, master.size());
-    f_ = allocate_array<float>(resource, line);
-    d_ = allocate_array<float>(resource, line);
-    z_ = allocate_array<float>(resource, line + 1);
-    v_ = allocate_array<int>(resource, line);
     const std::size_t lut_size = static_cast<std::size_t>(radius_cells_) * radius_cells_ + 1;
     lut_ = allocate_array<std::uint8_t>(resource, lut_size);
     for (std::size_t k = 0; k < lut_size; ++k) lut_[k] = cost_at(std::sqrt(static_cast<double>(k)) * res, config_);
@@ -286,68 +290,23 @@ Status InflationLayer::init(const Costmap2D& master, std::pmr::memory_resource& 
   });
 }
 
-// Felzenszwalb-Huttenlocher lower envelope of parabolas over f_[0..n), result in d_.
-void InflationLayer::transform_1d(std::size_t n) noexcept {
-  constexpr float kInf = std::numeric_limits<float>::infinity();
-  std::size_t k = 0;
-  v_[0] = 0;
-  z_[0] = -kInf;
-  z_[1] = kInf;
-  // Cells at infinity are skipped as parabola sites; they cannot be nearest.
-  std::size_t first = 0;
-  while (first < n && f_[first] == kInf) ++first;
-  if (first == n) {
-    for (std::size_t q = 0; q < n; ++q) d_[q] = kInf;
-    return;
-  }
-  v_[0] = static_cast<int>(first);
-  for (std::size_t q = first + 1; q < n; ++q) {
-    if (f_[q] == kInf) continue;
-    const float fq = f_[q] + static_cast<float>(q * q);
-    float s = 0.0f;
-    for (;;) {
-      const auto p = static_cast<std::size_t>(v_[k]);
-      s = (fq - (f_[p] + static_cast<float>(p * p))) / (2.0f * static_cast<float>(q) - 2.0f * static_cast<float>(p));
-      if (s > z_[k] || k == 0) break;
-      --k;
-    }
-    ++k;
-    v_[k] = static_cast<int>(q);
-    z_[k] = s;
-    z_[k + 1] = kInf;
-  }
-  k = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    while (z_[k + 1] < static_cast<float>(q)) ++k;
-    const float diff = static_cast<float>(q) - static_cast<float>(v_[k]);
-    d_[q] = diff * diff + f_[static_cast<std::size_t>(v_[k])];
-  }
-}
-
 void InflationLayer::inflate(Costmap2D& grid) noexcept {
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  const int w = grid.width();
-  const int h = grid.height();
-  // Columns, then rows: the exact squared Euclidean distance in cells.
-  for (int c = 0; c < w; ++c) {
-    for (int r = 0; r < h; ++r) f_[r] = grid.at(c, r) == kLethalCost ? 0.0f : kInf;
-    transform_1d(static_cast<std::size_t>(h));
-    for (int r = 0; r < h; ++r) distance2_[grid.index(c, r)] = d_[r];
-  }
+  const auto cells = grid.cells();
+  if (cells.size() > distance2_.size()) return;  // not the grid init() was sized for
+  for (std::size_t i = 0; i < cells.size(); ++i) distance2_[i] = cells[i] == kLethalCost ? 0.0f : kInf;
+  // Sized at init() for this grid's master, so it cannot refuse the grid.
+  (void)transform_.transform(distance2_, grid.width(), grid.height());
   const float limit = static_cast<float>(lut_.size() - 1);
-  for (int r = 0; r < h; ++r) {
-    for (int c = 0; c < w; ++c) f_[c] = distance2_[grid.index(c, r)];
-    transform_1d(static_cast<std::size_t>(w));
-    for (int c = 0; c < w; ++c) {
-      const float d2 = d_[c];
-      if (!(d2 <= limit)) continue;
-      const std::uint8_t cost = lut_[static_cast<std::size_t>(d2 + 0.5f)];
-      std::uint8_t& cell = grid.cells()[grid.index(c, r)];
-      if (cell == kNoInformationCost) {
-        if (cost >= kInscribedCost) cell = cost;
-      } else if (cost > cell) {
-        cell = cost;
-      }
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const float d2 = distance2_[i];
+    if (!(d2 <= limit)) continue;
+    const std::uint8_t cost = lut_[static_cast<std::size_t>(d2 + 0.5f)];
+    std::uint8_t& cell = cells[i];
+    if (cell == kNoInformationCost) {
+      if (cost >= kInscribedCost) cell = cost;
+    } else if (cost > cell) {
+      cell = cost;
     }
   }
 }

@@ -20,21 +20,6 @@ constexpr std::uint8_t kClosed = 2;
 
 }  // namespace
 
-const char* to_string(PlanStatus status) noexcept {
-  switch (status) {
-    case PlanStatus::ok: return "ok";
-    case PlanStatus::start_outside: return "start outside the costmap";
-    case PlanStatus::goal_outside: return "goal outside the costmap";
-    case PlanStatus::start_blocked: return "start cell is blocked";
-    case PlanStatus::goal_blocked: return "goal cell is blocked";
-    case PlanStatus::no_path: return "no path";
-    case PlanStatus::expansion_cap: return "expansion cap reached";
-    case PlanStatus::path_too_long: return "path longer than the output buffer";
-    case PlanStatus::too_large: return "costmap or waypoints larger than configured";
-  }
-  return "?";
-}
-
 std::size_t GlobalPlanner::storage_bytes(const GlobalPlannerConfig& c) noexcept {
   return mem::BoundedIndexHeap<Priority>::storage_bytes(c.max_cells) +
          c.max_cells * (sizeof(float) + 1 + 2 + 1 + 2) + c.max_waypoints * sizeof(GridCell) + 256;

@@ -15,19 +15,6 @@ constexpr std::uint16_t kUnreached = 0xFFFF;
 constexpr double kUnreachedPenaltyM = 10.0;  // a rollout ending where the target cannot be reached
 }  // namespace
 
-const char* to_string(DwaStatus status) noexcept {
-  switch (status) {
-    case DwaStatus::idle: return "idle";
-    case DwaStatus::tracking: return "tracking";
-    case DwaStatus::reached: return "reached";
-    case DwaStatus::waiting: return "waiting";
-    case DwaStatus::rotating: return "rotating";
-    case DwaStatus::backing_off: return "backing_off";
-    case DwaStatus::failed: return "failed";
-  }
-  return "?";
-}
-
 Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& resource) {
   if (config.v_samples < 1 || config.w_samples < 1 || !(config.control_period_s > 0.0) || !(config.sim_step_s > 0.0) ||
       config.sim_time_s < config.sim_step_s || config.max_path_points == 0) {

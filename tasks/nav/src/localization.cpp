@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "sen3bot/nav/arena.hpp"
+#include "sen3bot/nav/distance_transform.hpp"
 
 namespace sen3bot::nav {
 
@@ -48,50 +49,10 @@ std::size_t kld_particle_count(std::size_t k, double err, double z, std::size_t 
 
 std::size_t MonteCarloLocalization::storage_bytes(const MclConfig& c, const OccupancyMap& map) noexcept {
   const std::size_t cells = map.cell_count();
-  const std::size_t line = static_cast<std::size_t>(std::max(map.width(), map.height())) + 2;
-  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t)) + line * (3 * sizeof(float) + sizeof(int)) +
+  const auto line = static_cast<std::size_t>(std::max(map.width(), map.height()));
+  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t)) + DistanceTransform::storage_bytes(line) +
          c.max_particles * (2 * sizeof(Particle) + sizeof(double) + 2 * sizeof(std::uint64_t)) + 1024;
 }
-
-namespace {
-
-// One row or column of the exact squared distance transform (Felzenszwalb-Huttenlocher).
-void edt_1d(const float* f, std::size_t n, float* out, int* v, float* z) {
-  constexpr float kInf = std::numeric_limits<float>::infinity();
-  std::size_t first = 0;
-  while (first < n && f[first] == kInf) ++first;
-  if (first == n) {
-    std::fill(out, out + n, kInf);
-    return;
-  }
-  std::size_t k = 0;
-  v[0] = static_cast<int>(first);
-  z[0] = -kInf;
-  z[1] = kInf;
-  for (std::size_t q = first + 1; q < n; ++q) {
-    if (f[q] == kInf) continue;
-    float s = 0.0f;
-    for (;;) {
-      const auto p = static_cast<std::size_t>(v[k]);
-      s = ((f[q] + static_cast<float>(q * q)) - (f[p] + static_cast<float>(p * p))) /
-          (2.0f * static_cast<float>(q) - 2.0f * static_cast<float>(p));
-      if (s > z[k] || k == 0) break;
-      --k;
-    }
-    ++k;
-    v[k] = static_cast<int>(q);
-    z[k] = s;
-    z[k + 1] = kInf;
-  }
-  k = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    while (z[k + 1] < static_cast<float>(q)) ++k;
-    const float diff = static_cast<float>(q) - static_cast<float>(v[k]);
-    out[q] = diff * diff + f[static_cast<std::size_t>(v[k])];
-  }
-}
-
-}  // namespace
 
 Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap& map, std::pmr::memory_resource& resource) {
   if (config.min_particles == 0 || config.max_particles < config.min_particles || !(config.kld_err > 0.0) ||
@@ -104,11 +65,9 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
   if (map.origin_yaw_rad() != 0.0) return Error::format(Errc::config, "mcl: maps with a non-zero origin yaw are not supported");
   config_ = config;
   z_ = normal_quantile(config.kld_confidence);
-  width_ = map.width();
-  height_ = map.height();
-  resolution_m_ = map.resolution_m();
-  origin_x_m_ = map.origin_x_m();
-  origin_y_m_ = map.origin_y_m();
+  grid_ = map.geometry();
+  const int width = grid_.width();
+  const int height = grid_.height();
   rng_.seed(config.seed);
   return guarded("mcl", [&]() -> Status {
     const std::size_t cells = map.cell_count();
@@ -116,11 +75,8 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
     log_field_ = allocate_array<float>(resource, cells);
     auto squared = allocate_array<float>(resource, cells);
     free_cells_ = allocate_array<std::uint32_t>(resource, cells);
-    const std::size_t line = static_cast<std::size_t>(std::max(width_, height_)) + 2;
-    auto f = allocate_array<float>(resource, line);
-    auto d = allocate_array<float>(resource, line);
-    auto z = allocate_array<float>(resource, line);
-    auto v = allocate_array<int>(resource, line);
+    DistanceTransform transform;
+    if (Status s = transform.init(static_cast<std::size_t>(std::max(width, height)), resource); !s) return s;
     particles_ = allocate_array<Particle>(resource, config.max_particles);
     next_ = allocate_array<Particle>(resource, config.max_particles);
     cumulative_ = allocate_array<double>(resource, config.max_particles);
@@ -128,11 +84,8 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
 
     constexpr float kInf = std::numeric_limits<float>::infinity();
     free_count_ = 0;
-    for (int c = 0; c < width_; ++c) {
-      for (int r = 0; r < height_; ++r) f[static_cast<std::size_t>(r)] = map.at(c, r) >= config.occupied_threshold ? 0.0f : kInf;
-      edt_1d(f.data(), static_cast<std::size_t>(height_), d.data(), v.data(), z.data());
-      for (int r = 0; r < height_; ++r) squared[static_cast<std::size_t>(r) * width_ + c] = d[static_cast<std::size_t>(r)];
-    }
+    for (std::size_t i = 0; i < cells; ++i) squared[i] = map.cells()[i] >= config.occupied_threshold ? 0.0f : kInf;
+    transform.transform(squared, width, height);
     const double two_sigma2 = 2.0 * config.sigma_hit_m * config.sigma_hit_m;
     const double range_max = 10.0;  // LMS200 default range: only scales the z_rand floor
     const double max_d = config.likelihood_max_dist_m;
@@ -140,15 +93,14 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
     log_pz_far_ = std::log(pz_far_);
     const double skip_d = std::min(max_d, config.beam_skip_distance_m);
     pz_skip_ = static_cast<float>(config.z_hit * std::exp(-skip_d * skip_d / two_sigma2) + config.z_rand / range_max);
-    for (int r = 0; r < height_; ++r) {
-      const std::size_t row = static_cast<std::size_t>(r) * width_;
-      for (int c = 0; c < width_; ++c) f[static_cast<std::size_t>(c)] = squared[row + c];
-      edt_1d(f.data(), static_cast<std::size_t>(width_), d.data(), v.data(), z.data());
-      for (int c = 0; c < width_; ++c) {
-        const double dist = std::min(max_d, std::sqrt(static_cast<double>(d[static_cast<std::size_t>(c)])) * resolution_m_);
+    const double resolution_m = grid_.resolution_m();
+    for (int r = 0; r < height; ++r) {
+      const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(width);
+      for (int c = 0; c < width; ++c) {
+        const double dist = std::min(max_d, std::sqrt(static_cast<double>(squared[row + c])) * resolution_m);
         field_[row + c] = static_cast<float>(config.z_hit * std::exp(-dist * dist / two_sigma2) + config.z_rand / range_max);
         // Distance from the obstacle cell's edge rather than its centre, for the interpolation.
-        const double edge = std::max(0.0, dist - 0.5 * resolution_m_);
+        const double edge = std::max(0.0, dist - 0.5 * resolution_m);
         log_field_[row + c] = static_cast<float>(std::log(config.z_hit * std::exp(-edge * edge / two_sigma2) + config.z_rand / range_max));
         const int occ = map.at(c, r);
         if (occ >= 0 && occ < config.occupied_threshold / 2) free_cells_[free_count_++] = static_cast<std::uint32_t>(row + c);
@@ -162,25 +114,30 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
 float MonteCarloLocalization::log_field(double x_m, double y_m) const noexcept {
   // Bilinear between cell centres: a wall face then scores as well as the wall cell, so the
   // estimate does not snap half a cell into walls.
-  const double gx = (x_m - origin_x_m_) / resolution_m_ - 0.5;
-  const double gy = (y_m - origin_y_m_) / resolution_m_ - 0.5;
-  if (!(gx >= 0.0 && gy >= 0.0 && gx < width_ - 1 && gy < height_ - 1)) return log_pz_far_;
+  double gx = 0.0;
+  double gy = 0.0;
+  grid_.world_to_grid(x_m, y_m, gx, gy);
+  gx -= 0.5;
+  gy -= 0.5;
+  const int width = grid_.width();
+  if (!(gx >= 0.0 && gy >= 0.0 && gx < width - 1 && gy < grid_.height() - 1)) return log_pz_far_;
   const auto c = static_cast<std::size_t>(gx);
   const auto r = static_cast<std::size_t>(gy);
   const auto fx = static_cast<float>(gx - static_cast<double>(c));
   const auto fy = static_cast<float>(gy - static_cast<double>(r));
-  const std::size_t i = r * static_cast<std::size_t>(width_) + c;
-  const std::size_t w = static_cast<std::size_t>(width_);
+  const auto w = static_cast<std::size_t>(width);
+  const std::size_t i = r * w + c;
   const float top = log_field_[i] + fx * (log_field_[i + 1] - log_field_[i]);
   const float bottom = log_field_[i + w] + fx * (log_field_[i + w + 1] - log_field_[i + w]);
   return top + fy * (bottom - top);
 }
 
 float MonteCarloLocalization::likelihood(double x_m, double y_m) const noexcept {
-  const double gx = (x_m - origin_x_m_) / resolution_m_;
-  const double gy = (y_m - origin_y_m_) / resolution_m_;
-  if (!(gx >= 0.0 && gy >= 0.0 && gx < width_ && gy < height_)) return pz_far_;
-  return field_[static_cast<std::size_t>(gy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(gx)];
+  double gx = 0.0;
+  double gy = 0.0;
+  grid_.world_to_grid(x_m, y_m, gx, gy);
+  if (!(gx >= 0.0 && gy >= 0.0 && gx < grid_.width() && gy < grid_.height())) return pz_far_;
+  return field_[static_cast<std::size_t>(gy) * static_cast<std::size_t>(grid_.width()) + static_cast<std::size_t>(gx)];
 }
 
 void MonteCarloLocalization::set_pose(const Pose2D& pose, double std_xy_m, double std_theta_rad) noexcept {
@@ -206,9 +163,10 @@ void MonteCarloLocalization::global_initialize() noexcept {
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
     const std::uint32_t cell = free_cells_[pick(rng_)];
-    const double c = static_cast<double>(cell % static_cast<std::uint32_t>(width_)) + unit(rng_);
-    const double r = static_cast<double>(cell / static_cast<std::uint32_t>(width_)) + unit(rng_);
-    particles_[i] = {origin_x_m_ + c * resolution_m_, origin_y_m_ + r * resolution_m_,
+    const auto width = static_cast<std::uint32_t>(grid_.width());
+    const double c = static_cast<double>(cell % width) + unit(rng_);
+    const double r = static_cast<double>(cell / width) + unit(rng_);
+    particles_[i] = {grid_.origin_x_m() + c * grid_.resolution_m(), grid_.origin_y_m() + r * grid_.resolution_m(),
                      (2.0 * unit(rng_) - 1.0) * std::numbers::pi, w};
   }
   updates_since_resample_ = 0;
@@ -241,8 +199,8 @@ void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to)
   }
 }
 
-void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
-  const std::size_t beams = scan.ranges_m.size();
+void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
+  const std::size_t beams = scan.size();
   if (beams == 0) return;
   const std::size_t used = std::min(beams, config_.max_beams);
   const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
@@ -250,17 +208,11 @@ void MonteCarloLocalization::sensor_update(const ScanView& scan) noexcept {
   double bx[512];
   double by[512];
   std::size_t n = 0;
-  const double mc = std::cos(config_.laser_mount.theta_rad);
-  const double ms = std::sin(config_.laser_mount.theta_rad);
   for (std::size_t k = 0; k < used && n < 512; ++k) {
     const auto i = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
-    const double r = scan.ranges_m[i];
-    if (!std::isfinite(r) || r < scan.range_min_m || r >= scan.range_max_m) continue;
-    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-    const double sx = r * std::cos(a);
-    const double sy = r * std::sin(a);
-    bx[n] = config_.laser_mount.x_m + mc * sx - ms * sy;
-    by[n] = config_.laser_mount.y_m + ms * sx + mc * sy;
+    if (!scan.valid(i)) continue;
+    bx[n] = scan.end(i).x_m;
+    by[n] = scan.end(i).y_m;
     ++n;
   }
   if (n == 0) return;
@@ -408,11 +360,11 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m;
 }
 
-bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan) noexcept {
+bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan) noexcept {
   return update(odom, scan, Pose2D{odom.x_m, odom.y_m, odom.theta_rad});
 }
 
-bool MonteCarloLocalization::update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept {
+bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan, const Pose2D& odom_at_scan) noexcept {
   const Pose2D now{odom.x_m, odom.y_m, odom.theta_rad};
   odom_latest_ = now;
   if (!have_odom_) {

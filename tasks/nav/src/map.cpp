@@ -13,41 +13,8 @@ namespace sen3bot::nav {
 
 OccupancyMap::OccupancyMap(int width, int height, double resolution_m, double origin_x_m,
                            double origin_y_m, double origin_yaw_rad)
-    : width_(width),
-      height_(height),
-      resolution_m_(resolution_m),
-      origin_x_m_(origin_x_m),
-      origin_y_m_(origin_y_m),
-      origin_yaw_rad_(origin_yaw_rad),
-      cos_yaw_(std::cos(origin_yaw_rad)),
-      sin_yaw_(std::sin(origin_yaw_rad)),
+    : geometry_(width, height, resolution_m, origin_x_m, origin_y_m, origin_yaw_rad),
       cells_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0) {}
-
-void OccupancyMap::world_to_grid(double x_m, double y_m, double& gx, double& gy) const noexcept {
-  const double dx = x_m - origin_x_m_;
-  const double dy = y_m - origin_y_m_;
-  gx = (cos_yaw_ * dx + sin_yaw_ * dy) / resolution_m_;
-  gy = (-sin_yaw_ * dx + cos_yaw_ * dy) / resolution_m_;
-}
-
-bool OccupancyMap::world_to_cell(double x_m, double y_m, int& col, int& row) const noexcept {
-  double gx = 0.0;
-  double gy = 0.0;
-  world_to_grid(x_m, y_m, gx, gy);
-  // Clamp before the cast: far-away points must not overflow int.
-  gx = std::clamp(gx, -1.0, static_cast<double>(width_) + 1.0);
-  gy = std::clamp(gy, -1.0, static_cast<double>(height_) + 1.0);
-  col = static_cast<int>(std::floor(gx));
-  row = static_cast<int>(std::floor(gy));
-  return in_bounds(col, row);
-}
-
-void OccupancyMap::cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept {
-  const double lx = (col + 0.5) * resolution_m_;
-  const double ly = (row + 0.5) * resolution_m_;
-  x_m = origin_x_m_ + cos_yaw_ * lx - sin_yaw_ * ly;
-  y_m = origin_y_m_ + sin_yaw_ * lx + cos_yaw_ * ly;
-}
 
 namespace {
 

@@ -10,11 +10,11 @@
 namespace sen3bot::nav {
 namespace {
 
-// Where the laser was when the scan was taken: from the pose localization found for that very
-// scan when it has one, else from the newest pose.
-Pose2D sensor_pose_for(const PoseEstimate& pose, const ScanView& scan, const SensorMount& mount) noexcept {
-  const bool same_scan = pose.scan_stamp_ns != 0 && pose.scan_stamp_ns == scan.stamp_ns;
-  return compose(same_scan ? pose.scan_pose : pose.pose, mount);
+// Where the robot was when the scan was taken: the pose localization found for that very scan
+// when it has one, else the newest pose.
+Pose2D robot_pose_at(const PoseEstimate& pose, const ProjectedScan& scan) noexcept {
+  const bool same_scan = pose.scan_stamp_ns != 0 && pose.scan_stamp_ns == scan.stamp_ns();
+  return same_scan ? pose.scan_pose : pose.pose;
 }
 
 }  // namespace
@@ -30,20 +30,19 @@ void LocalizationTask::step(const tasks::StepContext& context) {
   tasks::Sample<Odometry> odom;
   if (!odom_.read(odom) || !odom.value.valid) return;
   history_.push(odom.value);
-  const ScanView* scan = nullptr;
-  ScanView view;
+  const ProjectedScan* scan = nullptr;
   if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
     scan_seq_ = scan_sample_.sequence;
-    view = scan_sample_.value.view();
-    scan = &view;
+    projected_.assign(scan_sample_.value.view(), config_.mcl.laser_mount);
+    scan = &projected_;
   }
   // A scan is weighed at the odometry pose of its stamp (when odometry reaches back that far).
   Pose2D at_scan{odom.value.x_m, odom.value.y_m, odom.value.theta_rad};
-  if (scan != nullptr) (void)history_.pose_at(scan->stamp_ns, at_scan);
+  if (scan != nullptr) (void)history_.pose_at(scan->stamp_ns(), at_scan);
   (void)mcl_.update(odom.value, scan, at_scan);
   if (scan != nullptr && mcl_.estimate().valid) {
     scan_pose_ = mcl_.pose_at_odometry(at_scan);
-    scan_stamp_ns_ = scan->stamp_ns;
+    scan_stamp_ns_ = scan->stamp_ns();
   }
   PoseEstimate e = mcl_.estimate();
   e.stamp_ns = context.start_ns;
@@ -178,16 +177,13 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
 void PlannerTask::step(const tasks::StepContext& context) {
   tasks::Sample<PoseEstimate> pose;
   const bool have_pose = pose_.read(pose) && pose.value.valid;
-  const ScanView* scan = nullptr;
-  ScanView view;
+  const ProjectedScan* scan = nullptr;
   if (config_.use_scan && scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
     scan_seq_ = scan_sample_.sequence;
-    view = scan_sample_.value.view();
-    scan = &view;
+    projected_.assign(scan_sample_.value.view(), config_.laser_mount);
+    scan = &projected_;
   }
-  if (have_pose && scan != nullptr) {
-    costmap_.update({pose.value.pose, sensor_pose_for(pose.value, *scan, config_.laser_mount), scan});
-  }
+  if (have_pose && scan != nullptr) costmap_.update({pose.value.pose, robot_pose_at(pose.value, *scan), scan});
   tasks::Sample<NavGoal> goal;
   if (!goal_.read(goal)) return;
   if (!goal.value.active) {
@@ -249,16 +245,14 @@ void ControllerTask::step(const tasks::StepContext& context) {
   const bool fresh_pose = pose_.read(pose) && pose.value.valid &&
                           static_cast<double>(context.start_ns - pose.stamp_ns) <= config_.pose_timeout_s * 1e9;
   if (fresh_pose && odom_.read(odom)) {
-    const ScanView* scan = nullptr;
-    ScanView view;
+    const ProjectedScan* scan = nullptr;
     if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
       scan_seq_ = scan_sample_.sequence;
-      view = scan_sample_.value.view();
-      scan = &view;
+      projected_.assign(scan_sample_.value.view(), config_.laser_mount);
+      scan = &projected_;
     }
-    const Pose2D sensor = scan != nullptr ? sensor_pose_for(pose.value, *scan, config_.laser_mount)
-                                          : compose(pose.value.pose, config_.laser_mount);
-    costmap_.update({pose.value.pose, sensor, scan});
+    const Pose2D at_scan = scan != nullptr ? robot_pose_at(pose.value, *scan) : pose.value.pose;
+    costmap_.update({pose.value.pose, at_scan, scan});
     const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap());
     command.v_m_s = c.v_m_s;
     command.w_rad_s = c.w_rad_s;
@@ -284,11 +278,12 @@ void SafetyTask::step(const tasks::StepContext& context) {
       static_cast<double>(context.start_ns - requested.stamp_ns) <= config_.command_timeout_s * 1e9) {
     in.requested = requested.value;
   }
-  ScanView view;
-  if (scan_.read(scan_sample_)) {
-    view = scan_sample_.value.view();
-    in.scan = &view;
+  if (scan_.read(scan_sample_) && (!have_scan_ || scan_sample_.sequence != scan_seq_)) {
+    scan_seq_ = scan_sample_.sequence;
+    projected_.assign(scan_sample_.value.view(), config_.safety.laser_mount);
+    have_scan_ = true;
   }
+  if (have_scan_) in.scan = &projected_;
   tasks::Sample<Odometry> odom;
   if (odom_.read(odom) && odom.value.valid) {
     in.odom_stamp_ns = odom.value.stamp_ns;

@@ -20,12 +20,14 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
   turn_radius_m_ = fp.circumscribed_radius_m() + config.lateral_margin_m;
 }
 
-SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
+SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   SafetyOutput out;
   out.command = in.requested;
   out.nearest_ahead_m = std::numeric_limits<double>::infinity();
+  // A stamp ahead of now (clocks a little apart) counts as a fresh scan, never a negative age.
+  if (in.scan != nullptr) out.scan_age_s = std::max(0.0, static_cast<double>(in.now_ns - in.scan->stamp_ns()) * 1e-9);
   const double stale_scan_ns = config_.stale_scan_periods * config_.scan_period_s * 1e9;
-  if (in.scan == nullptr || static_cast<double>(in.now_ns - in.scan->stamp_ns) > stale_scan_ns) out.reasons |= kSafetyScanStale;
+  if (in.scan == nullptr || static_cast<double>(in.now_ns - in.scan->stamp_ns()) > stale_scan_ns) out.reasons |= kSafetyScanStale;
   if (in.odom_stamp_ns < 0 || static_cast<double>(in.now_ns - in.odom_stamp_ns) > config_.odom_timeout_s * 1e9) {
     out.reasons |= kSafetyOdomStale;
   }
@@ -41,27 +43,14 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
   double v = in.requested.v_m_s;
   double w = in.requested.w_rad_s;
   const double speed = std::max({0.0, in.measured_v_m_s, v});
-  const double stop = config_.stop_distance_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_m_s2);
+  const double stop = config_.stop_distance_m + speed * (config_.reaction_s + out.scan_age_s) +
+                      speed * speed / (2.0 * config_.decel_m_s2);
   out.stop_distance_m = stop;
 
-  // Laser points in the robot frame, once.
-  const ScanView& scan = *in.scan;
-  const double mc = std::cos(config_.laser_mount.theta_rad);
-  const double ms = std::sin(config_.laser_mount.theta_rad);
-  std::size_t n = 0;
+  const std::span<const Point2D> points = in.scan->points();
   bool inside_turn_circle = false;
-  for (std::size_t i = 0; i < scan.ranges_m.size() && n < kMaxPoints; ++i) {
-    const double r = scan.ranges_m[i];
-    if (!std::isfinite(r) || r < scan.range_min_m || r >= scan.range_max_m) continue;
-    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-    const double sx = r * std::cos(a);
-    const double sy = r * std::sin(a);
-    const double x = config_.laser_mount.x_m + mc * sx - ms * sy;
-    const double y = config_.laser_mount.y_m + ms * sx + mc * sy;
-    if (std::hypot(x, y) < turn_radius_m_) inside_turn_circle = true;
-    points_x_[n] = x;
-    points_y_[n] = y;
-    ++n;
+  for (const Point2D& q : points) {
+    if (std::hypot(q.x_m, q.y_m) < turn_radius_m_) inside_turn_circle = true;
   }
 
   // Sweep the front half of the body (widened by the lateral margin) forward along the
@@ -79,9 +68,9 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) noexcept {
       const double py = straight ? 0.0 : (1.0 - std::cos(heading)) / curvature;
       const double c = std::cos(heading);
       const double s = std::sin(heading);
-      for (std::size_t k = 0; k < n; ++k) {
-        const double dx = points_x_[k] - px;
-        const double dy = points_y_[k] - py;
+      for (const Point2D& q : points) {
+        const double dx = q.x_m - px;
+        const double dy = q.y_m - py;
         const double bx = c * dx + s * dy;  // the point in the body frame at this step
         const double by = -s * dx + c * dy;
         if (bx >= 0.0 && bx <= front_m_ && std::abs(by) <= half_width) {

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <span>
 
-#include "sen3bot/nav/messages.hpp"
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/sim/simulation.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -29,21 +29,21 @@ class Referee {
   static constexpr std::size_t kMaxTrack = 4096;
 
   // The firmware's pose estimate, compared with the truth at every step; null: not judged.
-  void watch_estimate(const tasks::Topic<nav::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
+  void watch_estimate(const tasks::Topic<msg::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
   // Every world step; never allocates.
   void observe(const GroundTruth& truth) noexcept;
 
   [[nodiscard]] const RefereeReport& report() const noexcept { return report_; }
   void print(std::FILE* out) const;
   // The true driven path, a point per 5 cm moved.
-  [[nodiscard]] std::span<const nav::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+  [[nodiscard]] std::span<const msg::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
 
  private:
-  const tasks::Topic<nav::PoseEstimate>* estimate_ = nullptr;
+  const tasks::Topic<msg::PoseEstimate>* estimate_ = nullptr;
   RefereeReport report_;
   bool have_last_ = false;
-  nav::Pose2D last_;
-  std::array<nav::Point2D, kMaxTrack> track_{};
+  msg::Pose2D last_;
+  std::array<msg::Point2D, kMaxTrack> track_{};
   std::size_t track_count_ = 0;
 };
 

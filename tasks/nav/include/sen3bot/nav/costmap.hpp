@@ -15,9 +15,11 @@
 
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/mem/static_vector.hpp"
+#include "sen3bot/nav/distance_transform.hpp"
 #include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/grid_geometry.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/nav/scan.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 
 namespace sen3bot::nav {
 
@@ -32,22 +34,16 @@ class Costmap2D {
   // Takes width * height bytes from resource (once).
   Status init(int width, int height, double resolution_m, std::pmr::memory_resource& resource);
 
-  [[nodiscard]] int width() const noexcept { return width_; }
-  [[nodiscard]] int height() const noexcept { return height_; }
-  [[nodiscard]] double resolution_m() const noexcept { return resolution_m_; }
-  [[nodiscard]] double origin_x_m() const noexcept { return origin_x_m_; }
-  [[nodiscard]] double origin_y_m() const noexcept { return origin_y_m_; }
-  void set_origin(double x_m, double y_m) noexcept {
-    origin_x_m_ = x_m;
-    origin_y_m_ = y_m;
-  }
+  [[nodiscard]] const GridGeometry& geometry() const noexcept { return geometry_; }
+  [[nodiscard]] int width() const noexcept { return geometry_.width(); }
+  [[nodiscard]] int height() const noexcept { return geometry_.height(); }
+  [[nodiscard]] double resolution_m() const noexcept { return geometry_.resolution_m(); }
+  [[nodiscard]] double origin_x_m() const noexcept { return geometry_.origin_x_m(); }
+  [[nodiscard]] double origin_y_m() const noexcept { return geometry_.origin_y_m(); }
+  void set_origin(double x_m, double y_m) noexcept { geometry_.set_origin(x_m, y_m); }
   [[nodiscard]] std::size_t size() const noexcept { return cells_.size(); }
-  [[nodiscard]] bool in_bounds(int col, int row) const noexcept {
-    return col >= 0 && row >= 0 && col < width_ && row < height_;
-  }
-  [[nodiscard]] std::size_t index(int col, int row) const noexcept {
-    return static_cast<std::size_t>(row) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(col);
-  }
+  [[nodiscard]] bool in_bounds(int col, int row) const noexcept { return geometry_.in_bounds(col, row); }
+  [[nodiscard]] std::size_t index(int col, int row) const noexcept { return geometry_.index(col, row); }
   [[nodiscard]] std::uint8_t at(int col, int row) const noexcept { return cells_[index(col, row)]; }
   void set(int col, int row, std::uint8_t cost) noexcept { cells_[index(col, row)] = cost; }
   [[nodiscard]] std::span<std::uint8_t> cells() noexcept { return cells_; }
@@ -55,31 +51,22 @@ class Costmap2D {
   void fill(std::uint8_t cost) noexcept;
 
   bool world_to_cell(double x_m, double y_m, int& col, int& row) const noexcept {
-    const double gx = std::clamp((x_m - origin_x_m_) / resolution_m_, -2.0, width_ + 1.0);
-    const double gy = std::clamp((y_m - origin_y_m_) / resolution_m_, -2.0, height_ + 1.0);
-    col = static_cast<int>(std::floor(gx));
-    row = static_cast<int>(std::floor(gy));
-    return in_bounds(col, row);
+    return geometry_.world_to_cell(x_m, y_m, col, row);
   }
   void cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept {
-    x_m = origin_x_m_ + (col + 0.5) * resolution_m_;
-    y_m = origin_y_m_ + (row + 0.5) * resolution_m_;
+    geometry_.cell_to_world(col, row, x_m, y_m);
   }
 
  private:
-  int width_ = 0;
-  int height_ = 0;
-  double resolution_m_ = 0.05;
-  double origin_x_m_ = 0.0;
-  double origin_y_m_ = 0.0;
+  GridGeometry geometry_;
   std::span<std::uint8_t> cells_;
 };
 
 // What one costmap update sees. scan may be null (no new scan this cycle).
 struct CostmapInputs {
-  Pose2D robot_pose;   // map frame
-  Pose2D sensor_pose;  // map frame
-  const ScanView* scan = nullptr;
+  Pose2D robot_pose;  // map frame
+  Pose2D scan_pose;   // map frame: where the robot was when the scan was taken
+  const ProjectedScan* scan = nullptr;
 };
 
 // A plug-in layer. Later layers (dynamic obstacles, people) implement this too.
@@ -209,14 +196,9 @@ class InflationLayer final : public CostmapLayer {
   void inflate(Costmap2D& grid) noexcept;
 
  private:
-  void transform_1d(std::size_t n) noexcept;
-
   InflationLayerConfig config_;
+  DistanceTransform transform_;
   std::span<float> distance2_;  // squared distance in cells to the nearest lethal cell
-  std::span<float> f_;          // 1D transform scratch (max(width, height) + 1)
-  std::span<float> d_;
-  std::span<float> z_;
-  std::span<int> v_;
   std::span<std::uint8_t> lut_;  // cost by squared cell distance
   int radius_cells_ = 0;
 };

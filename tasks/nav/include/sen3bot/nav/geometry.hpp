@@ -1,29 +1,20 @@
 #pragma once
-// Small geometry shared by the navigation pieces and the simulated world: poses in the map
-// frame and the robot footprint. All trivially copyable so they can travel on topics.
+// Geometry shared by the navigation pieces and the simulated world: pose arithmetic and the
+// robot footprint. The value types themselves are the bus vocabulary's (msg/geometry.hpp).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
-#include <numbers>
+
+#include "sen3bot/msg/geometry.hpp"
 
 namespace sen3bot::nav {
 
-struct Pose2D {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
-
-struct Point2D {
-  double x_m = 0.0;
-  double y_m = 0.0;
-};
-
-inline double normalize_angle(double a_rad) noexcept {
-  a_rad = std::fmod(a_rad + std::numbers::pi, 2.0 * std::numbers::pi);
-  if (a_rad < 0.0) a_rad += 2.0 * std::numbers::pi;
-  return a_rad - std::numbers::pi;
-}
+using msg::compose;
+using msg::normalize_angle;
+using msg::Point2D;
+using msg::Pose2D;
+using msg::SensorMount;
 
 // a^-1 * b: the motion from pose a to pose b, in a's frame.
 inline Pose2D relative_pose(const Pose2D& a, const Pose2D& b) noexcept {

@@ -35,6 +35,7 @@
 
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/mem/bounded_index_heap.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/costmap.hpp"
 
 namespace sen3bot::nav {
@@ -58,18 +59,8 @@ struct GlobalPlannerConfig {
   int waypoint_reach_cells = 1;
 };
 
-enum class PlanStatus : std::uint8_t {
-  ok,
-  start_outside,   // start not on the costmap
-  goal_outside,
-  start_blocked,   // start cell impassable
-  goal_blocked,
-  no_path,         // the reachable region does not contain the goal
-  expansion_cap,   // gave up after max_expansions
-  path_too_long,   // the path does not fit the output buffer
-  too_large,       // the costmap or waypoint list exceeds what init() sized
-};
-const char* to_string(PlanStatus status) noexcept;
+using msg::PlanStatus;
+using msg::to_string;
 
 struct PlanResult {
   PlanStatus status = PlanStatus::no_path;

@@ -27,15 +27,16 @@
 #include <span>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/geometry.hpp"
 
 namespace sen3bot::nav {
 
-struct PathPoint {
-  float x_m = 0.0f;
-  float y_m = 0.0f;
-};
+using msg::DwaStatus;
+using msg::PathPoint;
+using msg::RecoveryCounts;
+using msg::to_string;
 
 struct DwaConfig {
   // Pioneer 3-DX limits (navigation.md): 1.2 m/s and 300 deg/s; indoors we stay lower.
@@ -78,17 +79,6 @@ struct DwaConfig {
   int max_recovery_cycles = 3;
 };
 
-enum class DwaStatus : std::uint8_t {
-  idle,         // no path
-  tracking,
-  reached,      // within goal tolerance: commanding zero
-  waiting,      // recovery 1
-  rotating,     // recovery 2
-  backing_off,  // recovery 3
-  failed,       // recoveries exhausted
-};
-const char* to_string(DwaStatus status) noexcept;
-
 struct DwaCommand {
   double v_m_s = 0.0;
   double w_rad_s = 0.0;
@@ -96,13 +86,6 @@ struct DwaCommand {
   std::uint32_t admissible = 0;  // rollouts that passed the collision check
   std::uint32_t evaluated = 0;
   double distance_to_goal_m = 0.0;
-};
-
-struct RecoveryCounts {
-  std::uint32_t waits = 0;
-  std::uint32_t rotations = 0;
-  std::uint32_t backoffs = 0;
-  [[nodiscard]] std::uint32_t total() const noexcept { return waits + rotations + backoffs; }
 };
 
 class DwaPlanner {

@@ -26,8 +26,10 @@
 #include <span>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/scan.hpp"
 
 namespace sen3bot::nav {
@@ -72,27 +74,11 @@ struct MclConfig {
   double initial_std_xy_m = 0.25;
   double initial_std_theta_rad = 0.2;
   double lost_std_xy_m = 1.0;          // estimate reported lost above this position spread
-  SensorMount laser_mount;
+  SensorMount laser_mount;            // LocalizationTask projects scans with it
   std::uint64_t seed = 1;
 };
 
-struct PoseEstimate {
-  Pose2D pose;                  // map frame
-  double cov_xx = 0.0;          // m^2
-  double cov_xy = 0.0;
-  double cov_yy = 0.0;
-  double cov_tt = 0.0;          // rad^2
-  std::uint32_t particles = 0;
-  std::uint32_t updates = 0;
-  bool valid = false;           // initialised
-  bool lost = false;            // spread above lost_std_xy_m
-  hal::Nanos stamp_ns = 0;
-  // Where the robot was when the newest scan the filter was given was taken (map frame), and
-  // that scan's stamp (0: none). The costmaps place that scan from here, not from pose.
-  Pose2D scan_pose;
-  hal::Nanos scan_stamp_ns = 0;
-};
-static_assert(std::is_trivially_copyable_v<PoseEstimate>);
+using msg::PoseEstimate;
 
 // The standard-normal quantile: Phi^-1(p) for 0 < p < 1 (Acklam's rational approximation,
 // relative error below 1.2e-9).
@@ -112,11 +98,11 @@ class MonteCarloLocalization {
   void global_initialize() noexcept;
 
   // Feeds odometry and (optionally) a scan. Returns true when a filter update ran.
-  bool update(const Odometry& odom, const ScanView* scan) noexcept;
+  bool update(const Odometry& odom, const ProjectedScan* scan) noexcept;
   // The same for a scan taken when odometry read odom_at_scan (an older pose than odom's, from
   // an OdometryHistory): the update happens at the scan's pose, and estimate() carries the
   // result forward to odom.
-  bool update(const Odometry& odom, const ScanView* scan, const Pose2D& odom_at_scan) noexcept;
+  bool update(const Odometry& odom, const ProjectedScan* scan, const Pose2D& odom_at_scan) noexcept;
   // The filter pose carried to an odometry pose (estimate() does this for the newest one).
   [[nodiscard]] Pose2D pose_at_odometry(const Pose2D& odom_pose) const noexcept;
 
@@ -134,7 +120,7 @@ class MonteCarloLocalization {
     double weight;
   };
   void motion_update(const Pose2D& from, const Pose2D& to) noexcept;
-  void sensor_update(const ScanView& scan) noexcept;
+  void sensor_update(const ProjectedScan& scan) noexcept;
   void resample() noexcept;
   void compute_estimate() noexcept;
   [[nodiscard]] float likelihood(double x_m, double y_m) const noexcept;
@@ -143,11 +129,7 @@ class MonteCarloLocalization {
   MclConfig config_;
   double z_ = 2.326;
   // Likelihood field over the map grid.
-  int width_ = 0;
-  int height_ = 0;
-  double resolution_m_ = 0.05;
-  double origin_x_m_ = 0.0;
-  double origin_y_m_ = 0.0;
+  GridGeometry grid_;
   float pz_far_ = 0.0f;
   float pz_skip_ = 0.0f;  // likelihood at beam_skip_distance_m
   float log_pz_far_ = 0.0f;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/nav/grid_geometry.hpp"
 
 namespace sen3bot::nav {
 
@@ -49,41 +50,33 @@ class OccupancyMap {
   OccupancyMap(int width, int height, double resolution_m, double origin_x_m, double origin_y_m,
                double origin_yaw_rad = 0.0);
 
-  [[nodiscard]] int width() const noexcept { return width_; }
-  [[nodiscard]] int height() const noexcept { return height_; }
-  [[nodiscard]] double resolution_m() const noexcept { return resolution_m_; }
-  [[nodiscard]] double origin_x_m() const noexcept { return origin_x_m_; }
-  [[nodiscard]] double origin_y_m() const noexcept { return origin_y_m_; }
-  [[nodiscard]] double origin_yaw_rad() const noexcept { return origin_yaw_rad_; }
+  [[nodiscard]] const GridGeometry& geometry() const noexcept { return geometry_; }
+  [[nodiscard]] int width() const noexcept { return geometry_.width(); }
+  [[nodiscard]] int height() const noexcept { return geometry_.height(); }
+  [[nodiscard]] double resolution_m() const noexcept { return geometry_.resolution_m(); }
+  [[nodiscard]] double origin_x_m() const noexcept { return geometry_.origin_x_m(); }
+  [[nodiscard]] double origin_y_m() const noexcept { return geometry_.origin_y_m(); }
+  [[nodiscard]] double origin_yaw_rad() const noexcept { return geometry_.origin_yaw_rad(); }
   [[nodiscard]] std::size_t cell_count() const noexcept { return cells_.size(); }
+  [[nodiscard]] bool in_bounds(int col, int row) const noexcept { return geometry_.in_bounds(col, row); }
 
-  [[nodiscard]] bool in_bounds(int col, int row) const noexcept {
-    return col >= 0 && row >= 0 && col < width_ && row < height_;
-  }
-  [[nodiscard]] std::int8_t at(int col, int row) const noexcept {
-    return cells_[static_cast<std::size_t>(row) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(col)];
-  }
-  void set(int col, int row, std::int8_t value) noexcept {
-    cells_[static_cast<std::size_t>(row) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(col)] = value;
-  }
+  [[nodiscard]] std::int8_t at(int col, int row) const noexcept { return cells_[geometry_.index(col, row)]; }
+  void set(int col, int row, std::int8_t value) noexcept { cells_[geometry_.index(col, row)] = value; }
   [[nodiscard]] const std::vector<std::int8_t>& cells() const noexcept { return cells_; }
 
-  // Map frame <-> grid. world_to_grid gives continuous cell coordinates (cell (c, r) spans
-  // [c, c+1) x [r, r+1)); world_to_cell floors them and reports whether the cell is inside.
-  void world_to_grid(double x_m, double y_m, double& gx, double& gy) const noexcept;
-  bool world_to_cell(double x_m, double y_m, int& col, int& row) const noexcept;
-  // Centre of a cell in the map frame.
-  void cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept;
+  // Map frame <-> grid (GridGeometry).
+  void world_to_grid(double x_m, double y_m, double& gx, double& gy) const noexcept {
+    geometry_.world_to_grid(x_m, y_m, gx, gy);
+  }
+  bool world_to_cell(double x_m, double y_m, int& col, int& row) const noexcept {
+    return geometry_.world_to_cell(x_m, y_m, col, row);
+  }
+  void cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept {
+    geometry_.cell_to_world(col, row, x_m, y_m);
+  }
 
  private:
-  int width_ = 0;
-  int height_ = 0;
-  double resolution_m_ = 0.05;
-  double origin_x_m_ = 0.0;
-  double origin_y_m_ = 0.0;
-  double origin_yaw_rad_ = 0.0;
-  double cos_yaw_ = 1.0;
-  double sin_yaw_ = 0.0;
+  GridGeometry geometry_;
   std::vector<std::int8_t> cells_;
 };
 

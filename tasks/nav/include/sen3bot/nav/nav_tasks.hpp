@@ -15,17 +15,23 @@
 #include <cstdint>
 #include <span>
 
+#include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
-#include "sen3bot/nav/messages.hpp"
 #include "sen3bot/nav/odometry_history.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
 namespace sen3bot::nav {
+
+using msg::BaseFlags;
+using msg::ControllerStatus;
+using msg::NavGoal;
+using msg::PathMessage;
 
 // --- Localization ----------------------------------------------------------------------------
 
@@ -54,6 +60,7 @@ class LocalizationTask final : public tasks::Task {
   std::atomic<bool> global_request_{false};
   std::uint64_t scan_seq_ = 0;
   tasks::Sample<ScanMessage> scan_sample_;
+  ProjectedScan projected_;       // the newest scan, projected with config_.mcl.laser_mount
   OdometryHistory history_;       // to take each scan at the pose it was measured from
   Pose2D scan_pose_;              // the filter pose at the newest scan (published)
   hal::Nanos scan_stamp_ns_ = 0;
@@ -125,6 +132,7 @@ class PlannerTask final : public tasks::Task {
   hal::Nanos last_plan_ns_ = 0;
   std::uint64_t scan_seq_ = 0;
   tasks::Sample<ScanMessage> scan_sample_;
+  ProjectedScan projected_;
   PathMessage message_;
 };
 
@@ -170,6 +178,7 @@ class ControllerTask final : public tasks::Task {
   std::uint32_t plan_id_ = 0;
   std::uint64_t scan_seq_ = 0;
   tasks::Sample<ScanMessage> scan_sample_;
+  ProjectedScan projected_;
   tasks::Sample<PathMessage> path_sample_;
 };
 
@@ -204,6 +213,9 @@ class SafetyTask final : public tasks::Task {
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<SafetyOutput>& status_;
   tasks::Sample<ScanMessage> scan_sample_;
+  std::uint64_t scan_seq_ = 0;
+  bool have_scan_ = false;
+  ProjectedScan projected_;  // projected once per scan, checked every step
   std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero
 };
 

@@ -8,28 +8,28 @@
 //  * a laser point lies inside the stop zone along the direction of motion: the front half of
 //    the body (its width plus lateral_margin_m a side) swept forward along the commanded arc
 //    would reach it within the stop distance. That distance grows with the speed v:
-//    stop_distance_m + v * reaction_s + v^2 / (2 decel_m_s2) (the base cannot stop at once).
+//      stop_distance_m + v * (reaction_s + scan_age_s) + v^2 / (2 decel_m_s2)
+//    The base cannot stop at once (the braking term), a command takes reaction_s to reach the
+//    wheels, and the robot has already moved for scan_age_s (now - the scan's stamp, at least
+//    0) towards what the scan shows: a scan may be up to stale_scan_periods periods old.
 //    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
 //    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
-#include <array>
 #include <cstdint>
-#include <type_traits>
 
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/geometry.hpp"
-#include "sen3bot/nav/scan.hpp"
+#include "sen3bot/nav/projected_scan.hpp"
 
 namespace sen3bot::nav {
 
-struct VelocityCommand {
-  double v_m_s = 0.0;
-  double w_rad_s = 0.0;
-  hal::Nanos stamp_ns = 0;
-};
-static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+using msg::SafetyOutput;
+using msg::SafetyReason;
+using msg::VelocityCommand;
+using enum msg::SafetyReason;
 
 struct SafetyConfig {
   double scan_period_s = 0.2;      // LMS200 at 38.4 kbaud: about 5 scans/s
@@ -37,30 +37,20 @@ struct SafetyConfig {
   double odom_timeout_s = 0.3;
   double stop_distance_m = 0.25;
   double slow_distance_m = 0.35;    // the slow zone's depth beyond the stop distance
-  double reaction_s = 0.1;          // command to wheels: one control period
+  // Command to wheels. The composition sets it from the measured sense-to-act budget; the
+  // default is one control period.
+  double reaction_s = 0.1;
   double decel_m_s2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
   double max_reverse_m_s = 0.1;
   Footprint footprint = Footprint::pioneer();
-  SensorMount laser_mount;
-};
-
-enum SafetyReason : std::uint32_t {
-  kSafetyNone = 0,
-  kSafetyScanStale = 1u << 0,
-  kSafetyOdomStale = 1u << 1,
-  kSafetyEstop = 1u << 2,
-  kSafetyMotorsOff = 1u << 3,
-  kSafetyLocalizationLost = 1u << 4,
-  kSafetyObstacle = 1u << 5,       // stopped for a point in the stop zone
-  kSafetySlowed = 1u << 6,         // scaled down in the slow zone
-  kSafetyReverseCapped = 1u << 7,
+  SensorMount laser_mount;          // SafetyTask projects scans with it
 };
 
 struct SafetyInputs {
   VelocityCommand requested;
-  const ScanView* scan = nullptr;  // the newest scan, or null if none ever arrived
-  hal::Nanos odom_stamp_ns = -1;   // -1: never
+  const ProjectedScan* scan = nullptr;  // the newest scan, or null if none ever arrived
+  hal::Nanos odom_stamp_ns = -1;        // -1: never
   bool estop = false;
   bool motors_enabled = true;
   bool localization_lost = false;
@@ -68,28 +58,16 @@ struct SafetyInputs {
   hal::Nanos now_ns = 0;
 };
 
-struct SafetyOutput {
-  VelocityCommand command;
-  std::uint32_t reasons = kSafetyNone;
-  double nearest_ahead_m = 0.0;  // free travel along the commanded arc (+inf: clear to the slow zone's end)
-  double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
-};
-static_assert(std::is_trivially_copyable_v<SafetyOutput>);
-
 class SafetyFilter {
  public:
   explicit SafetyFilter(const SafetyConfig& config = {}) noexcept;
-  // Not const: the scan's points go to a member buffer (no allocation, no big stack frame).
-  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) noexcept;
+  [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) const noexcept;
   [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
 
  private:
-  static constexpr std::size_t kMaxPoints = ScanMessage::kMaxBeams;
   static constexpr double kSweepStepM = 0.02;
 
   SafetyConfig config_;
-  std::array<double, kMaxPoints> points_x_{};
-  std::array<double, kMaxPoints> points_y_{};
   double front_m_ = 0.0;
   double half_width_m_ = 0.0;
   double turn_radius_m_ = 0.0;

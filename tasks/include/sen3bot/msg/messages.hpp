@@ -1,0 +1,19 @@
+#pragma once
+// The bus vocabulary: every message a Topic carries between drivers, navigation and the
+// mission. Fixed-size and trivially copyable; nothing here depends on an algorithm or driver.
+//
+//   message           header          published by                     consumed by
+//   ScanMessage       laser.hpp       bridge (from the LMS200 driver)  localization, controller, safety
+//   Odometry          base.hpp        bridge (from the P2OS driver)    localization, controller, safety
+//   BaseFlags         base.hpp        bridge (e-stop, motors)          safety
+//   PoseEstimate      navigation.hpp  localization                     planner, controller, safety, mission
+//   NavGoal           navigation.hpp  mission / command line           planner
+//   PathMessage       navigation.hpp  planner                          controller, mission
+//   ControllerStatus  navigation.hpp  controller                       mission, telemetry
+//   VelocityCommand   navigation.hpp  controller (requested)           safety
+//                                     safety (to the base)             bridge (to the P2OS driver)
+//   SafetyOutput      navigation.hpp  safety (command and reasons)     mission, telemetry
+#include "sen3bot/msg/base.hpp"
+#include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/msg/laser.hpp"
+#include "sen3bot/msg/navigation.hpp"

@@ -1,0 +1,157 @@
+#pragma once
+// Navigation's messages: the pose estimate, goals and paths, the controller's state and the
+// velocity commands with the safety filter's reasons.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+#include "sen3bot/hal/clock.hpp"
+#include "sen3bot/msg/geometry.hpp"
+
+namespace sen3bot::msg {
+
+struct PoseEstimate {
+  Pose2D pose;                  // map frame
+  double cov_xx = 0.0;          // m^2
+  double cov_xy = 0.0;
+  double cov_yy = 0.0;
+  double cov_tt = 0.0;          // rad^2
+  std::uint32_t particles = 0;
+  std::uint32_t updates = 0;
+  bool valid = false;           // initialised
+  bool lost = false;            // position spread above the filter's limit
+  hal::Nanos stamp_ns = 0;
+  // Where the robot was when the newest scan the filter was given was taken (map frame), and
+  // that scan's stamp (0: none). The costmaps place that scan from here, not from pose.
+  Pose2D scan_pose;
+  hal::Nanos scan_stamp_ns = 0;
+};
+static_assert(std::is_trivially_copyable_v<PoseEstimate>);
+
+struct NavGoal {
+  double x_m = 0.0;  // map frame
+  double y_m = 0.0;
+  std::uint32_t id = 0;  // a new id means a new goal: plan at once
+  bool active = false;   // false: stop and drop the path
+};
+static_assert(std::is_trivially_copyable_v<NavGoal>);
+
+// float: a path point needs centimetres, and the path message stays half the size.
+struct PathPoint {
+  float x_m = 0.0f;
+  float y_m = 0.0f;
+};
+static_assert(std::is_trivially_copyable_v<PathPoint>);
+
+enum class PlanStatus : std::uint8_t {
+  ok,
+  start_outside,   // start not on the costmap
+  goal_outside,
+  start_blocked,   // start cell impassable
+  goal_blocked,
+  no_path,         // the reachable region does not contain the goal
+  expansion_cap,   // gave up after max_expansions
+  path_too_long,   // the path does not fit the output buffer
+  too_large,       // the costmap or waypoint list exceeds what the planner was sized for
+};
+
+inline const char* to_string(PlanStatus status) noexcept {
+  switch (status) {
+    case PlanStatus::ok: return "ok";
+    case PlanStatus::start_outside: return "start outside the costmap";
+    case PlanStatus::goal_outside: return "goal outside the costmap";
+    case PlanStatus::start_blocked: return "start cell is blocked";
+    case PlanStatus::goal_blocked: return "goal cell is blocked";
+    case PlanStatus::no_path: return "no path";
+    case PlanStatus::expansion_cap: return "expansion cap reached";
+    case PlanStatus::path_too_long: return "path longer than the output buffer";
+    case PlanStatus::too_large: return "costmap or waypoints larger than configured";
+  }
+  return "?";
+}
+
+struct PathMessage {
+  static constexpr std::size_t kMaxPoints = 1024;  // 51 m of path at 0.05 m cells
+  std::array<PathPoint, kMaxPoints> points{};      // map frame, start first
+  std::uint16_t count = 0;
+  std::uint32_t plan_id = 0;    // increments with every plan (ok or not)
+  std::uint32_t goal_id = 0;
+  PlanStatus status = PlanStatus::no_path;
+  std::uint32_t expansions = 0;
+  std::uint16_t waypoints_passed = 0;
+  double length_m = 0.0;
+  double plan_time_ms = 0.0;    // wall time of the search (telemetry only)
+};
+static_assert(std::is_trivially_copyable_v<PathMessage>);
+
+enum class DwaStatus : std::uint8_t {
+  idle,         // no path
+  tracking,
+  reached,      // within goal tolerance: commanding zero
+  waiting,      // recovery 1
+  rotating,     // recovery 2
+  backing_off,  // recovery 3
+  failed,       // recoveries exhausted
+};
+
+inline const char* to_string(DwaStatus status) noexcept {
+  switch (status) {
+    case DwaStatus::idle: return "idle";
+    case DwaStatus::tracking: return "tracking";
+    case DwaStatus::reached: return "reached";
+    case DwaStatus::waiting: return "waiting";
+    case DwaStatus::rotating: return "rotating";
+    case DwaStatus::backing_off: return "backing_off";
+    case DwaStatus::failed: return "failed";
+  }
+  return "?";
+}
+
+struct RecoveryCounts {
+  std::uint32_t waits = 0;
+  std::uint32_t rotations = 0;
+  std::uint32_t backoffs = 0;
+  [[nodiscard]] std::uint32_t total() const noexcept { return waits + rotations + backoffs; }
+};
+static_assert(std::is_trivially_copyable_v<RecoveryCounts>);
+
+struct ControllerStatus {
+  DwaStatus status = DwaStatus::idle;
+  RecoveryCounts recoveries;
+  double distance_to_goal_m = 0.0;
+  std::uint32_t admissible = 0;
+  std::uint32_t plan_id = 0;  // the path being followed
+};
+static_assert(std::is_trivially_copyable_v<ControllerStatus>);
+
+struct VelocityCommand {
+  double v_m_s = 0.0;
+  double w_rad_s = 0.0;
+  hal::Nanos stamp_ns = 0;
+};
+static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+
+// Why the safety filter lowered a command (bits of SafetyOutput::reasons).
+enum SafetyReason : std::uint32_t {
+  kSafetyNone = 0,
+  kSafetyScanStale = 1u << 0,
+  kSafetyOdomStale = 1u << 1,
+  kSafetyEstop = 1u << 2,
+  kSafetyMotorsOff = 1u << 3,
+  kSafetyLocalizationLost = 1u << 4,
+  kSafetyObstacle = 1u << 5,       // stopped for a point in the stop zone
+  kSafetySlowed = 1u << 6,         // scaled down in the slow zone
+  kSafetyReverseCapped = 1u << 7,
+};
+
+struct SafetyOutput {
+  VelocityCommand command;
+  std::uint32_t reasons = kSafetyNone;
+  double nearest_ahead_m = 0.0;  // free travel along the commanded arc (+inf: clear to the slow zone's end)
+  double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
+  double scan_age_s = 0.0;       // age of the scan that decision used (0: none)
+};
+static_assert(std::is_trivially_copyable_v<SafetyOutput>);
+
+}  // namespace sen3bot::msg
