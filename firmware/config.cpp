@@ -38,7 +38,7 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
   if (r.has("base")) {
     const Reader b = r.child("base");
     b.allow_only({"port", "baud", "probe_bauds", "switch_to_baud", "link_timeout_s", "command_timeout_s",
-                  "request_encoders", "max_v_m_s", "max_omega_rad_s", "dist_conv_mm_per_unit", "vel_conv_mm_s_per_unit",
+                  "request_encoders", "trans_decel_m_s2", "max_v_m_s", "max_omega_rad_s", "dist_conv_mm_per_unit", "vel_conv_mm_s_per_unit",
                   "diff_conv_rad_per_mm"});
     p2os::P2osConfig& p = c.devices.base;
     c.devices.has_base = true;
@@ -49,6 +49,8 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
     if (b.has("link_timeout_s")) p.link_timeout_ms = static_cast<int>(millis(b, "link_timeout_s", 100, 60'000));
     if (b.has("command_timeout_s")) p.command_timeout_ms = static_cast<int>(millis(b, "command_timeout_s", 50, 60'000));
     if (b.has("request_encoders")) p.request_encoders = b.boolean("request_encoders");
+    if (b.has("trans_decel_m_s2"))
+      p.trans_decel_mm_s2 = static_cast<std::int32_t>(std::lround(b.number("trans_decel_m_s2", 0.05, 2.0) * 1000.0));
     if (b.has("max_v_m_s")) p.max_v_m_s = b.number("max_v_m_s", 0.0, 2.2);
     if (b.has("max_omega_rad_s")) p.max_omega_rad_s = b.number("max_omega_rad_s", 0.0, 8.8);
     if (b.has("dist_conv_mm_per_unit")) p.conversion.dist_conv_mm_per_unit = b.number("dist_conv_mm_per_unit", 0.01, 100.0);

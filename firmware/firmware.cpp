@@ -70,6 +70,12 @@ Status Firmware::create_navigation() {
     safety.safety.scan_period_s =
         hal::to_seconds(lms200::scan_interval_ns(config_.devices.laser.variant, config_.devices.laser.baud));
   safety.safety.reaction_s = hal::to_seconds(kSenseToActBudgetNs);
+  // The braking the stop zone counts on is the braking the base driver asks the robot for, or
+  // the P3-DX's power-up deceleration when it asks for none.
+  constexpr double kPowerUpDecelM_s2 = 0.3;
+  safety.safety.decel_m_s2 = config_.devices.has_base && config_.devices.base.trans_decel_mm_s2 > 0
+                                 ? config_.devices.base.trans_decel_mm_s2 / 1000.0
+                                 : kPowerUpDecelM_s2;
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
                                                    nav_pose_, nav_command_, nav_safety_);
 

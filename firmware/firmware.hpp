@@ -43,6 +43,7 @@ class Firmware {
   // The bus's messages, for the command line's reports, a simulator's referee and tests.
   [[nodiscard]] const tasks::Topic<msg::ScanMessage>& scan() const { return nav_scan_; }
   [[nodiscard]] const tasks::Topic<msg::Odometry>& odometry() const { return nav_odometry_; }
+  [[nodiscard]] const tasks::Topic<msg::VelocityCommand>& request() const { return nav_request_; }
   [[nodiscard]] const tasks::Topic<msg::VelocityCommand>& command() const { return nav_command_; }
   [[nodiscard]] const tasks::Topic<msg::SafetyOutput>& safety_output() const { return nav_safety_; }
   // Null without the device.

@@ -77,6 +77,28 @@ TEST(P2osLockstep, EnableAndDriveOneMetreSquareMatchesGroundTruth) {
   EXPECT_EQ(h.emulator.stats().watchdog_stops, 0u);
 }
 
+TEST(P2osLockstep, SetsTheConfiguredBrakingDecelerationAfterOpen) {
+  // The safety filter sizes its stop zone with this deceleration: the robot must brake so.
+  P2osConfig config;
+  config.trans_decel_mm_s2 = 600;
+  Lockstep h(config);
+  ASSERT_TRUE(h.connect());
+  bool seta = false;
+  for (std::size_t i = 0; i < h.emulator.command_log_size(); ++i) {
+    const ReceivedCommand& c = h.emulator.command_log(i);
+    if (c.command == static_cast<std::uint8_t>(Command::seta)) seta = c.value == -600;
+  }
+  EXPECT_TRUE(seta);
+  // From 0.5 m/s, braking at 0.6 m/s^2 takes 0.83 s; at the P3-DX's own 0.3 m/s^2 it would take
+  // twice that.
+  h.hold(0.5, 0.0);
+  h.run_for(hal::seconds(3));
+  ASSERT_NEAR(h.emulator.velocity_m_s(), 0.5, 1e-6);
+  h.hold(0.0, 0.0);
+  h.run_for(hal::millis(950));
+  EXPECT_NEAR(h.emulator.velocity_m_s(), 0.0, 1e-6);
+}
+
 TEST(P2osLockstep, KeepAliveWhileIdleNeverTripsWatchdog) {
   Lockstep h;
   ASSERT_TRUE(h.connect());

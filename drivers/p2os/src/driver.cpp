@@ -189,6 +189,8 @@ void P2osDriver::on_frame(const Frame& frame, hal::Nanos now_ns) noexcept {
         queue(encode_command_int(Command::rvel, 0));
         if (config_.request_config) queue(encode_command(Command::config));
         if (config_.bumpstall >= 0) queue(encode_command_int(Command::bumpstall, config_.bumpstall));
+        // SETA with a negative argument sets the braking deceleration.
+        if (config_.trans_decel_mm_s2 > 0) queue(encode_command_int(Command::seta, -config_.trans_decel_mm_s2));
         if (config_.request_encoders) queue(encode_command_int(Command::encoder, 2));
         phase_ = Phase::opening;
         phase_deadline_ns_ = now_ns + hal::millis(config_.sync_timeout_ms);

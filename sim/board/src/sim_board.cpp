@@ -6,17 +6,26 @@ namespace sen3bot::sim {
 
 namespace {
 
-// A driver's view of an in-memory link it does not own: the pipe belongs to the simulation.
+// A driver's view of an in-memory link it does not own (the pipe belongs to the simulation),
+// showing what it writes to the tap.
 class BorrowedStream final : public hal::ByteStream {
  public:
-  explicit BorrowedStream(hal::ByteStream& stream) : stream_(stream) {}
+  BorrowedStream(hal::ByteStream& stream, std::string_view link, WireTap* tap, hal::Clock& clock)
+      : stream_(stream), link_(link), tap_(tap), clock_(clock) {}
   Result<std::size_t> read(std::span<std::uint8_t> out) override { return stream_.read(out); }
-  Result<std::size_t> write(std::span<const std::uint8_t> data) override { return stream_.write(data); }
+  Result<std::size_t> write(std::span<const std::uint8_t> data) override {
+    Result<std::size_t> wrote = stream_.write(data);
+    if (tap_ != nullptr && wrote && *wrote > 0) tap_->on_write(link_, data.first(*wrote), clock_.now());
+    return wrote;
+  }
   [[nodiscard]] int poll_fd() const override { return stream_.poll_fd(); }
   [[nodiscard]] std::string_view name() const override { return stream_.name(); }
 
  private:
   hal::ByteStream& stream_;
+  std::string_view link_;
+  WireTap* tap_;
+  hal::Clock& clock_;
 };
 
 }  // namespace
@@ -51,7 +60,8 @@ Result<hal::Link> SimBoard::open_link(std::string_view link, const hal::LinkRequ
   if (link == "base" || link == "laser") {
     const bool base = link == "base";
     if (lockstep_) {
-      opened.stream = std::make_unique<BorrowedStream>(base ? *sim.base_driver_stream() : *sim.laser_driver_stream());
+      opened.stream = std::make_unique<BorrowedStream>(base ? *sim.base_driver_stream() : *sim.laser_driver_stream(),
+                                                       base ? "base" : "laser", tap_, sim_clock_);
       if (!base) opened.baud_control = sim.laser_driver_line();
       opened.baud = request.baud;
       return opened;

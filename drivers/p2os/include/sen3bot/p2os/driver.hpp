@@ -62,6 +62,9 @@ struct P2osConfig {
   bool request_encoders = false;
   // BUMPSTALL mode to send after OPEN: -1 leave as is, 0 none, 1 front, 2 rear, 3 both.
   int bumpstall = -1;
+  // Braking deceleration to set with SETA after OPEN (0: leave the robot's own, 300 mm/s^2 on a
+  // P3-DX as it powers up). The safety filter's stop zone is sized with the same number.
+  std::int32_t trans_decel_mm_s2 = 0;
   // Setpoint limits applied before encoding (P3-DX: 2.2 m/s, 500 deg/s absolute maxima).
   double max_v_m_s = 1.5;
   double max_omega_rad_s = 5.0;

@@ -8,6 +8,7 @@
 // every step.
 #include <atomic>
 #include <memory>
+#include <span>
 #include <string_view>
 #include <thread>
 
@@ -29,6 +30,14 @@ class SimLine final : public hal::DigitalInput, public hal::DigitalOutput {
 
  private:
   std::atomic<bool> state_{false};
+};
+
+// Sees every byte a driver writes to a simulated link, stamped with the board's clock, on the
+// writing thread: what went out on the wire, and when.
+class WireTap {
+ public:
+  virtual ~WireTap() = default;
+  virtual void on_write(std::string_view link, std::span<const std::uint8_t> bytes, hal::Nanos now_ns) = 0;
 };
 
 class SimBoard final : public hal::Board, private hal::SimClock::Listener {
@@ -56,6 +65,8 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   [[nodiscard]] Referee& referee() noexcept { return referee_; }
   [[nodiscard]] SimLine& estop() noexcept { return estop_; }
   [[nodiscard]] SimLine& light() noexcept { return light_; }
+  // Lockstep links only; set before the links are opened. Null: no tap.
+  void set_wire_tap(WireTap* tap) noexcept { tap_ = tap; }
 
  private:
   SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep);
@@ -71,6 +82,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   Referee referee_;
   SimLine estop_;
   SimLine light_;
+  WireTap* tap_ = nullptr;
   hal::Nanos next_step_ns_ = 0;
   std::thread thread_;
   std::atomic<bool> running_{false};
