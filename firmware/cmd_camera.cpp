@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "sen3bot/camera/camera.hpp"
 #include "sen3bot/camera/onvif_client.hpp"
@@ -67,10 +68,8 @@ Result<std::string> onvif_stream_url(std::string_view url) {
 }
 
 bool parse_positive(const char* text, double& out) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text, &end);
-  if (errno != 0 || end == text || *end != '\0' || !(v > 0)) return false;
+  double v = 0;
+  if (!parse_double(text, v) || !(v > 0)) return false;
   out = v;
   return true;
 }
@@ -247,9 +246,8 @@ int ptz_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   double seconds = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string_view arg = argv[i];
-    char* end = nullptr;
-    const double v = std::strtod(argv[i + 1], &end);
-    if (end == argv[i + 1] || *end != '\0') {
+    double v = 0;
+    if (!parse_double(argv[i + 1], v)) {
       std::fprintf(err, "sen3bot camera ptz: %s needs a number\n", argv[i]);
       return 2;
     }

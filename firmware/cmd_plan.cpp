@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/global_planner.hpp"
@@ -25,13 +26,12 @@ constexpr const char* kPlanUsage =
     "usage: sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]\n";
 
 // "X,Y" in metres, both finite.
-bool parse_point(const char* text, nav::Point2D& out) {
-  char* end = nullptr;
-  const double x = std::strtod(text, &end);
-  if (end == text || *end != ',') return false;
-  const char* second = end + 1;
-  const double y = std::strtod(second, &end);
-  if (end == second || *end != '\0' || !std::isfinite(x) || !std::isfinite(y)) return false;
+bool parse_point(std::string_view text, nav::Point2D& out) {
+  const std::size_t comma = text.find(',');
+  double x = 0, y = 0;
+  if (comma == std::string_view::npos || !parse_double(text.substr(0, comma), x) ||
+      !parse_double(text.substr(comma + 1), y))
+    return false;
   out = {x, y};
   return true;
 }

@@ -102,19 +102,19 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("waypoints")) n.waypoints_path = relative_to(r.file(), r.text("waypoints"));
-  if (r.has("initial_pose")) n.initial_pose = read_pose(r.child("initial_pose"));
-  if (r.has("initial_std_m")) n.initial_std_xy_m = r.number("initial_std_m", 0.0, 10.0);
+  if (r.has("initial_pose")) n.mcl.initial_pose = read_pose(r.child("initial_pose"));
+  if (r.has("initial_std_m")) n.mcl.initial_std_xy_m = r.number("initial_std_m", 0.0, 10.0);
   if (r.has("particles")) {
     const Reader p = r.child("particles");
     p.allow_only({"min", "max"});
-    n.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
-    n.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
-    if (n.max_particles < n.min_particles) p.fail("max", "must be at least min", YAML::Node());
+    n.mcl.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
+    n.mcl.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
+    if (n.mcl.max_particles < n.mcl.min_particles) p.fail("max", "must be at least min", YAML::Node());
   }
-  if (r.has("max_v_m_s")) n.max_v_m_s = r.number("max_v_m_s", 0.05, 2.0);
-  if (r.has("max_w_rad_s")) n.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
-  if (r.has("goal_tolerance_m")) n.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
-  if (r.has("stop_distance_m")) n.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
+  if (r.has("max_v_m_s")) n.dwa.max_v_m_s = r.number("max_v_m_s", 0.05, 2.0);
+  if (r.has("max_w_rad_s")) n.dwa.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
+  if (r.has("goal_tolerance_m")) n.dwa.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
+  if (r.has("stop_distance_m")) n.safety.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
   const std::vector<Reader> goals = r.sequence("goals");
   if (goals.empty() || goals.size() > MissionConfig::kMaxGoals)
     r.fail("goals", "expected 1 to " + std::to_string(MissionConfig::kMaxGoals) + " points", YAML::Node());

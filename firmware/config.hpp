@@ -11,6 +11,9 @@
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/lms200/device.hpp"
 #include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/local_planner.hpp"
+#include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/safety.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "mission.hpp"
 
@@ -36,19 +39,17 @@ struct DevicesConfig {
   lms200::Lms200Config laser;
 };
 
-// Localization, planners and safety over one map, and the mission's goals.
+// Localization, planners and safety over one map, and the mission's goals. The algorithms'
+// own configurations are held here, so their defaults are the only defaults; the
+// configuration file overrides a few of their keys and composition fills in the rest (laser
+// mount, scan timing, braking).
 struct NavigationSection {
   bool enabled = false;        // a `navigation` section is present
   std::string map_path;        // ROS map_server YAML
   std::string waypoints_path;  // optional: "x y" per line, map frame (the supervisory path)
-  nav::Pose2D initial_pose;    // localization's starting estimate
-  double initial_std_xy_m = 0.25;
-  std::size_t min_particles = 500;
-  std::size_t max_particles = 2000;
-  double max_v_m_s = 0.5;
-  double max_w_rad_s = 1.2;
-  double goal_tolerance_m = 0.15;
-  double stop_distance_m = 0.25;
+  nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file
+  nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
+  nav::SafetyConfig safety;    // stop_distance_m
   MissionConfig mission;
 };
 

@@ -44,10 +44,7 @@ Status Firmware::create_navigation() {
   const msg::SensorMount mount{config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
 
   nav::LocalizationTaskConfig localization;
-  localization.mcl.min_particles = n.min_particles;
-  localization.mcl.max_particles = n.max_particles;
-  localization.mcl.initial_pose = n.initial_pose;
-  localization.mcl.initial_std_xy_m = n.initial_std_xy_m;
+  localization.mcl = n.mcl;
   localization.mcl.laser_mount = mount;
   localization_task_ = std::make_unique<nav::LocalizationTask>(localization, map_, nav_scan_, nav_odometry_, nav_pose_);
 
@@ -57,14 +54,12 @@ Status Firmware::create_navigation() {
 
   nav::ControllerTaskConfig controller;
   controller.laser_mount = mount;
-  controller.dwa.max_v_m_s = n.max_v_m_s;
-  controller.dwa.max_w_rad_s = n.max_w_rad_s;
-  controller.dwa.goal_tolerance_m = n.goal_tolerance_m;
+  controller.dwa = n.dwa;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
                                                            nav_request_, nav_controller_);
 
   nav::SafetyTaskConfig safety;
-  safety.safety.stop_distance_m = n.stop_distance_m;
+  safety.safety = n.safety;
   safety.safety.laser_mount = mount;
   if (config_.devices.has_laser)
     safety.safety.scan_period_s =

@@ -29,7 +29,7 @@ case "${1:-}" in
     section "building"
     configure_and_build build
     section "running the simulated robot: the thesis' supervised-planning cases"
-    exec build/firmware/sen3bot sim --scenario thesis-sgp --report build/report
+    exec build/firmware/sen3bot-sim sim --scenario thesis-sgp --report build/report
     ;;
   test)
     start=$SECONDS

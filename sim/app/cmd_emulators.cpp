@@ -57,12 +57,12 @@ int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err)
     if (arg == "--pty") {
       pty_link = value;
     } else if (arg == "--tcp") {
-      char* end = nullptr;
-      tcp_port = std::strtol(value, &end, 10);
-      if (end == value || *end != '\0' || tcp_port < 0 || tcp_port > 65535) {
+      std::uint32_t port = 0;
+      if (!parse_u32(value, port) || port > 65535) {
         std::fprintf(err, "sen3bot-sim p2os-emulator: --tcp: expected a port 0..65535, got '%s'\n", value);
         return 2;
       }
+      tcp_port = port;
     } else if (arg == "--name") {
       config.name = value;
     } else {

@@ -189,12 +189,14 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
       write_json_string(f, s.name);
       std::fprintf(f,
                    ", \"period_us\": %lld, \"budget_us\": %lld, \"runs\": %llu, \"overruns\": %llu, \"slips\": %llu, "
-                   "\"skips\": %llu, \"exec_mean_us\": %.1f, \"exec_max_us\": %.1f, \"jitter_p99_us\": %.1f}",
+                   "\"skips\": %llu, \"exec_mean_us\": %.1f, \"exec_max_us\": %.1f, \"jitter_p99_us\": %.1f, "
+                   "\"cpu_mean_us\": %.1f, \"cpu_max_us\": %.1f, \"cpu_overruns\": %llu}",
                    static_cast<long long>(s.period_us), static_cast<long long>(s.budget_us),
                    static_cast<unsigned long long>(s.runs), static_cast<unsigned long long>(s.overruns),
                    static_cast<unsigned long long>(s.slips), static_cast<unsigned long long>(s.skips),
                    static_cast<double>(s.exec_mean_ns) / 1e3, static_cast<double>(s.exec_max_ns) / 1e3,
-                   static_cast<double>(s.jitter_p99_ns) / 1e3);
+                   static_cast<double>(s.jitter_p99_ns) / 1e3, static_cast<double>(s.cpu_mean_ns) / 1e3,
+                   static_cast<double>(s.cpu_max_ns) / 1e3, static_cast<unsigned long long>(s.cpu_overruns));
     }
     std::fprintf(f, "]}");
   }
@@ -287,7 +289,7 @@ constexpr const char* kSimUsage =
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   std::string scenario_name, report_dir, config_path = "config/sim.yaml";
   bool realtime = false, list = false, have_seed = false;
-  unsigned long long seed = 0;
+  std::uint64_t seed = 0;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -302,9 +304,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     } else if (arg == "--report" && has_value) {
       report_dir = argv[++i];
     } else if (arg == "--seed" && has_value) {
-      char* end = nullptr;
-      seed = std::strtoull(argv[++i], &end, 10);
-      if (end == argv[i] || *end != '\0') {
+      if (!firmware::parse_u64(argv[++i], seed)) {
         std::fprintf(err, "sen3bot-sim sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
         return 2;
       }
@@ -372,7 +372,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       world.seed = seed;
       world.base.noise_seed = static_cast<std::uint32_t>(seed);
     }
-    config.navigation.initial_pose = scenario->start;
+    config.navigation.mcl.initial_pose = scenario->start;
     config.navigation.mission.goal_count = scenario->goals.size();
     for (std::size_t g = 0; g < scenario->goals.size(); ++g) config.navigation.mission.goals[g] = scenario->goals[g];
     if (scenario->waypoints[0] != '\0') {

@@ -158,7 +158,7 @@ HallRun drive_the_hall(const std::string& map, const world::MoverScript* box, do
   rig.make_board();
   rig.config.navigation.map_path = map;
   rig.config.navigation.waypoints_path.clear();
-  rig.config.navigation.initial_pose = start;
+  rig.config.navigation.mcl.initial_pose = start;
   rig.config.navigation.mission.goal_count = 1;
   rig.config.navigation.mission.goals[0] = {13.0, 2.5};
   rig.config.navigation.mission.start_delay_s = 1.0;
@@ -214,7 +214,7 @@ TEST(SenseToAct, ABoxAppearingAtTheWorstPhaseIsStoppedShortOfAtFullSpeed) {
   // the wire plus the sense-to-act budget.
   const double reaction_s = hal::to_seconds(firmware::kSenseToActBudgetNs);
   const double decel = reference.config.devices.base.trans_decel_mm_s2 / 1000.0;
-  const double depth = reference.config.navigation.stop_distance_m + v * (reaction_s + interval_s + reaction_s) +
+  const double depth = reference.config.navigation.safety.stop_distance_m + v * (reaction_s + interval_s + reaction_s) +
                        v * v / (2.0 * decel);
   // Free travel from the robot's front to the box's near face when it appears: the robot covers
   // one more scan interval before a sweep sees it.
@@ -238,7 +238,7 @@ TEST(SenseToAct, ABoxAppearingAtTheWorstPhaseIsStoppedShortOfAtFullSpeed) {
     braked = std::abs(run.truth[ms].speed_m_s) < 0.05;
   }
   EXPECT_TRUE(braked);
-  EXPECT_GT(min_clearance, 0.8 * reference.config.navigation.stop_distance_m);
+  EXPECT_GT(min_clearance, 0.8 * reference.config.navigation.safety.stop_distance_m);
   if (std::getenv("SEN3BOT_LATENCY_TRACE") != nullptr)
     for (std::size_t ms = static_cast<std::size_t>(appear_ns / hal::millis(1)); ms < run.truth.size(); ms += 50)
       std::printf("t %.3f x %.3f v %.3f clearance %.3f\n", static_cast<double>(ms) / 1e3, run.truth[ms].pose.x_m,
