@@ -33,8 +33,37 @@ using config::millis;
 using config::read_pose;
 using config::relative_to;
 
+void read_camera(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"url", "transport", "max_width_px", "max_height_px", "format", "downscale", "frames"});
+  camera::CameraConfig& p = c.devices.camera;
+  c.devices.has_camera = true;
+  p.rtsp.url = r.text("url");
+  if (p.rtsp.url.rfind("rtsp://", 0) != 0) r.fail("url", "expected rtsp://[user:pass@]host[:port]/path", YAML::Node());
+  if (r.has("transport")) {
+    const std::string t = r.text("transport");
+    if (t == "tcp") p.rtsp.transport = camera::RtpTransport::tcp_interleaved;
+    else if (t == "udp") p.rtsp.transport = camera::RtpTransport::udp;
+    else r.fail("transport", "expected tcp or udp, got '" + t + "'", YAML::Node());
+  }
+  if (r.has("max_width_px")) p.max_width_px = static_cast<std::uint32_t>(r.integer("max_width_px", 16, 4096));
+  if (r.has("max_height_px")) p.max_height_px = static_cast<std::uint32_t>(r.integer("max_height_px", 16, 4096));
+  if (r.has("format")) {
+    const std::string f = r.text("format");
+    if (f == "bgr8") p.format = camera::PixelFormat::bgr8;
+    else if (f == "gray8") p.format = camera::PixelFormat::gray8;
+    else r.fail("format", "expected bgr8 or gray8, got '" + f + "'", YAML::Node());
+  }
+  if (r.has("downscale")) {
+    const std::int64_t d = r.integer("downscale", 1, 4);
+    if (d == 3) r.fail("downscale", "expected 1, 2 or 4", YAML::Node());
+    p.downscale = static_cast<int>(d);
+  }
+  if (r.has("frames")) p.frame_pool_slots = static_cast<std::size_t>(r.integer("frames", 3, 64));
+}
+
 void read_devices(const Reader& r, FirmwareConfig& c) {
-  r.allow_only({"base", "laser"});
+  r.allow_only({"base", "laser", "camera"});
+  if (r.has("camera")) read_camera(r.child("camera"), c);
   if (r.has("base")) {
     const Reader b = r.child("base");
     b.allow_only({"port", "baud", "probe_bauds", "switch_to_baud", "link_timeout_s", "command_timeout_s",

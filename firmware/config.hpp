@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "sen3bot/hal/result.hpp"
+#include "sen3bot/camera/camera.hpp"
 #include "sen3bot/lms200/device.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
@@ -33,10 +34,12 @@ struct TaskConfig {
 // Each device's port is handed to the board as it is: a device path or tcp://host:port on the
 // robot, or a name the simulated board answers ("sim").
 struct DevicesConfig {
-  bool has_base = false;   // devices.base present
-  bool has_laser = false;  // devices.laser present
+  bool has_base = false;    // devices.base present
+  bool has_laser = false;   // devices.laser present
+  bool has_camera = false;  // devices.camera present
   p2os::P2osConfig base;
   lms200::Lms200Config laser;
+  camera::CameraConfig camera;
 };
 
 // Localization, planners and safety over one map, and the mission's goals. The algorithms'

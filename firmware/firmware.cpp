@@ -21,6 +21,7 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "telemetry") return &telemetry_;
   if (name == "base") return base_task_.get();
   if (name == "laser") return laser_task_.get();
+  if (name == "camera") return camera_task_.get();
   if (name == "localization") return localization_task_.get();
   if (name == "planner") return planner_task_.get();
   if (name == "controller") return controller_task_.get();
@@ -84,6 +85,7 @@ Status Firmware::create_tasks() {
     base_task_ = std::make_unique<BaseTask>(config_.devices.base, board_,
                                             BaseTopics{nav_command_, nav_odometry_, nav_base_flags_});
   if (config_.devices.has_laser) laser_task_ = std::make_unique<LaserTask>(config_.devices.laser, board_, nav_scan_);
+  if (config_.devices.has_camera) camera_task_ = std::make_unique<CameraTask>(config_.devices.camera, board_);
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
   }
@@ -109,7 +111,7 @@ Status Firmware::init() {
     if (task_named(name) == nullptr)
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),
-                           name == "base" || name == "laser" ? "needs its device under devices"
+                           name == "base" || name == "laser" || name == "camera" ? "needs its device under devices"
                                                              : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {

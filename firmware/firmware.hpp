@@ -19,6 +19,7 @@
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "base_task.hpp"
+#include "camera_task.hpp"
 #include "laser_task.hpp"
 #include "mission.hpp"
 
@@ -49,6 +50,11 @@ class Firmware {
   // Null without the device.
   [[nodiscard]] const BaseTask* base() const { return base_task_.get(); }
   [[nodiscard]] const LaserTask* laser() const { return laser_task_.get(); }
+  // The newest decoded frames, for readers on any thread; null without a camera.
+  [[nodiscard]] camera::FramePool* camera_frames() {
+    return camera_task_ && camera_task_->camera() ? &camera_task_->camera()->frames() : nullptr;
+  }
+  [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
@@ -87,6 +93,7 @@ class Firmware {
   // Created by init() from the configuration; a row whose task is absent does not run.
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<LaserTask> laser_task_;
+  std::unique_ptr<CameraTask> camera_task_;
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;

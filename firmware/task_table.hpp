@@ -13,12 +13,15 @@
 namespace sen3bot::firmware {
 
 // Threads: "io" runs the reflex path from the laser to the wheels, "control" localization and
-// the local planner, "background" whatever may block (planning, logs, files, network). Within
+// the local planner, "background" whatever may block (planning, logs, files, network),
+// "camera" the RTSP client and the decoder (a 720p H.264 frame takes milliseconds to decode,
+// and a camera can fall silent: neither may hold up anything else). Within
 // a thread, due rows run highest priority first, so each thread's rows are ordered by the data
 // flow: on "io" a scan is read, checked by the safety filter and answered by the base in the
 // same cycle; on "control" localization feeds the controller. A row runs when its task is
 // configured: the devices under `devices`, localization, planners, safety and the mission
-// under `navigation`; the rest always. Budgets are for the Pi 3.
+// under `navigation`; the rest always. Budgets are for the Pi 3; the camera's allows one
+// 15 fps stream decoded at up to 1280 x 720.
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
     tasks::TaskSpec{"laser",        5'000,     500,       74,       "io"},
@@ -30,6 +33,7 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
+    tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
 };
 static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 

@@ -23,14 +23,18 @@ TEST(TaskTable, RowsAreValidAndNamesUnique) {
   }
 }
 
+// The simulated robot has every device but a camera.
+constexpr std::size_t kSimulatedRows = kTaskTable.size() - 1;
+
 TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
   FirmwareConfig config = sim_config();
   testing::SimRig rig = testing::load_sim_rig();
   Firmware fw(config, *rig.board, stdout);
   ASSERT_TRUE(fw.init());
-  ASSERT_EQ(fw.scheduler().task_count(), kTaskTable.size());
-  for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
-    EXPECT_EQ(fw.arena(i).name(), kTaskTable[i].name);
+  ASSERT_EQ(fw.scheduler().task_count(), kSimulatedRows);
+  for (std::size_t i = 0; i < fw.scheduler().task_count(); ++i) {
+    EXPECT_EQ(fw.arena(i).name(), fw.scheduler().spec(i).name);
+    EXPECT_NE(fw.scheduler().spec(i).name, "camera");
     EXPECT_LE(fw.arena(i).used_bytes(), fw.arena(i).capacity_bytes());
   }
 }
@@ -47,6 +51,18 @@ TEST(Firmware, AnExceededBudgetFailsInitNamingTaskArenaAndKey) {
   EXPECT_NE(m.find("task 'telemetry' init failed"), std::string::npos) << m;
   EXPECT_NE(m.find("budget 64 B exceeded: request of 512 B"), std::string::npos) << m;
   EXPECT_NE(m.find("tasks.telemetry.arena_bytes"), std::string::npos) << m;
+}
+
+TEST(Firmware, ACameraBudgetWithoutACameraIsAConfigurationError) {
+  FirmwareConfig config = sim_config();
+  config.tasks["camera"].arena_bytes = 1024;
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, stdout);
+  const Status s = fw.init();
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::string(s.error().message()).find("tasks.camera: this task is not enabled by the configuration (needs its device under devices)"),
+            std::string::npos)
+      << s.error().c_str();
 }
 
 TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {
@@ -84,9 +100,10 @@ TEST(Firmware, ASimulatedMinuteKeepsEveryRateExactly) {
   Firmware fw(config, *rig.board, sink);
   ASSERT_TRUE(fw.init());
   ASSERT_TRUE(fw.scheduler().run_lockstep(rig.clock(), hal::seconds(60)));
-  for (std::size_t i = 0; i < kTaskTable.size(); ++i) {
+  ASSERT_EQ(fw.scheduler().task_count(), kSimulatedRows);
+  for (std::size_t i = 0; i < fw.scheduler().task_count(); ++i) {
     const tasks::TaskStats s = fw.scheduler().stats(i);
-    EXPECT_EQ(s.runs, static_cast<std::uint64_t>(60'000'000 / kTaskTable[i].period_us)) << s.name;
+    EXPECT_EQ(s.runs, static_cast<std::uint64_t>(60'000'000 / s.period_us)) << s.name;
     EXPECT_EQ(s.overruns + s.slips + s.skips, 0u) << s.name;
   }
   tasks::Sample<tasks::HealthReport> health;

@@ -61,34 +61,40 @@ void Camera::on_frame(const EncodedFrame& frame) {
   }
 }
 
+void Camera::step(hal::Nanos now_ns) {
+  client_->step(now_ns);
+  // Status for non-real-time observers, refreshed every pass (a few hundred bytes; the error
+  // text reuses its buffer once it has held the longest message).
+  std::lock_guard lock(status_mutex_);
+  status_.state = client_->state();
+  status_.stream = client_->stream();
+  status_.rtsp = client_->stats();
+  if (client_->depacketizer()) status_.depacketizer = client_->depacketizer()->stats();
+  if (decoder_) status_.decoder = decoder_->stats();
+  status_.last_error.assign(client_->last_error());
+  if (latency_count_ != published_status_at_) {
+    published_status_at_ = latency_count_;
+    const std::size_t k = std::min(latency_count_, kLatencySamples);
+    double sorted[kLatencySamples];
+    std::copy(latencies_ms_, latencies_ms_ + k, sorted);
+    std::sort(sorted, sorted + k);
+    status_.latency_ms_p50 = sorted[k / 2];
+    status_.latency_ms_max = sorted[k - 1];
+  }
+}
+
+void Camera::close(hal::Nanos now_ns) { client_->stop(now_ns); }
+
 void Camera::run() {
-  std::size_t published_status_at = 0;
   while (running_.load(std::memory_order_acquire)) {
-    client_->step(clock_.now());
+    step(clock_.now());
     int fds[4];
     const std::size_t n = client_->poll_fds(fds, 4);
     pollfd pfds[4];
     for (std::size_t i = 0; i < n; ++i) pfds[i] = pollfd{fds[i], POLLIN, 0};
     (void)::poll(pfds, n, config_.poll_period_ms);
-    // Status for non-real-time observers, refreshed every pass (cheap, a few hundred bytes).
-    std::lock_guard lock(status_mutex_);
-    status_.state = client_->state();
-    status_.stream = client_->stream();
-    status_.rtsp = client_->stats();
-    if (client_->depacketizer()) status_.depacketizer = client_->depacketizer()->stats();
-    if (decoder_) status_.decoder = decoder_->stats();
-    status_.last_error = std::string(client_->last_error());
-    if (latency_count_ != published_status_at) {
-      published_status_at = latency_count_;
-      const std::size_t k = std::min(latency_count_, kLatencySamples);
-      double sorted[kLatencySamples];
-      std::copy(latencies_ms_, latencies_ms_ + k, sorted);
-      std::sort(sorted, sorted + k);
-      status_.latency_ms_p50 = sorted[k / 2];
-      status_.latency_ms_max = sorted[k - 1];
-    }
   }
-  client_->stop(clock_.now());
+  close(clock_.now());
 }
 
 CameraStatus Camera::status() const {

@@ -1,7 +1,8 @@
 #pragma once
-// The camera as the firmware sees it: one non-real-time thread runs the RTSP client and the
-// decoder and publishes frames to a fixed pool; real-time tasks read the newest frame with
-// frames().acquire_latest(), which never blocks or allocates.
+// The camera as the firmware sees it: the RTSP client and the decoder, stepped by a scheduler
+// task on its own non-real-time thread (step()) or by the camera's own thread (start()), publish
+// frames to a fixed pool; real-time tasks read the newest frame with frames().acquire_latest(),
+// which never blocks or allocates.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -44,8 +45,15 @@ class Camera {
   Camera(const Camera&) = delete;
   Camera& operator=(const Camera&) = delete;
 
+  // Runs step() on the camera's own thread, waiting on its sockets in between.
   Status start();
   void stop();  // TEARDOWN and join; idempotent
+
+  // One non-blocking pass: RTSP/RTP I/O, depacketizing, decoding what arrived, the status.
+  // For a caller with its own loop; not together with start().
+  void step(hal::Nanos now_ns);
+  // Ends the session (TEARDOWN) of a stepped camera.
+  void close(hal::Nanos now_ns);
 
   [[nodiscard]] FramePool& frames() { return *pool_; }
   [[nodiscard]] CameraStatus status() const;  // copies under a mutex: not for real-time code
@@ -70,6 +78,7 @@ class Camera {
   static constexpr std::size_t kLatencySamples = 256;
   double latencies_ms_[kLatencySamples] = {};
   std::size_t latency_count_ = 0;
+  std::size_t published_status_at_ = 0;
 };
 
 }  // namespace sen3bot::camera

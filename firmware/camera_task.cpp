@@ -1,0 +1,21 @@
+#include "camera_task.hpp"
+
+namespace sen3bot::firmware {
+
+Status CameraTask::init(std::pmr::memory_resource&) {
+  if (camera_ != nullptr) return Error(Errc::invalid_argument, "camera task: init called twice");
+  Result<std::unique_ptr<camera::Camera>> created = camera::Camera::create(config_, board_.clock());
+  if (!created) return Error::format(created.error().code(), "camera: %s", created.error().c_str());
+  camera_ = std::move(*created);
+  return Status::success();
+}
+
+void CameraTask::step(const tasks::StepContext& context) {
+  if (camera_ != nullptr) camera_->step(context.start_ns);
+}
+
+void CameraTask::shutdown() {
+  if (camera_ != nullptr) camera_->close(board_.clock().now());
+}
+
+}  // namespace sen3bot::firmware
