@@ -1,23 +1,14 @@
 #include "cli.hpp"
 
-#include <pthread.h>
-
-#include <atomic>
-#include <cerrno>
-#include <chrono>
-#include <csignal>
-#include <cstdlib>
-#include <cstring>
-#include <ctime>
 #include <string>
 #include <string_view>
 
+#include "cli_util.hpp"
 #include "commands.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "runner.hpp"
 #include "sen3bot/capture/dump.hpp"
-#include "sen3bot/hal/rt_setup.hpp"
 
 #ifndef SEN3BOT_VERSION
 #define SEN3BOT_VERSION "unknown"
@@ -117,31 +108,17 @@ int capture_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 }  // namespace
 
 int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  if (argc < 2) {
-    std::fputs(kUsage, err);
-    return 2;
-  }
-  const std::string_view command = argv[1];
-  if (command == "--help" || command == "-h" || command == "help") {
-    std::fputs(kUsage, out);
-    return 0;
-  }
-  if (command == "version" || command == "--version") {
-    std::fprintf(out, "sen3bot %s\n", SEN3BOT_VERSION);
-    return 0;
-  }
-  if (command == "run") return run_command(argc - 2, argv + 2, out, err);
-  if (command == "capture") return capture_command(argc - 2, argv + 2, out, err);
-  if (command == "decode" && argc >= 3 && std::string_view(argv[2]) == "p2os")
-    return decode_p2os_command(argc - 3, argv + 3, out, err);
-  if (command == "decode" && argc >= 3 && std::string_view(argv[2]) == "lms200")
-    return decode_lms200_command(argc - 3, argv + 3, out, err);
-  if (command == "scan") return scan_command(argc - 2, argv + 2, out, err);
-  if (command == "drive") return drive_command(argc - 2, argv + 2, out, err);
-  if (command == "camera") return camera_command(argc - 2, argv + 2, out, err);
-  if (command == "plan") return plan_command(argc - 2, argv + 2, out, err);
-  std::fprintf(err, "sen3bot: unknown command '%s'\n\n%s", argv[1], kUsage);
-  return 2;
+  static constexpr Command kCommands[] = {
+      {"run", "", run_command},
+      {"plan", "", plan_command},
+      {"capture", "", capture_command},
+      {"decode", "p2os", decode_p2os_command},
+      {"decode", "lms200", decode_lms200_command},
+      {"drive", "", drive_command},
+      {"scan", "", scan_command},
+      {"camera", "", camera_command},
+  };
+  return dispatch(argc, argv, "sen3bot", SEN3BOT_VERSION, kUsage, kCommands, out, err);
 }
 
 }  // namespace sen3bot::firmware

@@ -38,6 +38,30 @@ bool parse_double(std::string_view text, double& out) {
 bool parse_u32(std::string_view text, std::uint32_t& out) { return parse_unsigned(text, out, 0xFFFFFFFFull); }
 bool parse_u64(std::string_view text, std::uint64_t& out) { return parse_unsigned(text, out, ~0ull); }
 
+int dispatch(int argc, char** argv, std::string_view program, const char* version, const char* usage,
+             std::span<const Command> commands, std::FILE* out, std::FILE* err) {
+  if (argc < 2) {
+    std::fputs(usage, err);
+    return 2;
+  }
+  const std::string_view word = argv[1];
+  if (word == "--help" || word == "-h" || word == "help") {
+    std::fputs(usage, out);
+    return 0;
+  }
+  if (word == "version" || word == "--version") {
+    std::fprintf(out, "%.*s %s\n", static_cast<int>(program.size()), program.data(), version);
+    return 0;
+  }
+  for (const Command& c : commands) {
+    if (c.word != word) continue;
+    if (c.second.empty()) return c.run(argc - 2, argv + 2, out, err);
+    if (argc >= 3 && c.second == argv[2]) return c.run(argc - 3, argv + 3, out, err);
+  }
+  std::fprintf(err, "%.*s: unknown command '%s'\n\n%s", static_cast<int>(program.size()), program.data(), argv[1], usage);
+  return 2;
+}
+
 StopOnSignal::StopOnSignal() {
   g_stop_signal.store(0);
   struct sigaction action {};

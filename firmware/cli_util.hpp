@@ -4,6 +4,8 @@
 #include <signal.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <span>
 #include <string_view>
 
 namespace sen3bot::firmware {
@@ -13,6 +15,19 @@ bool parse_double(std::string_view text, double& out);
 // Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
 bool parse_u32(std::string_view text, std::uint32_t& out);
 bool parse_u64(std::string_view text, std::uint64_t& out);
+
+// One command of a binary: `word` (and `second`, for two-word commands such as "decode p2os")
+// and the function that takes the arguments after them.
+struct Command {
+  std::string_view word;
+  std::string_view second;  // empty: a one-word command
+  int (*run)(int argc, char** argv, std::FILE* out, std::FILE* err);
+};
+
+// The top of a binary's command line: --help/-h/help, version/--version (as "program
+// version"), then the commands; anything else prints the usage with exit status 2.
+int dispatch(int argc, char** argv, std::string_view program, const char* version, const char* usage,
+             std::span<const Command> commands, std::FILE* out, std::FILE* err);
 
 // SIGINT/SIGTERM set a flag while this object lives; the previous handlers come back after.
 // One at a time per process.

@@ -2,6 +2,7 @@
 #include <string>
 #include <string_view>
 
+#include "cli_util.hpp"
 #include "config.hpp"
 #include "config_reader.hpp"
 #include "firmware.hpp"
@@ -94,25 +95,13 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 }
 
 int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  if (argc < 2) {
-    std::fputs(kUsage, err);
-    return 2;
-  }
-  const std::string_view command = argv[1];
-  if (command == "--help" || command == "-h" || command == "help") {
-    std::fputs(kUsage, out);
-    return 0;
-  }
-  if (command == "version" || command == "--version") {
-    std::fprintf(out, "sen3bot-sim %s\n", SEN3BOT_VERSION);
-    return 0;
-  }
-  if (command == "run") return run_command(argc - 2, argv + 2, out, err);
-  if (command == "sim") return sim_command(argc - 2, argv + 2, out, err);
-  if (command == "p2os-emulator") return p2os_emulator_command(argc - 2, argv + 2, out, err);
-  if (command == "lms200-emulator") return lms200_emulator_command(argc - 2, argv + 2, out, err);
-  std::fprintf(err, "sen3bot-sim: unknown command '%s'\n\n%s", argv[1], kUsage);
-  return 2;
+  static constexpr firmware::Command kCommands[] = {
+      {"run", "", run_command},
+      {"sim", "", sim_command},
+      {"p2os-emulator", "", p2os_emulator_command},
+      {"lms200-emulator", "", lms200_emulator_command},
+  };
+  return firmware::dispatch(argc, argv, "sen3bot-sim", SEN3BOT_VERSION, kUsage, kCommands, out, err);
 }
 
 }  // namespace sen3bot::sim

@@ -9,6 +9,7 @@
 
 #include "base_task.hpp"
 #include "laser_task.hpp"
+#include "lockstep_harness.hpp"
 #include "pipe_board.hpp"
 #include "sen3bot/sim/lms200/emulator.hpp"
 #include "sen3bot/sim/p2os/emulator.hpp"
@@ -17,14 +18,7 @@
 namespace sen3bot::firmware {
 namespace {
 
-p2os::EmulatorConfig brisk_robot() {
-  p2os::EmulatorConfig c;
-  c.trans_accel_mm_s2 = 1500;
-  c.trans_decel_mm_s2 = 1500;
-  c.rot_accel_deg_s2 = 400;
-  c.rot_decel_deg_s2 = 400;
-  return c;
-}
+p2os::EmulatorConfig brisk_robot() { return p2os::test::fast_emulator_config(); }
 
 struct BaseRig {
   hal::MemoryPipe pipe{16384};
