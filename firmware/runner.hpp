@@ -2,6 +2,8 @@
 // Running a firmware over its board: the `run` command of both binaries. In lockstep when the
 // board's clock only moves when told to (a simulated board), else in real time with one OS
 // thread per task group, until SIGINT/SIGTERM, the configured duration or the mission's end.
+#include <signal.h>
+
 #include <cstdio>
 #include <string>
 
