@@ -4,7 +4,6 @@
 
 namespace sen3bot::firmware {
 
-
 Firmware::Firmware(const FirmwareConfig& config, hal::Board& board, std::FILE* out)
     : config_(config),
       board_(board),
