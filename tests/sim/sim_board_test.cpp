@@ -88,3 +88,32 @@ TEST(SimBoard, TheDiscreteLinesAreTheScenariosToDrive) {
 
 }  // namespace
 }  // namespace sen3bot::sim
+
+namespace sen3bot::sim {
+namespace {
+
+std::string sim_error(const std::string& section) {
+  Result<SimulationConfig> r = parse_sim_config("robot: { name: x }\n" + section, "sim.yaml", {});
+  return r ? std::string() : std::string(r.error().message());
+}
+
+TEST(SimConfig, TheShippedSectionAndItsErrors) {
+  const testing::SimRig rig = testing::load_sim_rig();
+  EXPECT_EQ(rig.world.map_path, SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");  // relative to the file
+  ASSERT_EQ(rig.world.movers.size(), 1u);
+  EXPECT_TRUE(rig.world.movers[0].person);
+  EXPECT_DOUBLE_EQ(rig.world.movers[0].speed_m_s, 0.6);
+  EXPECT_DOUBLE_EQ(rig.world.laser_mount.x_m, rig.config.laser_mount.x_m);  // the scanner sits where the firmware thinks
+
+  EXPECT_NE(sim_error("").find("sim.yaml: sim: missing"), std::string::npos) << sim_error("");
+  EXPECT_NE(sim_error("sim: { seed: 1 }\n").find("sim.map: missing"), std::string::npos);
+  EXPECT_NE(sim_error("sim: { map: m.yaml, weather: rain }\n").find("sim.weather: unknown key"), std::string::npos);
+  EXPECT_NE(sim_error("sim: { map: m.yaml, boxes: [ { path: [[1, 1]], shape: cone } ] }\n")
+                .find("sim.boxes[0].shape: expected circle or square, got 'cone'"),
+            std::string::npos);
+  EXPECT_NE(sim_error("sim: { map: m.yaml, people: [ { path: [] } ] }\n").find("sim.people[0].path: needs at least one point"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace sen3bot::sim
