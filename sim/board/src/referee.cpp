@@ -23,11 +23,16 @@ void Referee::observe(const GroundTruth& truth) noexcept {
                                kTrackSpacingM) {
     if (track_count_ < kMaxTrack) track_[track_count_++] = {p.x_m, p.y_m};
   }
+  // Each estimate once, against the truth of the first step after it was published (at most
+  // one world step, 5 ms, later): comparing an older estimate with a newer truth would count the
+  // motion in between as error.
   tasks::Sample<msg::PoseEstimate> estimate;
-  if (estimate_ != nullptr && std::abs(truth.speed_m_s) > kMovingSpeedM_s && estimate_->read(estimate) &&
-      estimate.value.valid)
-    report_.localization_error_max_m = std::max(
-        report_.localization_error_max_m, std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m));
+  if (estimate_ != nullptr && estimate_->read(estimate) && estimate.sequence != estimate_sequence_) {
+    estimate_sequence_ = estimate.sequence;
+    if (estimate.value.valid && std::abs(truth.speed_m_s) > kMovingSpeedM_s)
+      report_.localization_error_max_m = std::max(
+          report_.localization_error_max_m, std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m));
+  }
 }
 
 void Referee::print(std::FILE* out) const {

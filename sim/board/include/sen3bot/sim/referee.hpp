@@ -40,6 +40,7 @@ class Referee {
 
  private:
   const tasks::Topic<msg::PoseEstimate>* estimate_ = nullptr;
+  std::uint64_t estimate_sequence_ = 0;
   RefereeReport report_;
   bool have_last_ = false;
   msg::Pose2D last_;
