@@ -134,18 +134,16 @@ void Scheduler::run_slot(Slot& slot) {
 
   c.release_jitter.record(lateness);
   if (lateness >= slot.period_ns) c.slips.store(c.slips.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  if (exec > slot.budget_ns)
-    c.overruns.store(c.overruns.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  if (runs == 0 || exec < c.exec_min_ns.load(std::memory_order_relaxed))
-    c.exec_min_ns.store(exec, std::memory_order_relaxed);
-  if (exec > c.exec_max_ns.load(std::memory_order_relaxed)) c.exec_max_ns.store(exec, std::memory_order_relaxed);
-  c.exec_total_ns.store(c.exec_total_ns.load(std::memory_order_relaxed) + exec, std::memory_order_relaxed);
-  if (cpu > slot.budget_ns)
-    c.cpu_overruns.store(c.cpu_overruns.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  if (runs == 0 || cpu < c.cpu_min_ns.load(std::memory_order_relaxed))
-    c.cpu_min_ns.store(cpu, std::memory_order_relaxed);
-  if (cpu > c.cpu_max_ns.load(std::memory_order_relaxed)) c.cpu_max_ns.store(cpu, std::memory_order_relaxed);
-  c.cpu_total_ns.store(c.cpu_total_ns.load(std::memory_order_relaxed) + cpu, std::memory_order_relaxed);
+  // One writer per counter (this thread): plain load-then-store is enough.
+  auto record = [&](hal::Nanos t, std::atomic<std::uint64_t>& over, std::atomic<std::int64_t>& min,
+                    std::atomic<std::int64_t>& max, std::atomic<std::int64_t>& total) {
+    if (t > slot.budget_ns) over.store(over.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (runs == 0 || t < min.load(std::memory_order_relaxed)) min.store(t, std::memory_order_relaxed);
+    if (t > max.load(std::memory_order_relaxed)) max.store(t, std::memory_order_relaxed);
+    total.store(total.load(std::memory_order_relaxed) + t, std::memory_order_relaxed);
+  };
+  record(exec, c.overruns, c.exec_min_ns, c.exec_max_ns, c.exec_total_ns);
+  record(cpu, c.cpu_overruns, c.cpu_min_ns, c.cpu_max_ns, c.cpu_total_ns);
   c.last_start_ns.store(start, std::memory_order_relaxed);
   c.runs.store(runs + 1, std::memory_order_release);
 
