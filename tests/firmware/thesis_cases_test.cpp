@@ -63,7 +63,7 @@ TEST(ThesisCases, AllThreeReachTheGoalWithoutCollision) {
   const int code = sim::sim_command(static_cast<int>(argv.size()), argv.data(), out, err);
   std::fclose(out);
   std::fclose(err);
-  EXPECT_EQ(code, 0) << "a case was not reached or collided (sen3bot sim exits 3 then)";
+  EXPECT_EQ(code, 0) << "a case was not reached or collided (sen3bot-sim sim exits 3 then)";
 
   std::ifstream file(dir + "/report.json");
   ASSERT_TRUE(file.good());
