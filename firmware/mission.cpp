@@ -21,15 +21,6 @@ Status MissionTask::init(std::pmr::memory_resource&) {
   return Status::success();
 }
 
-void MissionTask::record_track(msg::Point2D p) noexcept {
-  constexpr double kTrackSpacingM = 0.05;
-  if (track_count_ > 0) {
-    const msg::Point2D& last = track_[track_count_ - 1];
-    if (std::hypot(p.x_m - last.x_m, p.y_m - last.y_m) < kTrackSpacingM) return;
-  }
-  if (track_count_ < kMaxTrack) track_[track_count_++] = p;
-}
-
 void MissionTask::start_goal(std::size_t index, hal::Nanos now_ns) {
   goal_index_ = index;
   goal_start_ns_ = now_ns;
@@ -47,7 +38,6 @@ void MissionTask::step(const tasks::StepContext& context) {
   tasks::Sample<msg::PoseEstimate> pose;
   const bool have_pose = topics_.pose.read(pose) && pose.value.valid;
   if (have_pose) {
-    record_track({pose.value.pose.x_m, pose.value.pose.y_m});
     if (have_last_pose_ && report_.state == MissionState::driving)
       report_.path_length_m += std::hypot(pose.value.pose.x_m - last_pose_.x_m, pose.value.pose.y_m - last_pose_.y_m);
     last_pose_ = pose.value.pose;

@@ -6,7 +6,6 @@
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
-#include <span>
 
 #include "sen3bot/msg/messages.hpp"
 #include "sen3bot/tasks/task.hpp"
@@ -56,15 +55,11 @@ class MissionTask final : public tasks::Task {
   [[nodiscard]] const MissionReport& report() const noexcept { return report_; }
   void print_report(std::FILE* out) const;
 
-  // The driven path as estimated, a point per 5 cm moved, and the first plan made for each
-  // goal: what a report draws.
-  static constexpr std::size_t kMaxTrack = 4096;
-  [[nodiscard]] std::span<const msg::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+  // The first plan made for each goal: what a report draws.
   [[nodiscard]] const msg::PathMessage& first_plan(std::size_t goal) const noexcept { return first_plans_[goal]; }
 
  private:
   void start_goal(std::size_t index, hal::Nanos now_ns);
-  void record_track(msg::Point2D p) noexcept;
 
   MissionConfig config_;
   MissionTopics topics_;
@@ -78,8 +73,6 @@ class MissionTask final : public tasks::Task {
   bool have_last_pose_ = false;
   msg::Pose2D last_pose_;
   std::uint32_t first_plan_for_goal_ = 0;
-  std::array<msg::Point2D, kMaxTrack> track_{};
-  std::size_t track_count_ = 0;
   std::array<msg::PathMessage, MissionConfig::kMaxGoals> first_plans_{};
   std::uint64_t safety_seq_ = 0;
 };

@@ -20,7 +20,6 @@
 
 #include "cli_util.hpp"
 #include "config.hpp"
-#include "config_reader.hpp"
 #include "firmware.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
@@ -380,23 +379,13 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     return 2;
   }
 
-  Result<std::string> text = firmware::config::read_text(config_path);
-  if (!text) {
-    std::fprintf(err, "sen3bot-sim sim: %s\n", text.error().c_str());
-    return 2;
-  }
-  const std::string_view sections[] = {kSimSection};
-  Result<FirmwareConfig> loaded = firmware::parse_config(*text, config_path, sections);
+  Result<SimulatedRobot> loaded = load_simulated_robot(config_path);
   if (!loaded) {
     std::fprintf(err, "sen3bot-sim sim: %s\n", loaded.error().c_str());
     return 2;
   }
-  FirmwareConfig base = std::move(*loaded);
-  Result<SimulationConfig> base_world = parse_sim_config(*text, config_path, base.laser_mount);
-  if (!base_world) {
-    std::fprintf(err, "sen3bot-sim sim: %s\n", base_world.error().c_str());
-    return 2;
-  }
+  const FirmwareConfig& base = loaded->firmware;
+  const SimulationConfig& base_world = loaded->world;
   if (!base.navigation.enabled) {
     std::fprintf(err, "sen3bot-sim sim: %s: needs a navigation section\n", config_path.c_str());
     return 2;
@@ -414,7 +403,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     const Case& c = scenario->cases[i];
     FirmwareConfig config = base;
     config.clock = realtime ? firmware::ClockMode::realtime : firmware::ClockMode::lockstep;
-    SimulationConfig world = *base_world;
+    SimulationConfig world = base_world;
     world.start_pose = scenario->start;
     world.movers = c.movers;
     if (have_seed) {
@@ -447,7 +436,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
   if (!report_dir.empty()) {
     const std::string json = report_dir + "/report.json";
-    if (!write_json(json, *scenario, have_seed ? seed : base_world->seed, results)) {
+    if (!write_json(json, *scenario, have_seed ? seed : base_world.seed, results)) {
       std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", json.c_str());
       return 1;
     }

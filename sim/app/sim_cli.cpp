@@ -4,7 +4,6 @@
 
 #include "cli_util.hpp"
 #include "config.hpp"
-#include "config_reader.hpp"
 #include "firmware.hpp"
 #include "runner.hpp"
 #include "sen3bot/sim/sim_board.hpp"
@@ -62,25 +61,15 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const firmware::StopSignalsBlocked blocked;
   firmware::RunOptions options;
   if (int rc = firmware::parse_run_options(argc, argv, "sen3bot-sim", options, err); rc != 0) return rc;
-  Result<std::string> text = firmware::config::read_text(options.config_path);
-  if (!text) {
-    std::fprintf(err, "sen3bot-sim: %s\n", text.error().c_str());
-    return 2;
-  }
-  const std::string_view sections[] = {kSimSection};
-  Result<firmware::FirmwareConfig> loaded = firmware::parse_config(*text, options.config_path, sections);
+  Result<SimulatedRobot> loaded = load_simulated_robot(options.config_path);
   if (!loaded) {
     std::fprintf(err, "sen3bot-sim: %s\n", loaded.error().c_str());
     return 2;
   }
-  firmware::FirmwareConfig& config = *loaded;
+  firmware::FirmwareConfig& config = loaded->firmware;
   firmware::apply(options, config);
-  Result<SimulationConfig> world = parse_sim_config(*text, options.config_path, config.laser_mount);
-  if (!world) {
-    std::fprintf(err, "sen3bot-sim: %s\n", world.error().c_str());
-    return 2;
-  }
-  Result<std::unique_ptr<SimBoard>> board = SimBoard::create(*world, config.clock == firmware::ClockMode::lockstep);
+  const SimulationConfig& world = loaded->world;
+  Result<std::unique_ptr<SimBoard>> board = SimBoard::create(world, config.clock == firmware::ClockMode::lockstep);
   if (!board) {
     std::fprintf(err, "sen3bot-sim: %s: sim: %s\n", options.config_path.c_str(), board.error().c_str());
     return 1;

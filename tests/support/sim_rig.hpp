@@ -8,7 +8,6 @@
 #include <string>
 
 #include "config.hpp"
-#include "config_reader.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 
@@ -30,18 +29,11 @@ struct SimRig {
 
 inline SimRig load_sim_rig(const std::string& path = SEN3BOT_SOURCE_DIR "/config/sim.yaml") {
   SimRig rig;
-  Result<std::string> text = firmware::config::read_text(path);
-  EXPECT_TRUE(text) << text.error().c_str();
-  if (!text) return rig;
-  const std::string_view sections[] = {sim::kSimSection};
-  Result<firmware::FirmwareConfig> config = firmware::parse_config(*text, path, sections);
-  EXPECT_TRUE(config) << config.error().c_str();
-  if (!config) return rig;
-  rig.config = std::move(*config);
-  Result<sim::SimulationConfig> world = sim::parse_sim_config(*text, path, rig.config.laser_mount);
-  EXPECT_TRUE(world) << world.error().c_str();
-  if (!world) return rig;
-  rig.world = std::move(*world);
+  Result<sim::SimulatedRobot> loaded = sim::load_simulated_robot(path);
+  EXPECT_TRUE(loaded) << loaded.error().c_str();
+  if (!loaded) return rig;
+  rig.config = std::move(loaded->firmware);
+  rig.world = std::move(loaded->world);
   rig.make_board();
   return rig;
 }

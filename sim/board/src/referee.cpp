@@ -27,7 +27,7 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   // one world step, 5 ms, later): comparing an older estimate with a newer truth would count the
   // motion in between as error.
   tasks::Sample<msg::PoseEstimate> estimate;
-  if (estimate_ != nullptr && estimate_->read(estimate) && estimate.sequence != estimate_sequence_) {
+  if (estimate_ != nullptr && estimate_->published() != estimate_sequence_ && estimate_->read(estimate)) {
     estimate_sequence_ = estimate.sequence;
     if (estimate.value.valid && std::abs(truth.speed_m_s) > kMovingSpeedM_s)
       report_.localization_error_max_m = std::max(

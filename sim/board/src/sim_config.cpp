@@ -57,4 +57,15 @@ Result<SimulationConfig> parse_sim_config(std::string_view yaml_text, const std:
   });
 }
 
+Result<SimulatedRobot> load_simulated_robot(const std::string& path) {
+  Result<std::string> text = firmware::config::read_text(path);
+  if (!text) return text.error();
+  const std::string_view sections[] = {kSimSection};
+  Result<firmware::FirmwareConfig> config = firmware::parse_config(*text, path, sections);
+  if (!config) return config.error();
+  Result<SimulationConfig> world = parse_sim_config(*text, path, config->laser_mount);
+  if (!world) return world.error();
+  return SimulatedRobot{std::move(*config), std::move(*world)};
+}
+
 }  // namespace sen3bot::sim

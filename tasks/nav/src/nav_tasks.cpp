@@ -278,12 +278,13 @@ void SafetyTask::step(const tasks::StepContext& context) {
       static_cast<double>(context.start_ns - requested.stamp_ns) <= config_.command_timeout_s * 1e9) {
     in.requested = requested.value;
   }
-  if (scan_.read(scan_sample_) && (!have_scan_ || scan_sample_.sequence != scan_seq_)) {
+  // The scan is copied and projected once, when a new one arrives; this row runs several times
+  // per scan.
+  if (scan_.published() != scan_seq_ && scan_.read(scan_sample_)) {
     scan_seq_ = scan_sample_.sequence;
     projected_.assign(scan_sample_.value.view(), config_.safety.laser_mount);
-    have_scan_ = true;
   }
-  if (have_scan_) in.scan = &projected_;
+  if (scan_seq_ != 0) in.scan = &projected_;
   tasks::Sample<Odometry> odom;
   if (odom_.read(odom) && odom.value.valid) {
     in.odom_stamp_ns = odom.value.stamp_ns;

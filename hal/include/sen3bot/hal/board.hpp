@@ -5,6 +5,7 @@
 // (sim/board) answers the same requests with device emulators driven by a ground-truth world.
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <string_view>
 
 #include "sen3bot/hal/byte_stream.hpp"
@@ -75,8 +76,8 @@ class Board {
 class PosixBoard final : public Board {
  public:
   struct Lines {
-    std::string_view estop_input;   // empty: none
-    std::string_view light_output;  // empty: none
+    std::string estop_input;   // empty: none
+    std::string light_output;  // empty: none
   };
   PosixBoard();
   explicit PosixBoard(const Lines& lines);

@@ -5,6 +5,7 @@
 #include <string>
 #include <string_view>
 
+#include "config.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/sim/simulation.hpp"
@@ -17,5 +18,13 @@ inline constexpr std::string_view kSimSection = "sim";
 // robot section, so the simulated scanner sits where the firmware believes it is.
 Result<SimulationConfig> parse_sim_config(std::string_view yaml_text, const std::string& source_name,
                                           const nav::Pose2D& laser_mount);
+
+// A configuration file as the simulator reads it: the firmware's part (the `sim` section left
+// to the board) and the simulated robot from that section.
+struct SimulatedRobot {
+  firmware::FirmwareConfig firmware;
+  SimulationConfig world;
+};
+Result<SimulatedRobot> load_simulated_robot(const std::string& path);
 
 }  // namespace sen3bot::sim

@@ -214,7 +214,6 @@ class SafetyTask final : public tasks::Task {
   tasks::Topic<SafetyOutput>& status_;
   tasks::Sample<ScanMessage> scan_sample_;
   std::uint64_t scan_seq_ = 0;
-  bool have_scan_ = false;
   ProjectedScan projected_;  // projected once per scan, checked every step
   std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero
 };
