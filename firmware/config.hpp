@@ -69,6 +69,9 @@ struct FirmwareConfig {
   ClockMode clock = ClockMode::lockstep;
   double duration_s = 0.0;  // 0: until SIGINT/SIGTERM
   bool lock_memory = true;
+  // PM QoS: the deepest CPU idle state's exit latency while running in real time; -1 leaves
+  // the platform's choice.
+  int max_cpu_wakeup_latency_us = 0;
   std::size_t prefault_stack_bytes = 64 * 1024;
   std::map<std::string, ThreadConfig, std::less<>> threads;
   std::map<std::string, TaskConfig, std::less<>> tasks;

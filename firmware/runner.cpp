@@ -194,6 +194,14 @@ int run_firmware(Firmware& fw, hal::Board& board, const FirmwareConfig& config, 
     if (Status s = hal::lock_memory(); !s)
       std::fprintf(err, "sen3bot: warning: %s (continuing without it)\n", s.error().c_str());
   }
+  hal::CpuLatencyRequest wakeup_latency;  // held until the run ends
+  if (lockstep == nullptr && config.max_cpu_wakeup_latency_us >= 0) {
+    Result<hal::CpuLatencyRequest> held = hal::CpuLatencyRequest::hold(config.max_cpu_wakeup_latency_us);
+    if (held)
+      wakeup_latency = std::move(*held);
+    else
+      std::fprintf(err, "sen3bot: warning: %s (continuing without it)\n", held.error().c_str());
+  }
   if (Status s = board.start(); !s) {
     std::fprintf(err, "sen3bot: %s\n", s.error().c_str());
     return 1;

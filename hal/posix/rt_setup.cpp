@@ -3,6 +3,7 @@
 #include <sched.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -128,6 +129,41 @@ Status set_current_thread_affinity(int cpu) {
                          list.c_str());
   }
   return posix::errno_error(err == EPERM ? Errc::permission : Errc::io, err, "pinning the thread to CPU %d", cpu);
+}
+
+CpuLatencyRequest::~CpuLatencyRequest() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+CpuLatencyRequest::CpuLatencyRequest(CpuLatencyRequest&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+CpuLatencyRequest& CpuLatencyRequest::operator=(CpuLatencyRequest&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+Result<CpuLatencyRequest> CpuLatencyRequest::hold(std::int32_t max_latency_us, const char* device) {
+  if (max_latency_us < 0) {
+    return Error::format(Errc::invalid_argument, "CPU wake-up latency %d us: must be 0 or more", max_latency_us);
+  }
+  const int fd = ::open(device, O_WRONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    return posix::errno_error(err == EACCES || err == EPERM ? Errc::permission : Errc::io, err,
+                              "%s: cannot request a CPU wake-up latency of %d us", device, max_latency_us);
+  }
+  // The device takes a binary 32-bit value; the request lasts while the descriptor is open.
+  const std::int32_t value = max_latency_us;
+  if (::write(fd, &value, sizeof value) != static_cast<ssize_t>(sizeof value)) {
+    const int err = errno;
+    ::close(fd);
+    return posix::errno_error(Errc::io, err, "%s: writing the latency request", device);
+  }
+  return CpuLatencyRequest(fd);
 }
 
 bool RtSetupReport::all_ok() const noexcept {

@@ -4,6 +4,7 @@
 // or CI machine (warned, runs best-effort).
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -27,6 +28,30 @@ Status set_current_thread_fifo(int priority);
 
 // Pins the calling thread to one CPU (0-based).
 Status set_current_thread_affinity(int cpu);
+
+// Holds a PM QoS request on /dev/cpu_dma_latency for as long as it lives: the CPUs stay out of
+// idle states whose exit takes longer than max_latency_us, so a sleeping real-time thread
+// wakes on time. Deep C-states (or, in a VM, halting the vCPU) add tens to hundreds of
+// microseconds to every wake-up; cyclictest makes the same request by default. Needs write
+// access to the device (root, or a udev rule on the robot); the Error says so.
+class CpuLatencyRequest {
+ public:
+  CpuLatencyRequest() = default;
+  ~CpuLatencyRequest();
+  CpuLatencyRequest(CpuLatencyRequest&& other) noexcept;
+  CpuLatencyRequest& operator=(CpuLatencyRequest&& other) noexcept;
+  CpuLatencyRequest(const CpuLatencyRequest&) = delete;
+  CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
+
+  // The request is dropped when the object (its file descriptor) goes.
+  static Result<CpuLatencyRequest> hold(std::int32_t max_latency_us,
+                                        const char* device = "/dev/cpu_dma_latency");
+  [[nodiscard]] bool active() const noexcept { return fd_ >= 0; }
+
+ private:
+  explicit CpuLatencyRequest(int fd) : fd_(fd) {}
+  int fd_ = -1;
+};
 
 struct RtSetupOptions {
   bool lock_memory = true;
