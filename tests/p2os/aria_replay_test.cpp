@@ -150,9 +150,10 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
   EXPECT_EQ(r.got[0].raw, bytes_of(encode_command(Command::sync0)));
   EXPECT_EQ(r.got[1].raw, bytes_of(encode_command(Command::sync1)));
   EXPECT_EQ(r.got[2].type, kTypeSync2);
-  EXPECT_LT(r.got[0].t_ns - sync0, hal::millis(50));
-  EXPECT_LT(r.got[1].t_ns - sync1, hal::millis(50));
-  EXPECT_LT(r.got[2].t_ns - sync2, hal::millis(50));
+  // Bounds leave room for sanitizers and qemu; ARIA waits up to 1 s for each.
+  EXPECT_LT(r.got[0].t_ns - sync0, hal::millis(100));
+  EXPECT_LT(r.got[1].t_ns - sync1, hal::millis(100));
+  EXPECT_LT(r.got[2].t_ns - sync2, hal::millis(100));
   const auto reply = with_frame(r.got[2], [](const Frame& f) { return decode_sync2_reply(f); });
   ASSERT_TRUE(reply && *reply);
   EXPECT_STREQ((*reply)->name.data(), config.name.c_str());
@@ -167,9 +168,9 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
   const auto sips = r.sips();
   ASSERT_FALSE(sips.empty());
   EXPECT_GT(sips.front().first, open);
-  EXPECT_LT(sips.front().first - open, hal::millis(150));
-  const double expected_sips = static_cast<double>(close - open) / 1e8;
-  EXPECT_NEAR(static_cast<double>(sips.size()), expected_sips, 0.15 * expected_sips);
+  EXPECT_LT(sips.front().first - open, hal::millis(250));
+  const double expected_sips = static_cast<double>(close - open) / 1e8;  // one per 100 ms
+  EXPECT_NEAR(static_cast<double>(sips.size()), expected_sips, 0.2 * expected_sips);
   bool config_reply = false;
   for (const Got& g : r.got) config_reply = config_reply || g.type == kTypeConfig;
   EXPECT_TRUE(config_reply);
@@ -182,14 +183,16 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
   ASSERT_GT(vel, enable);
   ASSERT_GT(stop, rvel);
   bool drove = false, turned = false;
+  int disabled_sips = 0;
   std::uint16_t x_at_vel = 0;
   for (const auto& [t, s] : sips) {
     const bool motors = (s.flags & flags::kMotorsEnabled) != 0;
-    if (t > enable + hal::millis(60) && t < disable) {
+    if (t > enable + hal::millis(150) && t < disable) {
       EXPECT_TRUE(motors) << "SIP at " << t;
     }
-    if (t > disable + hal::millis(60)) {
+    if (t > disable + hal::millis(10)) {
       EXPECT_FALSE(motors) << "SIP at " << t;
+      disabled_sips += 1;
     }
     if (t < vel) x_at_vel = s.x_raw;
     if (t > vel + hal::millis(300) && t < stop) {
@@ -203,14 +206,15 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
       EXPECT_EQ(s.left_vel_mm_s, 0);
       EXPECT_EQ(s.right_vel_mm_s, 0);
     }
-    EXPECT_LT(t, close + hal::millis(50)) << "a SIP after CLOSE";
+    EXPECT_LT(t, close + hal::millis(150)) << "a SIP after CLOSE";
   }
   EXPECT_TRUE(drove);
   EXPECT_TRUE(turned);
+  EXPECT_GE(disabled_sips, 1);  // the capture puts a SIP between ENABLE 0 and CLOSE
 
   // CLOSE ends the session and the connection: ARIA reads EOF rather than a silent socket.
   ASSERT_GE(r.eof_ns, 0) << "the connection stayed open after CLOSE";
-  EXPECT_LT(r.eof_ns - close, hal::millis(200));
+  EXPECT_LT(r.eof_ns - close, hal::millis(300));
   EXPECT_EQ((*runner)->connections_closed(), 1u);
   EXPECT_EQ((*runner)->clients_served(), 1u);
   const EmulatorStats stats = (*runner)->with_emulator([](P2osEmulator& e) { return e.stats(); });

@@ -42,7 +42,9 @@ void write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t
 // its reply has come; OPEN 1 with CONFIG 1; BATTERYINFO 1 and ENABLE 1 (simpleConnect enables
 // the motors); the six limit commands from the CONFIGpac in one burst; PULSE every ~510 ms
 // while idle; VEL and RVEL re-sent every ~510 ms while driving; stop() = VEL 0 + RVEL 0;
-// disconnect = ENABLE 0, then CLOSE 1. Times in ms after the connection was accepted.
+// disconnect = ENABLE 0, then CLOSE 1 90 ms later. Times in ms after the connection was accepted;
+// ENABLE 0 falls mid-way between two SIPs (they run on OPEN's 100 ms phase), so one SIP lands
+// between it and CLOSE to show the motors off.
 struct AriaPacket {
   int t_ms;
   Packet packet;
@@ -78,8 +80,8 @@ std::vector<AriaPacket> aria_client_packets() {
       {4429, encode_command_int(Command::vel, 0)},
       {4429, encode_command_int(Command::rvel, 0)},
       {4939, encode_command(kPulse)},
-      {5449, encode_command_int(Command::enable, 0)},
-      {5539, encode_command_int(kClose, 1)},
+      {5420, encode_command_int(Command::enable, 0)},
+      {5510, encode_command_int(kClose, 1)},
   };
 }
 
