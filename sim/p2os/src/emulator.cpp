@@ -21,7 +21,7 @@ constexpr double kMoveDoneMm = 0.5;
 // HEAD/DHEAD count as done within this angle of the target; small enough that braking from
 // the profile's speed there adds well under a tenth of a degree.
 constexpr double kHeadDoneDeg = 0.05;
-// Floor for a braking rate of 0 (SETA/SETRA never set one, but the profile divides by none).
+// Position modes brake at least this hard (mm/s², °/s²): a configured 0 would never stop.
 constexpr double kMinDecel = 1.0;
 // AMRISim sends this temperature for "no sensor".
 constexpr std::int8_t kNoTemperature = -127;
