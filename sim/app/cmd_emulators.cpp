@@ -65,13 +65,21 @@ int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err)
       tcp_port = port;
     } else if (arg == "--name") {
       config.name = value;
+    } else if (arg == "--watchdog") {
+      const std::string_view mode = value;
+      if (mode != "stop" && mode != "resume") {
+        std::fprintf(err, "sen3bot-sim p2os-emulator: --watchdog: expected 'stop' or 'resume', got '%s'\n", value);
+        return 2;
+      }
+      config.watchdog_resumes = mode == "resume";
     } else {
       std::fprintf(err, "sen3bot-sim p2os-emulator: unknown option '%s'\n", argv[i - 1]);
       return 2;
     }
   }
   if (pty_link.empty() == (tcp_port < 0)) {
-    std::fprintf(err, "usage: sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME]\n");
+    std::fprintf(err,
+                 "usage: sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]\n");
     return 2;
   }
   StopOnSignal stop;
@@ -100,10 +108,14 @@ int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err)
   while (!StopOnSignal::requested() != 0) clock.sleep_until(clock.now() + hal::millis(50));
   runner->stop();
   const p2os::EmulatorStats stats = runner->with_emulator([](p2os::P2osEmulator& e) { return e.stats(); });
-  std::fprintf(out, "stopped: %llu packets received, %llu bad checksums, %llu SIPs sent, %llu sessions\n",
+  std::fprintf(out,
+               "stopped: %llu packets received, %llu bad checksums, %llu SIPs sent, %llu sessions (%llu closed by "
+               "the client), %llu watchdog stops\n",
                static_cast<unsigned long long>(stats.packets_received),
                static_cast<unsigned long long>(stats.bad_checksums), static_cast<unsigned long long>(stats.sips_sent),
-               static_cast<unsigned long long>(stats.sessions_opened));
+               static_cast<unsigned long long>(stats.sessions_opened),
+               static_cast<unsigned long long>(stats.sessions_closed),
+               static_cast<unsigned long long>(stats.watchdog_stops));
   return 0;
 }
 

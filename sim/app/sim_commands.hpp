@@ -12,7 +12,7 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err);
 int run_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-// sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME]
+// sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]
 int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]
 int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);

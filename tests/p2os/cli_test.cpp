@@ -84,6 +84,9 @@ TEST(P2osCli, ArgumentErrors) {
   EXPECT_EQ(run(sim::p2os_emulator_command, {}).rc, 2);
   EXPECT_EQ(run(sim::p2os_emulator_command, {"--tcp", "70000"}).rc, 2);
   EXPECT_EQ(run(sim::p2os_emulator_command, {"--pty", "/tmp/x", "--tcp", "1"}).rc, 2);
+  const Outcome bad_watchdog = run(sim::p2os_emulator_command, {"--tcp", "0", "--watchdog", "resum"});
+  EXPECT_EQ(bad_watchdog.rc, 2);
+  EXPECT_NE(bad_watchdog.err.find("expected 'stop' or 'resume', got 'resum'"), std::string::npos) << bad_watchdog.err;
 }
 
 }  // namespace

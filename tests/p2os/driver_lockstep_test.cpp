@@ -369,9 +369,11 @@ TEST(P2osLockstep, OutOfSequenceSyncAndLenientArguments) {
   EXPECT_EQ(types[2], 2);
 }
 
-TEST(P2osLockstep, WatchdogStopsAndResumesLastSetpoint) {
+TEST(P2osLockstep, WatchdogStopsAndResumesLastSetpointWhenConfiguredTo) {
   hal::MemoryPipe pipe(4096);
-  P2osEmulator emu(test::fast_emulator_config());
+  EmulatorConfig config = test::fast_emulator_config();
+  config.watchdog_resumes = true;  // the ARCOS manual's behaviour; not the default
+  P2osEmulator emu(config);
   hal::Nanos t = 0;
   auto send = [&](const Packet& p) { (void)pipe.a().write(p.view()); };
   auto run = [&](hal::Nanos d) {

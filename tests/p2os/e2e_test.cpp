@@ -10,6 +10,7 @@
 #include "sen3bot/hal/serial.hpp"
 #include "sen3bot/sim/p2os/emulator_runner.hpp"
 #include "sen3bot/hal/board.hpp"
+#include "sen3bot/hal/tcp.hpp"
 
 namespace sen3bot::p2os {
 namespace {
@@ -166,6 +167,133 @@ TEST(P2osPty, ProbesTheRateThenSwitchesUpWithHostbaud) {
   const std::uint64_t sips = driver.state().sip_count;
   loop.run_for(hal::millis(500));
   EXPECT_GE(driver.state().sip_count, sips + 3);
+}
+
+// A raw client on a real socket: writes packets by hand, keeps what the robot sends.
+struct SocketClient {
+  static Result<SocketClient> connect(std::uint16_t port) {
+    auto stream = hal::TcpStream::connect("127.0.0.1", port, 2000);
+    if (!stream) return stream.error();
+    return SocketClient{std::move(*stream)};
+  }
+  bool send(const Packet& p) {
+    const Result<std::size_t> n = stream->write(p.view());
+    return n && *n == p.size;
+  }
+  // Reads for `duration_ns` or until the robot closes the connection; true if it did.
+  bool read_for(hal::Nanos duration_ns) {
+    const hal::Nanos end = clock.now() + duration_ns;
+    while (clock.now() < end) {
+      std::uint8_t chunk[512];
+      const Result<std::size_t> got = stream->read(chunk);
+      if (!got) {
+        closed_by_robot = got.error().code() == Errc::disconnected;
+        return closed_by_robot;
+      }
+      if (*got == 0) {
+        clock.sleep_until(clock.now() + hal::millis(1));
+        continue;
+      }
+      parser.feed(std::span<const std::uint8_t>(chunk, *got), clock.now(), [&](const Frame& f) {
+        types.push_back(f.type);
+        if (auto sip = decode_sip(f)) sips.push_back(*sip);
+      });
+    }
+    return false;
+  }
+  // SYNC0-2 and ARIA's OPEN 1; true if each SYNC got its own answer.
+  bool open_session() {
+    const std::size_t from = types.size();
+    for (const Command c : {Command::sync0, Command::sync1, Command::sync2}) {
+      if (!send(encode_command(c))) return false;
+      (void)read_for(hal::millis(60));
+    }
+    const bool synced = types.size() >= from + 3 && types[from] == kTypeSync0 && types[from + 1] == kTypeSync1 &&
+                        types[from + 2] == kTypeSync2;
+    return synced && send(encode_command_int(kOpen, 1));
+  }
+
+  std::unique_ptr<hal::TcpStream> stream;
+  hal::PosixClock clock{};
+  FrameParser parser{};
+  std::vector<std::uint8_t> types{};
+  std::vector<Sip> sips{};
+  bool closed_by_robot = false;
+};
+
+TEST(P2osTcp, CloseClosesTheConnectionAndTheNextSessionStartsFromZero) {
+  auto runner = TcpEmulatorRunner::start(quick_robot(), 0);
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  TcpEmulatorRunner& emu = **runner;
+  auto first = SocketClient::connect(emu.port());
+  ASSERT_TRUE(first) << first.error().c_str();
+  ASSERT_TRUE(first->open_session());
+  ASSERT_TRUE(first->send(encode_command_int(Command::enable, 1)));
+  ASSERT_TRUE(first->send(encode_command_int(Command::vel, 400)));
+  ASSERT_TRUE(first->send(encode_command_int(Command::rvel, 30)));
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_FALSE(first->read_for(hal::millis(400)));
+    ASSERT_TRUE(first->send(encode_command(kPulse)));
+  }
+  ASSERT_TRUE(first->send(encode_command_int(Command::vel, 0)));
+  ASSERT_TRUE(first->send(encode_command_int(Command::rvel, 0)));
+  ASSERT_FALSE(first->read_for(hal::millis(500)));
+  ASSERT_FALSE(first->sips.empty());
+  EXPECT_GT(first->sips.back().x_raw, 200);  // mm: it drove
+  EXPECT_GT(first->sips.back().theta_raw, 100);
+  const Pose2 truth = emu.with_emulator([](P2osEmulator& e) { return e.ground_truth(); });
+
+  // ARIA's disconnect: the robot hangs up, promptly.
+  ASSERT_TRUE(first->send(encode_command_int(Command::enable, 0)));
+  ASSERT_TRUE(first->send(encode_command_int(kClose, 1)));
+  const hal::Nanos closed_at = first->clock.now();
+  ASSERT_TRUE(first->read_for(hal::seconds(1))) << "still connected after CLOSE";
+  EXPECT_LT(first->clock.now() - closed_at, hal::millis(200));
+  EXPECT_EQ(emu.connections_closed(), 1u);
+
+  // The next connection is a new session: odometry from zero, the robot where it was.
+  auto second = SocketClient::connect(emu.port());
+  ASSERT_TRUE(second) << second.error().c_str();
+  ASSERT_TRUE(second->open_session());
+  ASSERT_FALSE(second->read_for(hal::millis(350)));
+  ASSERT_FALSE(second->sips.empty());
+  EXPECT_EQ(second->sips.front().x_raw, 0);
+  EXPECT_EQ(second->sips.front().y_raw, 0);
+  EXPECT_EQ(second->sips.front().theta_raw, 0);
+  const Pose2 now = emu.with_emulator([](P2osEmulator& e) { return e.ground_truth(); });
+  EXPECT_EQ(now.x_m, truth.x_m);
+  EXPECT_EQ(now.y_m, truth.y_m);
+  EXPECT_EQ(now.theta_rad, truth.theta_rad);
+  EXPECT_EQ(emu.clients_served(), 2u);
+}
+
+TEST(P2osTcp, AWaitingClientTakesOverFromOneThatWentSilent) {
+  auto runner = TcpEmulatorRunner::start(quick_robot(), 0);
+  ASSERT_TRUE(runner) << runner.error().c_str();
+  TcpEmulatorRunner& emu = **runner;
+  auto dead = SocketClient::connect(emu.port());
+  ASSERT_TRUE(dead) << dead.error().c_str();
+  ASSERT_TRUE(dead->open_session());
+  ASSERT_TRUE(dead->send(encode_command_int(Command::enable, 1)));
+  ASSERT_TRUE(dead->send(encode_command_int(Command::vel, 300)));
+  ASSERT_FALSE(dead->read_for(hal::millis(300)));
+  // The first client hangs (its socket stays open); a second one keeps asking, as ARIA does.
+  auto next = SocketClient::connect(emu.port());
+  ASSERT_TRUE(next) << next.error().c_str();
+  const hal::Nanos asked_at = next->clock.now();
+  bool echoed = false;
+  while (!echoed && next->clock.now() - asked_at < hal::seconds(5)) {
+    ASSERT_TRUE(next->send(encode_command(Command::sync0)));
+    (void)next->read_for(hal::millis(500));
+    echoed = !next->types.empty() && next->types.back() == kTypeSync0;
+  }
+  ASSERT_TRUE(echoed) << "never taken over";
+  // Taken over once the first had been silent for the 2 s watchdog time, not before.
+  EXPECT_GE(next->clock.now() - asked_at, hal::millis(1500));
+  EXPECT_TRUE(next->sips.empty());  // a fresh session: echoes, not "already open" SIPs
+  EXPECT_TRUE(dead->read_for(hal::millis(500)));  // the silent one was hung up
+  EXPECT_EQ(emu.with_emulator([](P2osEmulator& e) { return e.velocity_m_s(); }), 0.0);
+  EXPECT_EQ(emu.clients_served(), 2u);
 }
 
 }  // namespace

@@ -18,8 +18,11 @@ constexpr hal::Nanos kMaxIntegrationStepNs = hal::millis(5);
 constexpr int kBaudRevertMs = 500;
 // MOVE counts as done within this distance of the goal.
 constexpr double kMoveDoneMm = 0.5;
-// Heading-servo gain for HEAD/DHEAD, 1/s.
-constexpr double kHeadingGainPerS = 3.0;
+// HEAD/DHEAD count as done within this angle of the target; small enough that braking from
+// the profile's speed there adds well under a tenth of a degree.
+constexpr double kHeadDoneDeg = 0.05;
+// Position modes brake at least this hard (mm/s², °/s²): a configured 0 would never stop.
+constexpr double kMinDecel = 1.0;
 // AMRISim sends this temperature for "no sensor".
 constexpr std::int8_t kNoTemperature = -127;
 // Below these the robot counts as stopped (SIP type 0x32).
@@ -42,6 +45,15 @@ double approach(double value, double target, double rate_up, double rate_down, d
   const bool speeding_up = std::fabs(target) > std::fabs(value) && (value == 0 || (target > 0) == (value > 0));
   const double step = (speeding_up ? rate_up : rate_down) * dt_s;
   return value + std::clamp(target - value, -step, step);
+}
+
+// The fastest speed from which braking at `decel` in steps of `dt_s` stops within `distance`
+// (all magnitudes). The continuous sqrt(2 a d) overshoots by about v dt / 2, because each
+// step moves at the speed it has just set; this is the same sum taken over the steps.
+double braking_speed(double distance, double decel, double dt_s) {
+  const double a = std::max(decel, kMinDecel);
+  const double half_step = a * dt_s / 2.0;
+  return std::sqrt(half_step * half_step + 2.0 * a * distance) - half_step;
 }
 
 }  // namespace
@@ -69,6 +81,10 @@ void P2osEmulator::reset_session() noexcept {
   rot_accel_deg_s2_ = config_.rot_accel_deg_s2;
   rot_decel_deg_s2_ = config_.rot_decel_deg_s2;
   watchdog_tripped_ = false;
+  session_closed_ = false;
+  // A new session counts from zero, as AMRISim does per connection; the world does not move.
+  odom_x_mm_ = odom_y_mm_ = odom_theta_rad_ = 0;
+  left_ticks_ = right_ticks_ = 0;
   host_baud_ = flash_baud();
   verifying_baud_ = false;
   parser_.reset();
@@ -77,6 +93,12 @@ void P2osEmulator::reset_session() noexcept {
 
 std::uint32_t P2osEmulator::flash_baud() const noexcept {
   return config_.host_baud_code < std::size(kHostBaudRates) ? kHostBaudRates[config_.host_baud_code] : 9600;
+}
+
+bool P2osEmulator::take_session_closed() noexcept {
+  const bool closed = session_closed_;
+  session_closed_ = false;
+  return closed;
 }
 
 Pose2 P2osEmulator::odometry_pose() const noexcept { return {odom_x_mm_, odom_y_mm_, odom_theta_rad_}; }
@@ -165,10 +187,8 @@ void P2osEmulator::on_packet(const Frame& frame, hal::Nanos now_ns) noexcept {
   stats_.command_counts[frame.type] += 1;
   last_packet_ns_ = now_ns;
   verifying_baud_ = false;  // a valid packet at the current rate confirms it
-  if (watchdog_tripped_) {
-    watchdog_tripped_ = false;
-    if (!config_.watchdog_resumes) stop_motion();
-  }
+  // With watchdog_resumes the old setpoints are still there and take effect again now.
+  watchdog_tripped_ = false;
   const CommandArgument arg = decode_argument(frame.payload);
   ReceivedCommand& entry = log_[log_total_ % kCommandLogDepth];
   entry = ReceivedCommand{now_ns, frame.type, arg.kind, arg.value};
@@ -219,6 +239,8 @@ void P2osEmulator::handle_command(const Frame& frame, hal::Nanos now_ns) noexcep
       encoder_mode_ = 0;
       state_ = EmulatorState::sync_wait;
       expected_sync_ = 0;
+      session_closed_ = true;
+      stats_.sessions_closed += 1;
       return;
     case Command::enable:
       motors_enabled_ = arg.value != 0 && !estop_;
@@ -327,6 +349,9 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
       now_ns - last_packet_ns_ > hal::millis(config_.watchdog_ms)) {
     watchdog_tripped_ = true;
     stats_.watchdog_stops += 1;
+    // A client that went silent cannot stand behind its setpoints any more: drop them, so a
+    // later PULSE (or a new client's SYNC0) does not drive the robot off again.
+    if (!config_.watchdog_resumes) stop_motion();
   }
   while (remaining_ns > 0) {
     const hal::Nanos dt_ns = std::min(remaining_ns, kMaxIntegrationStepNs);
@@ -340,13 +365,10 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
     }
     double tv = watchdog_tripped_ ? 0.0 : target_v_mm_s_;
     double tw = watchdog_tripped_ ? 0.0 : target_w_deg_s_;
-    if (heading_mode_ && !watchdog_tripped_) {
-      const double error_deg = wrap_angle_rad(target_heading_rad_ - odom_theta_rad_) * kDegPerRad;
-      tw = std::clamp(error_deg * kHeadingGainPerS, -max_w_deg_s_, max_w_deg_s_);
-    }
+    if (heading_mode_ && !watchdog_tripped_) tw = heading_rate_deg_s(dt_s);
     if (move_mode_ && !watchdog_tripped_) {
       // Position mode: the fastest speed that can still brake to rest at the goal.
-      const double reach = std::sqrt(2.0 * std::max(decel_mm_s2_, 1.0) * std::fabs(move_remaining_mm_));
+      const double reach = braking_speed(std::fabs(move_remaining_mm_), decel_mm_s2_, dt_s);
       tv = std::fabs(move_remaining_mm_) < kMoveDoneMm ? 0.0 : std::copysign(reach, move_remaining_mm_);
     }
     tv = std::clamp(tv, -max_v_mm_s_, max_v_mm_s_);
@@ -377,6 +399,16 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
     left_ticks_ += (ds_mm - wheel_offset_mm) * config_.ticks_mm;
     right_ticks_ += (ds_mm + wheel_offset_mm) * config_.ticks_mm;
   }
+}
+
+double P2osEmulator::heading_rate_deg_s(double dt_s) const noexcept {
+  const double error_deg = wrap_angle_rad(target_heading_rad_ - odom_theta_rad_) * kDegPerRad;
+  if (std::fabs(error_deg) < kHeadDoneDeg) return 0.0;
+  // Like MOVE: the fastest rate that can still brake to rest at the target, so the heading
+  // stops there instead of overshooting (a proportional servo asks for more braking than
+  // RotDecel allows once the error is small).
+  const double reach = braking_speed(std::fabs(error_deg), rot_decel_deg_s2_, dt_s);
+  return std::copysign(std::min(reach, max_w_deg_s_), error_deg);
 }
 
 void P2osEmulator::send_sip() noexcept {

@@ -115,7 +115,10 @@ Result<std::unique_ptr<TcpEmulatorRunner>> TcpEmulatorRunner::start(const Emulat
 }
 
 TcpEmulatorRunner::TcpEmulatorRunner(const EmulatorConfig& config, std::unique_ptr<hal::TcpListener> listener)
-    : EmulatorRunner(config), listener_(std::move(listener)), port_(listener_->port()) {}
+    : EmulatorRunner(config),
+      listener_(std::move(listener)),
+      port_(listener_->port()),
+      silent_client_ns_(hal::millis(config.watchdog_ms)) {}
 
 TcpEmulatorRunner::~TcpEmulatorRunner() { stop(); }
 
@@ -125,10 +128,15 @@ void TcpEmulatorRunner::drop_client() {
 }
 
 int TcpEmulatorRunner::serve(hal::Nanos now_ns) {
-  if (!client_) {
+  // A client that vanished without closing (host down, cable out) holds the connection until
+  // keep-alive notices. Once it has been silent for the watchdog time, a waiting client takes
+  // over at once, on a new session.
+  const bool silent = client_ && now_ns - std::max(emulator_.last_packet_ns(), client_since_ns_) > silent_client_ns_;
+  if (!client_ || silent) {
     Result<std::unique_ptr<hal::TcpStream>> accepted = listener_->accept();
     if (accepted && *accepted) {
       client_ = std::move(*accepted);
+      client_since_ns_ = now_ns;
       clients_.fetch_add(1);
       emulator_.reset_session();
     }
@@ -136,6 +144,13 @@ int TcpEmulatorRunner::serve(hal::Nanos now_ns) {
   if (!client_) return listener_->poll_fd();
   if (Status s = emulator_.step(*client_, now_ns); !s) {
     client_.reset();  // the client left; the next one starts a new session
+    return listener_->poll_fd();
+  }
+  if (emulator_.take_session_closed()) {
+    // CLOSE ends the connection, as AMRISim does: the client reads EOF instead of waiting on
+    // a silent socket.
+    client_.reset();
+    closes_.fetch_add(1);
     return listener_->poll_fd();
   }
   return client_->poll_fd();

@@ -41,7 +41,10 @@ struct EmulatorConfig {
   std::string firmware_version = "E.1";
   int sip_cycle_ms = 100;
   int watchdog_ms = 2000;
-  bool watchdog_resumes = true;     // ARCOS: resume the last setpoint when traffic returns
+  // After a watchdog stop: false (default) drops the setpoints, so only a fresh motion command
+  // moves the robot again; true resumes them on the next packet, PULSE included, as the ARCOS
+  // manual describes (a reconnecting client's SYNC0 then restarts the dead client's motion).
+  bool watchdog_resumes = false;
   bool follow_client_sync = false;  // out-of-sequence SYNC: follow it (AMRISim) or restart (ARCOS)
   std::uint8_t auto_baud = 2;       // CONFIGpac AutoBaud; 2 makes ARIA send HOSTBAUD
   std::uint8_t host_baud_code = 0;  // 9600
@@ -86,6 +89,7 @@ struct EmulatorStats {
   std::uint64_t bytes_dropped = 0;  // output lost because the client did not read
   std::uint64_t watchdog_stops = 0;
   std::uint64_t sessions_opened = 0;
+  std::uint64_t sessions_closed = 0;  // CLOSE received while open
   std::array<std::uint32_t, 256> command_counts{};
 };
 
@@ -101,8 +105,15 @@ class P2osEmulator {
   // error when it failed (the client or device went away); the robot keeps its state.
   Status step(hal::ByteStream& stream, hal::Nanos now_ns) noexcept;
 
-  // Back to power-on state: sync-wait, motors off, setpoints cleared (pose kept).
+  // A new session, as at power-on or on a new TCP connection: sync-wait, motors off,
+  // setpoints cleared, odometry and wheel counters zeroed. The ground truth is untouched.
   void reset_session() noexcept;
+
+  // True once after the client's CLOSE ended an open session (cleared by this call and by
+  // reset_session()); a TCP runner then closes the connection, as AMRISim does.
+  [[nodiscard]] bool take_session_closed() noexcept;
+  // When the last valid client packet arrived (the watchdog's reference).
+  [[nodiscard]] hal::Nanos last_packet_ns() const noexcept { return last_packet_ns_; }
 
   // Ground truth in the world frame (m, rad); independent of the controller's odometry.
   [[nodiscard]] Pose2 ground_truth() const noexcept { return truth_; }
@@ -154,6 +165,7 @@ class P2osEmulator {
   void send_encoder() noexcept;
   Status flush(hal::ByteStream& stream) noexcept;
   void stop_motion() noexcept;
+  [[nodiscard]] double heading_rate_deg_s(double dt_s) const noexcept;
   [[nodiscard]] std::uint32_t flash_baud() const noexcept;
   std::uint8_t next_noise_byte() noexcept;
 
@@ -202,6 +214,7 @@ class P2osEmulator {
   hal::Nanos next_sip_ns_ = 0;
   hal::Nanos last_packet_ns_ = 0;
   bool watchdog_tripped_ = false;
+  bool session_closed_ = false;
 
   // Faults.
   int bad_checksum_packets_ = 0;

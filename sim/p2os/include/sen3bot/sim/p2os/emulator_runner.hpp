@@ -62,6 +62,8 @@ class PtyEmulatorRunner final : public EmulatorRunner {
   ~PtyEmulatorRunner() override;
   [[nodiscard]] const std::string& slave_path() const { return slave_path_; }
   // The device vanishes: the master is closed; the client's reads fail from then on.
+  // (CLOSE cannot close a pty: the session ends and SIPs stop, but the line stays up, as a
+  // serial port does, and the next SYNC0 starts a handshake.)
   void close_device();
 
  private:
@@ -75,12 +77,16 @@ class PtyEmulatorRunner final : public EmulatorRunner {
 class TcpEmulatorRunner final : public EmulatorRunner {
  public:
   // Listens on bind_address:port (port 0 picks a free one). Each new client starts a fresh
-  // session (sync-wait), as the simulators do; a second client waits until the first leaves.
+  // session (sync-wait, odometry zeroed), as the simulators do. A second client waits until
+  // the first leaves, or takes over once the first has sent nothing for the watchdog time.
+  // CLOSE ends the session and the connection.
   static Result<std::unique_ptr<TcpEmulatorRunner>> start(const EmulatorConfig& config, std::uint16_t port,
                                                           std::string_view bind_address = "127.0.0.1");
   ~TcpEmulatorRunner() override;
   [[nodiscard]] std::uint16_t port() const { return port_; }
   [[nodiscard]] std::uint64_t clients_served() const { return clients_.load(); }
+  // Connections the runner closed after the client's CLOSE.
+  [[nodiscard]] std::uint64_t connections_closed() const { return closes_.load(); }
   // Drops the current client's connection (the peer reads EOF).
   void drop_client();
 
@@ -90,7 +96,10 @@ class TcpEmulatorRunner final : public EmulatorRunner {
   std::unique_ptr<hal::TcpListener> listener_;
   std::unique_ptr<hal::TcpStream> client_;
   std::uint16_t port_;
+  hal::Nanos silent_client_ns_;
+  hal::Nanos client_since_ns_ = 0;
   std::atomic<std::uint64_t> clients_{0};
+  std::atomic<std::uint64_t> closes_{0};
 };
 
 }  // namespace sen3bot::p2os
