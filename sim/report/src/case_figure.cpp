@@ -21,6 +21,9 @@ constexpr int kAxisBottom = 44;  // tick labels and "x (m)"
 constexpr int kLegendGap = 20;
 constexpr int kSwatch = 28;
 constexpr int kRowPitch = 22;
+// The estimate's dashes; a 2 px line's round caps eat about 2 px of each gap.
+constexpr double kDashPx = 8;
+constexpr double kGapPx = 7;
 
 std::string format(const char* fmt, double v) {
   char buf[32];
@@ -174,7 +177,7 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
   if (!f.estimated.empty())
     entries.push_back({"estimated path (localization)", [](Canvas& c, Px p) {
                          const Px pts[] = {{p.x - 12, p.y}, {p.x + 12, p.y}};
-                         c.dashed_polyline(pts, kEstimated, 2, 5, 5);
+                         c.dashed_polyline(pts, kEstimated, 2, kDashPx, kGapPx);
                        }});
   if (!f.robot.empty())
     entries.push_back({"robot footprint at t (s)", [&f](Canvas& c, Px p) {
@@ -202,29 +205,26 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
   return entries;
 }
 
-// A scale bar of a round length between about 60 and 150 px, in black and white halves.
-void draw_scale_bar(Canvas& canvas, Px at, double px_per_m) {
-  double length_m = 1;
-  for (const double l : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0})
-    if (l * px_per_m >= 60) {
-      length_m = l;
-      break;
-    }
-  const int w = static_cast<int>(std::lround(length_m * px_per_m));
-  const int x = static_cast<int>(at.x), y = static_cast<int>(at.y);
-  canvas.fill_rect(x, y, w / 2, 6, kInk);
-  canvas.fill_rect(x + w / 2, y, w - w / 2, 6, kPaper);
-  canvas.line({static_cast<double>(x), static_cast<double>(y)}, {static_cast<double>(x + w), static_cast<double>(y)}, kInk);
-  canvas.line({static_cast<double>(x), static_cast<double>(y + 6)}, {static_cast<double>(x + w), static_cast<double>(y + 6)},
-              kInk);
-  canvas.line({static_cast<double>(x + w), static_cast<double>(y)}, {static_cast<double>(x + w), static_cast<double>(y + 6)},
-              kInk);
-  canvas.text({static_cast<double>(x - 3), static_cast<double>(y + 22)}, "0", kInk, kSmallSize);
-  canvas.text({static_cast<double>(x + w - 6), static_cast<double>(y + 22)},
-              format(length_m < 1 ? "%.1f m" : "%.0f m", length_m), kInk, kSmallSize);
+}  // namespace
+
+double scale_bar_length_m(double px_per_m) noexcept {
+  for (const double l : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0})
+    if (l * px_per_m >= 60) return l;
+  return 100.0;
 }
 
-}  // namespace
+void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m) {
+  const double length_m = scale_bar_length_m(px_per_m);
+  const int w = static_cast<int>(std::lround(length_m * px_per_m));
+  canvas.fill_rect(x, y, w / 2, 6, kInk);
+  canvas.fill_rect(x + w / 2, y, w - w / 2, 6, kPaper);
+  // The white half's border, on the pixels just outside it.
+  canvas.fill_rect(x + w / 2, y - 1, w - w / 2 + 1, 1, kInk);
+  canvas.fill_rect(x + w / 2, y + 6, w - w / 2 + 1, 1, kInk);
+  canvas.fill_rect(x + w, y, 1, 6, kInk);
+  canvas.text({x - 3.0, y + 22.0}, "0", kInk, kSmallSize);
+  canvas.text({x + w - 6.0, y + 22.0}, format(length_m < 1 ? "%.1f m" : "%.0f m", length_m), kInk, kSmallSize);
+}
 
 double figure_scale(const nav::OccupancyMap& map) noexcept {
   const double extent_m = std::max(map.width(), map.height()) * map.resolution_m();
@@ -292,7 +292,7 @@ Canvas draw_case_figure(const CaseFigure& f) {
   }
   // The estimate dashed over the truth, so both show where they coincide.
   canvas.polyline(to_pixels(view, f.driven), kDriven, 3);
-  canvas.dashed_polyline(to_pixels(view, f.estimated), kEstimated, 2, 5, 5);
+  canvas.dashed_polyline(to_pixels(view, f.estimated), kEstimated, 2, kDashPx, kGapPx);
   for (const RobotAt& r : f.robot) {
     canvas.outline_polygon(outline(view, f.footprint, r.pose), kRobot, 2);
     const double front = front_m(f.footprint), c = std::cos(r.pose.theta_rad), s = std::sin(r.pose.theta_rad);
@@ -367,7 +367,7 @@ Canvas draw_case_figure(const CaseFigure& f) {
     y += kRowPitch;
   }
   canvas.text({static_cast<double>(legend_x), y + 8}, "scale", kInk, kLineSize);
-  draw_scale_bar(canvas, {legend_x + 52.0, y + 2}, view.px_per_m);
+  draw_scale_bar(canvas, legend_x + 52, static_cast<int>(y) + 2, view.px_per_m);
   return canvas;
 }
 

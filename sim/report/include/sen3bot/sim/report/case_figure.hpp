@@ -74,7 +74,7 @@ inline constexpr Rgb kContact{230, 0, 230};
 inline constexpr Rgb kStart{0, 150, 150};
 inline constexpr Rgb kGoal{0, 0, 0};
 inline constexpr Rgb kPassed{0, 130, 0};
-inline constexpr Rgb kFailed{200, 0, 0};
+inline constexpr Rgb kFailed{180, 0, 50};
 }  // namespace colours
 
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
@@ -83,6 +83,12 @@ inline constexpr Rgb kFailed{200, 0, 0};
 [[nodiscard]] View figure_view(const CaseFigure& figure) noexcept;
 // The whole figure; figure.map must be set.
 [[nodiscard]] Canvas draw_case_figure(const CaseFigure& figure);
+
+// A scale bar's length: the first of 0.5, 1, 2, 5, ... m that is at least 60 px long.
+[[nodiscard]] double scale_bar_length_m(double px_per_m) noexcept;
+// The bar, its left end's top at (x, y), 6 px tall: the first half ink, the second half paper
+// framed in ink; "0" and its length under it.
+void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m);
 
 // The instants to draw the robot at: the first pose, then each after at least spacing_m of
 // travel since the last one chosen, and the last pose.
