@@ -1,11 +1,10 @@
 // `sen3bot-sim sim`: named scenarios on the simulated robot, each case a whole firmware run in
-// lockstep (or real) time, with a report folder: a PNG of the map with the safe path, the
-// plans, the driven path and the obstacles, and a JSON summary with per-task statistics.
+// lockstep (or real) time, with a report folder: a figure per case (report_figure.hpp) and a
+// JSON summary with per-task statistics.
 #include <sys/stat.h>
 
 #include <cerrno>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <numbers>
@@ -26,7 +25,6 @@ namespace sen3bot::sim {
 
 using firmware::Firmware;
 using firmware::FirmwareConfig;
-using firmware::MissionConfig;
 using firmware::MissionReport;
 using firmware::MissionState;
 using firmware::MissionTask;

@@ -180,7 +180,7 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
                          c.dashed_polyline(pts, kEstimated, 2, kDashPx, kGapPx);
                        }});
   if (!f.robot.empty())
-    entries.push_back({"robot footprint at t (s)", [&f](Canvas& c, Px p) {
+    entries.push_back({"robot footprint at t (s into the run)", [&f](Canvas& c, Px p) {
                          // Scaled to the swatch, not to the map.
                          const double scale = 11.0 / std::max(f.footprint.circumscribed_radius_m(), 0.01);
                          View v{0, 0, scale, p.x, p.y};
