@@ -86,7 +86,7 @@ void Canvas::dashed_polyline(std::span<const Px> points, Rgb colour, int thickne
         const Px q{a.x + (b.x - a.x) * end / length, a.y + (b.y - a.y) * end / length};
         line(p, q, colour, thickness);
       }
-      s = end;
+      s = std::max(end, s + 1e-9);  // always forward, even where rounding eats a sliver
     }
     phase = std::fmod(phase + length, period);
   }

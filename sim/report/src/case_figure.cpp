@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <functional>
 #include <initializer_list>
+#include <numbers>
 
 namespace sen3bot::sim::report {
 
@@ -58,7 +59,7 @@ std::vector<Px> outline(const View& view, const nav::Footprint& footprint, const
   const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
   if (footprint.vertex_count == 0) {
     for (int i = 0; i < 24; ++i) {
-      const double a = 2 * 3.14159265358979 * i / 24;
+      const double a = 2 * std::numbers::pi * i / 24;
       pts.push_back(view(pose.x_m + footprint.circle_radius_m * std::cos(a), pose.y_m + footprint.circle_radius_m * std::sin(a)));
     }
     return pts;
