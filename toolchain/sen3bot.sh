@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The two README commands.
-#   toolchain/sen3bot.sh mission   install what is missing, build, run the simulated robot
-#                                  through the thesis' three cases (report in build/report)
+#   toolchain/sen3bot.sh mission   install what is missing, build the simulator (sen3bot-sim
+#                                  only), run the simulated robot through the thesis' three
+#                                  cases (report in build/report)
 #   toolchain/sen3bot.sh test      install what is missing, build, run every test suite:
 #                                  native (-Werror), ASan+UBSan, and aarch64 under qemu-user
 #                                  and a bounded coverage-guided fuzzing run of every parser
@@ -13,11 +14,15 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 jobs=${SEN3BOT_JOBS:-$(nproc)}
 
-configure_and_build() {  # <build-dir> <cmake options...>
+configure() {  # <build-dir> <cmake options...>
   local dir=$1
   shift
   cmake -S . -B "$dir" -G Ninja -DSEN3BOT_WERROR=ON "$@" >/dev/null
-  cmake --build "$dir" -j "$jobs"
+}
+
+configure_and_build() {  # <build-dir> <cmake options...>: every target
+  configure "$@"
+  cmake --build "$1" -j "$jobs"
 }
 
 section() { printf '\n==== %s ====\n' "$*"; }
@@ -26,8 +31,11 @@ case "${1:-}" in
   mission)
     section "installing missing packages"
     toolchain/bootstrap.sh
-    section "building"
-    configure_and_build build
+    section "building the simulator"
+    # Only what the mission runs: the tests and benchmarks are the test command's. The build
+    # directory is configured as for the test command, so either can follow the other.
+    configure build
+    cmake --build build -j "$jobs" --target sen3bot-sim
     section "running the simulated robot: the thesis' supervised-planning cases"
     exec build/firmware/sen3bot-sim sim --scenario thesis-sgp --report build/report
     ;;

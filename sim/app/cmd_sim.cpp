@@ -1,11 +1,10 @@
 // `sen3bot-sim sim`: named scenarios on the simulated robot, each case a whole firmware run in
-// lockstep (or real) time, with a report folder: a PNG of the map with the safe path, the
-// plans, the driven path and the obstacles, and a JSON summary with per-task statistics.
+// lockstep (or real) time, with a report folder: a figure per case (report_figure.hpp) and a
+// JSON summary with per-task statistics.
 #include <sys/stat.h>
 
 #include <cerrno>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <numbers>
@@ -14,13 +13,10 @@
 #include <thread>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "cli_util.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
+#include "report_figure.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -29,7 +25,6 @@ namespace sen3bot::sim {
 
 using firmware::Firmware;
 using firmware::FirmwareConfig;
-using firmware::MissionConfig;
 using firmware::MissionReport;
 using firmware::MissionState;
 using firmware::MissionTask;
@@ -94,102 +89,14 @@ std::vector<Scenario> scenarios() {
 
 struct CaseResult {
   std::string name;
+  std::string title;  // the figure's: "case 2/3: NAME"
+  std::string description;
   MissionReport report;
   RefereeReport truth;
   double sim_time_s = 0;
   double wall_time_s = 0;
   std::vector<tasks::TaskStats> stats;
 };
-
-constexpr int kScale = 4;  // pixels per map cell
-
-cv::Point to_pixel(const nav::OccupancyMap& map, double x_m, double y_m, int scale) {
-  double gx = 0, gy = 0;
-  map.world_to_grid(x_m, y_m, gx, gy);
-  return {static_cast<int>(std::lround(gx * scale)), static_cast<int>(std::lround((map.height() - gy) * scale))};
-}
-
-// The map as the thesis figures show it: free white, occupied black, the safe path's waypoints,
-// the first global plan per goal, the driven path, and the obstacles where they stood.
-void draw_map(cv::Mat& image, const Firmware& fw, const SimulationConfig& sim, const MissionTask& mission,
-              const Referee& referee) {
-  const nav::OccupancyMap& map = fw.map();
-  for (int row = 0; row < map.height(); ++row)
-    for (int col = 0; col < map.width(); ++col) {
-      const std::int8_t v = map.at(col, row);
-      const cv::Scalar colour = v < 0 ? cv::Scalar(160, 160, 160) : v >= 50 ? cv::Scalar(0, 0, 0) : cv::Scalar(255, 255, 255);
-      const int y = (map.height() - 1 - row) * kScale;
-      cv::rectangle(image, cv::Rect(col * kScale, y, kScale, kScale), colour, cv::FILLED);
-    }
-  for (const world::MoverScript& m : sim.movers) {
-    const msg::Point2D c = m.path.front();
-    const cv::Scalar colour = m.person ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 90, 200);
-    const int half = static_cast<int>(std::lround(m.size_m / 2 / map.resolution_m() * kScale));
-    if (m.shape == world::MoverShape::square) {
-      const cv::Point p = to_pixel(map, c.x_m, c.y_m, kScale);
-      cv::rectangle(image, cv::Rect(p.x - half, p.y - half, 2 * half, 2 * half), colour, cv::FILLED);
-    }
-    for (std::size_t i = 1; i < m.path.size(); ++i)
-      cv::line(image, to_pixel(map, m.path[i - 1].x_m, m.path[i - 1].y_m, kScale),
-               to_pixel(map, m.path[i].x_m, m.path[i].y_m, kScale), colour, 2 * half, cv::LINE_AA);
-  }
-  for (const msg::Point2D& w : fw.waypoints())
-    cv::circle(image, to_pixel(map, w.x_m, w.y_m, kScale), 4, cv::Scalar(255, 80, 0), cv::FILLED, cv::LINE_AA);
-  for (std::size_t g = 0; g < mission.report().goals_reached + 1 && g < MissionConfig::kMaxGoals; ++g) {
-    const msg::PathMessage& plan = mission.first_plan(g);
-    for (std::size_t i = 1; i < plan.count; ++i)
-      cv::line(image, to_pixel(map, plan.points[i - 1].x_m, plan.points[i - 1].y_m, kScale),
-               to_pixel(map, plan.points[i].x_m, plan.points[i].y_m, kScale), cv::Scalar(0, 170, 0), 2, cv::LINE_AA);
-  }
-  const std::span<const msg::Point2D> track = referee.track();
-  for (std::size_t i = 1; i < track.size(); ++i)
-    cv::line(image, to_pixel(map, track[i - 1].x_m, track[i - 1].y_m, kScale),
-             to_pixel(map, track[i].x_m, track[i].y_m, kScale), cv::Scalar(0, 0, 230), 2, cv::LINE_AA);
-}
-
-// The map with axes in metres, a title and a legend around it.
-bool write_png(const std::string& path, const std::string& title, const Firmware& fw, const SimulationConfig& sim,
-               const MissionTask& mission, const Referee& referee) {
-  const nav::OccupancyMap& map = fw.map();
-  constexpr int kLeft = 56, kTop = 44, kBottom = 44, kRight = 230;
-  const int map_w = map.width() * kScale, map_h = map.height() * kScale;
-  cv::Mat canvas(kTop + map_h + kBottom, kLeft + map_w + kRight, CV_8UC3, cv::Scalar(255, 255, 255));
-  cv::Mat image = canvas(cv::Rect(kLeft, kTop, map_w, map_h));
-  draw_map(image, fw, sim, mission, referee);
-  const cv::Scalar ink(40, 40, 40);
-  const int font = cv::FONT_HERSHEY_SIMPLEX;
-  cv::rectangle(canvas, cv::Rect(kLeft - 1, kTop - 1, map_w + 2, map_h + 2), ink, 1);
-  cv::putText(canvas, title, cv::Point(kLeft, 28), font, 0.6, ink, 1, cv::LINE_AA);
-  // Ticks every metre along both axes, in map coordinates.
-  const double res = map.resolution_m();
-  for (int m = static_cast<int>(std::ceil(map.origin_x_m())); m <= map.origin_x_m() + map.width() * res; ++m) {
-    const int x = kLeft + static_cast<int>(std::lround((m - map.origin_x_m()) / res * kScale));
-    cv::line(canvas, cv::Point(x, kTop + map_h), cv::Point(x, kTop + map_h + 6), ink, 1);
-    cv::putText(canvas, std::to_string(m), cv::Point(x - 5, kTop + map_h + 20), font, 0.4, ink, 1, cv::LINE_AA);
-  }
-  for (int m = static_cast<int>(std::ceil(map.origin_y_m())); m <= map.origin_y_m() + map.height() * res; ++m) {
-    const int y = kTop + map_h - static_cast<int>(std::lround((m - map.origin_y_m()) / res * kScale));
-    cv::line(canvas, cv::Point(kLeft - 6, y), cv::Point(kLeft, y), ink, 1);
-    cv::putText(canvas, std::to_string(m), cv::Point(kLeft - 24, y + 4), font, 0.4, ink, 1, cv::LINE_AA);
-  }
-  cv::putText(canvas, "x (m)", cv::Point(kLeft + map_w / 2 - 16, kTop + map_h + 38), font, 0.45, ink, 1, cv::LINE_AA);
-  cv::putText(canvas, "y (m)", cv::Point(6, kTop - 10), font, 0.45, ink, 1, cv::LINE_AA);
-  // Legend.
-  const int lx = kLeft + map_w + 16;
-  int ly = kTop + 10;
-  auto entry = [&](const char* label, auto&& swatch) {
-    swatch(cv::Point(lx, ly));
-    cv::putText(canvas, label, cv::Point(lx + 30, ly + 5), font, 0.45, ink, 1, cv::LINE_AA);
-    ly += 26;
-  };
-  entry("wall / rack", [&](cv::Point p) { cv::rectangle(canvas, cv::Rect(p.x, p.y - 6, 20, 12), cv::Scalar(0, 0, 0), cv::FILLED); });
-  entry("safe path waypoint", [&](cv::Point p) { cv::circle(canvas, p + cv::Point(10, 0), 4, cv::Scalar(255, 80, 0), cv::FILLED, cv::LINE_AA); });
-  entry("first plan per goal", [&](cv::Point p) { cv::line(canvas, p, p + cv::Point(20, 0), cv::Scalar(0, 170, 0), 2, cv::LINE_AA); });
-  entry("driven path (truth)", [&](cv::Point p) { cv::line(canvas, p, p + cv::Point(20, 0), cv::Scalar(0, 0, 230), 2, cv::LINE_AA); });
-  entry("box", [&](cv::Point p) { cv::rectangle(canvas, cv::Rect(p.x + 4, p.y - 6, 12, 12), cv::Scalar(0, 90, 200), cv::FILLED); });
-  entry("person's walk", [&](cv::Point p) { cv::line(canvas, p, p + cv::Point(20, 0), cv::Scalar(0, 140, 255), 4, cv::LINE_AA); });
-  return cv::imwrite(path, canvas);
-}
 
 void write_json_string(std::FILE* f, std::string_view s) {
   std::fputc('"', f);
@@ -315,13 +222,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   board.referee().print(out);
   if (!report_dir.empty()) {
     const std::string png = report_dir + "/" + result.name + ".png";
-    double goal_s = 0;
-    for (std::size_t g = 0; g < result.report.goals_reached; ++g) goal_s += result.report.goal_time_s[g];
-    char title[160];
-    std::snprintf(title, sizeof title, "%s: %s, %.1f s to the goals, %llu collisions, min clearance %.2f m",
-                  label.c_str(), to_string(mission.report().state), goal_s,
-                  static_cast<unsigned long long>(result.truth.moving_contacts), result.truth.min_clearance_m);
-    if (!write_png(png, title, fw, world, mission, board.referee()))
+    if (!draw_case_figure(case_figure(result.title, result.description, config, fw, board)).write_png(png))
       std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
   }
   if (quiet != out) std::fclose(quiet);
@@ -421,6 +322,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::fprintf(out, "\ncase %zu/%zu %s: %s\n", i + 1, scenario->cases.size(), c.name, c.description);
     CaseResult& result = results.emplace_back();
     result.name = c.name;
+    result.title = "case " + std::to_string(i + 1) + "/" + std::to_string(scenario->cases.size()) + ": " + c.name;
+    result.description = std::string(scenario->name) + ": " + c.description;
     if (run_case(config, world, realtime, c.name, report_dir, result, out, err) != 0) return 1;
     if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0) rc = 3;
   }

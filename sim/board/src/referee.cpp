@@ -8,9 +8,22 @@ namespace sen3bot::sim {
 namespace {
 constexpr double kTrackSpacingM = 0.05;
 constexpr double kMovingSpeedM_s = 0.02;
+
+// Appends p when it is at least kTrackSpacingM from the last point kept and there is room.
+template <std::size_t N>
+void keep_spaced(std::array<msg::Point2D, N>& points, std::size_t& count, double x_m, double y_m) noexcept {
+  if (count == N) return;
+  if (count == 0 || std::hypot(x_m - points[count - 1].x_m, y_m - points[count - 1].y_m) >= kTrackSpacingM)
+    points[count++] = {x_m, y_m};
+}
 }  // namespace
 
 void Referee::observe(const GroundTruth& truth) noexcept {
+  const double t_s = static_cast<double>(truth.stamp_ns) / 1e9;
+  if (truth.contacts > report_.contacts && contact_count_ < kMaxContacts)
+    contacts_[contact_count_++] = {t_s, truth.pose, truth.moving_contacts > report_.moving_contacts};
+  if (pose_count_ < kMaxPoses && (pose_count_ == 0 || t_s - poses_[pose_count_ - 1].t_s >= kPoseIntervalS - 1e-9))
+    poses_[pose_count_++] = {t_s, truth.pose, false};
   report_.contacts = truth.contacts;
   report_.moving_contacts = truth.moving_contacts;
   report_.min_clearance_m = std::min(report_.min_clearance_m, truth.clearance_m);
@@ -19,16 +32,15 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   if (have_last_) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
   last_ = p;
   have_last_ = true;
-  if (track_count_ == 0 || std::hypot(p.x_m - track_[track_count_ - 1].x_m, p.y_m - track_[track_count_ - 1].y_m) >=
-                               kTrackSpacingM) {
-    if (track_count_ < kMaxTrack) track_[track_count_++] = {p.x_m, p.y_m};
-  }
+  keep_spaced(track_, track_count_, p.x_m, p.y_m);
   // Each estimate once, against the truth of the first step after it was published (at most
   // one world step, 5 ms, later): comparing an older estimate with a newer truth would count the
   // motion in between as error.
   tasks::Sample<msg::PoseEstimate> estimate;
   if (estimate_ != nullptr && estimate_->published() != estimate_sequence_ && estimate_->read(estimate)) {
     estimate_sequence_ = estimate.sequence;
+    if (estimate.value.valid)
+      keep_spaced(estimate_track_, estimate_track_count_, estimate.value.pose.x_m, estimate.value.pose.y_m);
     if (estimate.value.valid && std::abs(truth.speed_m_s) > kMovingSpeedM_s)
       report_.localization_error_max_m = std::max(
           report_.localization_error_max_m, std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m));

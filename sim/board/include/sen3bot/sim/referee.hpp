@@ -24,9 +24,19 @@ struct RefereeReport {
   double localization_error_max_m = 0;  // estimate vs truth, while the robot moved
 };
 
+// A true pose at a world time (the simulation clock's seconds).
+struct TimedPose {
+  double t_s = 0;
+  msg::Pose2D pose;
+  bool moving = false;  // for a contact: whether the robot itself was moving
+};
+
 class Referee {
  public:
   static constexpr std::size_t kMaxTrack = 4096;
+  static constexpr std::size_t kMaxPoses = 4096;  // at kPoseIntervalS: 17 minutes
+  static constexpr double kPoseIntervalS = 0.25;
+  static constexpr std::size_t kMaxContacts = 64;
 
   // The firmware's pose estimate, compared with the truth at every step; null: not judged.
   void watch_estimate(const tasks::Topic<msg::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
@@ -37,6 +47,14 @@ class Referee {
   void print(std::FILE* out) const;
   // The true driven path, a point per 5 cm moved.
   [[nodiscard]] std::span<const msg::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
+  // The true pose every kPoseIntervalS, with its heading: where a figure draws the robot.
+  [[nodiscard]] std::span<const TimedPose> poses() const noexcept { return {poses_.data(), pose_count_}; }
+  // The published estimate's path, a point per 5 cm moved (valid estimates only).
+  [[nodiscard]] std::span<const msg::Point2D> estimate_track() const noexcept {
+    return {estimate_track_.data(), estimate_track_count_};
+  }
+  // The true pose where each contact began, the first kMaxContacts of them.
+  [[nodiscard]] std::span<const TimedPose> contact_poses() const noexcept { return {contacts_.data(), contact_count_}; }
 
  private:
   const tasks::Topic<msg::PoseEstimate>* estimate_ = nullptr;
@@ -46,6 +64,12 @@ class Referee {
   msg::Pose2D last_;
   std::array<msg::Point2D, kMaxTrack> track_{};
   std::size_t track_count_ = 0;
+  std::array<TimedPose, kMaxPoses> poses_{};
+  std::size_t pose_count_ = 0;
+  std::array<msg::Point2D, kMaxTrack> estimate_track_{};
+  std::size_t estimate_track_count_ = 0;
+  std::array<TimedPose, kMaxContacts> contacts_{};
+  std::size_t contact_count_ = 0;
 };
 
 }  // namespace sen3bot::sim

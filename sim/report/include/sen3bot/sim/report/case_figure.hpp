@@ -1,0 +1,97 @@
+#pragma once
+// One simulated case as a figure, from plain data: the map with axes in metres and a scale bar,
+// the safe path's waypoints, the global plans, the true and the estimated path, the robot's
+// footprint at a few instants, the boxes and people with their tracks, the contacts, start and
+// goals, and a legend; above it the case's name, description and result line.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/map.hpp"
+#include "sen3bot/sim/report/canvas.hpp"
+
+namespace sen3bot::sim::report {
+
+struct RobotAt {
+  double t_s = 0;
+  msg::Pose2D pose;
+};
+
+struct TimedPoint {
+  double t_s = 0;
+  msg::Point2D at;
+};
+
+struct MoverTrack {
+  std::vector<msg::Point2D> path;  // where it was while it could be seen, in time order
+  std::vector<TimedPoint> marks;   // a person drawn at these instants
+  double size_m = 0.4;
+  double appear_s = 0;  // a box that appears later is labelled with the time
+  bool person = false;
+  bool square = false;
+};
+
+struct Contact {
+  msg::Point2D at;
+  double t_s = 0;
+  bool moving = false;  // the robot was moving: a collision
+};
+
+struct CaseFigure {
+  std::string title;        // "case 2/3: obstacle-before-planning"
+  std::string description;  // what the case is
+  std::string result;       // "goal reached in 15.2 s, 0 contacts, 1 recovery"
+  bool passed = false;      // the result line in green, else red
+  const nav::OccupancyMap* map = nullptr;
+  std::vector<msg::Point2D> waypoints;
+  std::vector<std::vector<msg::Point2D>> plans;
+  std::vector<msg::Point2D> driven;     // ground truth
+  std::vector<msg::Point2D> estimated;  // the firmware's pose estimate
+  nav::Footprint footprint = nav::Footprint::pioneer();
+  std::vector<RobotAt> robot;  // the footprint drawn at these true poses, labelled with t
+  std::vector<MoverTrack> movers;
+  std::vector<Contact> contacts;
+  msg::Pose2D start;
+  std::vector<msg::Point2D> goals;
+};
+
+// The colours, shared by the drawing and its legend (and the tests).
+namespace colours {
+inline constexpr Rgb kPaper{255, 255, 255};
+inline constexpr Rgb kInk{40, 40, 40};
+inline constexpr Rgb kWall{0, 0, 0};
+inline constexpr Rgb kUnknown{175, 175, 175};
+inline constexpr Rgb kWaypoint{0, 80, 255};
+inline constexpr Rgb kPlan{0, 170, 0};
+inline constexpr Rgb kDriven{220, 0, 0};
+inline constexpr Rgb kEstimated{140, 40, 200};
+inline constexpr Rgb kRobot{120, 0, 0};
+inline constexpr Rgb kBox{200, 90, 0};
+inline constexpr Rgb kPerson{255, 140, 0};
+inline constexpr Rgb kContact{230, 0, 230};
+inline constexpr Rgb kStart{0, 150, 150};
+inline constexpr Rgb kGoal{0, 0, 0};
+inline constexpr Rgb kPassed{0, 130, 0};
+inline constexpr Rgb kFailed{180, 0, 50};
+}  // namespace colours
+
+// Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
+[[nodiscard]] double figure_scale(const nav::OccupancyMap& map) noexcept;
+// Where the map is drawn on draw_case_figure()'s canvas.
+[[nodiscard]] View figure_view(const CaseFigure& figure) noexcept;
+// The whole figure; figure.map must be set.
+[[nodiscard]] Canvas draw_case_figure(const CaseFigure& figure);
+
+// A scale bar's length: the first of 0.5, 1, 2, 5, ... m that is at least 60 px long.
+[[nodiscard]] double scale_bar_length_m(double px_per_m) noexcept;
+// The bar, its left end's top at (x, y), 6 px tall: the first half ink, the second half paper
+// framed in ink; "0" and its length under it.
+void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m);
+
+// The instants to draw the robot at: the first pose, then each after at least spacing_m of
+// travel since the last one chosen, and the last pose.
+[[nodiscard]] std::vector<RobotAt> robot_instants(std::span<const RobotAt> poses, double spacing_m);
+
+}  // namespace sen3bot::sim::report

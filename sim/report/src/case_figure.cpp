@@ -1,0 +1,395 @@
+#include "sen3bot/sim/report/case_figure.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <initializer_list>
+#include <numbers>
+
+namespace sen3bot::sim::report {
+
+namespace {
+
+using namespace colours;
+
+constexpr double kTitleSize = 0.6;
+constexpr double kLineSize = 0.45;
+constexpr double kSmallSize = 0.38;
+constexpr int kMargin = 12;
+constexpr int kAxisLeft = 44;    // room for the y tick labels
+constexpr int kAxisBottom = 44;  // tick labels and "x (m)"
+constexpr int kLegendGap = 20;
+constexpr int kSwatch = 28;
+constexpr int kRowPitch = 22;
+// The estimate's dashes; a 2 px line's round caps eat about 2 px of each gap.
+constexpr double kDashPx = 8;
+constexpr double kGapPx = 7;
+
+std::string format(const char* fmt, double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
+
+// The header's three lines and their baselines.
+struct Header {
+  int title_y = 0, description_y = 0, result_y = 0, height = 0;
+};
+
+Header header_layout() {
+  Header h;
+  h.title_y = kMargin + Canvas::text_height(kTitleSize, 2);
+  h.description_y = h.title_y + 8 + Canvas::text_height(kLineSize);
+  h.result_y = h.description_y + 9 + Canvas::text_height(0.5);
+  h.height = h.result_y + 34;  // and room for "y (m)" above the plot
+  return h;
+}
+
+// Tick spacing that gives at most about ten ticks over extent_m.
+double tick_step(double extent_m) {
+  for (const double step : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0})
+    if (extent_m / step <= 10.5) return step;
+  return 100.0;
+}
+
+// The footprint's outline at a pose, in pixels.
+std::vector<Px> outline(const View& view, const nav::Footprint& footprint, const msg::Pose2D& pose) {
+  std::vector<Px> pts;
+  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+  if (footprint.vertex_count == 0) {
+    for (int i = 0; i < 24; ++i) {
+      const double a = 2 * std::numbers::pi * i / 24;
+      pts.push_back(view(pose.x_m + footprint.circle_radius_m * std::cos(a), pose.y_m + footprint.circle_radius_m * std::sin(a)));
+    }
+    return pts;
+  }
+  for (std::size_t i = 0; i < footprint.vertex_count; ++i) {
+    const msg::Point2D v = footprint.vertices[i];
+    pts.push_back(view(pose.x_m + c * v.x_m - s * v.y_m, pose.y_m + s * v.x_m + c * v.y_m));
+  }
+  return pts;
+}
+
+double front_m(const nav::Footprint& footprint) {
+  if (footprint.vertex_count == 0) return footprint.circle_radius_m;
+  double x = 0;
+  for (std::size_t i = 0; i < footprint.vertex_count; ++i) x = std::max(x, footprint.vertices[i].x_m);
+  return x;
+}
+
+std::vector<Px> to_pixels(const View& view, std::span<const msg::Point2D> points) {
+  std::vector<Px> out;
+  out.reserve(points.size());
+  for (const msg::Point2D& p : points) out.push_back(view(p.x_m, p.y_m));
+  return out;
+}
+
+// Small labels that must not overprint each other: each goes to the first of its candidate
+// places still free, or is left out; placed in order of importance, drawn over everything.
+class Labels {
+ public:
+  explicit Labels(Canvas& canvas) : canvas_(canvas) {}
+  // Each candidate is where the label's centre would be.
+  bool place(std::string_view text, std::initializer_list<Px> centres, Rgb colour) {
+    const double w = Canvas::text_width(text, kSmallSize), h = Canvas::text_height(kSmallSize);
+    for (const Px c : centres) {
+      const Box box{c.x - w / 2 - 1, c.y - h / 2 - 1, c.x + w / 2 + 1, c.y + h / 2 + 1};
+      if (std::any_of(placed_.begin(), placed_.end(), [&](const Box& b) { return b.overlaps(box); })) continue;
+      placed_.push_back(box);
+      texts_.push_back({std::string(text), {c.x - w / 2, c.y + h / 2}, colour});
+      return true;
+    }
+    return false;
+  }
+  void draw() {
+    for (const Text& t : texts_) canvas_.text(t.at, t.text, t.colour, kSmallSize, 1, true);
+  }
+
+ private:
+  struct Text {
+    std::string text;
+    Px at;
+    Rgb colour;
+  };
+  struct Box {
+    double x0, y0, x1, y1;
+    [[nodiscard]] bool overlaps(const Box& o) const noexcept { return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1; }
+  };
+  Canvas& canvas_;
+  std::vector<Box> placed_;
+  std::vector<Text> texts_;
+};
+
+void draw_cross(Canvas& canvas, Px c, double half, Rgb colour, int thickness) {
+  canvas.line({c.x - half, c.y - half}, {c.x + half, c.y + half}, colour, thickness);
+  canvas.line({c.x - half, c.y + half}, {c.x + half, c.y - half}, colour, thickness);
+}
+
+void draw_start(Canvas& canvas, Px c) { canvas.ring(c, 11, kStart, 3); }
+
+void draw_goal(Canvas& canvas, Px c) {
+  canvas.disc(c, 8, kGoal);
+  canvas.disc(c, 5, kPaper);
+  canvas.disc(c, 2.5, kGoal);
+}
+
+void draw_map(Canvas& canvas, const View& view, const nav::OccupancyMap& map) {
+  const double res = map.resolution_m();
+  for (int row = 0; row < map.height(); ++row)
+    for (int col = 0; col < map.width(); ++col) {
+      const std::int8_t v = map.at(col, row);
+      if (v >= 0 && v < 50) continue;  // free: the paper
+      const double x_m = map.origin_x_m() + col * res, y_m = map.origin_y_m() + row * res;
+      const Px lo = view(x_m, y_m), hi = view(x_m + res, y_m + res);  // hi is up and right
+      const int x0 = static_cast<int>(std::lround(lo.x)), x1 = static_cast<int>(std::lround(hi.x));
+      const int y0 = static_cast<int>(std::lround(hi.y)), y1 = static_cast<int>(std::lround(lo.y));
+      canvas.fill_rect(x0, y0, x1 - x0, y1 - y0, v < 0 ? kUnknown : kWall);
+    }
+}
+
+struct LegendEntry {
+  std::string label;
+  std::function<void(Canvas&, Px)> swatch;  // drawn centred on the point, kSwatch wide
+};
+
+std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
+  std::vector<LegendEntry> entries;
+  entries.push_back({"wall, rack (map)", [](Canvas& c, Px p) {
+                       c.fill_rect(static_cast<int>(p.x) - 10, static_cast<int>(p.y) - 6, 20, 12, kWall);
+                     }});
+  if (std::any_of(f.map->cells().begin(), f.map->cells().end(), [](std::int8_t v) { return v < 0; }))
+    entries.push_back({"unknown (map)", [](Canvas& c, Px p) {
+                         c.fill_rect(static_cast<int>(p.x) - 10, static_cast<int>(p.y) - 6, 20, 12, kUnknown);
+                       }});
+  if (!f.waypoints.empty())
+    entries.push_back({"safe path waypoints", [](Canvas& c, Px p) {
+                         c.disc({p.x - 6, p.y}, 3.5, kWaypoint);
+                         c.disc({p.x + 6, p.y}, 3.5, kWaypoint);
+                       }});
+  if (!f.plans.empty())
+    entries.push_back({"global plan (first per goal)", [](Canvas& c, Px p) {
+                         c.line({p.x - 12, p.y}, {p.x + 12, p.y}, kPlan, 2);
+                       }});
+  if (!f.driven.empty())
+    entries.push_back({"driven path (ground truth)", [](Canvas& c, Px p) {
+                         c.line({p.x - 12, p.y}, {p.x + 12, p.y}, kDriven, 3);
+                       }});
+  if (!f.estimated.empty())
+    entries.push_back({"estimated path (localization)", [](Canvas& c, Px p) {
+                         const Px pts[] = {{p.x - 12, p.y}, {p.x + 12, p.y}};
+                         c.dashed_polyline(pts, kEstimated, 2, kDashPx, kGapPx);
+                       }});
+  if (!f.robot.empty())
+    entries.push_back({"robot footprint at t (s into the run)", [&f](Canvas& c, Px p) {
+                         // Scaled to the swatch, not to the map.
+                         const double scale = 11.0 / std::max(f.footprint.circumscribed_radius_m(), 0.01);
+                         View v{0, 0, scale, p.x, p.y};
+                         c.outline_polygon(outline(v, f.footprint, {}), kRobot, 2);
+                         c.line(p, v(front_m(f.footprint), 0), kRobot, 2);
+                       }});
+  if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return !m.person; }))
+    entries.push_back({"box", [](Canvas& c, Px p) {
+                         c.fill_rect(static_cast<int>(p.x) - 6, static_cast<int>(p.y) - 6, 12, 12, kBox);
+                       }});
+  if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return m.person; }))
+    entries.push_back({"person's track, and at t (s)", [](Canvas& c, Px p) {
+                         c.line({p.x - 12, p.y}, {p.x + 2, p.y}, kPerson, 2);
+                         c.ring({p.x + 7, p.y}, 6, kPerson, 2);
+                       }});
+  if (!f.contacts.empty())
+    entries.push_back({"contact at t (s), bold: moving", [](Canvas& c, Px p) { draw_cross(c, p, 5, kContact, 3); }});
+  entries.push_back({"start", [](Canvas& c, Px p) {
+                       c.ring(p, 7, kStart, 3);
+                     }});
+  entries.push_back({f.goals.size() > 1 ? "goals, in order" : "goal", [](Canvas& c, Px p) { draw_goal(c, p); }});
+  return entries;
+}
+
+}  // namespace
+
+double scale_bar_length_m(double px_per_m) noexcept {
+  for (const double l : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0})
+    if (l * px_per_m >= 60) return l;
+  return 100.0;
+}
+
+void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m) {
+  const double length_m = scale_bar_length_m(px_per_m);
+  const int w = static_cast<int>(std::lround(length_m * px_per_m));
+  canvas.fill_rect(x, y, w / 2, 6, kInk);
+  canvas.fill_rect(x + w / 2, y, w - w / 2, 6, kPaper);
+  // The white half's border, on the pixels just outside it.
+  canvas.fill_rect(x + w / 2, y - 1, w - w / 2 + 1, 1, kInk);
+  canvas.fill_rect(x + w / 2, y + 6, w - w / 2 + 1, 1, kInk);
+  canvas.fill_rect(x + w, y, 1, 6, kInk);
+  canvas.text({x - 3.0, y + 22.0}, "0", kInk, kSmallSize);
+  canvas.text({x + w - 6.0, y + 22.0}, format(length_m < 1 ? "%.1f m" : "%.0f m", length_m), kInk, kSmallSize);
+}
+
+double figure_scale(const nav::OccupancyMap& map) noexcept {
+  const double extent_m = std::max(map.width(), map.height()) * map.resolution_m();
+  return extent_m > 9.5 ? 760.0 / extent_m : 80.0;
+}
+
+View figure_view(const CaseFigure& figure) noexcept {
+  const nav::OccupancyMap& map = *figure.map;
+  const double s = figure_scale(map);
+  const double map_h = std::round(map.height() * map.resolution_m() * s);
+  return {map.origin_x_m(), map.origin_y_m(), s, static_cast<double>(kMargin + kAxisLeft),
+          header_layout().height + map_h};
+}
+
+Canvas draw_case_figure(const CaseFigure& f) {
+  const nav::OccupancyMap& map = *f.map;
+  const View view = figure_view(f);
+  const Header header = header_layout();
+  const double width_m = map.width() * map.resolution_m(), height_m = map.height() * map.resolution_m();
+  const int map_w = static_cast<int>(std::lround(width_m * view.px_per_m));
+  const int map_h = static_cast<int>(std::lround(height_m * view.px_per_m));
+  const int plot_left = static_cast<int>(view.left_px), plot_top = header.height;
+
+  const std::vector<LegendEntry> legend = legend_entries(f);
+  int legend_w = 0;
+  for (const LegendEntry& e : legend) legend_w = std::max(legend_w, kSwatch + 10 + Canvas::text_width(e.label, kLineSize));
+  const int legend_x = plot_left + map_w + kLegendGap;
+  const int legend_h = static_cast<int>(legend.size()) * kRowPitch + 60;  // and the scale bar
+  const int header_w = std::max({Canvas::text_width(f.title, kTitleSize, 2), Canvas::text_width(f.description, kLineSize),
+                                 Canvas::text_width(f.result, 0.5)});
+  const int width = std::max(legend_x + legend_w + kMargin, kMargin + header_w + kMargin);
+  const int height = std::max(plot_top + map_h + kAxisBottom, plot_top + legend_h) + kMargin / 2;
+  Canvas canvas(width, height, kPaper);
+
+  // The header: what the case is and how it went.
+  canvas.text({kMargin, static_cast<double>(header.title_y)}, f.title, kInk, kTitleSize, 2);
+  canvas.text({kMargin, static_cast<double>(header.description_y)}, f.description, {90, 90, 90}, kLineSize);
+  canvas.text({kMargin, static_cast<double>(header.result_y)}, f.result, f.passed ? kPassed : kFailed, 0.5, 1);
+
+  draw_map(canvas, view, map);
+  for (const std::vector<msg::Point2D>& plan : f.plans) canvas.polyline(to_pixels(view, plan), kPlan, 2);
+  for (const msg::Point2D& w : f.waypoints) canvas.disc(view(w.x_m, w.y_m), 3.5, kWaypoint);
+  for (const MoverTrack& m : f.movers) {
+    if (m.path.empty()) continue;
+    const double half_px = m.size_m / 2 * view.px_per_m;
+    if (m.person) {
+      canvas.polyline(to_pixels(view, m.path), kPerson, 2);
+      for (const TimedPoint& p : m.marks) {
+        const Px c = view(p.at.x_m, p.at.y_m);
+        canvas.ring(c, half_px, kPerson, 2);
+      }
+      continue;
+    }
+    // A box stands where it was first seen.
+    const Px c = view(m.path.front().x_m, m.path.front().y_m);
+    if (m.square) {
+      const std::vector<Px> square{{c.x - half_px, c.y - half_px}, {c.x + half_px, c.y - half_px},
+                                   {c.x + half_px, c.y + half_px}, {c.x - half_px, c.y + half_px}};
+      canvas.fill_polygon(square, kBox);
+    } else {
+      canvas.disc(c, half_px, kBox);
+    }
+    if (m.appear_s > 0)
+      canvas.text({c.x + half_px + 4, c.y + 4}, format("appears at %.1f s", m.appear_s), kBox, kSmallSize, 1, true);
+  }
+  // The estimate dashed over the truth, so both show where they coincide.
+  canvas.polyline(to_pixels(view, f.driven), kDriven, 3);
+  canvas.dashed_polyline(to_pixels(view, f.estimated), kEstimated, 2, kDashPx, kGapPx);
+  for (const RobotAt& r : f.robot) {
+    canvas.outline_polygon(outline(view, f.footprint, r.pose), kRobot, 2);
+    const double front = front_m(f.footprint), c = std::cos(r.pose.theta_rad), s = std::sin(r.pose.theta_rad);
+    const Px centre = view(r.pose.x_m, r.pose.y_m);
+    canvas.line(centre, view(r.pose.x_m + front * c, r.pose.y_m + front * s), kRobot, 2);
+  }
+  for (const Contact& c : f.contacts) {
+    const Px p = view(c.at.x_m, c.at.y_m);
+    draw_cross(canvas, p, 6, kContact, c.moving ? 4 : 2);
+  }
+  for (std::size_t g = 0; g < f.goals.size(); ++g) {
+    const Px p = view(f.goals[g].x_m, f.goals[g].y_m);
+    draw_goal(canvas, p);
+    if (f.goals.size() > 1)
+      canvas.text({p.x - 16, p.y - 10}, format("%.0f", static_cast<double>(g + 1)), kGoal, kLineSize, 1, true);
+  }
+  draw_start(canvas, view(f.start.x_m, f.start.y_m));  // a ring around a goal that is also the start
+
+  // The times: contacts first, then the robot's (on its right-hand side if free, so an
+  // out-and-back run keeps its two legs' labels apart), then the people's.
+  Labels labels(canvas);
+  for (const Contact& c : f.contacts) {
+    const Px p = view(c.at.x_m, c.at.y_m);
+    labels.place(format("%.1f", c.t_s), {{p.x - 22, p.y}, {p.x + 22, p.y}, {p.x, p.y - 16}, {p.x, p.y + 16}}, kContact);
+  }
+  const double o = f.footprint.circumscribed_radius_m() + 9 / view.px_per_m;
+  for (const RobotAt& r : f.robot) {
+    const double c = std::cos(r.pose.theta_rad), s = std::sin(r.pose.theta_rad);
+    labels.place(format("%.0f", r.t_s),
+                 {view(r.pose.x_m + o * s, r.pose.y_m - o * c), view(r.pose.x_m - o * s, r.pose.y_m + o * c),
+                  view(r.pose.x_m - o * c, r.pose.y_m - o * s)},
+                 kRobot);
+  }
+  for (const MoverTrack& m : f.movers)
+    for (const TimedPoint& p : m.marks) {
+      const Px c = view(p.at.x_m, p.at.y_m);
+      const double d = m.size_m / 2 * view.px_per_m + 8;
+      labels.place(format("%.0f", p.t_s), {{c.x, c.y - d}, {c.x, c.y + d}, {c.x + d + 4, c.y}, {c.x - d - 4, c.y}}, kPerson);
+    }
+  labels.draw();
+
+  // The frame, ticks in metres and the axis names.
+  const std::vector<Px> frame{{plot_left - 1.0, plot_top - 1.0},
+                              {static_cast<double>(plot_left + map_w), plot_top - 1.0},
+                              {static_cast<double>(plot_left + map_w), static_cast<double>(plot_top + map_h)},
+                              {plot_left - 1.0, static_cast<double>(plot_top + map_h)}};
+  canvas.outline_polygon(frame, kInk, 1);
+  const double step = tick_step(std::max(width_m, height_m));
+  const char* tick_format = step < 1 ? "%.1f" : "%.0f";
+  for (double m = std::ceil(map.origin_x_m() / step) * step; m <= map.origin_x_m() + width_m + 1e-9; m += step) {
+    const double x = view(m, 0).x;
+    const double y = plot_top + map_h;
+    canvas.line({x, y}, {x, y + 5}, kInk);
+    const std::string label = format(tick_format, m);
+    canvas.text({x - Canvas::text_width(label, kSmallSize) / 2.0, y + 18}, label, kInk, kSmallSize);
+  }
+  for (double m = std::ceil(map.origin_y_m() / step) * step; m <= map.origin_y_m() + height_m + 1e-9; m += step) {
+    const double y = view(0, m).y;
+    const double x = plot_left - 1.0;
+    canvas.line({x - 5, y}, {x, y}, kInk);
+    const std::string label = format(tick_format, m);
+    canvas.text({x - 8 - Canvas::text_width(label, kSmallSize), y + 5}, label, kInk, kSmallSize);
+  }
+  canvas.text({plot_left + map_w / 2.0 - 14, static_cast<double>(plot_top + map_h + 36)}, "x (m)", kInk, kLineSize);
+  canvas.text({kMargin, plot_top - 8.0}, "y (m)", kInk, kLineSize);
+
+  // The legend, then the scale bar under it.
+  double y = plot_top + 10.0;
+  for (const LegendEntry& e : legend) {
+    e.swatch(canvas, {legend_x + kSwatch / 2.0, y});
+    canvas.text({static_cast<double>(legend_x + kSwatch + 10), y + 5}, e.label, kInk, kLineSize);
+    y += kRowPitch;
+  }
+  canvas.text({static_cast<double>(legend_x), y + 8}, "scale", kInk, kLineSize);
+  draw_scale_bar(canvas, legend_x + 52, static_cast<int>(y) + 2, view.px_per_m);
+  return canvas;
+}
+
+std::vector<RobotAt> robot_instants(std::span<const RobotAt> poses, double spacing_m) {
+  std::vector<RobotAt> out;
+  if (poses.empty()) return out;
+  out.push_back(poses.front());
+  double travelled = 0;
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    travelled += std::hypot(poses[i].pose.x_m - poses[i - 1].pose.x_m, poses[i].pose.y_m - poses[i - 1].pose.y_m);
+    if (travelled >= spacing_m) {
+      out.push_back(poses[i]);
+      travelled = 0;
+    }
+  }
+  // The last pose: instead of the previous one when they would nearly overlap.
+  if (poses.size() > 1 && out.back().t_s != poses.back().t_s) {
+    if (out.size() > 1 && travelled < spacing_m / 2) out.back() = poses.back();
+    else out.push_back(poses.back());
+  }
+  return out;
+}
+
+}  // namespace sen3bot::sim::report

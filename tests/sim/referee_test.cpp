@@ -1,0 +1,85 @@
+// The referee's record of a run, fed ground truth by hand: the true pose at a fixed interval
+// with its heading, the estimate's path, and where each contact began.
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "sen3bot/sim/referee.hpp"
+
+namespace sen3bot::sim {
+namespace {
+
+GroundTruth at(double t_s, double x_m, double theta_rad = 0) {
+  GroundTruth truth;
+  truth.stamp_ns = static_cast<hal::Nanos>(t_s * 1e9 + 0.5);
+  truth.pose = {x_m, 1.0, theta_rad};
+  truth.speed_m_s = 0.2;
+  truth.clearance_m = 1.0;
+  truth.nearest_person_m = 5.0;
+  return truth;
+}
+
+TEST(Referee, KeepsTheTruePoseEveryQuarterSecondWithItsHeading) {
+  auto referee = std::make_unique<Referee>();  // its records are large for a stack
+  for (int step = 0; step <= 200; ++step) {  // 1 s of 5 ms world steps
+    const double t = step * 0.005;
+    referee->observe(at(t, 0.2 * t, 0.5 * t));
+  }
+  ASSERT_EQ(referee->poses().size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    const TimedPose& p = referee->poses()[static_cast<std::size_t>(i)];
+    EXPECT_NEAR(p.t_s, 0.25 * i, 1e-9);
+    EXPECT_NEAR(p.pose.x_m, 0.05 * i, 1e-9);
+    EXPECT_NEAR(p.pose.theta_rad, 0.125 * i, 1e-9);
+  }
+}
+
+TEST(Referee, TheEstimatesPathAPointPerFiveCentimetresOfValidEstimates) {
+  auto referee = std::make_unique<Referee>();
+  tasks::Topic<msg::PoseEstimate> estimate;
+  referee->watch_estimate(&estimate);
+  for (int step = 0; step < 20; ++step) {
+    msg::PoseEstimate e;
+    e.pose = {0.02 * step, 2.0, 0};  // 2 cm a step: every third step is 5 cm on
+    e.valid = step != 6;             // one invalid estimate is skipped
+    estimate.publish(e, step);
+    referee->observe(at(step * 0.005, 0));
+  }
+  std::vector<double> xs;
+  for (const msg::Point2D& p : referee->estimate_track()) xs.push_back(p.x_m);
+  ASSERT_EQ(xs.size(), 7u);
+  EXPECT_NEAR(xs[0], 0.0, 1e-9);
+  EXPECT_NEAR(xs[1], 0.06, 1e-9);
+  EXPECT_NEAR(xs[2], 0.14, 1e-9);  // 0.12 was the invalid one
+  EXPECT_NEAR(xs[6], 0.38, 1e-9);
+  EXPECT_NEAR(referee->estimate_track()[0].y_m, 2.0, 1e-9);
+}
+
+TEST(Referee, WhereEachContactBeganAndWhetherTheRobotMoved) {
+  auto referee = std::make_unique<Referee>();
+  GroundTruth t = at(0.0, 0.0);
+  referee->observe(t);
+  t = at(0.005, 0.1);
+  t.contacts = 1;  // touched while standing
+  t.in_contact = true;
+  referee->observe(t);
+  t = at(0.010, 0.2);
+  t.contacts = 1;  // the same contact goes on
+  referee->observe(t);
+  t = at(0.015, 0.3, 1.0);
+  t.contacts = 2;
+  t.moving_contacts = 1;
+  referee->observe(t);
+  ASSERT_EQ(referee->contact_poses().size(), 2u);
+  EXPECT_NEAR(referee->contact_poses()[0].pose.x_m, 0.1, 1e-9);
+  EXPECT_NEAR(referee->contact_poses()[0].t_s, 0.005, 1e-9);
+  EXPECT_FALSE(referee->contact_poses()[0].moving);
+  EXPECT_NEAR(referee->contact_poses()[1].pose.x_m, 0.3, 1e-9);
+  EXPECT_NEAR(referee->contact_poses()[1].pose.theta_rad, 1.0, 1e-9);
+  EXPECT_TRUE(referee->contact_poses()[1].moving);
+  EXPECT_EQ(referee->report().contacts, 2u);
+  EXPECT_EQ(referee->report().moving_contacts, 1u);
+}
+
+}  // namespace
+}  // namespace sen3bot::sim
