@@ -71,6 +71,39 @@ const SdpMedia* SessionDescription::first_supported_video() const {
   return nullptr;
 }
 
+namespace {
+
+// "H265/90000" from the rtpmap, else "payload type 96 without rtpmap".
+std::string format_of(const SdpMedia& m) {
+  if (m.encoding.empty()) return "payload type " + std::to_string(m.payload_type) + " without rtpmap";
+  std::string out = m.encoding;
+  if (m.clock_rate_hz > 0) out += "/" + std::to_string(m.clock_rate_hz);
+  return out;
+}
+
+}  // namespace
+
+Error no_supported_video(const SessionDescription& sd) {
+  std::string codecs;   // "H265" or "H265, MP4V-ES"
+  std::string formats;  // "rtpmap H265/90000"
+  std::string others;   // non-video media, for the no-video case
+  for (const SdpMedia& m : sd.media) {
+    if (m.media == "video") {
+      const std::string name = m.encoding.empty() ? "unknown" : m.encoding;
+      if (codecs.find(name) == std::string::npos) codecs += (codecs.empty() ? "" : ", ") + name;
+      formats += (formats.empty() ? "" : "; ") + std::string(m.encoding.empty() ? "" : "rtpmap ") + format_of(m);
+    } else {
+      others += (others.empty() ? "" : ", ") + m.media + (m.encoding.empty() ? "" : " " + format_of(m));
+    }
+  }
+  if (!codecs.empty()) {
+    return Error::format(Errc::not_supported, "the camera offers only %s video (%s); supported: H264, JPEG",
+                         codecs.c_str(), formats.c_str());
+  }
+  if (others.empty()) return Error(Errc::not_supported, "the SDP has no media at all (no m= line)");
+  return Error::format(Errc::not_supported, "the SDP has no video track (media: %s)", others.c_str());
+}
+
 Result<SessionDescription> parse_sdp(std::string_view text) {
   if (text.size() > kMaxSdpBytes) return Error(Errc::protocol, "SDP exceeds 64 KiB");
   std::string_view rest = text;
