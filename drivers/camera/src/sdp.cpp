@@ -1,5 +1,6 @@
 #include "sen3bot/camera/sdp.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 
@@ -84,18 +85,20 @@ std::string format_of(const SdpMedia& m) {
 }  // namespace
 
 Error no_supported_video(const SessionDescription& sd) {
-  std::string codecs;   // "H265" or "H265, MP4V-ES"
-  std::string formats;  // "rtpmap H265/90000"
-  std::string others;   // non-video media, for the no-video case
+  std::vector<std::string> names;  // each video codec once: "H265", "MP4V-ES"
+  std::string formats;             // "rtpmap H265/90000"
+  std::string others;              // non-video media, for the no-video case
   for (const SdpMedia& m : sd.media) {
     if (m.media == "video") {
-      const std::string name = m.encoding.empty() ? "unknown" : m.encoding;
-      if (codecs.find(name) == std::string::npos) codecs += (codecs.empty() ? "" : ", ") + name;
+      std::string name = m.encoding.empty() ? "unknown" : m.encoding;
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(std::move(name));
       formats += (formats.empty() ? "" : "; ") + std::string(m.encoding.empty() ? "" : "rtpmap ") + format_of(m);
     } else {
       others += (others.empty() ? "" : ", ") + m.media + (m.encoding.empty() ? "" : " " + format_of(m));
     }
   }
+  std::string codecs;
+  for (const std::string& name : names) codecs += (codecs.empty() ? "" : ", ") + name;
   if (!codecs.empty()) {
     return Error::format(Errc::not_supported, "the camera offers only %s video (%s); supported: H264, JPEG",
                          codecs.c_str(), formats.c_str());
