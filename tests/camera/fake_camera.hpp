@@ -70,6 +70,12 @@ class FakeCamera {
                                           [&](const std::string& r) { return r.starts_with(method + " "); }));
   }
   int authorized() const { return authorized_.load(); }
+  // The n-th request of `method` gets replies[n] (the last one from then on); before any client
+  // connects.
+  void set_sequence(const std::string& method, std::vector<std::string> replies) {
+    std::lock_guard lock(mutex_);
+    sequences_[method] = std::move(replies);
+  }
 
  private:
   void run() {
@@ -98,18 +104,29 @@ class FakeCamera {
           auto msg = parse_message(c.buf, &consumed);
           if (!msg) break;
           const std::string method(msg->method);
+          std::string recorded;
+          bool have_recorded = false;
           {
             std::lock_guard lock(mutex_);
             requests_.push_back(method + " " + std::string(msg->uri));
+            if (auto it = sequences_.find(method); it != sequences_.end() && !it->second.empty()) {
+              const auto nth = static_cast<std::size_t>(
+                  std::count_if(requests_.begin(), requests_.end(), [&](const std::string& r) { return r.starts_with(method + " "); }));
+              recorded = it->second[std::min(nth, it->second.size()) - 1];
+              have_recorded = true;
+            } else if (auto found = replies_.find(method); found != replies_.end()) {
+              recorded = found->second;
+              have_recorded = true;
+            }
           }
           if (msg->header("Authorization")) ++authorized_;
           std::string reply;
-          if (auto it = replies_.find(method); it != replies_.end()) {
-            if (it->second.empty()) {
+          if (have_recorded) {
+            if (recorded.empty()) {
               c.stream.reset();
               break;
             }
-            reply = adapt_reply(it->second, msg->cseq().value_or(0));
+            reply = adapt_reply(recorded, msg->cseq().value_or(0));
           } else {
             reply = "RTSP/1.0 200 OK\r\nCSeq: " + std::to_string(msg->cseq().value_or(0)) +
                     "\r\nPublic: OPTIONS, DESCRIBE, SETUP, PLAY, TEARDOWN\r\n\r\n";
@@ -123,6 +140,7 @@ class FakeCamera {
   }
 
   std::map<std::string, std::string> replies_;
+  std::map<std::string, std::vector<std::string>> sequences_;
   std::unique_ptr<hal::TcpListener> listener_;
   std::thread thread_;
   std::atomic<bool> stop_{false};

@@ -182,6 +182,39 @@ TEST(FailureClassification, RejectedCredentialsAreNotRetried) {
   EXPECT_EQ(fake.authorized(), 1);
 }
 
+TEST(FailureClassification, AStaleNonceIsNotARejection) {
+  const std::string challenge = "RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Digest realm=\"cam\", nonce=\"a1\"\r\n\r\n";
+  const std::string stale =
+      "RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Digest realm=\"cam\", nonce=\"b2\", stale=true\r\n\r\n";
+  {
+    // Challenge, stale nonce, then the stream: the client plays.
+    FakeCamera fake({{"SETUP", testing::read_fixture("rtsp/hikvision_setup.txt")},
+                     {"PLAY", testing::read_fixture("rtsp/hikvision_play.txt")}});
+    fake.set_sequence("DESCRIBE", {challenge, stale, testing::read_fixture("rtsp/hikvision_describe.txt")});
+    NullSink sink;
+    auto client = RtspClient::create(quick_retry_config(fake.port(), "admin:secret@"), sink);
+    ASSERT_TRUE(client.ok());
+    const Watched w = watch(**client);
+    EXPECT_EQ((*client)->state(), ClientState::playing) << to_string((*client)->state()) << ": " << w.last_error;
+    EXPECT_EQ((*client)->stats().auth_retries, 2u);
+    EXPECT_EQ(fake.count("DESCRIBE"), 3);
+    EXPECT_EQ(fake.accepted(), 1);
+  }
+  {
+    // Stale again after the stale retry: that is a rejection.
+    FakeCamera fake(describe_reply(""));
+    fake.set_sequence("DESCRIBE", {challenge, stale});
+    NullSink sink;
+    auto client = RtspClient::create(quick_retry_config(fake.port(), "admin:secret@"), sink);
+    ASSERT_TRUE(client.ok());
+    const Watched w = watch(**client);
+    EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+    EXPECT_NE(w.last_error.find("rejected the credentials"), std::string::npos) << w.last_error;
+    EXPECT_EQ(fake.count("DESCRIBE"), 3);
+    EXPECT_EQ(fake.accepted(), 1);
+  }
+}
+
 TEST(FailureClassification, AuthenticationWithoutCredentialsIsNotRetried) {
   FakeCamera fake(describe_reply("RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Basic realm=\"cam\"\r\n\r\n"));
   NullSink sink;
@@ -215,7 +248,7 @@ TEST(FailureClassification, AnOverloadedCameraIsRetried) {
   EXPECT_FALSE(w.ever_failed) << w.last_error;
   EXPECT_GE(fake.accepted(), 5);
   EXPECT_GE(w.connects, 5u);
-  EXPECT_NE(w.last_error.find("503"), std::string::npos) << w.last_error;
+  EXPECT_NE(w.last_error.find("503 Service Unavailable"), std::string::npos) << w.last_error;
 }
 
 TEST(FailureClassification, ADroppedConnectionIsRetried) {

@@ -349,7 +349,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "DESCRIBE: %d", msg.status));
+        fail(now, Error::format(Errc::protocol, "DESCRIBE: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
         return;
       }
       on_describe(now, msg);
@@ -363,7 +363,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "SETUP: %d", msg.status));
+        fail(now, Error::format(Errc::protocol, "SETUP: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
         return;
       }
       on_setup(now, msg);
@@ -375,7 +375,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "PLAY: %d", msg.status));
+        fail(now, Error::format(Errc::protocol, "PLAY: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
         return;
       }
       state_ = ClientState::playing;
