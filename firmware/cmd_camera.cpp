@@ -107,7 +107,8 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
         return 2;
       }
     } else if (arg == "--frames" && has_value) {
-      if (!parse_positive(argv[++i], frames_wanted) || frames_wanted != std::floor(frames_wanted) || frames_wanted > 1e9) {
+      const bool whole = parse_positive(argv[++i], frames_wanted) && frames_wanted == std::floor(frames_wanted);
+      if (!whole || frames_wanted > 1e9) {
         std::fprintf(err, "sen3bot camera probe: --frames needs a whole number from 1 to 1e9\n");
         return 2;
       }

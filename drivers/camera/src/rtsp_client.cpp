@@ -22,6 +22,11 @@ constexpr int kRtspStatusNotImplemented = 501;
 
 hal::Nanos ms(int v) { return hal::millis(v); }
 
+// "SETUP: 503 Service Unavailable"
+Error status_error(Errc code, const char* what, const RtspMessage& msg) {
+  return Error::format(code, "%s: %d %.*s", what, msg.status, static_cast<int>(msg.reason.size()), msg.reason.data());
+}
+
 }  // namespace
 
 const char* to_string(RtpTransport t) { return t == RtpTransport::udp ? "udp" : "tcp"; }
@@ -295,8 +300,8 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
   pending_.active = false;
   if (msg.status == kRtspStatusUnauthorized) {
     if (!auth_.has_credentials()) {
-      give_up(Error::format(Errc::permission, "%s: 401 Unauthorized: the camera requires credentials and none are configured",
-                            pending_.method.c_str()));
+      give_up(Error::format(Errc::permission, "%s: 401 Unauthorized: the camera requires credentials and none are "
+                            "configured", pending_.method.c_str()));
       return;
     }
     mem::StaticVector<std::string_view, 8> challenges;
@@ -343,13 +348,12 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
     case ClientState::describe:
       if (msg.status == kRtspStatusNotFound || msg.status == kRtspStatusForbidden) {
         // The path is wrong or not ours to play: the same request will get the same answer.
-        give_up(Error::format(msg.status == kRtspStatusNotFound ? Errc::not_found : Errc::permission,
-                              "DESCRIBE %s: %d %.*s", request_url_.c_str(), msg.status,
-                              static_cast<int>(msg.reason.size()), msg.reason.data()));
+        const std::string what = "DESCRIBE " + request_url_;
+        give_up(status_error(msg.status == kRtspStatusNotFound ? Errc::not_found : Errc::permission, what.c_str(), msg));
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "DESCRIBE: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
+        fail(now, status_error(Errc::protocol, "DESCRIBE", msg));
         return;
       }
       on_describe(now, msg);
@@ -363,7 +367,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "SETUP: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
+        fail(now, status_error(Errc::protocol, "SETUP", msg));
         return;
       }
       on_setup(now, msg);
@@ -375,7 +379,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "PLAY: %d %.*s", msg.status, static_cast<int>(msg.reason.size()), msg.reason.data()));
+        fail(now, status_error(Errc::protocol, "PLAY", msg));
         return;
       }
       state_ = ClientState::playing;
