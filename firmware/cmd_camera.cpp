@@ -153,8 +153,6 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
   bool described = false;
   for (;;) {
     const camera::CameraStatus status = (*cam)->status();
-    if (status.decoder.frames_decoded >= wanted || status.failed() || std::chrono::steady_clock::now() >= deadline) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
     if (!described && status.state == camera::ClientState::playing) {
       described = true;
       std::fprintf(out, "{\"event\":\"playing\",\"codec\":\"%s\",\"transport\":\"%s\",\"setup_url\":\"",
@@ -163,6 +161,8 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
       std::fprintf(out, "\",\"session_timeout_s\":%d}\n", status.stream.session_timeout_s);
       std::fflush(out);
     }
+    if (status.decoder.frames_decoded >= wanted || status.failed() || std::chrono::steady_clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
     camera::FrameHandle frame = (*cam)->frames().acquire_latest();
     if (!frame || frame.ref().sequence == seen) continue;
     const camera::FrameRef& ref = frame.ref();

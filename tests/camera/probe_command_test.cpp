@@ -145,6 +145,7 @@ TEST(ProbeCommand, DecodesExactlyTheFramesAskedForWhenTheyArriveInABurst) {
   const ProbeRun run = probe({url, "--frames", "30", "--timeout", "10"});
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(json_number(run.out, "frames_decoded"), 30) << run.out;
+  EXPECT_NE(run.out.find("{\"event\":\"playing\",\"codec\":\"h264\""), std::string::npos) << run.out;
 }
 
 TEST(ProbeCommand, AnH265OnlyCameraEndsTheProbeAtOnceNamingTheCodec) {
