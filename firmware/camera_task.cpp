@@ -11,7 +11,14 @@ Status CameraTask::init(std::pmr::memory_resource&) {
 }
 
 void CameraTask::step(const tasks::StepContext& context) {
-  if (camera_ != nullptr) camera_->step(context.start_ns);
+  if (camera_ == nullptr || failure_reported_) return;
+  camera_->step(context.start_ns);
+  if (camera_->failed()) {
+    failure_reported_ = true;
+    // Once, off the steady state: status() copies the reason under the camera's mutex.
+    const camera::CameraStatus status = camera_->status();
+    bus_.events.post(context.start_ns, tasks::Severity::error, "camera", "gave up: %s", status.last_error.c_str());
+  }
 }
 
 void CameraTask::shutdown() {

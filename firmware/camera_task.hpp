@@ -1,19 +1,23 @@
 #pragma once
 // The camera as a row of the task table, on its own non-real-time thread: each step does the
 // RTSP/RTP I/O that is ready, depacketizes and decodes what arrived into the fixed frame pool.
-// Readers take the newest frame from frames() without blocking.
+// Readers take the newest frame from frames() without blocking. A camera that failed for good
+// (see camera::RtspClient::step) is reported once on the event log with its reason and by
+// failed() to the health report; the row then does nothing and the firmware runs without it.
 #include <memory>
 #include <memory_resource>
 
 #include "sen3bot/camera/camera.hpp"
 #include "sen3bot/hal/board.hpp"
+#include "sen3bot/tasks/bus.hpp"
 #include "sen3bot/tasks/task.hpp"
 
 namespace sen3bot::firmware {
 
 class CameraTask final : public tasks::Task {
  public:
-  CameraTask(const camera::CameraConfig& config, hal::Board& board) : config_(config), board_(board) {}
+  CameraTask(const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus)
+      : config_(config), board_(board), bus_(bus) {}
 
   // Builds the client, the decoder's converter and the frame pool (slots x the largest frame,
   // from the configuration: the camera's memory, sized once here). Connecting happens in step().
@@ -21,6 +25,7 @@ class CameraTask final : public tasks::Task {
   void step(const tasks::StepContext& context) override;
   // TEARDOWN.
   void shutdown() override;
+  [[nodiscard]] bool failed() const noexcept override { return camera_ != nullptr && camera_->failed(); }
 
   // Null before init().
   [[nodiscard]] camera::Camera* camera() noexcept { return camera_.get(); }
@@ -28,7 +33,9 @@ class CameraTask final : public tasks::Task {
  private:
   camera::CameraConfig config_;
   hal::Board& board_;
+  tasks::Bus& bus_;
   std::unique_ptr<camera::Camera> camera_;
+  bool failure_reported_ = false;
 };
 
 }  // namespace sen3bot::firmware

@@ -1,5 +1,6 @@
 // sen3bot camera probe: connect to an RTSP camera, decode N frames, report what arrived.
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -106,8 +107,9 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
         return 2;
       }
     } else if (arg == "--frames" && has_value) {
-      if (!parse_positive(argv[++i], frames_wanted)) {
-        std::fprintf(err, "sen3bot camera probe: --frames needs a positive number\n");
+      const bool whole = parse_positive(argv[++i], frames_wanted) && frames_wanted == std::floor(frames_wanted);
+      if (!whole || frames_wanted > 1e9) {
+        std::fprintf(err, "sen3bot camera probe: --frames needs a whole number from 1 to 1e9\n");
         return 2;
       }
     } else if (arg == "--timeout" && has_value) {
@@ -131,6 +133,10 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     config.rtsp.url = *rtsp;
   }
+  // The camera decodes exactly the frames asked for; the loop waits for its own count, which
+  // the pool's sequence numbers (sampled, and ahead of the status) cannot give.
+  const auto wanted = static_cast<std::uint64_t>(frames_wanted);
+  config.decode_limit_frames = wanted;
   hal::PosixClock clock;
   auto cam = camera::Camera::create(config, clock);
   if (!cam) {
@@ -145,19 +151,18 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
   hal::Nanos first_ns = 0;
   hal::Nanos last_ns = 0;
   bool described = false;
-  while (std::chrono::steady_clock::now() < deadline && seen < static_cast<std::uint64_t>(frames_wanted)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    if (!described) {
-      const auto status = (*cam)->status();
-      if (status.state == camera::ClientState::playing) {
-        described = true;
-        std::fprintf(out, "{\"event\":\"playing\",\"codec\":\"%s\",\"transport\":\"%s\",\"setup_url\":\"",
-                     camera::to_string(status.stream.codec), camera::to_string(status.stream.transport));
-        json_escape(out, status.stream.setup_url);
-        std::fprintf(out, "\",\"session_timeout_s\":%d}\n", status.stream.session_timeout_s);
-        std::fflush(out);
-      }
+  for (;;) {
+    const camera::CameraStatus status = (*cam)->status();
+    if (!described && status.state == camera::ClientState::playing) {
+      described = true;
+      std::fprintf(out, "{\"event\":\"playing\",\"codec\":\"%s\",\"transport\":\"%s\",\"setup_url\":\"",
+                   camera::to_string(status.stream.codec), camera::to_string(status.stream.transport));
+      json_escape(out, status.stream.setup_url);
+      std::fprintf(out, "\",\"session_timeout_s\":%d}\n", status.stream.session_timeout_s);
+      std::fflush(out);
     }
+    if (status.decoder.frames_decoded >= wanted || status.failed() || std::chrono::steady_clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
     camera::FrameHandle frame = (*cam)->frames().acquire_latest();
     if (!frame || frame.ref().sequence == seen) continue;
     const camera::FrameRef& ref = frame.ref();
@@ -176,16 +181,21 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
       cv::imwrite(save_dir + name, image);
     }
   }
-  const auto status = (*cam)->status();
   (*cam)->stop();
+  // After the thread has stopped: the counts are final.
+  const camera::CameraStatus status = (*cam)->status();
   const std::uint64_t decoded = status.decoder.frames_decoded;
   const std::uint64_t dropped = status.decoder.decode_errors + status.decoder.no_free_slot +
                                 status.depacketizer.frames_dropped_damaged + status.depacketizer.frames_dropped_no_idr +
                                 status.depacketizer.frames_dropped_oversize;
   const double span_s = static_cast<double>(last_ns - first_ns) / 1e9;
   const double fps = seen > first_seq && span_s > 0 ? static_cast<double>(seen - first_seq) / span_s : 0.0;
-  if (decoded == 0 && !status.last_error.empty()) {
-    std::fprintf(err, "sen3bot camera probe: no frame decoded: %s\n", status.last_error.c_str());
+  if (status.failed()) {
+    std::fprintf(err, "sen3bot camera probe: %s (not retrying)\n", status.last_error.c_str());
+  } else if (decoded < wanted) {
+    std::fprintf(err, "sen3bot camera probe: %llu of %llu frames decoded in %.1f s%s%s\n",
+                 static_cast<unsigned long long>(decoded), static_cast<unsigned long long>(wanted), timeout_s,
+                 status.last_error.empty() ? "" : "; last error: ", status.last_error.c_str());
   }
   std::fprintf(out,
                "{\"codec\":\"%s\",\"width\":%u,\"height\":%u,\"transport\":\"%s\",\"frames_decoded\":%llu,"
@@ -194,7 +204,7 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
                camera::to_string(status.stream.transport), static_cast<unsigned long long>(decoded),
                static_cast<unsigned long long>(dropped), fps, status.latency_ms_p50,
                static_cast<unsigned long long>(status.rtsp.rtp_packets), static_cast<unsigned long long>(status.rtsp.rtp_lost));
-  return decoded > 0 ? 0 : 1;
+  return decoded > 0 && !status.failed() ? 0 : 1;
 }
 
 int discover_command(int argc, char** argv, std::FILE* out, std::FILE* err) {

@@ -84,7 +84,7 @@ Status Firmware::create_tasks() {
     base_task_ = std::make_unique<BaseTask>(config_.devices.base, board_,
                                             BaseTopics{nav_command_, nav_odometry_, nav_base_flags_});
   if (config_.devices.has_laser) laser_task_ = std::make_unique<LaserTask>(config_.devices.laser, board_, nav_scan_);
-  if (config_.devices.has_camera) camera_task_ = std::make_unique<CameraTask>(config_.devices.camera, board_);
+  if (config_.devices.has_camera) camera_task_ = std::make_unique<CameraTask>(config_.devices.camera, board_, bus_);
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
   }

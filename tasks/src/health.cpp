@@ -35,6 +35,17 @@ void HealthTask::step(const StepContext& context) {
                        static_cast<int>(spec.name.size()), spec.name.data(), stalled ? "stalled" : "running again");
       previous_[i].stalled = stalled;
     }
+    const bool failed = scheduler_.task(i).failed();
+    if (failed) {
+      ++report.failed_count;
+      report.failed_mask |= std::uint64_t{1} << i;
+    }
+    if (failed != previous_[i].failed) {
+      bus_.events.post(now, failed ? Severity::error : Severity::info, "health", "task %.*s %s",
+                       static_cast<int>(spec.name.size()), spec.name.data(),
+                       failed ? "failed: running without its device" : "has its device again");
+      previous_[i].failed = failed;
+    }
     const std::uint64_t overruns = c.overruns.load(std::memory_order_relaxed);
     const std::uint64_t slips = c.slips.load(std::memory_order_relaxed);
     report.overruns_total += overruns;
@@ -51,7 +62,7 @@ void HealthTask::step(const StepContext& context) {
     previous_[i].overruns = overruns;
     previous_[i].slips = slips;
   }
-  report.ok = report.stalled_count == 0 && report.slips_since_last == 0;
+  report.ok = report.stalled_count == 0 && report.failed_count == 0 && report.slips_since_last == 0;
   bus_.health.publish(report, now);
 }
 

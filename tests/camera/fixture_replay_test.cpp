@@ -1,6 +1,8 @@
 // The recorded real-camera responses (tests/data/camera/rtsp/) replayed by a small fake
 // server of ours on 127.0.0.1: the client must send SETUP and PLAY to the URLs those cameras
-// expect, and must stay on the one connection it opened whatever hosts the replies name.
+// expect, and must stay on the one connection it opened whatever hosts the replies name. And
+// failures are classified: what retrying cannot cure ends the client for good, on one
+// connection; what may pass (503, a dropped connection, no server) keeps it reconnecting.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "camera_test_util.hpp"
+#include "fake_camera.hpp"
 #include "sen3bot/camera/rtsp_client.hpp"
 #include "sen3bot/camera/rtsp_message.hpp"
 #include "sen3bot/hal/clock.hpp"
@@ -20,96 +23,7 @@
 namespace sen3bot::camera {
 namespace {
 
-// Puts the request's CSeq into a recorded reply and makes Content-Length match the body.
-std::string adapt_reply(const std::string& recorded, std::uint32_t cseq) {
-  const std::size_t split = recorded.find("\r\n\r\n");
-  const std::string head = recorded.substr(0, split);
-  const std::string body = split == std::string::npos ? "" : recorded.substr(split + 4);
-  std::string out;
-  std::size_t pos = 0;
-  while (pos < head.size()) {
-    std::size_t eol = head.find("\r\n", pos);
-    if (eol == std::string::npos) eol = head.size();
-    const std::string line = head.substr(pos, eol - pos);
-    pos = eol + 2;
-    const std::string lower = [&] {
-      std::string l = line.substr(0, line.find(':'));
-      for (char& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      return l;
-    }();
-    if (lower == "cseq" || lower == "content-length") continue;
-    out += line + "\r\n";
-  }
-  out += "CSeq: " + std::to_string(cseq) + "\r\n";
-  if (!body.empty()) out += "Content-Length: " + std::to_string(body.size()) + "\r\n";
-  return out + "\r\n" + body;
-}
-
-class FakeCamera {
- public:
-  explicit FakeCamera(std::map<std::string, std::string> replies) : replies_(std::move(replies)) {
-    auto listener = hal::TcpListener::listen("127.0.0.1", 0);
-    EXPECT_TRUE(listener.ok());
-    listener_ = std::move(*listener);
-    thread_ = std::thread([this] { run(); });
-  }
-  ~FakeCamera() {
-    stop_ = true;
-    thread_.join();
-  }
-  std::uint16_t port() const { return listener_->port(); }
-  std::vector<std::string> requests() {
-    std::lock_guard lock(mutex_);
-    return requests_;
-  }
-  int accepted() const { return accepted_.load(); }
-
- private:
-  void run() {
-    std::vector<std::unique_ptr<hal::TcpStream>> clients;
-    std::string buf;
-    while (!stop_) {
-      if (auto s = listener_->accept(); s && *s) {
-        ++accepted_;
-        clients.push_back(std::move(*s));
-      }
-      for (auto& c : clients) {
-        std::uint8_t tmp[4096];
-        auto n = c->read(tmp);
-        if (!n || *n == 0) continue;
-        buf.append(reinterpret_cast<const char*>(tmp), *n);
-        std::size_t consumed = 0;
-        while (true) {
-          auto msg = parse_message(buf, &consumed);
-          if (!msg) break;
-          const std::string method(msg->method);
-          {
-            std::lock_guard lock(mutex_);
-            requests_.push_back(method + " " + std::string(msg->uri));
-          }
-          std::string reply;
-          if (auto it = replies_.find(method); it != replies_.end()) {
-            reply = adapt_reply(it->second, msg->cseq().value_or(0));
-          } else {
-            reply = "RTSP/1.0 200 OK\r\nCSeq: " + std::to_string(msg->cseq().value_or(0)) +
-                    "\r\nPublic: OPTIONS, DESCRIBE, SETUP, PLAY, TEARDOWN\r\n\r\n";
-          }
-          (void)c->write(std::span(reinterpret_cast<const std::uint8_t*>(reply.data()), reply.size()));
-          buf.erase(0, consumed);
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-  }
-
-  std::map<std::string, std::string> replies_;
-  std::unique_ptr<hal::TcpListener> listener_;
-  std::thread thread_;
-  std::atomic<bool> stop_{false};
-  std::atomic<int> accepted_{0};
-  std::mutex mutex_;
-  std::vector<std::string> requests_;
-};
+using testing::FakeCamera;
 
 struct NullSink : EncodedFrameSink {
   void on_frame(const EncodedFrame&) override {}
@@ -180,21 +94,189 @@ TEST(FixtureReplay, SetupAndPlayUrlsMatchWhatEachCameraExpects) {
   }
 }
 
-TEST(FixtureReplay, H265OnlyCameraIsAClearError) {
-  FakeCamera fake({{"DESCRIBE", testing::read_fixture("rtsp/anjvision_describe.txt")}});
+// Failure classification. Backoff starts at 50 ms and stops doubling at 100 ms, so a client
+// that kept retrying would connect at least five times in the 1 s window these tests watch.
+constexpr int kWindowMs = 1000;
+
+RtspClientConfig quick_retry_config(std::uint16_t port, const std::string& userinfo = "") {
   RtspClientConfig config;
-  config.url = "rtsp://127.0.0.1:" + std::to_string(fake.port()) + "/h265";
-  NullSink sink;
-  auto client = RtspClient::create(config, sink);
-  ASSERT_TRUE(client.ok());
+  config.url = "rtsp://" + userinfo + "127.0.0.1:" + std::to_string(port) + "/stream";
+  config.backoff_initial_ms = 50;
+  config.backoff_max_ms = 100;
+  config.response_timeout_ms = 1000;
+  return config;
+}
+
+struct Watched {
+  bool ever_failed = false;
+  std::uint64_t connects = 0;
+  std::string last_error;
+};
+
+// Steps the client for the whole window, whatever state it reaches.
+Watched watch(RtspClient& client) {
   hal::PosixClock clock;
-  const hal::Nanos deadline = clock.now() + hal::seconds(3);
-  while (clock.now() < deadline && (*client)->state() != ClientState::backoff) {
-    (*client)->step(clock.now());
+  Watched w;
+  const hal::Nanos end = clock.now() + hal::millis(kWindowMs);
+  while (clock.now() < end) {
+    client.step(clock.now());
+    w.ever_failed = w.ever_failed || client.failed();
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
+  w.connects = client.stats().connects;
+  w.last_error = std::string(client.last_error());
+  return w;
+}
+
+std::map<std::string, std::string> describe_reply(std::string reply) { return {{"DESCRIBE", std::move(reply)}}; }
+
+std::string as_describe_reply(const std::string& sdp) {
+  return "RTSP/1.0 200 OK\r\nCSeq: 1\r\nContent-Type: application/sdp\r\n\r\n" + sdp;
+}
+
+TEST(FailureClassification, H265OnlyCamerasAreNamedAndNotRetried) {
+  // Anjvision sends an RTSP reply; the TP-Link recording is the SDP alone (H.265, PCMA audio
+  // and a vendor track).
+  const std::string replies[] = {testing::read_fixture("rtsp/anjvision_describe.txt"),
+                                 as_describe_reply(testing::read_fixture("rtsp/tplink_sdp.txt"))};
+  for (const std::string& describe : replies) {
+    FakeCamera fake(describe_reply(describe));
+    NullSink sink;
+    auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+    ASSERT_TRUE(client.ok());
+    const Watched w = watch(**client);
+    EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+    EXPECT_EQ(w.last_error, "the camera offers only H265 video (rtpmap H265/90000); supported: H264, JPEG");
+    EXPECT_EQ(fake.accepted(), 1);
+    EXPECT_EQ(w.connects, 1u);
+    EXPECT_EQ(fake.count("DESCRIBE"), 1);
+    EXPECT_EQ(fake.count("SETUP"), 0);
+  }
+}
+
+TEST(FailureClassification, AnAudioOnlyCameraHasNoVideoTrack) {
+  FakeCamera fake(describe_reply(as_describe_reply("v=0\r\no=- 0 0 IN IP4 127.0.0.1\r\ns=x\r\nt=0 0\r\n"
+                                                  "m=audio 0 RTP/AVP 8\r\na=rtpmap:8 PCMA/8000\r\na=control:track2\r\n")));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+  EXPECT_EQ(w.last_error, "the SDP has no video track (media: audio PCMA/8000)");
+  EXPECT_EQ(fake.accepted(), 1);
+}
+
+TEST(FailureClassification, RejectedCredentialsAreNotRetried) {
+  // Every DESCRIBE, with or without Authorization, gets a fresh Digest challenge.
+  FakeCamera fake(describe_reply("RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\n"
+                                "WWW-Authenticate: Digest realm=\"cam\", nonce=\"5e1f\"\r\n\r\n"));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port(), "admin:wrong@"), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+  EXPECT_NE(w.last_error.find("401"), std::string::npos) << w.last_error;
+  EXPECT_NE(w.last_error.find("rejected the credentials of user 'admin'"), std::string::npos) << w.last_error;
+  EXPECT_EQ(fake.accepted(), 1);
+  EXPECT_EQ(fake.count("DESCRIBE"), 2);  // the challenge, then the credentials once
+  EXPECT_EQ(fake.authorized(), 1);
+}
+
+TEST(FailureClassification, AStaleNonceIsNotARejection) {
+  const std::string challenge = "RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Digest realm=\"cam\", nonce=\"a1\"\r\n\r\n";
+  const std::string stale =
+      "RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Digest realm=\"cam\", nonce=\"b2\", stale=true\r\n\r\n";
+  {
+    // Challenge, stale nonce, then the stream: the client plays.
+    FakeCamera fake({{"SETUP", testing::read_fixture("rtsp/hikvision_setup.txt")},
+                     {"PLAY", testing::read_fixture("rtsp/hikvision_play.txt")}});
+    fake.set_sequence("DESCRIBE", {challenge, stale, testing::read_fixture("rtsp/hikvision_describe.txt")});
+    NullSink sink;
+    auto client = RtspClient::create(quick_retry_config(fake.port(), "admin:secret@"), sink);
+    ASSERT_TRUE(client.ok());
+    const Watched w = watch(**client);
+    EXPECT_EQ((*client)->state(), ClientState::playing) << to_string((*client)->state()) << ": " << w.last_error;
+    EXPECT_EQ((*client)->stats().auth_retries, 2u);
+    EXPECT_EQ(fake.count("DESCRIBE"), 3);
+    EXPECT_EQ(fake.accepted(), 1);
+  }
+  {
+    // Stale again after the stale retry: that is a rejection.
+    FakeCamera fake(describe_reply(""));
+    fake.set_sequence("DESCRIBE", {challenge, stale});
+    NullSink sink;
+    auto client = RtspClient::create(quick_retry_config(fake.port(), "admin:secret@"), sink);
+    ASSERT_TRUE(client.ok());
+    const Watched w = watch(**client);
+    EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+    EXPECT_NE(w.last_error.find("rejected the credentials"), std::string::npos) << w.last_error;
+    EXPECT_EQ(fake.count("DESCRIBE"), 3);
+    EXPECT_EQ(fake.accepted(), 1);
+  }
+}
+
+TEST(FailureClassification, AuthenticationWithoutCredentialsIsNotRetried) {
+  FakeCamera fake(describe_reply("RTSP/1.0 401 Unauthorized\r\nCSeq: 1\r\nWWW-Authenticate: Basic realm=\"cam\"\r\n\r\n"));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+  EXPECT_NE(w.last_error.find("none are configured"), std::string::npos) << w.last_error;
+  EXPECT_EQ(fake.accepted(), 1);
+  EXPECT_EQ(fake.authorized(), 0);
+}
+
+TEST(FailureClassification, AStreamThatDoesNotExistIsNotRetried) {
+  FakeCamera fake(describe_reply("RTSP/1.0 404 Stream Not Found\r\nCSeq: 1\r\n\r\n"));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_EQ((*client)->state(), ClientState::failed) << to_string((*client)->state());
+  EXPECT_NE(w.last_error.find("404 Stream Not Found"), std::string::npos) << w.last_error;
+  EXPECT_NE(w.last_error.find("/stream"), std::string::npos) << w.last_error;
+  EXPECT_EQ(fake.accepted(), 1);
+}
+
+TEST(FailureClassification, AnOverloadedCameraIsRetried) {
+  FakeCamera fake(describe_reply("RTSP/1.0 503 Service Unavailable\r\nCSeq: 1\r\n\r\n"));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_FALSE(w.ever_failed) << w.last_error;
+  EXPECT_GE(fake.accepted(), 5);
+  EXPECT_GE(w.connects, 5u);
+  EXPECT_NE(w.last_error.find("503 Service Unavailable"), std::string::npos) << w.last_error;
+}
+
+TEST(FailureClassification, ADroppedConnectionIsRetried) {
+  // The camera closes the connection on DESCRIBE (a reboot, a Wi-Fi drop at its end).
+  FakeCamera fake(describe_reply(""));
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(fake.port()), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_FALSE(w.ever_failed) << w.last_error;
+  EXPECT_GE(fake.accepted(), 5);
+  EXPECT_GE(fake.count("DESCRIBE"), 5);
+}
+
+TEST(FailureClassification, NoServerAtAllIsRetried) {
+  std::uint16_t port = 0;
+  {
+    auto listener = hal::TcpListener::listen("127.0.0.1", 0);
+    ASSERT_TRUE(listener.ok());
+    port = (*listener)->port();
+  }  // closed: connecting is refused
+  NullSink sink;
+  auto client = RtspClient::create(quick_retry_config(port), sink);
+  ASSERT_TRUE(client.ok());
+  const Watched w = watch(**client);
+  EXPECT_FALSE(w.ever_failed) << w.last_error;
   EXPECT_EQ((*client)->state(), ClientState::backoff);
-  EXPECT_NE((*client)->last_error().find("no H.264 or JPEG"), std::string::npos) << (*client)->last_error();
+  EXPECT_GE((*client)->stats().reconnects, 5u);
 }
 
 }  // namespace

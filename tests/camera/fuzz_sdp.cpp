@@ -1,4 +1,5 @@
-// Fuzz target: the SDP parser, then control resolution of what it found.
+// Fuzz target: the SDP parser, then control resolution of what it found and the reason
+// given when it holds no video we decode.
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
@@ -13,5 +14,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (sd->media.size() > kMaxSdpMedia) __builtin_trap();
   for (const SdpMedia& m : sd->media) (void)resolve_control("rtsp://h/base/", m.control);
   (void)resolve_control("rtsp://h/base", sd->session_control);
+  if (sd->first_supported_video() == nullptr && no_supported_video(*sd).message().empty()) __builtin_trap();
   return 0;
 }

@@ -172,6 +172,12 @@ TEST(GstPeer, DigestAndBasicAuth) {
     const auto bad = run_camera(wrong, 1, 1500);
     EXPECT_EQ(bad.frames, 0u) << mode;
     EXPECT_NE(bad.status.last_error.find("401"), std::string::npos) << mode << ": " << bad.status.last_error;
+    // Rejected credentials will be rejected again: one connection, then the client gives up.
+    EXPECT_TRUE(bad.status.failed()) << mode << ": " << to_string(bad.status.state);
+    EXPECT_NE(bad.status.last_error.find("rejected the credentials of user 'admin'"), std::string::npos)
+        << mode << ": " << bad.status.last_error;
+    EXPECT_EQ(bad.status.rtsp.connects, 1u) << mode;
+    EXPECT_EQ(bad.status.rtsp.reconnects, 0u) << mode;
   }
 }
 

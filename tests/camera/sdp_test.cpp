@@ -68,7 +68,29 @@ TEST(Sdp, H265IsNotSupportedVideo) {
     auto sd = parse_sdp(text);
     ASSERT_TRUE(sd.ok());
     EXPECT_EQ(sd->first_supported_video(), nullptr);
+    const Error why = no_supported_video(*sd);
+    EXPECT_EQ(why.code(), Errc::not_supported);
+    EXPECT_EQ(why.message(), "the camera offers only H265 video (rtpmap H265/90000); supported: H264, JPEG");
   }
+}
+
+TEST(Sdp, NoSupportedVideoSaysWhatIsOffered) {
+  auto reason = [](const char* text) {
+    auto sd = parse_sdp(text);
+    EXPECT_TRUE(sd.ok());
+    EXPECT_EQ(sd->first_supported_video(), nullptr) << text;
+    return std::string(no_supported_video(*sd).message());
+  };
+  EXPECT_EQ(reason("v=0\nm=audio 0 RTP/AVP 0\na=rtpmap:0 PCMU/8000\nm=application 0 RTP/AVP 107\n"),
+            "the SDP has no video track (media: audio PCMU/8000, application)");
+  EXPECT_EQ(reason("v=0\ns=x\n"), "the SDP has no media at all (no m= line)");
+  // Two unsupported tracks, one without rtpmap; a codec offered twice is named once.
+  EXPECT_EQ(reason("v=0\nm=video 0 RTP/AVP 96\na=rtpmap:96 H265/90000\nm=video 0 RTP/AVP 97\n"
+                   "m=video 0 RTP/AVP 98\na=rtpmap:98 H265/90000\n"),
+            "the camera offers only H265, unknown video (rtpmap H265/90000; payload type 97 without rtpmap; "
+            "rtpmap H265/90000); supported: H264, JPEG");
+  EXPECT_EQ(reason("v=0\nm=video 0 RTP/AVP 96\na=rtpmap:96 H2650/90000\nm=video 0 RTP/AVP 97\na=rtpmap:97 H265/90000\n"),
+            "the camera offers only H2650, H265 video (rtpmap H2650/90000; rtpmap H265/90000); supported: H264, JPEG");
 }
 
 TEST(Sdp, HikvisionSkipsMetadataTrack) {

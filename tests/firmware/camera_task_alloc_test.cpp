@@ -25,7 +25,8 @@ TEST(CameraTaskAllocation, SteadyStateStepsMakeNoCxxAllocation) {
   config.max_width_px = 640;
   config.max_height_px = 480;
   hal::PosixBoard board;
-  CameraTask task(config, board);
+  tasks::Bus bus;
+  CameraTask task(config, board, bus);
   std::pmr::monotonic_buffer_resource arena;
   ASSERT_TRUE(task.init(arena));
   hal::Clock& clock = board.clock();

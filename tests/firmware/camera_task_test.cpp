@@ -1,6 +1,7 @@
 // The camera's row of the task table: the firmware, configured with a camera, runs the RTSP
 // client and the decoder on the table's "camera" thread against Debian's gst-rtsp-server
-// (tests/camera/peers/rtsp_server.py), in real time, and frames arrive in the pool.
+// (tests/camera/peers/rtsp_server.py), in real time, and frames arrive in the pool; against a
+// camera that offers only H.265 the row gives up once, says why, and the firmware runs on.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -8,7 +9,9 @@
 #include <string>
 #include <thread>
 
+#include "camera_test_util.hpp"
 #include "config.hpp"
+#include "fake_camera.hpp"
 #include "firmware.hpp"
 #include "peer_process.hpp"
 #include "task_table.hpp"
@@ -20,10 +23,10 @@ std::string camera_config(const std::string& url) {
   return "robot: { name: camera-test }\n"
          "run: { clock: realtime, duration_s: 0 }\n"
          "realtime: { lock_memory: false }\n"
-         "threads: { camera: { realtime: false } }\n"
+         "threads: { camera: { realtime: false }, control: { realtime: false }, background: { realtime: false } }\n"
          "tasks:\n"
          "  health: { arena_bytes: 4KiB }\n"
-         "  telemetry: { arena_bytes: 4KiB }\n"
+         "  telemetry: { arena_bytes: 4KiB, status_period_s: 0.5 }\n"
          "  camera: { arena_bytes: 1KiB }\n"
          "devices:\n"
          "  camera: { url: " + url + ", transport: tcp, max_width_px: 640, max_height_px: 480, format: gray8 }\n";
@@ -69,6 +72,63 @@ TEST(CameraTask, TheCameraRowDecodesFramesOnItsOwnThread) {
   std::printf("camera row: %llu runs, CPU mean %.2f ms, max %.2f ms (budget %.1f ms)\n",
               static_cast<unsigned long long>(stats.runs), static_cast<double>(stats.cpu_mean_ns) * 1e-6,
               static_cast<double>(stats.cpu_max_ns) * 1e-6, static_cast<double>(stats.budget_us) * 1e-3);
+}
+
+std::size_t row_of(const tasks::Scheduler& scheduler, std::string_view name) {
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i)
+    if (scheduler.spec(i).name == name) return i;
+  return scheduler.task_count();
+}
+
+TEST(CameraTask, ACameraThatFailedForGoodIsReportedAndTheFirmwareRunsWithoutIt) {
+  camera::testing::FakeCamera fake({{"DESCRIBE", camera::testing::read_fixture("rtsp/anjvision_describe.txt")}});
+  const std::string url = "rtsp://127.0.0.1:" + std::to_string(fake.port()) + "/stream0";
+  Result<FirmwareConfig> config = parse_config(camera_config(url), "camera.yaml");
+  ASSERT_TRUE(config) << config.error().c_str();
+
+  hal::PosixBoard board;
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  Firmware fw(*config, board, out);
+  ASSERT_TRUE(fw.init());
+  ASSERT_TRUE(fw.scheduler().start());
+  // Long enough for three reconnects at the default backoff (250, 500, 1000 ms) had the
+  // failure been taken for a passing one.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  const tasks::Scheduler& scheduler = fw.scheduler();
+  const std::size_t camera_row = row_of(scheduler, "camera");
+  const std::size_t health_row = row_of(scheduler, "health");
+  ASSERT_LT(camera_row, scheduler.task_count());
+  ASSERT_LT(health_row, scheduler.task_count());
+  const std::uint64_t health_runs = scheduler.counters(health_row).runs.load();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_GT(scheduler.counters(health_row).runs.load(), health_runs);  // the firmware runs on
+  tasks::Sample<tasks::HealthReport> report;
+  ASSERT_TRUE(fw.bus().health.read(report));
+  fw.shutdown();
+
+  EXPECT_TRUE(fw.camera()->failed());
+  const camera::CameraStatus status = fw.camera()->camera()->status();
+  EXPECT_EQ(status.state, camera::ClientState::failed);
+  EXPECT_EQ(status.last_error, "the camera offers only H265 video (rtpmap H265/90000); supported: H264, JPEG");
+  EXPECT_EQ(fake.accepted(), 1);
+  EXPECT_EQ(report.value.failed_count, 1u);
+  EXPECT_EQ(report.value.failed_mask, std::uint64_t{1} << camera_row);
+  EXPECT_EQ(report.value.stalled_count, 0u);
+  EXPECT_FALSE(report.value.ok);
+  EXPECT_EQ(fw.camera_frames()->latest_sequence(), 0u);
+
+  std::fflush(out);
+  std::rewind(out);
+  std::string text;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, out)) text.append(buf, n);
+  std::fclose(out);
+  EXPECT_NE(text.find("error   camera: gave up: the camera offers only H265 video (rtpmap H265/90000); supported: H264, JPEG"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("error   health: task camera failed: running without its device"), std::string::npos) << text;
+  EXPECT_NE(text.find("health DEGRADED (0 stalled, 1 failed)"), std::string::npos) << text;
 }
 
 TEST(CameraTask, BadCameraKeysAreConfigurationErrors) {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <functional>
 #include <string>
@@ -97,6 +98,52 @@ TEST(HealthTask, DetectsATaskThatNeverRuns) {
   EXPECT_FALSE(s.value.ok);
   EXPECT_EQ(s.value.stalled_mask, 0b100u);
   EXPECT_EQ(s.value.stalled_count, 1u);
+}
+
+// A task whose device failed for good keeps running (it is not stalled) but the report and
+// the event log say it failed, and the status line shows it.
+class DeviceTask final : public Task {
+ public:
+  Status init(std::pmr::memory_resource&) override { return Status::success(); }
+  void step(const StepContext& c) override {
+    if (c.release_ns >= seconds(1)) failed_.store(true);
+  }
+  [[nodiscard]] bool failed() const noexcept override { return failed_.load(); }
+
+ private:
+  std::atomic<bool> failed_{false};
+};
+
+TEST(HealthTask, ReportsATaskWhoseDeviceFailed) {
+  Rig rig;
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  DeviceTask device;
+  HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
+  TelemetryTask telemetry(rig.scheduler, rig.bus, rig.clock, out, TelemetryConfig{1'000, 256});
+  ASSERT_TRUE(rig.scheduler.add({"device", 50'000, 10'000, 50, "io"}, device));
+  ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
+  ASSERT_TRUE(rig.scheduler.add({"telemetry", 200'000, 5'000, 0, "background"}, telemetry));
+  ASSERT_TRUE(health.init(rig.arena));
+  ASSERT_TRUE(telemetry.init(rig.arena));
+  ASSERT_TRUE(rig.scheduler.run_lockstep(rig.clock, millis(900)));
+  Sample<HealthReport> before;
+  ASSERT_TRUE(rig.bus.health.read(before));
+  EXPECT_TRUE(before.value.ok);
+  EXPECT_EQ(before.value.failed_count, 0u);
+
+  ASSERT_TRUE(rig.scheduler.run_lockstep(rig.clock, millis(2100)));
+  telemetry.shutdown();
+  const std::string text = read_all(out);
+  std::fclose(out);
+  Sample<HealthReport> after;
+  ASSERT_TRUE(rig.bus.health.read(after));
+  EXPECT_FALSE(after.value.ok);
+  EXPECT_EQ(after.value.failed_count, 1u);
+  EXPECT_EQ(after.value.failed_mask, 0b1u);
+  EXPECT_EQ(after.value.stalled_count, 0u);
+  EXPECT_NE(text.find("error   health: task device failed: running without its device"), std::string::npos) << text;
+  EXPECT_NE(text.find("health DEGRADED (0 stalled, 1 failed)"), std::string::npos) << text;
 }
 
 TEST(HealthTask, InitFailsCleanlyWhenItsArenaIsTooSmall) {

@@ -45,6 +45,9 @@ void Camera::stop() {
 }
 
 void Camera::on_frame(const EncodedFrame& frame) {
+  if (config_.decode_limit_frames > 0 && decoder_ && decoder_->stats().frames_decoded >= config_.decode_limit_frames) {
+    return;
+  }
   if (!decoder_ || decoder_codec_ != frame.codec) {
     DecoderOptions options;
     options.downscale = config_.downscale;
@@ -63,6 +66,7 @@ void Camera::on_frame(const EncodedFrame& frame) {
 
 void Camera::step(hal::Nanos now_ns) {
   client_->step(now_ns);
+  if (client_->failed()) failed_.store(true, std::memory_order_release);
   // Status for non-real-time observers, refreshed every pass (a few hundred bytes; the error
   // text reuses its buffer once it has held the longest message).
   std::lock_guard lock(status_mutex_);

@@ -12,6 +12,8 @@ constexpr std::size_t kTxBufferBytes = 16 * 1024;
 constexpr std::size_t kUdpDatagramBytes = 65536;
 constexpr std::string_view kUserAgent = "sen3bot-camera/1";
 constexpr int kRtspStatusUnauthorized = 401;
+constexpr int kRtspStatusForbidden = 403;
+constexpr int kRtspStatusNotFound = 404;
 constexpr int kRtspStatusSessionNotFound = 454;
 constexpr int kRtspStatusAggregateNotAllowed = 459;
 constexpr int kRtspStatusOnlyAggregate = 460;
@@ -19,6 +21,11 @@ constexpr int kRtspStatusUnsupportedTransport = 461;
 constexpr int kRtspStatusNotImplemented = 501;
 
 hal::Nanos ms(int v) { return hal::millis(v); }
+
+// "SETUP: 503 Service Unavailable"
+Error status_error(Errc code, const char* what, const RtspMessage& msg) {
+  return Error::format(code, "%s: %d %.*s", what, msg.status, static_cast<int>(msg.reason.size()), msg.reason.data());
+}
 
 }  // namespace
 
@@ -33,6 +40,7 @@ const char* to_string(ClientState s) {
     case ClientState::play: return "play";
     case ClientState::playing: return "playing";
     case ClientState::backoff: return "backoff";
+    case ClientState::failed: return "failed";
   }
   return "?";
 }
@@ -94,6 +102,12 @@ void RtspClient::fail(hal::Nanos now, const Error& why) {
   state_ = ClientState::backoff;
 }
 
+void RtspClient::give_up(const Error& why) {
+  last_error_ = why;
+  close_connection();
+  state_ = ClientState::failed;
+}
+
 void RtspClient::start_connection(hal::Nanos now) {
   close_connection();
   // Resolution and connect block for at most connect_timeout_ms; this runs on the camera's
@@ -142,6 +156,8 @@ bool RtspClient::send_request(hal::Nanos now, std::string method, std::string ur
   pending_.extra_headers = std::move(extra);
   pending_.cseq = next_cseq_++;
   pending_.sent_ns = now;
+  pending_.auth_retried = false;
+  pending_.stale_retried = false;
   std::string text = pending_.method + " " + pending_.uri + " RTSP/1.0\r\nCSeq: " + std::to_string(pending_.cseq) +
                      "\r\nUser-Agent: " + std::string(kUserAgent) + "\r\n";
   if (!info_.session_id.empty()) text += "Session: " + info_.session_id + "\r\n";
@@ -159,13 +175,15 @@ bool RtspClient::send_request(hal::Nanos now, std::string method, std::string ur
   return true;
 }
 
-void RtspClient::resend_pending(hal::Nanos now) {
+void RtspClient::resend_pending(hal::Nanos now, bool stale_retry) {
   Pending p = pending_;
   send_request(now, p.method, p.uri, p.extra_headers);
   pending_.auth_retried = true;
+  pending_.stale_retried = p.stale_retried || stale_retry;
 }
 
 void RtspClient::step(hal::Nanos now) {
+  if (state_ == ClientState::failed) return;
   if (state_ == ClientState::idle) {
     start_connection(now);
     return;
@@ -281,8 +299,9 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
   if (!pending_.active || msg.cseq() != pending_.cseq) return;  // stale or unsolicited: ignore
   pending_.active = false;
   if (msg.status == kRtspStatusUnauthorized) {
-    if (pending_.auth_retried || !auth_.has_credentials()) {
-      fail(now, Error::format(Errc::permission, "%s: 401 Unauthorized", pending_.method.c_str()));
+    if (!auth_.has_credentials()) {
+      give_up(Error::format(Errc::permission, "%s: 401 Unauthorized: the camera requires credentials and none are "
+                            "configured", pending_.method.c_str()));
       return;
     }
     mem::StaticVector<std::string_view, 8> challenges;
@@ -291,12 +310,21 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
     }
     auto challenge = choose_challenge(std::span<const std::string_view>(challenges.data(), challenges.size()));
     if (!challenge) {
-      fail(now, challenge.error());
+      give_up(Error::format(challenge.error().code(), "%s: 401 Unauthorized: %s", pending_.method.c_str(),
+                            challenge.error().c_str()));
       return;
     }
+    // A 401 to a request that carried credentials rejects them, unless it only says the nonce
+    // went stale (once per request): the same credentials with the new nonce may pass.
+    if (pending_.auth_retried && (!challenge->stale || pending_.stale_retried)) {
+      give_up(Error::format(Errc::permission, "%s: 401 Unauthorized: the camera rejected the credentials of user '%s'",
+                            pending_.method.c_str(), auth_.user().c_str()));
+      return;
+    }
+    const bool stale_retry = pending_.auth_retried;
     ++stats_.auth_retries;
     auth_.set_challenge(*challenge);
-    resend_pending(now);  // once: a second 401 fails above
+    resend_pending(now, stale_retry);
     return;
   }
   const std::string method = pending_.method;
@@ -318,8 +346,14 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
       send_request(now, "DESCRIBE", request_url_, "Accept: application/sdp\r\n");
       break;
     case ClientState::describe:
+      if (msg.status == kRtspStatusNotFound || msg.status == kRtspStatusForbidden) {
+        // The path is wrong or not ours to play: the same request will get the same answer.
+        const std::string what = "DESCRIBE " + request_url_;
+        give_up(status_error(msg.status == kRtspStatusNotFound ? Errc::not_found : Errc::permission, what.c_str(), msg));
+        return;
+      }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "DESCRIBE: %d", msg.status));
+        fail(now, status_error(Errc::protocol, "DESCRIBE", msg));
         return;
       }
       on_describe(now, msg);
@@ -333,7 +367,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "SETUP: %d", msg.status));
+        fail(now, status_error(Errc::protocol, "SETUP", msg));
         return;
       }
       on_setup(now, msg);
@@ -345,7 +379,7 @@ void RtspClient::on_response(hal::Nanos now, const RtspMessage& msg) {
         return;
       }
       if (msg.status != 200) {
-        fail(now, Error::format(Errc::protocol, "PLAY: %d", msg.status));
+        fail(now, status_error(Errc::protocol, "PLAY", msg));
         return;
       }
       state_ = ClientState::playing;
@@ -371,7 +405,7 @@ void RtspClient::on_describe(hal::Nanos now, const RtspMessage& msg) {
   sdp_ = std::move(*sdp);
   const SdpMedia* video = sdp_.first_supported_video();
   if (video == nullptr) {
-    fail(now, Error(Errc::not_supported, "no H.264 or JPEG video track in the SDP"));
+    give_up(no_supported_video(sdp_));
     return;
   }
   const std::string base = choose_base_url(msg.header("Content-Base").value_or(""),

@@ -1,5 +1,6 @@
 #include "sen3bot/camera/sdp.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 
@@ -69,6 +70,41 @@ const SdpMedia* SessionDescription::first_supported_video() const {
     if (m.media == "video" && m.codec != VideoCodec::unknown) return &m;
   }
   return nullptr;
+}
+
+namespace {
+
+// "H265/90000" from the rtpmap, else "payload type 96 without rtpmap".
+std::string format_of(const SdpMedia& m) {
+  if (m.encoding.empty()) return "payload type " + std::to_string(m.payload_type) + " without rtpmap";
+  std::string out = m.encoding;
+  if (m.clock_rate_hz > 0) out += "/" + std::to_string(m.clock_rate_hz);
+  return out;
+}
+
+}  // namespace
+
+Error no_supported_video(const SessionDescription& sd) {
+  std::vector<std::string> names;  // each video codec once: "H265", "MP4V-ES"
+  std::string formats;             // "rtpmap H265/90000"
+  std::string others;              // non-video media, for the no-video case
+  for (const SdpMedia& m : sd.media) {
+    if (m.media == "video") {
+      std::string name = m.encoding.empty() ? "unknown" : m.encoding;
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(std::move(name));
+      formats += (formats.empty() ? "" : "; ") + std::string(m.encoding.empty() ? "" : "rtpmap ") + format_of(m);
+    } else {
+      others += (others.empty() ? "" : ", ") + m.media + (m.encoding.empty() ? "" : " " + format_of(m));
+    }
+  }
+  std::string codecs;
+  for (const std::string& name : names) codecs += (codecs.empty() ? "" : ", ") + name;
+  if (!codecs.empty()) {
+    return Error::format(Errc::not_supported, "the camera offers only %s video (%s); supported: H264, JPEG",
+                         codecs.c_str(), formats.c_str());
+  }
+  if (others.empty()) return Error(Errc::not_supported, "the SDP has no media at all (no m= line)");
+  return Error::format(Errc::not_supported, "the SDP has no video track (media: %s)", others.c_str());
 }
 
 Result<SessionDescription> parse_sdp(std::string_view text) {

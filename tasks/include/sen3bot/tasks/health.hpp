@@ -1,6 +1,6 @@
 #pragma once
 // Watches the scheduler: a task that has not started for `stall_periods` of its periods is
-// stalled; new overruns and slips are reported. The safety task will act on this report.
+// stalled; new overruns and slips are reported, and tasks whose device failed for good. The safety task will act on this report.
 #include <cstdint>
 #include <memory_resource>
 #include <span>
@@ -28,6 +28,7 @@ class HealthTask final : public Task {
     std::uint64_t overruns = 0;
     std::uint64_t slips = 0;
     bool stalled = false;
+    bool failed = false;
   };
 
   const Scheduler& scheduler_;

@@ -117,6 +117,7 @@ class Scheduler {
   [[nodiscard]] TaskStats stats(std::size_t index) const;
   [[nodiscard]] const TaskCounters& counters(std::size_t index) const { return slots_[index].counters; }
   [[nodiscard]] const TaskSpec& spec(std::size_t index) const { return slots_[index].spec; }
+  [[nodiscard]] const Task& task(std::size_t index) const { return *slots_[index].task; }
   // The table index of a task added to this scheduler, or task_count() if it was not added.
   [[nodiscard]] std::size_t index_of(const Task& task) const noexcept {
     for (std::size_t i = 0; i < task_count_; ++i)

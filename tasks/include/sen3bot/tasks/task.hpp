@@ -25,6 +25,9 @@ class Task {
   virtual void step(const StepContext& context) = 0;
   // Called once after the scheduler stopped; may block (e.g. a clean device close).
   virtual void shutdown() {}
+  // Its device failed for good (e.g. a camera that offers no codec we decode): the task keeps
+  // its row but does nothing, and the rest of the firmware runs without it. Any thread.
+  [[nodiscard]] virtual bool failed() const noexcept { return false; }
 };
 
 }  // namespace sen3bot::tasks

@@ -56,6 +56,7 @@ class Authenticator {
   void reset() { challenge_ = {}; nonce_count_ = 0; }
   [[nodiscard]] bool active() const { return challenge_.scheme != AuthScheme::none && !credentials_.empty(); }
   [[nodiscard]] bool has_credentials() const { return !credentials_.empty(); }
+  [[nodiscard]] const std::string& user() const { return credentials_.user; }
 
   // Empty when no challenge has been seen. cnonce is used only with qop=auth.
   std::string authorization(std::string_view method, std::string_view uri, std::string_view cnonce);

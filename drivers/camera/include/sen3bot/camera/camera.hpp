@@ -25,10 +25,11 @@ struct CameraConfig {
   PixelFormat format = PixelFormat::bgr8;  // bgr8 for display/detection, gray8 for cheap work
   int downscale = 1;                     // 1, 2 or 4: divide the source size before fitting
   int poll_period_ms = 5;                // longest sleep of the camera thread between steps
+  std::uint64_t decode_limit_frames = 0;  // stop decoding after this many frames; 0: never
 };
 
 struct CameraStatus {
-  ClientState state = ClientState::idle;
+  ClientState state = ClientState::idle;  // failed: given up for good, last_error says why
   StreamInfo stream;
   RtspClientStats rtsp;
   DepacketizerStats depacketizer;
@@ -36,6 +37,7 @@ struct CameraStatus {
   double latency_ms_p50 = 0;  // last RTP packet of a frame -> frame readable, over the last 256
   double latency_ms_max = 0;
   std::string last_error;
+  [[nodiscard]] bool failed() const { return state == ClientState::failed; }
 };
 
 class Camera {
@@ -57,6 +59,8 @@ class Camera {
 
   [[nodiscard]] FramePool& frames() { return *pool_; }
   [[nodiscard]] CameraStatus status() const;  // copies under a mutex: not for real-time code
+  // The client gave up for good (see RtspClient::step); any thread, lock-free.
+  [[nodiscard]] bool failed() const { return failed_.load(std::memory_order_acquire); }
 
  private:
   class Sink;
@@ -73,6 +77,7 @@ class Camera {
   VideoCodec decoder_codec_ = VideoCodec::unknown;
   std::thread thread_;
   std::atomic<bool> running_{false};
+  std::atomic<bool> failed_{false};
   mutable std::mutex status_mutex_;
   CameraStatus status_;
   static constexpr std::size_t kLatencySamples = 256;

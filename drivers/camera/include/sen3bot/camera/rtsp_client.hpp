@@ -2,8 +2,9 @@
 // RTSP 1.0 playback client as a non-blocking state machine: step(now) does whatever I/O is
 // ready and advances OPTIONS -> DESCRIBE -> SETUP -> PLAY -> playing, with the 401 retry,
 // 461 transport fallback, keep-alive every timeout/2, RTCP receiver reports, and reconnect
-// with exponential backoff. It only ever connects to the configured URL's host: control
-// URLs from the camera are used as request URIs on the open connection, never dialled.
+// with exponential backoff; a failure that retrying cannot cure (see step()) ends in state
+// failed instead. It only ever connects to the configured URL's host: control URLs from the
+// camera are used as request URIs on the open connection, never dialled.
 #include <cstdint>
 #include <memory>
 #include <random>
@@ -42,7 +43,9 @@ struct RtspClientConfig {
   bool keepalive = true;               // off only to test session expiry
 };
 
-enum class ClientState : std::uint8_t { idle, options, describe, setup, play, playing, backoff };
+// backoff: waiting to reconnect after a failure that may pass (network, timeout, 5xx).
+// failed: given up for good (see RtspClient::step); last_error() says why.
+enum class ClientState : std::uint8_t { idle, options, describe, setup, play, playing, backoff, failed };
 const char* to_string(ClientState s);
 
 struct RtspClientStats {
@@ -81,6 +84,10 @@ class RtspClient {
   static Result<std::unique_ptr<RtspClient>> create(RtspClientConfig config, EncodedFrameSink& sink);
 
   // Non-blocking; call often (after a poll on poll_fds() or on a timer of a few ms).
+  // Reconnects with backoff after network loss, timeouts, 5xx and other statuses, but stops
+  // for good (state failed, nothing more sent) when retrying cannot succeed: no video track,
+  // only codecs we cannot decode, authentication required without credentials or rejected
+  // with them (401 to a request that carried them), 403, or 404 to DESCRIBE (no such stream).
   void step(hal::Nanos now_ns);
   // Sends TEARDOWN (best effort) and closes.
   void stop(hal::Nanos now_ns);
@@ -92,6 +99,7 @@ class RtspClient {
   [[nodiscard]] const RtspClientStats& stats() const { return stats_; }
   [[nodiscard]] const StreamInfo& stream() const { return info_; }
   [[nodiscard]] const Depacketizer* depacketizer() const { return depacketizer_.get(); }
+  [[nodiscard]] bool failed() const { return state_ == ClientState::failed; }
   // The last reason a connection attempt failed or was dropped ("" when none).
   [[nodiscard]] std::string_view last_error() const { return last_error_.message(); }
   [[nodiscard]] const RtspUrl& target() const { return target_; }
@@ -106,14 +114,16 @@ class RtspClient {
     std::string extra_headers;
     std::uint32_t cseq = 0;
     hal::Nanos sent_ns = 0;
-    bool auth_retried = false;
+    bool auth_retried = false;   // sent again with credentials after a 401
+    bool stale_retried = false;  // and once more after a 401 with stale=true
   };
 
   void start_connection(hal::Nanos now);
   void fail(hal::Nanos now, const Error& why);
+  void give_up(const Error& why);  // permanent: no reconnect
   void close_connection();
   bool send_request(hal::Nanos now, std::string method, std::string uri, std::string extra);
-  void resend_pending(hal::Nanos now);
+  void resend_pending(hal::Nanos now, bool stale_retry);
   bool queue_bytes(std::span<const std::uint8_t> bytes);
   bool flush_output();
   void read_tcp(hal::Nanos now);

@@ -42,6 +42,11 @@ struct SessionDescription {
   [[nodiscard]] const SdpMedia* first_supported_video() const;
 };
 
+// Why first_supported_video() found nothing, naming what the camera offers: "the camera offers
+// only H265 video (rtpmap H265/90000); supported: H264, JPEG" or "the SDP has no video track
+// (media: audio PCMA/8000)". Errc::not_supported.
+Error no_supported_video(const SessionDescription& sd);
+
 // Lenient about what varies between cameras (attribute order, spaces after ';', missing
 // rtpmap for static types, unknown lines); strict about size and structure (must begin
 // with v=, bounded line count and media count). Bad base64 in sprop is ignored, never fatal.
