@@ -289,8 +289,9 @@ TEST(Lms200Emulator, SubrangeStreamsOnlyTheRequestedValues) {
   std::vector<Bytes> frames;
   Wire::kinds(w.run_for(hal::seconds(2)), &frames);
   const std::vector<Bytes> subranges = frames_with_code(frames, kReplySubrangeScan);
-  // 52 bytes a telegram at 9600 baud: about 18 a second where a complete 361-value B0 manages 1.3.
-  EXPECT_GT(subranges.size(), 25u);
+  // 58 bytes a telegram take 60.4 ms at 9600 baud: about 33 in two seconds, where complete
+  // 361-value B0 telegrams (763 ms each) manage two or three.
+  EXPECT_NEAR(static_cast<double>(subranges.size()), 32.0, 2.0);
   for (const Bytes& f : subranges) {
     EXPECT_EQ(f.size(), 2 * 21 + 16u);
     Result<ScanTelegram> s = decode_subrange_scan(FrameView{f});
@@ -301,7 +302,9 @@ TEST(Lms200Emulator, SubrangeStreamsOnlyTheRequestedValues) {
     EXPECT_TRUE(s->has_indices);
     for (std::size_t i = 0; i < s->count; ++i) ASSERT_EQ(s->words[i], full[170 + i]) << i;
   }
-  EXPECT_EQ(subranges.front().size() > 4 ? decode_subrange_scan(FrameView{subranges.front()})->words[10] : 0, 150);
+  // Straight ahead (value 181, the 11th sent): the box face 1.5 m away, in cm.
+  ASSERT_FALSE(subranges.empty());
+  EXPECT_EQ(decode_subrange_scan(FrameView{subranges.front()})->words[10], 150);
 }
 
 TEST(Lms200Emulator, MalformedMeanAndSubrangeRequestsAreRejected) {
