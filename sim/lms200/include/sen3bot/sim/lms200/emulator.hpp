@@ -3,7 +3,8 @@
 // (none before streamed B0), status byte 0x10 by default, baud changes answered at the old
 // rate and then applied, output paced at 10 bits per byte of the current rate and at the
 // mirror's scan rate (the newest complete scan goes out when the line is slower), ranges from
-// a RangeSource, and fault injection.
+// a RangeSource, and fault injection. Streams complete scans (20 24, B0), partial scans
+// (20 2A, B0), mean values (20 26, B6) and sub-ranges (20 27, B7).
 //
 // The core is step(now) over a hal::ByteStream: in lockstep the pacing follows the simulated
 // clock. Lms200PtyRunner (pty_runner.hpp) runs it in real time on a pseudo-terminal.
@@ -133,7 +134,8 @@ struct FaultPlan {
 };
 
 struct EmulatorOptions {
-  std::uint8_t status = kStatusNormal;           // status byte of every reply
+  std::uint8_t status = kStatusNormal;           // status byte of every reply; level error or
+                                                 // fatal (bits 0-2) also faults the B1 device status
   std::uint32_t initial_baud = 9600;             // power-on rate ("permanent" rate if not 9600)
   Variant variant{180, 100};
   Units units = Units::cm;
