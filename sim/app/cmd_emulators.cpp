@@ -214,7 +214,8 @@ int parse_lms200_emulator_args(int argc, char** argv, Lms200EmulatorArgs& args, 
         expected = "cm or mm";
       }
     } else if (arg == "--mode") {
-      if (parse_u32(value, number) && number <= 0xFF && lms200::valid_measuring_mode(static_cast<std::uint8_t>(number))) {
+      if (parse_u32(value, number) && number <= 0xFF &&
+          lms200::valid_measuring_mode(static_cast<std::uint8_t>(number))) {
         options.measuring_mode = static_cast<lms200::MeasuringMode>(number);
       } else {
         expected = "a measuring mode: 0x00 to 0x06, 0x0F or 0x3F";
@@ -281,8 +282,8 @@ int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* er
                link.c_str(), static_cast<int>((*runner)->slave_path().size()), (*runner)->slave_path().data(),
                options.initial_baud, options.variant.angle_deg, options.variant.resolution_cdeg,
                lms200::to_string(options.units).data(), options.status,
-               options.faults.device_fault ? " (device fault)" : "", map_path.empty() ? "built-in room" : map_path.c_str(),
-               p.x_m, p.y_m, p.theta_rad);
+               options.faults.device_fault ? " (device fault)" : "",
+               map_path.empty() ? "built-in room" : map_path.c_str(), p.x_m, p.y_m, p.theta_rad);
   std::fflush(out);
   hal::PosixClock clock;
   while (!StopOnSignal::requested() != 0) clock.sleep_until(clock.now() + hal::millis(50));

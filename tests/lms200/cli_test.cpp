@@ -228,7 +228,9 @@ TEST(Lms200EmulatorCommand, AFaultFromTheCommandLineIsSeenThroughTheDriver) {
     std::FILE* devnull = std::fopen("/dev/null", "w");
     _exit(sim::sim_cli_main(static_cast<int>(args.size()), argv.data(), out, devnull));
   }
-  for (int waited_ms = 0; waited_ms < 30'000 && contents(out).find("until SIGINT") == std::string::npos; waited_ms += 50)
+  // Wait for the banner (under qemu-user start-up takes a while).
+  for (int waited_ms = 0; waited_ms < 30'000 && contents(out).find("until SIGINT") == std::string::npos;
+       waited_ms += 50)
     usleep(50'000);
   const std::string banner = contents(out);
   EXPECT_NE(banner.find("at 38400 baud, 100/100, mm, status 0x10 (device fault)"), std::string::npos) << banner;

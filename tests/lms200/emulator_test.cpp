@@ -51,7 +51,8 @@ struct Wire {
       while (p.next(e)) {
         any = true;
         out.push_back(e.kind);
-        if (frames && e.kind == TelegramParser::Kind::frame) frames->emplace_back(e.frame.bytes.begin(), e.frame.bytes.end());
+        if (frames && e.kind == TelegramParser::Kind::frame)
+          frames->emplace_back(e.frame.bytes.begin(), e.frame.bytes.end());
       }
       if (pushed == 0 && !any) break;
     }
@@ -228,7 +229,8 @@ class Breathing final : public RangeSource {
   void ranges(hal::Nanos t, const ScanGeometry& g, std::span<float> out_m) override {
     const std::int64_t scan = t / period_ns_;
     for (std::size_t i = 0; i < std::min(g.count, out_m.size()); ++i)
-      out_m[i] = i == 0 ? INFINITY : static_cast<float>(2.0 + 0.001 * static_cast<double>(i) + 0.01 * static_cast<double>(scan % 4));
+      out_m[i] = i == 0 ? INFINITY
+                        : static_cast<float>(2.0 + 0.001 * static_cast<double>(i) + 0.01 * static_cast<double>(scan % 4));
   }
 
  private:

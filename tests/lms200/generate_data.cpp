@@ -111,7 +111,8 @@ int main(int argc, char** argv) {
   Bytes mixed = of(*request_mean_values(4));
   for (std::uint8_t b : of(*request_subrange(171, 191, {180, 50}))) mixed.push_back(b);
   for (const Bytes& r : {stream_scan(kReplyMeanScan, 101, 250, 0, true), scan(101, false, 0),
-                         stream_scan(kReplySubrangeScan, 21, 0, 171, false), stream_scan(kReplyMeanScan, 361, 2, 0, false)})
+                         stream_scan(kReplySubrangeScan, 21, 0, 171, false),
+                         stream_scan(kReplyMeanScan, 361, 2, 0, false)})
     mixed.insert(mixed.end(), r.begin(), r.end());
   write(corpus / "stream_modes_mix.bin", mixed);
   Bytes hostile = {0x02, 0x80, 0xD6, 0x02};
