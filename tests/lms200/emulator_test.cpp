@@ -68,6 +68,13 @@ struct Wire {
 
 using K = TelegramParser::Kind;
 
+std::vector<Bytes> frames_with_code(const std::vector<Bytes>& frames, std::uint8_t code) {
+  std::vector<Bytes> out;
+  for (const Bytes& f : frames)
+    if (f.size() > 4 && f[4] == code) out.push_back(f);
+  return out;
+}
+
 TEST(Lms200Emulator, AckThenReplyWithFixedLengthsAndStatus0x10) {
   Wire w;
   struct Case {
@@ -208,6 +215,32 @@ TEST(Lms200Emulator, PartialScansAndRealTimeIndices) {
   EXPECT_EQ(std::vector<int>(offsets.begin(), offsets.begin() + 5), (std::vector<int>{0, 1, 2, 3, 0}));
 }
 
+TEST(Lms200Emulator, ScanOnRequestWhilePartialScansStreamIsComplete) {
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.variant = {100, 50};
+  Wire w(o);
+  ASSERT_TRUE(w.line.set_baud(500000).ok());
+  w.send(request_mode(OperatingMode::partial_scans));
+  w.run_for(hal::millis(50));
+  w.send(request_single_scan());
+  std::vector<Bytes> frames;
+  Wire::kinds(w.run_for(hal::millis(50)), &frames);
+  int complete = 0;
+  for (const Bytes& f : frames_with_code(frames, kReplyScan)) {
+    Result<ScanTelegram> s = decode_scan(FrameView{f});
+    ASSERT_TRUE(s.ok());
+    if (s->partial) {
+      EXPECT_EQ(s->count, 101);
+    } else {
+      ++complete;
+      EXPECT_EQ(s->count, 201);
+      EXPECT_EQ(s->words[100], 150);  // straight ahead: the box 1.5 m away
+    }
+  }
+  EXPECT_EQ(complete, 1);
+}
+
 TEST(Lms200Emulator, SingleScanOnRequest) {
   Wire w;
   w.send(request_single_scan());
@@ -237,12 +270,6 @@ class Breathing final : public RangeSource {
   hal::Nanos period_ns_;
 };
 
-std::vector<Bytes> frames_with_code(const std::vector<Bytes>& frames, std::uint8_t code) {
-  std::vector<Bytes> out;
-  for (const Bytes& f : frames)
-    if (f.size() > 4 && f[4] == code) out.push_back(f);
-  return out;
-}
 
 TEST(Lms200Emulator, MeanValuesStreamTheMeanOfEveryNScans) {
   EmulatorOptions o;

@@ -120,8 +120,12 @@ ScanGeometry Lms200Emulator::geometry() const noexcept {
 }
 
 std::size_t Lms200Emulator::scan_words(hal::Nanos t, std::span<std::uint16_t> out) noexcept {
+  return fill_words(t, out, mode_ == OperatingMode::partial_scans);
+}
+
+std::size_t Lms200Emulator::fill_words(hal::Nanos t, std::span<std::uint16_t> out, bool partial_raster) noexcept {
   ScanGeometry g = geometry();
-  if (mode_ == OperatingMode::partial_scans && variant_.resolution_cdeg != 100) {
+  if (partial_raster && variant_.resolution_cdeg != 100) {
     // One mirror revolution: the 1 deg raster shifted by the current offset.
     g.count = variant_.angle_deg + 1u;
     g.angle_min_rad += partial_offset_ * 25 * kRadPerCentiDeg;
@@ -210,7 +214,7 @@ void Lms200Emulator::accumulate_mean(hal::Nanos now) noexcept {
   }
   const MeasuringMode mode = measuring_mode();
   for (std::int64_t k = last_scan_taken_ + 1; k <= newest; ++k) {
-    const std::size_t n = scan_words((k + 1) * period, words_);
+    const std::size_t n = fill_words((k + 1) * period, words_, false);
     for (std::size_t i = 0; i < n; ++i) {
       const ScanValue v = decode_value(words_[i], mode);
       if (v.reason == InvalidReason::none) {
@@ -243,7 +247,8 @@ void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number, bool
     n = value_count(variant_);
     std::copy_n(mean_words_.begin(), n, words_.begin());
   } else {
-    n = scan_words(now, words_);
+    // A scan on request (30 01) is a complete one even while partial scans stream.
+    n = fill_words(now, words_, kind == OperatingMode::partial_scans);
   }
   const FaultPlan& f = options_.faults;
   const std::uint64_t k = counters_.scans_sent + 1;

@@ -201,6 +201,9 @@ class Lms200Emulator {
  private:
   static constexpr std::size_t kQueueBytes = 4096;
 
+  // The words of one scan at time t: the complete scan, or one mirror turn's 1 deg raster at
+  // the current partial offset.
+  std::size_t fill_words(hal::Nanos t, std::span<std::uint16_t> out, bool partial_raster) noexcept;
   void handle(hal::Nanos now, FrameView request) noexcept;
   void reply(std::uint8_t code, std::span<const std::uint8_t> data, bool ack = true) noexcept;
   bool enqueue(std::span<const std::uint8_t> bytes) noexcept;
