@@ -38,6 +38,21 @@ bool parse_double(std::string_view text, double& out) {
 bool parse_u32(std::string_view text, std::uint32_t& out) { return parse_unsigned(text, out, 0xFFFFFFFFull); }
 bool parse_u64(std::string_view text, std::uint64_t& out) { return parse_unsigned(text, out, ~0ull); }
 
+bool parse_lms200_variant(std::string_view text, lms200::Variant& out) {
+  const std::size_t slash = text.find('/');
+  if (slash == std::string_view::npos) return false;
+  std::uint32_t angle = 0;
+  double res_deg = 0;
+  // 1 deg is the coarsest resolution, which also keeps the conversion in range.
+  if (!parse_u32(text.substr(0, slash), angle) || angle > 0xFFFF || !parse_double(text.substr(slash + 1), res_deg) ||
+      res_deg <= 0 || res_deg > 1)
+    return false;
+  const lms200::Variant v{static_cast<std::uint16_t>(angle), static_cast<std::uint16_t>(std::lround(res_deg * 100))};
+  if (!lms200::valid_variant(v)) return false;
+  out = v;
+  return true;
+}
+
 int dispatch(int argc, char** argv, std::string_view program, const char* version, const char* usage,
              std::span<const Command> commands, std::FILE* out, std::FILE* err) {
   if (argc < 2) {

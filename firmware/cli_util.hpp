@@ -8,6 +8,8 @@
 #include <span>
 #include <string_view>
 
+#include "sen3bot/lms200/protocol.hpp"
+
 namespace sen3bot::firmware {
 
 // The whole text must be a finite number (no trailing characters, no NaN or infinity).
@@ -15,6 +17,9 @@ bool parse_double(std::string_view text, double& out);
 // Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
 bool parse_u32(std::string_view text, std::uint32_t& out);
 bool parse_u64(std::string_view text, std::uint64_t& out);
+// An LMS200 variant as angle/resolution in degrees ("180/0.5" -> {180, 50}); only the five
+// variants the scanner has.
+bool parse_lms200_variant(std::string_view text, lms200::Variant& out);
 
 // One command of a binary: `word` (and `second`, for two-word commands such as "decode p2os")
 // and the function that takes the arguments after them.

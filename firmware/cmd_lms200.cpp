@@ -21,24 +21,13 @@ namespace sen3bot::firmware {
 
 namespace {
 
-// "180/0.5" -> {180, 50}
-bool parse_variant(std::string_view text, lms200::Variant& out) {
-  const std::size_t slash = text.find('/');
-  if (slash == std::string_view::npos) return false;
-  std::uint32_t angle = 0;
-  double res_deg = 0;
-  if (!parse_u32(text.substr(0, slash), angle) || !parse_double(text.substr(slash + 1), res_deg)) return false;
-  out.angle_deg = static_cast<std::uint16_t>(angle);
-  out.resolution_cdeg = static_cast<std::uint16_t>(std::lround(res_deg * 100));
-  return lms200::valid_variant(out);
-}
-
 void print_scan_json(const lms200::LaserScan& s, std::FILE* out) {
   std::fprintf(out,
                "{\"t_s\":%.6f,\"seq\":%llu,\"angle_min_rad\":%.6f,\"angle_increment_rad\":%.8f,\"units\":\"%s\","
-               "\"baud\":%u,\"count\":%u,\"ranges_m\":[",
+               "\"baud\":%u,\"status\":\"0x%02x\",\"device_status\":%u,\"fault\":%s,\"count\":%u,\"ranges_m\":[",
                hal::to_seconds(s.stamp_ns), static_cast<unsigned long long>(s.sequence), s.angle_min_rad,
-               s.angle_increment_rad, lms200::to_string(static_cast<lms200::Units>(s.units)).data(), s.baud, s.count);
+               s.angle_increment_rad, lms200::to_string(static_cast<lms200::Units>(s.units)).data(), s.baud, s.status,
+               s.device_status, s.scanner_fault ? "true" : "false", s.count);
   for (std::size_t i = 0; i < s.count; ++i) {
     if (i) std::fputc(',', out);
     if (s.valid(i)) {
@@ -96,7 +85,7 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       ok = parse_u32(value, number) && lms200::baud_mode(number).ok();
       config.baud = number;
     } else if (arg == "--variant") {
-      ok = parse_variant(value, config.variant);
+      ok = parse_lms200_variant(value, config.variant);
     } else if (arg == "--units") {
       ok = value == "cm" || value == "mm";
       config.units = value == "mm" ? lms200::Units::mm : lms200::Units::cm;

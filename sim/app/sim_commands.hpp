@@ -14,7 +14,8 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]
 int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-// sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--status 0x10] [--baud B]
+// sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--baud B] [--variant A/R]
+//   [--units cm|mm] [--mode M] [--indices on|off] [--status S] [--fault F]... (lms200_emulator_options.hpp)
 int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 }  // namespace sen3bot::sim

@@ -1,4 +1,4 @@
-// Steady state allocates nothing: the driver's and the emulator's step(). Own executable: it
+// Steady state allocates nothing: the driver's and the emulator's step(), in every streaming mode. Own executable: it
 // counts global allocations. The task around the device is covered with the whole task table
 // in tests/firmware/zero_allocation_test.cpp.
 #include <gtest/gtest.h>
@@ -30,12 +30,42 @@ TEST(Lms200Allocation, DriverAndEmulatorStepsAllocateNothing) {
   f.corrupt_crc_every = 2;
   f.false_header_every = 3;
   f.invalid_values_every = 1;
+  f.device_fault = true;
   rig.emulator.set_faults(f);
   rig.run_for(hal::seconds(1));
   rig.emulator.set_faults({});
   rig.run_for(hal::seconds(1));
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_GT(rig.device.counters().scans, 100u);
+}
+
+TEST(Lms200Allocation, EmulatorStreamingMeansAndSubrangesAllocatesNothing) {
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.variant = {100, 25};
+  o.availability = kAvailabilityRealTimeIndices;
+  WallWorld world = testing::test_world();
+  hal::MemoryPipe pipe{16384};
+  SimulatedLine line(500000);
+  Lms200Emulator emulator(o, pipe.b(), world, &line);
+  const Request mean = *request_mean_values(10);
+  const Request subrange = *request_subrange(50, 350, o.variant);
+  const Request partial = request_mode(OperatingMode::partial_scans);
+  std::array<std::uint8_t, 4096> sink{};
+  hal::Nanos now = 0;
+  AllocationScope scope;
+  for (const Request* r : {&mean, &subrange, &partial}) {
+    ASSERT_EQ(*pipe.a().write(r->span()), r->size);
+    for (const hal::Nanos end = now + hal::seconds(1); now < end; now += hal::micros(200)) {
+      emulator.step(now);
+      while (*pipe.a().read(sink) > 0) {
+      }
+    }
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  // A second each at 100/0.25 (18.75 complete scans a second): one mean of 10 scans, 18
+  // sub-ranges, 74 partial scans.
+  EXPECT_GT(emulator.counters().scans_sent, 80u);
 }
 
 }  // namespace

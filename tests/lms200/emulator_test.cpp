@@ -1,8 +1,10 @@
 // The emulator seen from the wire, with a hand-driven client in lockstep: ACK placement,
 // reply lengths, baud changes at the old rate, pacing, garbling at a wrong rate, NAK and
-// 0x92, installation mode, partial scans and real-time indices.
+// 0x92, installation mode, partial scans and real-time indices, mean values and sub-ranges,
+// the skipped-scan count across mode switches, and a device fault in the status reply.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "rig.hpp"
@@ -14,8 +16,11 @@ namespace {
 using Bytes = std::vector<std::uint8_t>;
 
 struct Wire {
-  explicit Wire(const EmulatorOptions& options = {})
-      : world(testing::test_world()), line(options.initial_baud), emulator(options, pipe.b(), world, &line) {}
+  // `source`: what the scanner sees; the test room when null.
+  explicit Wire(const EmulatorOptions& options = {}, RangeSource* source = nullptr)
+      : world(testing::test_world()),
+        line(options.initial_baud),
+        emulator(options, pipe.b(), source != nullptr ? *source : world, &line) {}
 
   void send(const Request& r) { ASSERT_EQ(*pipe.a().write(r.span()), r.size); }
   void send_raw(const Bytes& b) { ASSERT_EQ(*pipe.a().write(b), b.size()); }
@@ -36,12 +41,20 @@ struct Wire {
   // Parses `bytes` as the scanner's side of the wire.
   static std::vector<TelegramParser::Kind> kinds(const Bytes& bytes, std::vector<Bytes>* frames = nullptr) {
     TelegramParser p(Side::from_device);
-    p.push(bytes);
     std::vector<TelegramParser::Kind> out;
-    TelegramParser::Event e;
-    while (p.next(e)) {
-      out.push_back(e.kind);
-      if (frames && e.kind == TelegramParser::Kind::frame) frames->emplace_back(e.frame.bytes.begin(), e.frame.bytes.end());
+    // The parser's ring holds two telegrams: push what fits, take out what is complete, repeat.
+    for (std::size_t at = 0; at < bytes.size();) {
+      const std::size_t pushed = p.push({bytes.data() + at, bytes.size() - at});
+      at += pushed;
+      TelegramParser::Event e;
+      bool any = false;
+      while (p.next(e)) {
+        any = true;
+        out.push_back(e.kind);
+        if (frames && e.kind == TelegramParser::Kind::frame)
+          frames->emplace_back(e.frame.bytes.begin(), e.frame.bytes.end());
+      }
+      if (pushed == 0 && !any) break;
     }
     return out;
   }
@@ -54,6 +67,13 @@ struct Wire {
 };
 
 using K = TelegramParser::Kind;
+
+std::vector<Bytes> frames_with_code(const std::vector<Bytes>& frames, std::uint8_t code) {
+  std::vector<Bytes> out;
+  for (const Bytes& f : frames)
+    if (f.size() > 4 && f[4] == code) out.push_back(f);
+  return out;
+}
 
 TEST(Lms200Emulator, AckThenReplyWithFixedLengthsAndStatus0x10) {
   Wire w;
@@ -195,6 +215,32 @@ TEST(Lms200Emulator, PartialScansAndRealTimeIndices) {
   EXPECT_EQ(std::vector<int>(offsets.begin(), offsets.begin() + 5), (std::vector<int>{0, 1, 2, 3, 0}));
 }
 
+TEST(Lms200Emulator, ScanOnRequestWhilePartialScansStreamIsComplete) {
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.variant = {100, 50};
+  Wire w(o);
+  ASSERT_TRUE(w.line.set_baud(500000).ok());
+  w.send(request_mode(OperatingMode::partial_scans));
+  w.run_for(hal::millis(50));
+  w.send(request_single_scan());
+  std::vector<Bytes> frames;
+  Wire::kinds(w.run_for(hal::millis(50)), &frames);
+  int complete = 0;
+  for (const Bytes& f : frames_with_code(frames, kReplyScan)) {
+    Result<ScanTelegram> s = decode_scan(FrameView{f});
+    ASSERT_TRUE(s.ok());
+    if (s->partial) {
+      EXPECT_EQ(s->count, 101);
+    } else {
+      ++complete;
+      EXPECT_EQ(s->count, 201);
+      EXPECT_EQ(s->words[100], 150);  // straight ahead: the box 1.5 m away
+    }
+  }
+  EXPECT_EQ(complete, 1);
+}
+
 TEST(Lms200Emulator, SingleScanOnRequest) {
   Wire w;
   w.send(request_single_scan());
@@ -206,6 +252,187 @@ TEST(Lms200Emulator, SingleScanOnRequest) {
   // Straight ahead from the room's centre: the box face 1.5 m away, in cm.
   EXPECT_EQ(s->words[90], 150);
   EXPECT_FALSE(w.emulator.streaming());
+}
+
+// Beam i at 2 m + i mm, plus 10 mm per scan number modulo 4; beam 0 hits nothing. The mean
+// of any four consecutive scans is 2015 + i mm, a value no single scan has.
+class Breathing final : public RangeSource {
+ public:
+  explicit Breathing(Variant v) : period_ns_(scan_period_ns(v)) {}
+  void ranges(hal::Nanos t, const ScanGeometry& g, std::span<float> out_m) override {
+    const std::int64_t scan = t / period_ns_;
+    for (std::size_t i = 0; i < std::min(g.count, out_m.size()); ++i)
+      out_m[i] = i == 0 ? INFINITY
+                        : static_cast<float>(2.0 + 0.001 * static_cast<double>(i) + 0.01 * static_cast<double>(scan % 4));
+  }
+
+ private:
+  hal::Nanos period_ns_;
+};
+
+
+TEST(Lms200Emulator, MeanValuesStreamTheMeanOfEveryNScans) {
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.units = Units::mm;
+  Breathing source(o.variant);
+  Wire w(o, &source);
+  ASSERT_TRUE(w.line.set_baud(500000).ok());
+  w.send(*request_mean_values(4));
+  std::vector<Bytes> frames;
+  const auto kinds = Wire::kinds(w.run_for(hal::seconds(1)), &frames);
+  ASSERT_GE(kinds.size(), 2u);
+  EXPECT_EQ(kinds[0], K::ack);
+  EXPECT_EQ(frames[0][4], kReplyModeChange);
+  EXPECT_EQ(decode_mode_change(FrameView{frames[0]})->result, kModeChangeOk);
+  const std::vector<Bytes> means = frames_with_code(frames, kReplyMeanScan);
+  // One mean per four scans of 1/75 s: 18.75 per second; the first after four scans.
+  EXPECT_EQ(means.size() + 1, frames.size());
+  EXPECT_NEAR(static_cast<double>(means.size()), 18.0, 1.0);
+  EXPECT_EQ(w.emulator.counters().scans_skipped, 0u);
+  for (const Bytes& f : means) {
+    Result<ScanTelegram> s = decode_mean_scan(FrameView{f});
+    ASSERT_TRUE(s.ok()) << s.error().c_str();
+    EXPECT_EQ(s->mean_samples, 4);
+    EXPECT_EQ(s->count, 181);
+    EXPECT_EQ(s->units, Units::mm);
+    EXPECT_EQ(decode_value(s->words[0], MeasuringMode::range8_fields_dazzle).reason, InvalidReason::over_maximum);
+    for (std::size_t i = 1; i < s->count; ++i) ASSERT_EQ(s->words[i], 2015 + i) << i;
+  }
+  // Monitoring mode stops the stream.
+  w.send(request_mode(OperatingMode::monitoring));
+  w.run_for(hal::millis(100));
+  EXPECT_FALSE(w.emulator.streaming());
+  EXPECT_TRUE(w.run_for(hal::millis(200)).empty());
+}
+
+TEST(Lms200Emulator, SubrangeStreamsOnlyTheRequestedValues) {
+  EmulatorOptions o;
+  o.variant = {180, 50};
+  o.availability = kAvailabilityRealTimeIndices;
+  Wire w(o);
+  std::array<std::uint16_t, kMaxValues> full{};
+  ASSERT_EQ(w.emulator.scan_words(0, full), 361u);
+  // Values 171..191 of 361: 10 degrees either side of straight ahead, the box 1.5 m away.
+  w.send(*request_subrange(171, 191, o.variant));
+  std::vector<Bytes> frames;
+  Wire::kinds(w.run_for(hal::seconds(2)), &frames);
+  const std::vector<Bytes> subranges = frames_with_code(frames, kReplySubrangeScan);
+  // 58 bytes a telegram take 60.4 ms at 9600 baud: about 33 in two seconds, where complete
+  // 361-value B0 telegrams (763 ms each) manage two or three.
+  EXPECT_NEAR(static_cast<double>(subranges.size()), 32.0, 2.0);
+  for (const Bytes& f : subranges) {
+    EXPECT_EQ(f.size(), 2 * 21 + 16u);
+    Result<ScanTelegram> s = decode_subrange_scan(FrameView{f});
+    ASSERT_TRUE(s.ok()) << s.error().c_str();
+    EXPECT_EQ(s->first_index, 171);
+    EXPECT_EQ(s->last_index, 191);
+    EXPECT_EQ(s->count, 21);
+    EXPECT_TRUE(s->has_indices);
+    for (std::size_t i = 0; i < s->count; ++i) ASSERT_EQ(s->words[i], full[170 + i]) << i;
+  }
+  // Straight ahead (value 181, the 11th sent): the box face 1.5 m away, in cm.
+  ASSERT_FALSE(subranges.empty());
+  EXPECT_EQ(decode_subrange_scan(FrameView{subranges.front()})->words[10], 150);
+}
+
+TEST(Lms200Emulator, MalformedMeanAndSubrangeRequestsAreRejected) {
+  EmulatorOptions o;
+  o.variant = {180, 50};
+  Wire w(o);
+  const Bytes bad[] = {
+      {0x20, 0x26, 1},                  // fewer than 2 scans
+      {0x20, 0x26, 251},                // more than 250
+      {0x20, 0x26},                     // no sample count
+      {0x20, 0x27, 0, 0, 10, 0},        // first 0 (indices are 1-based)
+      {0x20, 0x27, 11, 0, 10, 0},       // first > last
+      {0x20, 0x27, 1, 0, 0x6A, 0x01},   // last 362 > 361
+      {0x20, 0x27, 1, 0, 10},           // short
+  };
+  for (const Bytes& payload : bad) {
+    w.send(make_request(payload));
+    std::vector<Bytes> frames;
+    Wire::kinds(w.run_for(hal::millis(50)), &frames);
+    ASSERT_EQ(frames.size(), 1u);
+    EXPECT_EQ(frames[0][4], kReplyRejected) << int(payload[1]) << " " << payload.size();
+    EXPECT_FALSE(w.emulator.streaming());
+  }
+  EXPECT_EQ(w.emulator.counters().rejected, std::size(bad));
+}
+
+TEST(Lms200Emulator, SkippedScansStayPlausibleAcrossModeSwitches) {
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.variant = {100, 25};  // four mirror turns per complete scan
+  Wire w(o);
+  ASSERT_TRUE(w.line.set_baud(500000).ok());
+  // An hour after power-on, so scan numbers counted in the wrong period differ by far.
+  w.now = hal::seconds(3600);
+  const hal::Nanos began = w.now;
+  auto check = [&](const char* after) {
+    const EmulatorCounters& c = w.emulator.counters();
+    // Everything sent or skipped happened on a mirror turn since streaming began.
+    const auto turns = static_cast<std::uint64_t>((w.now - began) / kMirrorPeriodNs) + 1;
+    EXPECT_LE(c.scans_sent + c.scans_skipped, turns) << after;
+    // At 500 kbaud every telegram here leaves before the next scan: nothing to skip.
+    EXPECT_EQ(c.scans_skipped, 0u) << after;
+  };
+  w.send(request_mode(OperatingMode::partial_scans));
+  w.run_for(hal::millis(500));
+  check("partial scans");
+  EXPECT_GT(w.emulator.counters().scans_sent, 30u);
+  w.send(request_mode(OperatingMode::continuous_all));
+  w.run_for(hal::millis(500));
+  check("complete scans");
+  w.send(request_mode(OperatingMode::partial_scans));
+  w.run_for(hal::millis(500));
+  check("partial scans again");
+  w.send(*request_subrange(1, 401, o.variant));
+  w.run_for(hal::millis(500));
+  check("sub-range");
+  w.send(*request_mean_values(2));
+  w.run_for(hal::millis(500));
+  check("mean values");
+  w.send(request_mode(OperatingMode::partial_scans));
+  w.run_for(hal::millis(500));
+  check("partial scans after mean values");
+}
+
+TEST(Lms200Emulator, DeviceFaultShowsInTheStatusReplyAndTheStatusByte) {
+  struct Case {
+    std::uint8_t status;
+    bool device_fault;
+    std::uint8_t want_device_status;
+    std::uint8_t want_status;
+  };
+  const Case cases[] = {
+      {0x10, false, kDeviceStatusOk, 0x10},
+      {0x12, false, kDeviceStatusOk, 0x12},     // a warning is not a fault
+      {0x13, false, kDeviceStatusFault, 0x13},  // --status with level "error"
+      {0x14, false, kDeviceStatusFault, 0x14},  // level "fatal"
+      {0x10, true, kDeviceStatusFault, 0x13},
+      {0x14, true, kDeviceStatusFault, 0x14},
+  };
+  for (const Case& c : cases) {
+    EmulatorOptions o;
+    o.status = c.status;
+    o.faults.device_fault = c.device_fault;
+    Wire w(o);
+    w.send(request_status());
+    std::vector<Bytes> frames;
+    Wire::kinds(w.run_for(hal::millis(300)), &frames);
+    ASSERT_EQ(frames.size(), 1u);
+    Result<StatusReply> s = decode_status(FrameView{frames[0]});
+    ASSERT_TRUE(s.ok()) << s.error().c_str();
+    EXPECT_EQ(s->device_status, c.want_device_status) << std::hex << int(c.status) << " " << c.device_fault;
+    EXPECT_EQ(s->status, c.want_status) << std::hex << int(c.status) << " " << c.device_fault;
+    // Streamed scans carry the same status byte.
+    w.send(request_single_scan());
+    frames.clear();
+    Wire::kinds(w.run_for(hal::millis(500)), &frames);
+    ASSERT_EQ(frames.size(), 1u);
+    EXPECT_EQ(decode_scan(FrameView{frames[0]})->status, c.want_status);
+  }
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // Fuzz target: arbitrary bytes into both parser sides, in chunk sizes taken from the input,
 // and every telegram that passes the CRC through every decoder. Checks invariants that must
 // hold for any input: frames are CRC-valid and within LEN bounds, decoders never read past
-// the frame, scan counts never exceed 401.
+// the frame, scan counts never exceed 401, B7 sub-ranges and B6 sample counts are in bounds.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -22,6 +22,24 @@ void check(bool ok) {
   if (!ok) std::abort();
 }
 
+// What any decoded B0, B6 or B7 must satisfy, whatever the bytes were.
+void check_scan(FrameView f, const sen3bot::Result<ScanTelegram>& s, std::uint8_t code) {
+  if (!s.ok()) return;
+  check(f.code() == code && s->code == code);
+  check(s->count <= kMaxValues);
+  check(s->first_index >= 1 && s->last_index <= kMaxValues);
+  check(s->last_index + 1 - s->first_index == s->count);
+  if (code != kReplySubrangeScan) check(s->first_index == 1);
+  if (code == kReplyMeanScan) check(s->mean_samples >= kMinMeanSamples && s->mean_samples <= kMaxMeanSamples);
+  if (code != kReplyMeanScan) check(s->mean_samples == 0);
+  check(static_cast<unsigned>(s->units) <= 2);
+  for (std::size_t i = 0; i < s->count; ++i)
+    for (MeasuringMode m : kModes) {
+      const ScanValue v = decode_value(s->words[i], m);
+      check((v.reason == InvalidReason::none) == ((v.flags & value_flag::kValid) != 0));
+    }
+}
+
 void decode_all(FrameView f) {
   check(f.bytes.size() >= kFrameOverheadBytes + 1 && f.bytes.size() <= kMaxFrameBytes);
   check(f.len() >= 1 && f.len() <= kMaxLen);
@@ -33,15 +51,14 @@ void decode_all(FrameView f) {
   (void)decode_variant(f);
   (void)decode_read_config(f);
   (void)decode_write_config(f);
-  auto s = decode_scan(f);
-  if (s.ok()) {
-    check(s->count <= kMaxValues);
-    for (std::size_t i = 0; i < s->count; ++i)
-      for (MeasuringMode m : kModes) {
-        const ScanValue v = decode_value(s->words[i], m);
-        check((v.reason == InvalidReason::none) == ((v.flags & value_flag::kValid) != 0));
-      }
-  }
+  check_scan(f, decode_scan(f), kReplyScan);
+  check_scan(f, decode_mean_scan(f), kReplyMeanScan);
+  check_scan(f, decode_subrange_scan(f), kReplySubrangeScan);
+  // The dispatcher agrees with the decoder of the telegram's own code.
+  auto any = decode_any_scan(f);
+  check(any.ok() == ((f.code() == kReplyScan && decode_scan(f).ok()) ||
+                     (f.code() == kReplyMeanScan && decode_mean_scan(f).ok()) ||
+                     (f.code() == kReplySubrangeScan && decode_subrange_scan(f).ok())));
 }
 
 void run(Side side, const std::uint8_t* data, std::size_t size) {

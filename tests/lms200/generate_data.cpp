@@ -41,6 +41,26 @@ Bytes scan(std::size_t n, bool indices, std::uint16_t units_bits) {
   return reply(kReplyScan, d);
 }
 
+// B6 (mean of `samples` scans) or, with first > 0, B7 (values first..first + n - 1).
+Bytes stream_scan(std::uint8_t code, std::size_t n, std::uint8_t samples, std::uint16_t first, bool indices) {
+  Bytes d;
+  if (code == kReplyMeanScan) d.push_back(samples);
+  if (code == kReplySubrangeScan) {
+    const auto last = static_cast<std::uint16_t>(first + n - 1);
+    d.insert(d.end(), {static_cast<std::uint8_t>(first & 0xFF), static_cast<std::uint8_t>(first >> 8),
+                       static_cast<std::uint8_t>(last & 0xFF), static_cast<std::uint8_t>(last >> 8)});
+  }
+  d.push_back(static_cast<std::uint8_t>(n & 0xFF));
+  d.push_back(static_cast<std::uint8_t>((n >> 8) | 0x40));  // mm
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto v = static_cast<std::uint16_t>(i % 7 == 0 ? 8191 : 2000 + 3 * i);
+    d.push_back(static_cast<std::uint8_t>(v & 0xFF));
+    d.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
+  if (indices) d.insert(d.end(), {3, 4});
+  return reply(code, d);
+}
+
 Bytes of(const Request& r) { return Bytes(r.span().begin(), r.span().end()); }
 
 }  // namespace
@@ -84,6 +104,17 @@ int main(int argc, char** argv) {
   write(corpus / "golden_replies.bin", replies);
   write(corpus / "scan_401_indices_mm.bin", scan(401, true, 0x4000));
   write(corpus / "scan_181_cm.bin", scan(181, false, 0));
+  // Mean values and sub-ranges, their requests, and a stream mixing them with B0.
+  write(corpus / "mean_181_mm.bin", stream_scan(kReplyMeanScan, 181, 10, 0, false));
+  write(corpus / "subrange_22_indices_mm.bin", stream_scan(kReplySubrangeScan, 22, 0, 1, true));
+  write(corpus / "subrange_401_indices_mm.bin", stream_scan(kReplySubrangeScan, 401, 0, 1, true));
+  Bytes mixed = of(*request_mean_values(4));
+  for (std::uint8_t b : of(*request_subrange(171, 191, {180, 50}))) mixed.push_back(b);
+  for (const Bytes& r : {stream_scan(kReplyMeanScan, 101, 250, 0, true), scan(101, false, 0),
+                         stream_scan(kReplySubrangeScan, 21, 0, 171, false),
+                         stream_scan(kReplyMeanScan, 361, 2, 0, false)})
+    mixed.insert(mixed.end(), r.begin(), r.end());
+  write(corpus / "stream_modes_mix.bin", mixed);
   Bytes hostile = {0x02, 0x80, 0xD6, 0x02};
   const Bytes s361 = scan(361, false, 0x4000);
   hostile.insert(hostile.end(), s361.begin(), s361.end());

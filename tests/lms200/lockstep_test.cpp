@@ -305,6 +305,57 @@ TEST(Lms200Lockstep, StatusByteOtherThan0x10IsTolerated) {
   EXPECT_EQ(rig.device.latest_scan().status, 0x00);
 }
 
+TEST(Lms200Lockstep, HealthyScannerReportsNoFault) {
+  Rig rig(EmulatorOptions{}, driver_config(38400, {180, 100}, Units::cm));
+  rig.device.start(rig.now);
+  ASSERT_TRUE(rig.until_streaming()) << rig.device.last_error().c_str();
+  rig.run_for(hal::millis(500));
+  EXPECT_EQ(rig.device.status().device_status, kDeviceStatusOk);
+  EXPECT_FALSE(rig.device.scanner_fault());
+  EXPECT_FALSE(rig.device.latest_scan().scanner_fault);
+  EXPECT_EQ(rig.device.counters().fault_reports, 0u);
+}
+
+TEST(Lms200Lockstep, FaultAtStartUpIsSurfacedAndScansStillFlow) {
+  EmulatorOptions eo;
+  eo.faults.device_fault = true;
+  Rig rig(eo, driver_config(38400, {180, 100}, Units::cm));
+  rig.device.start(rig.now);
+  ASSERT_TRUE(rig.until_streaming()) << rig.device.last_error().c_str();
+  rig.run_for(hal::millis(500));
+  EXPECT_EQ(rig.device.status().device_status, kDeviceStatusFault);
+  EXPECT_EQ(rig.device.counters().fault_reports, 1u);
+  EXPECT_TRUE(rig.device.scanner_fault());
+  const LaserScan& scan = rig.device.latest_scan();
+  ASSERT_GT(scan.sequence, 0u);
+  EXPECT_EQ(scan.device_status, kDeviceStatusFault);
+  EXPECT_EQ(status_level(scan.status), StatusLevel::error);
+  EXPECT_TRUE(scan.scanner_fault);
+}
+
+TEST(Lms200Lockstep, FaultWhileStreamingShowsInTheNextScans) {
+  Rig rig(EmulatorOptions{}, driver_config(500000, {180, 100}, Units::mm));
+  rig.device.start(rig.now);
+  ASSERT_TRUE(rig.until_streaming()) << rig.device.last_error().c_str();
+  rig.run_for(hal::millis(200));
+  ASSERT_FALSE(rig.device.latest_scan().scanner_fault);
+  FaultPlan faults;
+  faults.device_fault = true;
+  rig.emulator.set_faults(faults);
+  const std::uint64_t before = rig.device.latest_scan().sequence;
+  rig.run_for(hal::millis(200));
+  ASSERT_GT(rig.device.latest_scan().sequence, before + 5);
+  // The B1 from start-up said OK; the status byte of each scan now says error.
+  EXPECT_EQ(rig.device.latest_scan().device_status, kDeviceStatusOk);
+  EXPECT_TRUE(rig.device.latest_scan().scanner_fault);
+  EXPECT_TRUE(rig.device.scanner_fault());
+  // And the fault clears with the scanner's report.
+  rig.emulator.set_faults(FaultPlan{});
+  rig.run_for(hal::millis(200));
+  EXPECT_FALSE(rig.device.latest_scan().scanner_fault);
+  EXPECT_FALSE(rig.device.scanner_fault());
+}
+
 TEST(Lms200Lockstep, MissingAckIsCountedNotFatal) {
   EmulatorOptions eo;
   eo.faults.suppress_ack = true;

@@ -1,15 +1,21 @@
 // The recorded session replayed through the driver: it sends exactly the recorded requests
-// and decodes exactly the recorded scans; the capture decoder reproduces the checked-in JSON.
+// and decodes exactly the recorded scans; the capture decoder reproduces the checked-in JSON
+// and reads mean-value and sub-range streams.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "rig.hpp"
+#include "sen3bot/capture/recording_stream.hpp"
 #include "sen3bot/capture/replay_stream.hpp"
+#include "sen3bot/capture/writer.hpp"
 #include "sen3bot/lms200/capture_decode.hpp"
 #include "sen3bot/lms200/parser.hpp"
 #include "session.hpp"
@@ -114,6 +120,70 @@ TEST(Lms200Replay, CaptureDecodesToTheCheckedInJson) {
   std::stringstream want;
   want << in.rdbuf();
   EXPECT_EQ(decoded, want.str());
+}
+
+TEST(Lms200CaptureDecode, MeanValuesAndSubrangesAreDecodedAsScans) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("lms200_stream_modes_" + std::to_string(::getpid()) + ".s3bcap");
+  hal::SimClock clock;
+  capture::CaptureWriter writer(1 << 20);
+  capture::CaptureInfo info;
+  info.channels.push_back({0, "lms200", 500000});
+  ASSERT_TRUE(writer.open(path, info).ok());
+  EmulatorOptions o;
+  o.initial_baud = 500000;
+  o.variant = {180, 50};
+  WallWorld world = testing::test_world();
+  hal::MemoryPipe pipe(16384);
+  SimulatedLine line(500000);
+  Lms200Emulator emulator(o, pipe.b(), world, &line);
+  capture::RecordingStream client(pipe.a(), writer, 0, clock);
+  hal::Nanos now = 0;
+  std::array<std::uint8_t, 2048> sink{};
+  for (const Request& r : {*request_mean_values(4), *request_subrange(171, 191, o.variant)}) {
+    ASSERT_EQ(*client.write(r.span()), r.size);
+    for (const hal::Nanos end = now + hal::millis(300); now < end; now += hal::micros(200)) {
+      clock.advance_to(now);
+      emulator.step(now);
+      while (*client.read(sink) > 0) {
+      }
+    }
+  }
+  ASSERT_TRUE(writer.close().ok());
+  Result<capture::CaptureFile> file = capture::CaptureFile::load(path);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(file.ok()) << file.error().c_str();
+  char* buffer = nullptr;
+  std::size_t size = 0;
+  std::FILE* out = open_memstream(&buffer, &size);
+  Result<CaptureDecodeSummary> summary = decode_capture_json(*file, "", out);
+  std::fclose(out);
+  const std::string text(buffer, size);
+  std::free(buffer);
+  ASSERT_TRUE(summary.ok()) << summary.error().c_str();
+  int means = 0;
+  int subranges = 0;
+  std::istringstream lines(text);
+  std::string l;
+  while (std::getline(lines, l)) {
+    if (l.find("\"code\":\"0xb6\"") != std::string::npos) {
+      ++means;
+      EXPECT_NE(l.find("\"count\":361,"), std::string::npos) << l.substr(0, 200);
+      EXPECT_NE(l.find("\"mean_samples\":4,"), std::string::npos) << l.substr(0, 200);
+    }
+    if (l.find("\"code\":\"0xb7\"") != std::string::npos) {
+      ++subranges;
+      EXPECT_NE(l.find("\"count\":21,"), std::string::npos) << l.substr(0, 200);
+      EXPECT_NE(l.find("\"first\":171,\"last\":191"), std::string::npos) << l.substr(0, 200);
+      // Straight ahead, the 11th value: the box face 1.5 m away.
+      EXPECT_NE(l.find(",1.500,"), std::string::npos) << l.substr(0, 300);
+    }
+    EXPECT_EQ(l.find("\"error\""), std::string::npos) << l.substr(0, 200);
+  }
+  // 300 ms each: a mean of 4 scans every 107 ms, a sub-range every 27 ms.
+  EXPECT_GE(means, 2);
+  EXPECT_GE(subranges, 9);
+  EXPECT_EQ(summary->scans, static_cast<std::size_t>(means + subranges));
 }
 
 }  // namespace

@@ -64,7 +64,9 @@ struct Decoder {
         }
         break;
       }
-      case kReplyScan: scan(f); break;
+      case kReplyScan:
+      case kReplyMeanScan:
+      case kReplySubrangeScan: scan(f); break;
       default: break;
     }
     std::fputs("}\n", out);
@@ -72,7 +74,7 @@ struct Decoder {
   }
 
   void scan(FrameView f) {
-    Result<ScanTelegram> s = decode_scan(f);
+    Result<ScanTelegram> s = decode_any_scan(f);
     if (!s) {
       std::fprintf(out, ",\"error\":\"%s\"", s.error().c_str());
       return;
@@ -82,6 +84,8 @@ struct Decoder {
     std::fprintf(out, ",\"count\":%u,\"units\":\"%s\",\"partial\":%s,\"offset_qdeg\":%u,\"measuring_mode\":\"0x%02x\"",
                  s->count, to_string(s->units).data(), s->partial ? "true" : "false", s->partial_offset_qdeg,
                  static_cast<unsigned>(mode));
+    if (s->code == kReplyMeanScan) std::fprintf(out, ",\"mean_samples\":%u", s->mean_samples);
+    if (s->code == kReplySubrangeScan) std::fprintf(out, ",\"first\":%u,\"last\":%u", s->first_index, s->last_index);
     if (s->has_indices) std::fprintf(out, ",\"scan_index\":%u,\"telegram_index\":%u", s->scan_index, s->telegram_index);
     std::fputs(",\"ranges_m\":[", out);
     for (std::size_t i = 0; i < s->count; ++i) {

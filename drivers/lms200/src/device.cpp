@@ -332,6 +332,7 @@ void Lms200Device::on_frame(hal::Nanos now, FrameView frame) noexcept {
   }
   if (!got_ack_) ++counters_.missing_acks;
   awaiting_ = false;
+  if (frame.len() >= 2) last_status_byte_ = frame.reply_status();
   on_reply(now, frame);
 }
 
@@ -381,6 +382,7 @@ void Lms200Device::on_reply(hal::Nanos now, FrameView frame) noexcept {
       Result<StatusReply> r = decode_status(frame);
       if (!r) return fail(now, r.error());
       status_ = *r;
+      if (r->device_status != kDeviceStatusOk) ++counters_.fault_reports;
       if (r->baud != 0 && r->baud != baud_) {
         return fail(now, Error::format(Errc::protocol, "lms200: status reports %u baud, host is at %u", r->baud,
                                        baud_));
@@ -417,6 +419,11 @@ void Lms200Device::on_reply(hal::Nanos now, FrameView frame) noexcept {
   }
 }
 
+bool Lms200Device::scanner_fault() const noexcept {
+  const StatusLevel level = status_level(last_status_byte_);
+  return status_.device_status != kDeviceStatusOk || level == StatusLevel::error || level == StatusLevel::fatal;
+}
+
 bool Lms200Device::take_new_scan(LaserScan& out) noexcept {
   if (scan_.sequence == taken_sequence_) return false;
   out = scan_;
@@ -431,6 +438,7 @@ void Lms200Device::on_scan(hal::Nanos now, FrameView frame) noexcept {
     return;
   }
   const ScanTelegram& t = *decoded;
+  last_status_byte_ = t.status;
   if (t.count != value_count(config_.variant) || t.partial) {
     ++counters_.bad_scans;
     return;
@@ -450,6 +458,8 @@ void Lms200Device::on_scan(hal::Nanos now, FrameView frame) noexcept {
   scan_.measuring_mode = static_cast<std::uint8_t>(mode);
   scan_.status = t.status;
   scan_.link_state = LinkState::streaming;
+  scan_.device_status = status_.device_status;
+  scan_.scanner_fault = scanner_fault();
   scan_.baud = baud_;
   const ParserStats& ps = parser_.stats();
   scan_.crc_errors = static_cast<std::uint32_t>(ps.crc_errors);

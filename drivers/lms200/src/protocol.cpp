@@ -54,6 +54,15 @@ std::uint32_t baud_of_status_word(std::uint16_t word) noexcept {
   return 0;
 }
 
+StatusLevel status_level(std::uint8_t status) noexcept {
+  const unsigned level = status & 0x07u;
+  return level <= static_cast<unsigned>(StatusLevel::fatal) ? static_cast<StatusLevel>(level) : StatusLevel::reserved;
+}
+
+std::uint8_t with_status_level(std::uint8_t status, StatusLevel level) noexcept {
+  return static_cast<std::uint8_t>((status & ~0x07u) | (static_cast<unsigned>(level) & 0x07u));
+}
+
 bool valid_variant(Variant v) noexcept {
   if (v.angle_deg == 180) return v.resolution_cdeg == 100 || v.resolution_cdeg == 50;
   if (v.angle_deg == 100) return v.resolution_cdeg == 100 || v.resolution_cdeg == 50 || v.resolution_cdeg == 25;
@@ -308,6 +317,31 @@ Request request_single_scan() noexcept {
   return make_request(p);
 }
 
+Result<Request> request_mean_values(std::uint8_t samples) noexcept {
+  if (samples < kMinMeanSamples || samples > kMaxMeanSamples)
+    return Error::format(Errc::invalid_argument, "lms200: mean values over %u scans; the LMS200 averages %u to %u",
+                         samples, kMinMeanSamples, kMaxMeanSamples);
+  const std::uint8_t p[] = {static_cast<std::uint8_t>(Command::mode_change),
+                            static_cast<std::uint8_t>(OperatingMode::mean_values), samples};
+  return make_request(p);
+}
+
+Result<Request> request_subrange(std::uint16_t first, std::uint16_t last, Variant variant) noexcept {
+  if (!valid_variant(variant))
+    return Error::format(Errc::invalid_argument, "lms200: sub-range for variant %u/%u, which the LMS200 does not have",
+                         variant.angle_deg, variant.resolution_cdeg);
+  const std::uint16_t n = value_count(variant);
+  if (first < 1 || first > last || last > n)
+    return Error::format(Errc::invalid_argument,
+                         "lms200: sub-range %u..%u; need 1 <= first <= last <= %u (1-based, variant %u/%u)", first,
+                         last, n, variant.angle_deg, variant.resolution_cdeg);
+  std::uint8_t p[6] = {static_cast<std::uint8_t>(Command::mode_change),
+                       static_cast<std::uint8_t>(OperatingMode::subrange)};
+  put_u16(&p[2], first);
+  put_u16(&p[4], last);
+  return make_request(p);
+}
+
 std::size_t make_reply(std::uint8_t code, std::span<const std::uint8_t> data, std::uint8_t status,
                        std::span<std::uint8_t> out, std::uint8_t address) noexcept {
   const std::size_t len = data.size() + 2;
@@ -402,33 +436,94 @@ Result<ConfigReply> decode_write_config(FrameView f) noexcept {
   return c;
 }
 
-Result<ScanTelegram> decode_scan(FrameView f) noexcept {
-  if (f.code() != kReplyScan || f.len() < 4) return protocol_error("not a B0 scan reply", f.code(), f.len());
+namespace {
+
+// The part B0, B6 and B7 share: the count word at payload offset `at`, the values, the
+// optional real-time indices (told apart by LEN), the status byte.
+Result<ScanTelegram> decode_values(FrameView f, std::size_t at, ScanTelegram& s, const char* name) noexcept {
+  // Header fields before the count word, the count word itself and the status byte.
+  const std::size_t fixed = at + 2 + 1;
+  if (f.len() < fixed)
+    return Error::format(Errc::protocol, "lms200: %s LEN %u too short for its header", name, f.len());
   const auto p = f.payload();
-  const std::uint16_t count_word = get_u16(p, 1);
-  ScanTelegram s;
+  const std::uint16_t count_word = get_u16(p, at);
   s.count = count_word & 0x03FFu;
   s.partial_offset_qdeg = static_cast<std::uint8_t>((count_word >> 11) & 0x3u);
   s.partial = (count_word & 0x2000u) != 0;
   const unsigned units = count_word >> 14;
-  if (units > 2) return protocol_error("B0 units bits 11 are reserved", f.code(), f.len());
+  if (units > 2) return Error::format(Errc::protocol, "lms200: %s units bits 11 are reserved", name);
   s.units = static_cast<Units>(units);
-  if (s.count > kMaxValues) return protocol_error("B0 count above 401", f.code(), f.len());
-  const std::size_t plain = 2u * s.count + 4u;
+  if (s.count > kMaxValues) return Error::format(Errc::protocol, "lms200: %s count %u above 401", name, s.count);
+  const std::size_t plain = 2u * s.count + fixed;
   if (f.len() == plain) {
     s.has_indices = false;
   } else if (f.len() == plain + 2) {
     s.has_indices = true;
   } else {
-    return Error::format(Errc::protocol, "lms200: B0 LEN %u does not fit %u values", f.len(), s.count);
+    return Error::format(Errc::protocol, "lms200: %s LEN %u does not fit %u values", name, f.len(), s.count);
   }
-  for (std::size_t i = 0; i < s.count; ++i) s.words[i] = get_u16(p, 3 + 2 * i);
+  const std::size_t values_at = at + 2;
+  for (std::size_t i = 0; i < s.count; ++i) s.words[i] = get_u16(p, values_at + 2 * i);
   if (s.has_indices) {
-    s.scan_index = p[3 + 2u * s.count];
-    s.telegram_index = p[4 + 2u * s.count];
+    s.scan_index = p[values_at + 2u * s.count];
+    s.telegram_index = p[values_at + 2u * s.count + 1];
   }
   s.status = f.reply_status();
   return s;
+}
+
+}  // namespace
+
+Result<ScanTelegram> decode_scan(FrameView f) noexcept {
+  if (f.code() != kReplyScan || f.len() < 4) return protocol_error("not a B0 scan reply", f.code(), f.len());
+  ScanTelegram s;
+  Result<ScanTelegram> r = decode_values(f, 1, s, "B0");
+  if (r) {
+    r->code = kReplyScan;
+    r->last_index = r->count;
+  }
+  return r;
+}
+
+Result<ScanTelegram> decode_mean_scan(FrameView f) noexcept {
+  if (f.code() != kReplyMeanScan) return protocol_error("not a B6 mean-value reply", f.code(), f.len());
+  if (f.len() < 5) return Error::format(Errc::protocol, "lms200: B6 LEN %u too short for its header", f.len());
+  ScanTelegram s;
+  s.code = kReplyMeanScan;
+  s.mean_samples = f.payload()[1];
+  if (s.mean_samples < kMinMeanSamples || s.mean_samples > kMaxMeanSamples)
+    return Error::format(Errc::protocol, "lms200: B6 mean over %u scans, outside %u..%u", s.mean_samples,
+                         kMinMeanSamples, kMaxMeanSamples);
+  Result<ScanTelegram> r = decode_values(f, 2, s, "B6");
+  if (r) r->last_index = r->count;
+  return r;
+}
+
+Result<ScanTelegram> decode_subrange_scan(FrameView f) noexcept {
+  if (f.code() != kReplySubrangeScan) return protocol_error("not a B7 sub-range reply", f.code(), f.len());
+  if (f.len() < 8) return Error::format(Errc::protocol, "lms200: B7 LEN %u too short for its header", f.len());
+  const auto p = f.payload();
+  ScanTelegram s;
+  s.code = kReplySubrangeScan;
+  s.first_index = get_u16(p, 1);
+  s.last_index = get_u16(p, 3);
+  if (s.first_index < 1 || s.first_index > s.last_index || s.last_index > kMaxValues)
+    return Error::format(Errc::protocol, "lms200: B7 sub-range %u..%u is not 1 <= first <= last <= 401",
+                         s.first_index, s.last_index);
+  Result<ScanTelegram> r = decode_values(f, 5, s, "B7");
+  if (r && r->count != r->last_index - r->first_index + 1)
+    return Error::format(Errc::protocol, "lms200: B7 sub-range %u..%u but %u values", r->first_index, r->last_index,
+                         r->count);
+  return r;
+}
+
+Result<ScanTelegram> decode_any_scan(FrameView f) noexcept {
+  switch (f.code()) {
+    case kReplyScan: return decode_scan(f);
+    case kReplyMeanScan: return decode_mean_scan(f);
+    case kReplySubrangeScan: return decode_subrange_scan(f);
+    default: return protocol_error("not a scan reply (B0, B6, B7)", f.code(), f.len());
+  }
 }
 
 }  // namespace sen3bot::lms200

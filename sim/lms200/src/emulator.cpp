@@ -120,8 +120,12 @@ ScanGeometry Lms200Emulator::geometry() const noexcept {
 }
 
 std::size_t Lms200Emulator::scan_words(hal::Nanos t, std::span<std::uint16_t> out) noexcept {
+  return fill_words(t, out, mode_ == OperatingMode::partial_scans);
+}
+
+std::size_t Lms200Emulator::fill_words(hal::Nanos t, std::span<std::uint16_t> out, bool partial_raster) noexcept {
   ScanGeometry g = geometry();
-  if (mode_ == OperatingMode::partial_scans && variant_.resolution_cdeg != 100) {
+  if (partial_raster && variant_.resolution_cdeg != 100) {
     // One mirror revolution: the 1 deg raster shifted by the current offset.
     g.count = variant_.angle_deg + 1u;
     g.angle_min_rad += partial_offset_ * 25 * kRadPerCentiDeg;
@@ -154,17 +158,98 @@ bool Lms200Emulator::enqueue(std::span<const std::uint8_t> bytes) noexcept {
   return true;
 }
 
+std::uint8_t Lms200Emulator::status_byte() const noexcept {
+  const std::uint8_t s = options_.status;
+  if (!options_.faults.device_fault) return s;
+  const StatusLevel level = status_level(s);
+  return level == StatusLevel::fatal ? s : with_status_level(s, StatusLevel::error);
+}
+
+std::uint8_t Lms200Emulator::device_status() const noexcept {
+  const StatusLevel level = status_level(status_byte());
+  return level == StatusLevel::error || level == StatusLevel::fatal ? kDeviceStatusFault : kDeviceStatusOk;
+}
+
 void Lms200Emulator::reply(std::uint8_t code, std::span<const std::uint8_t> data, bool ack) noexcept {
   if (ack && !options_.faults.suppress_ack) {
     const std::uint8_t a = kAck;
     enqueue({&a, 1});
   }
-  const std::size_t n = make_reply(code, data, options_.status, frame_, options_.address);
+  const std::size_t n = make_reply(code, data, status_byte(), frame_, options_.address);
   enqueue({frame_.data(), n});
 }
 
-void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number) noexcept {
-  const std::size_t n = scan_words(now, words_);
+hal::Nanos Lms200Emulator::stream_period_ns() const noexcept {
+  return mode_ == OperatingMode::partial_scans ? kMirrorPeriodNs : scan_period_ns(variant_);
+}
+
+void Lms200Emulator::start_stream(hal::Nanos now, OperatingMode mode) noexcept {
+  mode_ = mode;
+  installation_ = false;
+  partial_offset_ = 0;
+  // The first streamed scan is the next one the mirror completes, counted in the new mode's
+  // period: partial scans count mirror turns, the others complete scans.
+  last_scan_sent_ = now / stream_period_ns() - 1;
+  if (mode == OperatingMode::mean_values) {
+    // Means are numbered from 1; the first needs mean_samples_ scans from now.
+    last_scan_sent_ = 0;
+    mean_blocks_ = 0;
+    mean_taken_ = 0;
+    last_scan_taken_ = now / scan_period_ns(variant_) - 1;
+    mean_sum_.fill(0);
+    mean_valid_.fill(0);
+  }
+}
+
+void Lms200Emulator::accumulate_mean(hal::Nanos now) noexcept {
+  const hal::Nanos period = scan_period_ns(variant_);
+  const std::int64_t newest = now / period - 1;
+  if (newest <= last_scan_taken_) return;
+  // After a long gap between steps only the last mean's worth of scans is taken.
+  if (newest - last_scan_taken_ > mean_samples_) {
+    last_scan_taken_ = newest - mean_samples_;
+    mean_taken_ = 0;
+    mean_sum_.fill(0);
+    mean_valid_.fill(0);
+  }
+  const MeasuringMode mode = measuring_mode();
+  for (std::int64_t k = last_scan_taken_ + 1; k <= newest; ++k) {
+    const std::size_t n = fill_words((k + 1) * period, words_, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      const ScanValue v = decode_value(words_[i], mode);
+      if (v.reason == InvalidReason::none) {
+        mean_sum_[i] += v.distance;
+        ++mean_valid_[i];
+      } else {
+        mean_code_[i] = v.distance;
+      }
+    }
+    if (++mean_taken_ < mean_samples_) continue;
+    // The mean of the valid samples; a beam without one keeps its last code.
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint16_t d = mean_valid_[i] > 0
+                                  ? static_cast<std::uint16_t>((mean_sum_[i] + mean_valid_[i] / 2u) / mean_valid_[i])
+                                  : mean_code_[i];
+      mean_words_[i] = encode_value(d, 0, mode);
+    }
+    ++mean_blocks_;
+    mean_taken_ = 0;
+    mean_sum_.fill(0);
+    mean_valid_.fill(0);
+  }
+  last_scan_taken_ = newest;
+}
+
+void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number, bool streamed) noexcept {
+  const OperatingMode kind = streamed ? mode_ : OperatingMode::continuous_all;
+  std::size_t n = 0;
+  if (kind == OperatingMode::mean_values) {
+    n = value_count(variant_);
+    std::copy_n(mean_words_.begin(), n, words_.begin());
+  } else {
+    // A scan on request (30 01) is a complete one even while partial scans stream.
+    n = fill_words(now, words_, kind == OperatingMode::partial_scans);
+  }
   const FaultPlan& f = options_.faults;
   const std::uint64_t k = counters_.scans_sent + 1;
   const MeasuringMode mode = measuring_mode();
@@ -182,21 +267,39 @@ void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number) noex
       words_[i] = encode_value(v.distance, value_flag::kDazzle, mode);
     }
   }
-  // B0 data: count word, values, optional indices.
-  std::array<std::uint8_t, 2 + 2 * kMaxValues + 2> data{};
+  // Which values go out: all of them, or the requested sub-range (clamped to the variant).
+  std::size_t first = 0;
+  if (kind == OperatingMode::subrange) {
+    const std::size_t last = std::min<std::size_t>(subrange_last_, n);
+    first = std::min<std::size_t>(subrange_first_, last) - 1;
+    n = last - first;
+  }
+  // Header (B6: samples; B7: first, last), count word, values, optional indices.
+  std::array<std::uint8_t, 4 + 2 + 2 * kMaxValues + 2> data{};
+  std::size_t size = 0;
+  std::uint8_t code = kReplyScan;
+  if (kind == OperatingMode::mean_values) {
+    code = kReplyMeanScan;
+    data[size++] = mean_samples_;
+  } else if (kind == OperatingMode::subrange) {
+    code = kReplySubrangeScan;
+    put_u16(&data[size], static_cast<std::uint16_t>(first + 1));
+    put_u16(&data[size + 2], static_cast<std::uint16_t>(first + n));
+    size += 4;
+  }
   std::uint16_t count_word = static_cast<std::uint16_t>(n & 0x3FFu);
   count_word = static_cast<std::uint16_t>(count_word | (static_cast<unsigned>(units()) << 14));
-  if (mode_ == OperatingMode::partial_scans) {
+  if (kind == OperatingMode::partial_scans) {
     count_word = static_cast<std::uint16_t>(count_word | 0x2000u | ((partial_offset_ & 0x3u) << 11));
   }
-  put_u16(&data[0], count_word);
-  for (std::size_t i = 0; i < n; ++i) put_u16(&data[2 + 2 * i], words_[i]);
-  std::size_t size = 2 + 2 * n;
+  put_u16(&data[size], count_word);
+  size += 2;
+  for (std::size_t i = 0; i < n; ++i, size += 2) put_u16(&data[size], words_[first + i]);
   if (config_[config_offset::kAvailability] & kAvailabilityRealTimeIndices) {
     data[size++] = static_cast<std::uint8_t>(scan_number & 0xFF);
     data[size++] = static_cast<std::uint8_t>(telegram_index_++ & 0xFF);
   }
-  std::size_t frame_size = make_reply(kReplyScan, {data.data(), size}, options_.status, frame_, options_.address);
+  std::size_t frame_size = make_reply(code, {data.data(), size}, status_byte(), frame_, options_.address);
   if (f.false_header_every != 0 && k % f.false_header_every == 0) {
     // A plausible header whose claimed length swallows the real telegram's start.
     const std::uint8_t fake[] = {kStx, static_cast<std::uint8_t>(kReplyAddressFlag | options_.address), 0xD6, 0x02};
@@ -210,11 +313,12 @@ void Lms200Emulator::enqueue_scan(hal::Nanos now, std::int64_t scan_number) noex
   if (f.corrupt_crc_every != 0 && k % f.corrupt_crc_every == 0) frame_[frame_size - 1] ^= 0x5A;
   if (f.truncate_every != 0 && k % f.truncate_every == 0) frame_size /= 2;
   enqueue({frame_.data(), frame_size});
+  ++counters_.scans_sent;
+  if (!streamed) return;
   if (last_scan_sent_ >= 0 && scan_number > last_scan_sent_ + 1)
     counters_.scans_skipped += static_cast<std::uint64_t>(scan_number - last_scan_sent_ - 1);
   last_scan_sent_ = scan_number;
-  ++counters_.scans_sent;
-  if (mode_ == OperatingMode::partial_scans) {
+  if (kind == OperatingMode::partial_scans) {
     const std::uint8_t steps = static_cast<std::uint8_t>(100 / variant_.resolution_cdeg);
     partial_offset_ = static_cast<std::uint8_t>((partial_offset_ + 100 / steps / 25) % 4);
   }
@@ -253,12 +357,23 @@ void Lms200Emulator::handle(hal::Nanos now, FrameView request) noexcept {
           break;
         case OperatingMode::continuous_all:
         case OperatingMode::partial_scans:
-          mode_ = mode;
-          installation_ = false;
-          partial_offset_ = 0;
-          // The first streamed scan is the next one the mirror completes.
-          last_scan_sent_ = now / scan_period_ns(variant_) - 1;
+          start_stream(now, mode);
           break;
+        case OperatingMode::mean_values:
+          if (p.size() != 3 || p[2] < kMinMeanSamples || p[2] > kMaxMeanSamples) return reject();
+          mean_samples_ = p[2];
+          start_stream(now, mode);
+          break;
+        case OperatingMode::subrange: {
+          if (p.size() != 6) return reject();
+          const auto first = static_cast<std::uint16_t>(p[2] | (p[3] << 8));
+          const auto last = static_cast<std::uint16_t>(p[4] | (p[5] << 8));
+          if (first < 1 || first > last || last > value_count(variant_)) return reject();
+          subrange_first_ = first;
+          subrange_last_ = last;
+          start_stream(now, mode);
+          break;
+        }
         case OperatingMode::baud_9600:
         case OperatingMode::baud_19200:
         case OperatingMode::baud_38400:
@@ -276,7 +391,7 @@ void Lms200Emulator::handle(hal::Nanos now, FrameView request) noexcept {
         const std::uint8_t a = kAck;
         enqueue({&a, 1});
       }
-      return enqueue_scan(now, now / scan_period_ns(variant_) - 1);
+      return enqueue_scan(now, now / scan_period_ns(variant_) - 1, false);
     }
     case Command::status: {
       std::array<std::uint8_t, kStatusDataBytes> d{};  // index i here is status offset i + 1
@@ -285,7 +400,7 @@ void Lms200Emulator::handle(hal::Nanos now, FrameView request) noexcept {
       for (std::size_t i = 0; i < kSoftwareVersion.size(); ++i)
         at(o::kVersion + i) = static_cast<std::uint8_t>(kSoftwareVersion[i]);
       at(o::kOperatingMode) = static_cast<std::uint8_t>(installation_ ? OperatingMode::installation : mode_);
-      at(o::kDeviceStatus) = 0;
+      at(o::kDeviceStatus) = device_status();
       at(o::kVariantType) = 0;
       at(o::kMeasuringMode) = config_[config_offset::kMeasuringMode];
       put_u16(&at(o::kScanAngle), variant_.angle_deg);
@@ -423,11 +538,13 @@ void Lms200Emulator::step(hal::Nanos now) noexcept {
     pending_baud_ = 0;
     ++counters_.baud_changes;
   }
+  // The mirror keeps turning whether or not the line is free: means add up every scan.
+  if (mode_ == OperatingMode::mean_values) accumulate_mean(now);
   if (streaming() && queued() == 0 && config_reply_at_ns_ < 0) {
-    const hal::Nanos period = mode_ == OperatingMode::partial_scans ? kMirrorPeriodNs : scan_period_ns(variant_);
-    const std::int64_t newest = now / period - 1;
+    // Mean values are numbered by finished means, the rest by scans in the stream's period.
+    const std::int64_t newest = mode_ == OperatingMode::mean_values ? mean_blocks_ : now / stream_period_ns() - 1;
     if (newest > last_scan_sent_) {
-      enqueue_scan(now, newest);
+      enqueue_scan(now, newest, true);
       pace_output(now, garble);
     }
   }

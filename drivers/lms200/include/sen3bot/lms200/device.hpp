@@ -63,6 +63,7 @@ struct DeviceCounters {
   std::uint64_t config_writes = 0;  // 0x77 sent (EEPROM writes)
   std::uint64_t bad_scans = 0;      // CRC-valid B0 that did not decode
   std::uint64_t ignored_frames = 0;  // valid telegrams nobody asked for
+  std::uint64_t fault_reports = 0;   // B1 replies with a device status other than OK
 };
 
 // Transmission time of `bytes` at `baud`, 8N1 = 10 bits per byte.
@@ -97,6 +98,9 @@ class Lms200Device {
   [[nodiscard]] const DeviceCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] const ParserStats& parser_stats() const noexcept { return parser_.stats(); }
   [[nodiscard]] const StatusReply& status() const noexcept { return status_; }
+  // The scanner reports a fault: B1 device status at start-up, or the level bits of the
+  // newest telegram's status byte (error or fatal). Scans keep flowing; the user decides.
+  [[nodiscard]] bool scanner_fault() const noexcept;
   [[nodiscard]] const ConfigBlock& config_block() const noexcept { return config_block_; }
 
   // The newest scan; `sequence` grows with each one. take_new_scan() copies it out once.
@@ -172,6 +176,7 @@ class Lms200Device {
   bool stop_requested_ = false;
 
   StatusReply status_;
+  std::uint8_t last_status_byte_ = kStatusNormal;  // of the newest reply or scan
   ConfigBlock config_block_;
   ScanTelegram telegram_;
   LaserScan scan_;

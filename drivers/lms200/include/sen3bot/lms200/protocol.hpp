@@ -25,6 +25,20 @@
 //   The two index bytes are present only when availability bit 0x02 is set; a decoder
 //   tells them apart by LEN (= 2N + 4, or 2N + 6 with indices).
 //
+// B6 mean values (mode 0x26, request 20 26 M with M = 2..250 scans averaged):
+//
+//   B6 | M u8 | count u16 | N x value u16 | [scan index, telegram index] | S
+//   LEN = 2N + 5, or 2N + 7 with indices. The values carry no flag bits.
+//
+// B7 sub-range (mode 0x27, request 20 27 first u16 last u16; 1-based indices into the
+// complete scan, first <= last <= angle / resolution + 1):
+//
+//   B7 | first u16 | last u16 | count u16 | N x value u16 | [scan index, telegram index] | S
+//   N = last - first + 1; LEN = 2N + 8, or 2N + 10 with indices.
+//
+// Layouts as sicktoolbox (SickLMS2xx, Telegram Listing pages 61 and 63) reads them; that the
+// count words of B6 and B7 carry the units in bits 14-15 as B0 does is our assumption.
+//
 // Value word per measuring mode (configuration byte 5):
 //   00, 02     bits 0-12 distance; 0x2000 field A, 0x4000 field B, 0x8000 dazzle (00) / field C (02)
 //   01         bits 0-12 distance; bits 13-15 reflector level 0-7
@@ -74,6 +88,8 @@ enum class Command : std::uint8_t {
 };
 inline constexpr std::uint8_t kReplyModeChange = 0xA0;
 inline constexpr std::uint8_t kReplyScan = 0xB0;
+inline constexpr std::uint8_t kReplyMeanScan = 0xB6;
+inline constexpr std::uint8_t kReplySubrangeScan = 0xB7;
 inline constexpr std::uint8_t kReplyStatus = 0xB1;
 inline constexpr std::uint8_t kReplyErrors = 0xB2;
 inline constexpr std::uint8_t kReplyType = 0xBA;
@@ -91,6 +107,8 @@ enum class OperatingMode : std::uint8_t {
   diagnostic = 0x10,
   continuous_all = 0x24,  // stream B0 with every value
   monitoring = 0x25,      // data only on request (stops streaming)
+  mean_values = 0x26,     // stream B6: the mean of every S consecutive scans
+  subrange = 0x27,        // stream B7: values first..last of each complete scan
   partial_scans = 0x2A,   // stream each mirror revolution's 1 deg raster with its offset
   baud_38400 = 0x40,
   baud_19200 = 0x41,
@@ -107,6 +125,15 @@ inline constexpr std::uint8_t kModeChangeFault = 0x02;
 
 // Status byte S of a unit in normal operation (strict clients require it).
 inline constexpr std::uint8_t kStatusNormal = 0x10;
+// Bits 0-2 of S: 0 OK, 1 info, 2 warning, 3 error, 4 fatal (third-party reading of the
+// Telegram Listing, unverified on a unit).
+enum class StatusLevel : std::uint8_t { ok = 0, info = 1, warning = 2, error = 3, fatal = 4, reserved = 5 };
+StatusLevel status_level(std::uint8_t status) noexcept;
+// The status byte `status` with its level bits set to `level`.
+std::uint8_t with_status_level(std::uint8_t status, StatusLevel level) noexcept;
+// B1 device status (status offset 9): 0 OK, anything else a fault.
+inline constexpr std::uint8_t kDeviceStatusOk = 0x00;
+inline constexpr std::uint8_t kDeviceStatusFault = 0x01;
 
 // Rates the LMS200 supports and their mode-change codes.
 inline constexpr std::array<std::uint32_t, 4> kSupportedBauds = {9600, 19200, 38400, 500000};
@@ -214,6 +241,12 @@ Request request_variant(Variant v) noexcept;         // 3B angle res
 Request request_read_config() noexcept;              // 74
 Request request_write_config(std::span<const std::uint8_t> block) noexcept;  // 77 + 7..34 bytes
 Request request_single_scan() noexcept;              // 30 01
+// Scans averaged per B6 telegram (sicktoolbox refuses anything else).
+inline constexpr std::uint8_t kMinMeanSamples = 2;
+inline constexpr std::uint8_t kMaxMeanSamples = 250;
+Result<Request> request_mean_values(std::uint8_t samples) noexcept;  // 20 26 S
+// 20 27 first last; 1 <= first <= last <= value_count(variant).
+Result<Request> request_subrange(std::uint16_t first, std::uint16_t last, Variant variant) noexcept;
 
 // --- replies ---------------------------------------------------------------------------------
 // A CRC-checked telegram as the parser delivers it; `bytes` is the whole frame.
@@ -315,7 +348,11 @@ Result<ConfigReply> decode_read_config(FrameView f) noexcept;
 Result<ConfigReply> decode_write_config(FrameView f) noexcept;
 
 inline constexpr std::size_t kMaxValues = 401;
-struct ScanTelegram {  // B0
+struct ScanTelegram {  // B0, B6 or B7
+  std::uint8_t code = kReplyScan;
+  std::uint8_t mean_samples = 0;  // B6: scans averaged; 0 for B0 and B7
+  std::uint16_t first_index = 1;  // 1-based position of words[0] in the complete scan (B7: first)
+  std::uint16_t last_index = 0;   // B7: last; B0 and B6: count
   std::uint16_t count = 0;
   Units units = Units::cm;
   bool partial = false;
@@ -326,7 +363,10 @@ struct ScanTelegram {  // B0
   std::uint8_t status = 0;
   std::array<std::uint16_t, kMaxValues> words{};  // raw value words
 };
-Result<ScanTelegram> decode_scan(FrameView f) noexcept;
+Result<ScanTelegram> decode_scan(FrameView f) noexcept;           // B0 only
+Result<ScanTelegram> decode_mean_scan(FrameView f) noexcept;      // B6 only
+Result<ScanTelegram> decode_subrange_scan(FrameView f) noexcept;  // B7 only
+Result<ScanTelegram> decode_any_scan(FrameView f) noexcept;       // B0, B6 or B7 by its code
 
 // The reply code that answers `request_code`, as a check for correlation.
 constexpr bool answers(std::uint8_t reply, std::uint8_t request_code) {

@@ -48,6 +48,8 @@ struct LaserScan {
   std::uint8_t measuring_mode = 0;
   std::uint8_t status = 0;      // the telegram's status byte
   LinkState link_state = LinkState::idle;
+  std::uint8_t device_status = 0;  // B1 device status from start-up: 0 OK, otherwise a fault
+  bool scanner_fault = false;      // device_status, or level error/fatal in `status` (Lms200Device::scanner_fault)
   std::uint32_t baud = 0;
 
   // Device counters at the time of this scan.

@@ -3,7 +3,8 @@
 // (none before streamed B0), status byte 0x10 by default, baud changes answered at the old
 // rate and then applied, output paced at 10 bits per byte of the current rate and at the
 // mirror's scan rate (the newest complete scan goes out when the line is slower), ranges from
-// a RangeSource, and fault injection.
+// a RangeSource, and fault injection. Streams complete scans (20 24, B0), partial scans
+// (20 2A, B0), mean values (20 26, B6) and sub-ranges (20 27, B7).
 //
 // The core is step(now) over a hal::ByteStream: in lockstep the pacing follows the simulated
 // clock. Lms200PtyRunner (pty_runner.hpp) runs it in real time on a pseudo-terminal.
@@ -129,10 +130,12 @@ struct FaultPlan {
   std::uint32_t oversize_len_every = 0;    // "02 80" with LEN 822 (> 814) in front of the telegram
   bool silent = false;                     // sends nothing and ignores requests (cable pulled)
   bool suppress_ack = false;               // no 0x06 before replies
+  bool device_fault = false;               // B1 device status "fault", status byte level "error"
 };
 
 struct EmulatorOptions {
-  std::uint8_t status = kStatusNormal;           // status byte of every reply
+  std::uint8_t status = kStatusNormal;           // status byte of every reply; level error or
+                                                 // fatal (bits 0-2) also faults the B1 device status
   std::uint32_t initial_baud = 9600;             // power-on rate ("permanent" rate if not 9600)
   Variant variant{180, 100};
   Units units = Units::cm;
@@ -180,7 +183,14 @@ class Lms200Emulator {
   [[nodiscard]] MeasuringMode measuring_mode() const noexcept {
     return static_cast<MeasuringMode>(config_[config_offset::kMeasuringMode]);
   }
-  [[nodiscard]] bool streaming() const noexcept { return mode_ == OperatingMode::continuous_all || mode_ == OperatingMode::partial_scans; }
+  [[nodiscard]] bool streaming() const noexcept {
+    return mode_ == OperatingMode::continuous_all || mode_ == OperatingMode::partial_scans ||
+           mode_ == OperatingMode::mean_values || mode_ == OperatingMode::subrange;
+  }
+  // What the scanner reports now: the status byte S of every telegram, and the B1 device
+  // status. A fault (FaultPlan::device_fault, or an S whose level is error or fatal) shows in both.
+  [[nodiscard]] std::uint8_t status_byte() const noexcept;
+  [[nodiscard]] std::uint8_t device_status() const noexcept;
   [[nodiscard]] OperatingMode mode() const noexcept { return mode_; }
   [[nodiscard]] const EmulatorCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] const ParserStats& parser_stats() const noexcept { return parser_.stats(); }
@@ -191,10 +201,19 @@ class Lms200Emulator {
  private:
   static constexpr std::size_t kQueueBytes = 4096;
 
+  // The words of one scan at time t: the complete scan, or one mirror turn's 1 deg raster at
+  // the current partial offset.
+  std::size_t fill_words(hal::Nanos t, std::span<std::uint16_t> out, bool partial_raster) noexcept;
   void handle(hal::Nanos now, FrameView request) noexcept;
   void reply(std::uint8_t code, std::span<const std::uint8_t> data, bool ack = true) noexcept;
   bool enqueue(std::span<const std::uint8_t> bytes) noexcept;
-  void enqueue_scan(hal::Nanos now, std::int64_t scan_number) noexcept;
+  // `streamed`: part of the current streaming mode (B0, B6 or B7 by mode, counted for skips);
+  // otherwise one B0 on request (30 01).
+  void enqueue_scan(hal::Nanos now, std::int64_t scan_number, bool streamed) noexcept;
+  void start_stream(hal::Nanos now, OperatingMode mode) noexcept;
+  // Scans streaming counts in: a mirror turn for partial scans, a complete scan otherwise.
+  [[nodiscard]] hal::Nanos stream_period_ns() const noexcept;
+  void accumulate_mean(hal::Nanos now) noexcept;
   void pace_output(hal::Nanos now, bool garble) noexcept;
   [[nodiscard]] std::size_t queued() const noexcept { return static_cast<std::size_t>(q_tail_ - q_head_); }
 
@@ -222,6 +241,18 @@ class Lms200Emulator {
   std::int64_t last_scan_sent_ = -1;
   std::uint8_t partial_offset_ = 0;
   std::uint32_t telegram_index_ = 0;
+  // Mode 0x26: sums over the current block of mean_samples_ scans, and the last finished mean.
+  std::uint8_t mean_samples_ = 0;
+  std::uint8_t mean_taken_ = 0;
+  std::int64_t mean_blocks_ = 0;        // means finished since the mode started
+  std::int64_t last_scan_taken_ = -1;   // newest scan added to the sums
+  std::array<std::uint32_t, kMaxValues> mean_sum_{};
+  std::array<std::uint8_t, kMaxValues> mean_valid_{};
+  std::array<std::uint16_t, kMaxValues> mean_code_{};
+  std::array<std::uint16_t, kMaxValues> mean_words_{};
+  // Mode 0x27: 1-based first and last value.
+  std::uint16_t subrange_first_ = 1;
+  std::uint16_t subrange_last_ = 1;
 
   std::array<float, kMaxValues> ranges_m_{};
   std::array<std::uint16_t, kMaxValues> words_{};
