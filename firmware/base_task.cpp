@@ -7,7 +7,7 @@
 namespace sen3bot::firmware {
 
 BaseTask::BaseTask(const p2os::P2osConfig& config, hal::Board& board, const BaseTopics& topics)
-    : config_(config), board_(board), topics_(topics) {}
+    : config_(config), board_(board), topics_(topics), backoff_(config.reopen_delay_ms) {}
 
 BaseTask::~BaseTask() {
   if (driver_ != nullptr) {
@@ -34,10 +34,12 @@ void BaseTask::try_open(int connect_timeout_ms, hal::Nanos now_ns) {
   Result<hal::Link> opened = board_.open_link("base", hal::LinkRequest{config_.port, config_.baud, connect_timeout_ms});
   if (!opened) {
     open_error_ = opened.error();
-    next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
+    missing_.store(true, std::memory_order_relaxed);
+    backoff_.failed(now_ns);
     return;
   }
   open_error_.reset();
+  missing_.store(false, std::memory_order_relaxed);
   link_ = std::move(*opened);
   driver_->attach(*link_.stream, now_ns, link_.baud_control, link_.baud);
 }
@@ -59,14 +61,18 @@ void BaseTask::step(const tasks::StepContext& context) {
   }
   if (!driver_->attached() && !driver_->closed()) {
     if (link_.stream) {
-      // The stream failed: drop it and try again after the reopen delay.
+      // The stream failed: drop it and try again after the backoff delay.
       open_error_ = driver_->stream_error();
       link_ = hal::Link{};
-      next_open_ns_ = now_ns + hal::millis(config_.reopen_delay_ms);
+      missing_.store(true, std::memory_order_relaxed);
+      backoff_.failed(now_ns);
     }
-    if (now_ns >= next_open_ns_) try_open(config_.reopen_connect_timeout_ms, now_ns);
+    if (backoff_.due(now_ns)) try_open(config_.reopen_connect_timeout_ms, now_ns);
   }
   driver_->step(now_ns);
+  // Only a link that reached SIPs resets the backoff: a port that opens and drops at once
+  // is still retried slowly.
+  if (driver_->state().link == p2os::LinkState::connected) backoff_.succeeded();
   if (driver_->take_new_sip() || driver_->state().link != last_published_link_) publish(now_ns);
 }
 

@@ -8,7 +8,7 @@
 namespace sen3bot::firmware {
 
 LaserTask::LaserTask(const lms200::Lms200Config& config, hal::Board& board, tasks::Topic<msg::ScanMessage>& topic)
-    : config_(config), board_(board), topic_(topic) {}
+    : config_(config), board_(board), topic_(topic), backoff_(config.restart_delay_ms) {}
 
 // The device and the scans live in the arena and are trivially destructible: nothing to run
 // here, and the arena may be gone already.
@@ -21,24 +21,39 @@ Status LaserTask::init(std::pmr::memory_resource& arena) {
   if (!lms200::baud_mode(config_.baud)) return Error::format(Errc::config, "lms200: unsupported baud %u", config_.baud);
   if (!lms200::valid_measuring_mode(static_cast<std::uint8_t>(config_.measuring_mode)))
     return Error(Errc::config, "lms200: unknown measuring mode");
-  Result<hal::Link> opened = board_.open_link("laser", hal::LinkRequest{config_.port, config_.baud});
-  if (!opened) return opened.error();
-  link_ = std::move(*opened);
   try {
-    void* device_memory = arena.allocate(sizeof(lms200::Lms200Device), alignof(lms200::Lms200Device));
-    device_ = new (device_memory) lms200::Lms200Device(config_, *link_.stream, link_.baud_control);
+    device_memory_ = arena.allocate(sizeof(lms200::Lms200Device), alignof(lms200::Lms200Device));
     scan_ = new (arena.allocate(sizeof(lms200::LaserScan), alignof(lms200::LaserScan))) lms200::LaserScan();
     message_ = new (arena.allocate(sizeof(msg::ScanMessage), alignof(msg::ScanMessage))) msg::ScanMessage();
   } catch (const std::bad_alloc&) {
     return Error::format(Errc::capacity, "lms200: task arena too small (needs %zu bytes)", kArenaBytes);
   }
-  arena_ = &arena;
+  try_open(board_.clock().now());
   return Status::success();
 }
 
+void LaserTask::try_open(hal::Nanos now_ns) {
+  Result<hal::Link> opened = board_.open_link("laser", hal::LinkRequest{config_.port, config_.baud});
+  if (!opened) {
+    open_error_ = opened.error();
+    missing_.store(true, std::memory_order_relaxed);
+    backoff_.failed(now_ns);
+    return;
+  }
+  open_error_.reset();
+  missing_.store(false, std::memory_order_relaxed);
+  backoff_.succeeded();
+  link_ = std::move(*opened);
+  device_ = new (device_memory_) lms200::Lms200Device(config_, *link_.stream, link_.baud_control);
+}
+
 void LaserTask::step(const tasks::StepContext& context) {
-  if (device_ == nullptr) return;
+  if (scan_ == nullptr) return;
   const hal::Nanos now = context.start_ns;
+  if (device_ == nullptr) {
+    if (backoff_.due(now)) try_open(now);
+    if (device_ == nullptr) return;
+  }
   if (!started_) {
     device_->start(now);
     started_ = true;
@@ -46,11 +61,15 @@ void LaserTask::step(const tasks::StepContext& context) {
   // A vanished USB adapter: reopen the same port now and then; the device restarts itself.
   // The reopened stream replaces the old one under the device (same object, new descriptor).
   if (device_->phase() == lms200::Lms200Device::Phase::error_wait &&
-      device_->last_error().code() == Errc::disconnected && now >= next_reopen_ns_) {
-    next_reopen_ns_ = now + hal::millis(config_.restart_delay_ms);
+      device_->last_error().code() == Errc::disconnected && backoff_.due(now)) {
+    backoff_.failed(now);  // the next try waits longer, unless the device streams again first
     if (auto* serial = dynamic_cast<hal::SerialPort*>(link_.stream.get())) (void)serial->reopen();
   }
   device_->step(now);
+  if (device_->phase() == lms200::Lms200Device::Phase::streaming) backoff_.succeeded();
+  missing_.store(device_->phase() == lms200::Lms200Device::Phase::error_wait &&
+                     device_->last_error().code() == Errc::disconnected,
+                 std::memory_order_relaxed);
   if (device_->take_new_scan(*scan_)) {
     to_nav_scan(*scan_, *message_);
     topic_.publish(*message_, now);

@@ -46,6 +46,17 @@ void HealthTask::step(const StepContext& context) {
                        failed ? "failed: running without its device" : "has its device again");
       previous_[i].failed = failed;
     }
+    const bool missing = scheduler_.task(i).device_missing();
+    if (missing) {
+      ++report.missing_count;
+      report.missing_mask |= std::uint64_t{1} << i;
+    }
+    if (missing != previous_[i].missing) {
+      bus_.events.post(now, missing ? Severity::error : Severity::info, "health", "task %.*s %s",
+                       static_cast<int>(spec.name.size()), spec.name.data(),
+                       missing ? "has no device: retrying" : "has its device");
+      previous_[i].missing = missing;
+    }
     const std::uint64_t overruns = c.overruns.load(std::memory_order_relaxed);
     const std::uint64_t slips = c.slips.load(std::memory_order_relaxed);
     report.overruns_total += overruns;
@@ -62,7 +73,8 @@ void HealthTask::step(const StepContext& context) {
     previous_[i].overruns = overruns;
     previous_[i].slips = slips;
   }
-  report.ok = report.stalled_count == 0 && report.failed_count == 0 && report.slips_since_last == 0;
+  report.ok = report.stalled_count == 0 && report.failed_count == 0 && report.missing_count == 0 &&
+              report.slips_since_last == 0;
   bus_.health.publish(report, now);
 }
 

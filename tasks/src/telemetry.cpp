@@ -49,9 +49,9 @@ void TelemetryTask::write_status(hal::Nanos now) {
   if (have_health && n > 0 && static_cast<std::size_t>(n) < line_.size()) {
     const HealthReport& h = health.value;
     std::snprintf(line_.data() + n, line_.size() - static_cast<std::size_t>(n),
-                  ", health %s (%u stalled, %u failed), overruns %" PRIu64 ", slips %" PRIu64 ", skips %" PRIu64
+                  ", health %s (%u stalled, %u failed, %u missing), overruns %" PRIu64 ", slips %" PRIu64 ", skips %" PRIu64
                   ", events dropped %" PRIu64,
-                  h.ok ? "ok" : "DEGRADED", h.stalled_count, h.failed_count, h.overruns_total, h.slips_total, h.skips_total,
+                  h.ok ? "ok" : "DEGRADED", h.stalled_count, h.failed_count, h.missing_count, h.overruns_total, h.slips_total, h.skips_total,
                   bus_.events.dropped());
   }
   std::fprintf(out_, "%s\n", line_.data());

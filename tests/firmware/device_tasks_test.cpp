@@ -157,7 +157,7 @@ TEST(LaserTask, PublishesNavigationScansFromTheBoardsLink) {
   EXPECT_GT(in_room, 150);  // walls of an 8 m x 6 m room seen from inside
 }
 
-TEST(LaserTask, RejectsABadVariantAndAMissingLink) {
+TEST(LaserTask, RejectsAVariantTheScannerDoesNotHave) {
   testing::PipeBoard board;
   tasks::Topic<msg::ScanMessage> topic;
   std::vector<std::byte> budget(1 << 16);
@@ -165,7 +165,85 @@ TEST(LaserTask, RejectsABadVariantAndAMissingLink) {
   lms200::Lms200Config bad;
   bad.variant = {180, 25};
   EXPECT_EQ(LaserTask(bad, board, topic).init(arena).error().code(), Errc::config);
-  EXPECT_EQ(LaserTask(lms200::Lms200Config{}, board, topic).init(arena).error().code(), Errc::not_found);
+}
+
+// Opens at 0, 0.5, 1.5, 3.5 and 7.5 s: restart/reopen delay 500 ms doubling to the 5 s cap.
+constexpr int kAttemptsInTenSeconds = 5;
+
+TEST(LaserTask, StartsWithoutItsDeviceReportsItAndRetriesWithBackoff) {
+  testing::PipeBoard board;
+  tasks::Topic<msg::ScanMessage> topic;
+  std::vector<std::byte> budget(1 << 16);
+  std::pmr::monotonic_buffer_resource arena(budget.data(), budget.size(), std::pmr::null_memory_resource());
+  lms200::Lms200Config config;
+  config.restart_delay_ms = 500;
+  LaserTask task(config, board, topic);
+  ASSERT_TRUE(task.init(arena));  // the base task starts without its device too
+  EXPECT_TRUE(task.device_missing());
+  ASSERT_TRUE(task.last_open_error().has_value());
+  EXPECT_EQ(task.last_open_error()->code(), Errc::not_found);
+  hal::SimClock& clock = board.sim_clock();
+  std::uint64_t cycle = 0;
+  auto run = [&](hal::Nanos duration, const std::function<void()>& each = {}) {
+    const hal::Nanos end = clock.now() + duration;
+    while (clock.now() < end) {
+      if (each) each();
+      task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
+      clock.advance_by(hal::millis(5));
+    }
+  };
+  run(hal::seconds(10));
+  EXPECT_EQ(board.attempts("laser"), kAttemptsInTenSeconds);
+  EXPECT_TRUE(task.device_missing());
+  EXPECT_EQ(task.device(), nullptr);
+
+  // Plugged in: the next attempt (at 12.5 s) finds it and scans flow.
+  hal::MemoryPipe pipe(16384);
+  lms200::WallWorld world = lms200::WallWorld::room_with_box(8.0, 6.0, 6.0, 3.0, 1.0);
+  lms200::SimulatedLine line;
+  lms200::Lms200Emulator emulator(lms200::EmulatorOptions{}, pipe.b(), world, &line);
+  board.attach("laser", pipe.a(), &line);
+  run(hal::seconds(8), [&] { emulator.step(clock.now()); });
+  EXPECT_EQ(board.opens("laser"), 1);
+  EXPECT_FALSE(task.device_missing());
+  EXPECT_FALSE(task.last_open_error().has_value());
+  tasks::Sample<msg::ScanMessage> scan;
+  EXPECT_TRUE(topic.read(scan));
+}
+
+TEST(BaseTask, StartsWithoutItsDeviceReportsItAndRetriesWithBackoff) {
+  testing::PipeBoard board;
+  tasks::Topic<msg::VelocityCommand> command;
+  tasks::Topic<msg::Odometry> odometry;
+  tasks::Topic<msg::BaseFlags> flags;
+  p2os::P2osConfig config;
+  config.reopen_delay_ms = 500;
+  BaseTask task(config, board, BaseTopics{command, odometry, flags});
+  std::array<std::byte, 64 * 1024> buffer{};
+  std::pmr::monotonic_buffer_resource arena{buffer.data(), buffer.size(), std::pmr::null_memory_resource()};
+  ASSERT_TRUE(task.init(arena));
+  EXPECT_TRUE(task.device_missing());
+  hal::SimClock& clock = board.sim_clock();
+  std::uint64_t cycle = 0;
+  auto run = [&](hal::Nanos duration, const std::function<void()>& each = {}) {
+    const hal::Nanos end = clock.now() + duration;
+    while (clock.now() < end) {
+      if (each) each();
+      task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
+      clock.advance_by(hal::millis(5));
+    }
+  };
+  run(hal::seconds(10));
+  EXPECT_EQ(board.attempts("base"), kAttemptsInTenSeconds);
+  EXPECT_TRUE(task.device_missing());
+
+  hal::MemoryPipe pipe{16384};
+  p2os::P2osEmulator emulator{brisk_robot()};
+  board.attach("base", pipe.a());
+  run(hal::seconds(8), [&] { (void)emulator.step(pipe.b(), clock.now()); });
+  EXPECT_EQ(board.opens("base"), 1);
+  EXPECT_FALSE(task.device_missing());
+  EXPECT_EQ(task.driver()->state().link, p2os::LinkState::connected);
 }
 
 }  // namespace

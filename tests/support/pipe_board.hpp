@@ -22,12 +22,18 @@ class PipeBoard final : public hal::Board {
     auto it = opens_.find(link);
     return it == opens_.end() ? 0 : it->second;
   }
+  // Open calls, including those that found no link.
+  [[nodiscard]] int attempts(const std::string& link) const {
+    auto it = attempts_.find(link);
+    return it == attempts_.end() ? 0 : it->second;
+  }
 
   [[nodiscard]] std::string_view name() const override { return "pipe"; }
   [[nodiscard]] hal::Clock& clock() override { return clock_; }
   [[nodiscard]] hal::SimClock* lockstep_clock() noexcept override { return &clock_; }
   [[nodiscard]] hal::SimClock& sim_clock() noexcept { return clock_; }
   Result<hal::Link> open_link(std::string_view link, const hal::LinkRequest& request) override {
+    ++attempts_[std::string(link)];
     auto it = links_.find(std::string(link));
     if (it == links_.end()) return Error(Errc::not_found, "pipe board: no such link");
     ++opens_[std::string(link)];
@@ -57,6 +63,7 @@ class PipeBoard final : public hal::Board {
   hal::SimClock clock_;
   std::map<std::string, Entry> links_;
   std::map<std::string, int> opens_;
+  std::map<std::string, int> attempts_;
 };
 
 }  // namespace sen3bot::testing

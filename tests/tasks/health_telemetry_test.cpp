@@ -143,7 +143,51 @@ TEST(HealthTask, ReportsATaskWhoseDeviceFailed) {
   EXPECT_EQ(after.value.failed_mask, 0b1u);
   EXPECT_EQ(after.value.stalled_count, 0u);
   EXPECT_NE(text.find("error   health: task device failed: running without its device"), std::string::npos) << text;
-  EXPECT_NE(text.find("health DEGRADED (0 stalled, 1 failed)"), std::string::npos) << text;
+  EXPECT_NE(text.find("health DEGRADED (0 stalled, 1 failed, 0 missing)"), std::string::npos) << text;
+}
+
+// A device that is missing from 1 s to 2 s: the report says so while it is, and the log
+// tells when it went and came back.
+class MissingDeviceTask final : public Task {
+ public:
+  Status init(std::pmr::memory_resource&) override { return Status::success(); }
+  void step(const StepContext& c) override { missing_.store(c.release_ns >= seconds(1) && c.release_ns < seconds(2)); }
+  [[nodiscard]] bool device_missing() const noexcept override { return missing_.load(); }
+
+ private:
+  std::atomic<bool> missing_{false};
+};
+
+TEST(HealthTask, ReportsAMissingDeviceAndItsReturn) {
+  Rig rig;
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  MissingDeviceTask device;
+  HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
+  TelemetryTask telemetry(rig.scheduler, rig.bus, rig.clock, out, TelemetryConfig{1'000, 256});
+  ASSERT_TRUE(rig.scheduler.add({"laser", 50'000, 10'000, 50, "io"}, device));
+  ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
+  ASSERT_TRUE(rig.scheduler.add({"telemetry", 200'000, 5'000, 0, "background"}, telemetry));
+  ASSERT_TRUE(health.init(rig.arena));
+  ASSERT_TRUE(telemetry.init(rig.arena));
+  ASSERT_TRUE(rig.scheduler.run_lockstep(rig.clock, millis(1500)));
+  Sample<HealthReport> during;
+  ASSERT_TRUE(rig.bus.health.read(during));
+  EXPECT_FALSE(during.value.ok);
+  EXPECT_EQ(during.value.missing_count, 1u);
+  EXPECT_EQ(during.value.missing_mask, 0b1u);
+  EXPECT_EQ(during.value.stalled_count, 0u);
+  ASSERT_TRUE(rig.scheduler.run_lockstep(rig.clock, millis(1000)));
+  telemetry.shutdown();
+  const std::string text = read_all(out);
+  std::fclose(out);
+  Sample<HealthReport> after;
+  ASSERT_TRUE(rig.bus.health.read(after));
+  EXPECT_TRUE(after.value.ok);
+  EXPECT_EQ(after.value.missing_count, 0u);
+  EXPECT_NE(text.find("error   health: task laser has no device: retrying"), std::string::npos) << text;
+  EXPECT_NE(text.find("info    health: task laser has its device"), std::string::npos) << text;
+  EXPECT_NE(text.find("health DEGRADED (0 stalled, 0 failed, 1 missing)"), std::string::npos) << text;
 }
 
 TEST(HealthTask, InitFailsCleanlyWhenItsArenaIsTooSmall) {

@@ -16,12 +16,14 @@ struct HealthReport {
   std::uint64_t stalled_mask = 0;      // bit i: task i has not started for stall_periods periods
   std::uint32_t failed_count = 0;
   std::uint64_t failed_mask = 0;       // bit i: task i's device failed for good (Task::failed())
+  std::uint32_t missing_count = 0;
+  std::uint64_t missing_mask = 0;      // bit i: task i's device is missing, retried (Task::device_missing())
   std::uint64_t overruns_total = 0;
   std::uint64_t slips_total = 0;
   std::uint64_t skips_total = 0;
   std::uint64_t overruns_since_last = 0;  // since the previous report
   std::uint64_t slips_since_last = 0;
-  bool ok = false;                     // nothing stalled or failed, no slip since the previous report
+  bool ok = false;                     // nothing stalled, failed or missing, no slip since the previous report
 };
 
 using FirmwareEventLog = EventLog<256>;

@@ -29,6 +29,7 @@ class HealthTask final : public Task {
     std::uint64_t slips = 0;
     bool stalled = false;
     bool failed = false;
+    bool missing = false;
   };
 
   const Scheduler& scheduler_;

@@ -28,6 +28,9 @@ class Task {
   // Its device failed for good (e.g. a camera that offers no codec we decode): the task keeps
   // its row but does nothing, and the rest of the firmware runs without it. Any thread.
   [[nodiscard]] virtual bool failed() const noexcept { return false; }
+  // Its device is absent or went away (not opened, unplugged): the task keeps its row and
+  // keeps trying to reopen it with backoff. Any thread.
+  [[nodiscard]] virtual bool device_missing() const noexcept { return false; }
 };
 
 }  // namespace sen3bot::tasks
