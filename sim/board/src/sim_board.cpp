@@ -1,5 +1,10 @@
 #include "sen3bot/sim/sim_board.hpp"
 
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "sen3bot/hal/rt_setup.hpp"
 #include "sen3bot/hal/serial.hpp"
 
 namespace sen3bot::sim {
@@ -88,7 +93,9 @@ void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {
 Status SimBoard::start() {
   if (lockstep_ || running_.load()) return Status::success();
   running_.store(true);
-  thread_ = std::thread([this] { thread_main(); });
+  std::atomic<int> started{0};  // 1 real-time, 2 best effort
+  thread_ = std::thread([this, &started] { thread_main(started); });
+  while (started.load() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   return Status::success();
 }
 
@@ -98,7 +105,13 @@ void SimBoard::stop() noexcept {
 }
 
 // Real time: the world steps on its grid from the moment the board starts (t = 0 for movers).
-void SimBoard::thread_main() {
+void SimBoard::thread_main(std::atomic<int>& started) {
+  const Status fifo = hal::set_current_thread_fifo(kWorldPriority);
+  if (!fifo)
+    std::fprintf(stderr, "sen3bot-sim: warning: world thread: %s (the simulated world may lag behind under load)\n",
+                 fifo.error().c_str());
+  (void)hal::prefault_stack(64 * 1024);
+  started.store(fifo ? 1 : 2);
   const hal::Nanos origin = posix_clock_.now();
   hal::Nanos next = origin;
   while (running_.load(std::memory_order_acquire)) {

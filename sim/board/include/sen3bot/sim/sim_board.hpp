@@ -43,6 +43,9 @@ class WireTap {
 class SimBoard final : public hal::Board, private hal::SimClock::Listener {
  public:
   static constexpr hal::Nanos kStepNs = hal::millis(5);
+  // In real time the world thread stands for physics and the devices' own processors, which no
+  // load on the robot's computer delays: it runs above every task of the firmware's table.
+  static constexpr int kWorldPriority = 90;
 
   // Builds the world and the emulators (LinkKind from `lockstep`). Allocates; before the run.
   static Result<std::unique_ptr<SimBoard>> create(const SimulationConfig& config, bool lockstep);
@@ -72,7 +75,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep);
   void before_advance(hal::Nanos now_ns, hal::Nanos to_ns) override;
   void step(hal::Nanos now_ns) noexcept;
-  void thread_main();
+  void thread_main(std::atomic<int>& started);
 
   std::unique_ptr<Simulation> simulation_;
   bool lockstep_;

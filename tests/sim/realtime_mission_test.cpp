@@ -1,0 +1,92 @@
+// The main mission in real time while a CPU hog keeps every core busy, as a build beside the
+// robot would: the firmware's threads on the monotonic clock, the drivers on real ptys, the
+// simulated world on its own thread. Run several times, it must be as safe as the lockstep
+// run: both goals, no contact while the robot moves, and not many more recoveries.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include "firmware.hpp"
+#include "mission.hpp"
+#include "runner.hpp"
+#include "sim_rig.hpp"
+
+namespace sen3bot::sim {
+namespace {
+
+// One busy thread per CPU at normal priority.
+class CpuHog {
+ public:
+  CpuHog() {
+    const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
+    for (unsigned c = 0; c < cpus; ++c) {
+      threads_.emplace_back([this] {
+        volatile std::uint64_t x = 0;
+        while (!stop_.load(std::memory_order_relaxed)) x = x * 6364136223846793005ull + 1;
+      });
+    }
+  }
+  ~CpuHog() {
+    stop_ = true;
+    for (auto& t : threads_) t.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::vector<std::thread> threads_;
+};
+
+struct Outcome {
+  firmware::MissionReport mission;
+  RefereeReport truth;
+};
+
+Outcome run_mission(bool lockstep) {
+  testing::SimRig rig = testing::load_sim_rig();
+  rig.config.clock = lockstep ? firmware::ClockMode::lockstep : firmware::ClockMode::realtime;
+  rig.make_board(lockstep);
+  std::FILE* out = std::tmpfile();
+  EXPECT_NE(out, nullptr);
+  firmware::Firmware fw(rig.config, *rig.board, out);
+  rig.board->referee().watch_estimate(&fw.pose_estimate());
+  const int rc = firmware::run_firmware(fw, *rig.board, rig.config, out, stderr);
+  EXPECT_EQ(rc, 0);
+  Outcome o;
+  if (fw.mission() != nullptr) o.mission = fw.mission()->report();
+  o.truth = rig.board->referee().report();
+  std::fclose(out);
+  return o;
+}
+
+TEST(RealTimeMission, UnderACpuHogIsAsSafeAsTheLockstepRun) {
+  const Outcome lockstep = run_mission(true);
+  ASSERT_EQ(lockstep.mission.state, firmware::MissionState::complete);
+  ASSERT_EQ(lockstep.truth.moving_contacts, 0u);
+
+  constexpr int kRuns = 3;
+  std::uint32_t recoveries = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    Outcome o;
+    {
+      CpuHog hog;
+      o = run_mission(false);
+    }
+    std::printf("real-time run %d under load: %zu goals, %u recoveries, %llu contacts (%llu moving), "
+                "min clearance %.2f m, closest person %.2f m (lockstep: %u recoveries)\n",
+                run + 1, o.mission.goals_reached, o.mission.recoveries,
+                static_cast<unsigned long long>(o.truth.contacts),
+                static_cast<unsigned long long>(o.truth.moving_contacts), o.truth.min_clearance_m,
+                o.truth.min_person_distance_m, lockstep.mission.recoveries);
+    EXPECT_EQ(o.mission.state, firmware::MissionState::complete) << "run " << run + 1;
+    EXPECT_EQ(o.truth.moving_contacts, 0u) << "run " << run + 1;
+    recoveries += o.mission.recoveries;
+  }
+  // Recoveries vary with timing run to run; on average no more than the lockstep run's and a few.
+  EXPECT_LE(recoveries, kRuns * (lockstep.mission.recoveries + 3));
+}
+
+}  // namespace
+}  // namespace sen3bot::sim
