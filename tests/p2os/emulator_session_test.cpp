@@ -172,6 +172,39 @@ TEST(P2osEmulatorSession, DriverOnANewSessionStartsAtTheOrigin) {
   EXPECT_EQ(h.emulator.ground_truth().y_m, truth.y_m);
 }
 
+// The same driver reconnecting to a new session (as the base task does after a TCP drop):
+// the robot's counters restart at zero but the driver's odometry carries on without a jump,
+// so localization sees no teleport.
+TEST(P2osEmulatorSession, SameDriverOnANewSessionKeepsItsOdometryContinuous) {
+  test::Lockstep h;
+  ASSERT_TRUE(h.connect());
+  h.hold(0.4, 0.3);
+  h.run_for(hal::seconds(3));
+  h.hold(0, 0);
+  h.run_for(hal::seconds(1));
+  const double x = h.driver.state().x_m, y = h.driver.state().y_m, th = h.driver.state().theta_rad;
+  ASSERT_GT(std::hypot(x, y), 0.5);
+
+  h.driver.detach();
+  h.pipe.reset();
+  h.emulator.reset_session();
+  h.driver.attach(h.pipe.a(), h.now_ns);
+  bool connected = false;
+  for (int i = 0; i < 2500 && !connected; ++i) {
+    (void)h.emulator.step(h.pipe.b(), h.now_ns);
+    h.driver.step(h.now_ns);
+    h.now_ns += test::Lockstep::kStepNs;
+    connected = h.driver.state().link == LinkState::connected;
+  }
+  ASSERT_TRUE(connected);
+  EXPECT_NEAR(h.driver.state().x_m, x, 1e-9);
+  EXPECT_NEAR(h.driver.state().y_m, y, 1e-9);
+  EXPECT_NEAR(h.driver.state().theta_rad, th, 1e-9);
+  h.hold(0.3, 0);  // and it follows the robot's motion from there
+  h.run_for(hal::seconds(2));
+  EXPECT_GT(std::hypot(h.driver.state().x_m - x, h.driver.state().y_m - y), 0.3);
+}
+
 TEST(P2osEmulatorSession, CloseEndsTheSessionOnceAndTheLineStaysUsable) {
   RawClient c;
   c.open_session();

@@ -61,6 +61,24 @@ TEST(P2osOdometry, FirstSipSeedsFromSignExtendedCounters) {
   EXPECT_NEAR(odo.pose().theta_rad, std::numbers::pi / 2, 1e-12);
 }
 
+TEST(P2osOdometry, RebaseKeepsThePoseWhenTheCountersRestart) {
+  Odometry odo;
+  odo.update(sip_at(1000, 2000, 512));
+  odo.update(sip_at(1500, 2000, 512));  // +0.5 m
+  odo.rebase();
+  odo.update(sip_at(0, 0, 0));  // a new session: counters back at zero
+  EXPECT_NEAR(odo.pose().x_m, 1.5, 1e-12);
+  EXPECT_NEAR(odo.pose().y_m, 2.0, 1e-12);
+  EXPECT_NEAR(odo.pose().theta_rad, std::numbers::pi / 4, 1e-12);
+  odo.update(sip_at(100, 0, 0));  // deltas from the new reference
+  EXPECT_NEAR(odo.pose().x_m, 1.6, 1e-12);
+  EXPECT_NEAR(odo.distance_m(), 0.6, 1e-12);
+  Odometry fresh;  // before the first SIP there is nothing to keep: it seeds as usual
+  fresh.rebase();
+  fresh.update(sip_at(-250, 0, 0));
+  EXPECT_NEAR(fresh.pose().x_m, -0.25, 1e-12);
+}
+
 TEST(P2osOdometry, HeadingAcrossPiUsesExactUnit) {
   Odometry odo;
   std::int64_t units = 2000;

@@ -183,6 +183,7 @@ void P2osDriver::on_frame(const Frame& frame, hal::Nanos now_ns) noexcept {
           return;
         }
         if (auto reply = decode_sync2_reply(frame)) identity_ = *reply;
+        odometry_.rebase();
         queue(encode_command(kOpen));
         // ARCOS resumes its last setpoint once traffic returns: stop it before anything else.
         queue(encode_command_int(Command::vel, 0));

@@ -45,6 +45,13 @@ void Odometry::update(const Sip& sip) noexcept {
     seeded_ = true;
     return;
   }
+  if (rebase_) {
+    last_x_ = sip.x_raw;
+    last_y_ = sip.y_raw;
+    last_theta_ = sip.theta_raw;
+    rebase_ = false;
+    return;
+  }
   const double dx_m = position_delta(sip.x_raw, last_x_) * factors_.dist_conv_mm_per_unit * 1e-3;
   const double dy_m = position_delta(sip.y_raw, last_y_) * factors_.dist_conv_mm_per_unit * 1e-3;
   pose_.x_m += dx_m;

@@ -34,6 +34,10 @@ class Odometry {
   // from 15 bits); later SIPs add deltas.
   void update(const Sip& sip) noexcept;
   void reset() noexcept { seeded_ = false; }
+  // A new session: the controller may have restarted its counters (each TCP session of a
+  // simulator does). The next SIP becomes the counters' reference and the pose carries on
+  // from where it was, so odometry never jumps; motion while the link was down is lost.
+  void rebase() noexcept { rebase_ = seeded_; }
 
   [[nodiscard]] const Pose2& pose() const noexcept { return pose_; }
   [[nodiscard]] double distance_m() const noexcept { return distance_m_; }
@@ -53,6 +57,7 @@ class Odometry {
   std::uint16_t last_y_ = 0;
   std::int16_t last_theta_ = 0;
   bool seeded_ = false;
+  bool rebase_ = false;
 };
 
 }  // namespace sen3bot::p2os
