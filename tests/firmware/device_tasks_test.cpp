@@ -167,6 +167,17 @@ TEST(LaserTask, RejectsAVariantTheScannerDoesNotHave) {
   EXPECT_EQ(LaserTask(bad, board, topic).init(arena).error().code(), Errc::config);
 }
 
+// Steps a task every 5 ms of simulated time, calling `each` (the far end's emulator) first.
+void step_for(tasks::Task& task, hal::SimClock& clock, std::uint64_t& cycle, hal::Nanos duration,
+              const std::function<void()>& each) {
+  const hal::Nanos end = clock.now() + duration;
+  while (clock.now() < end) {
+    if (each) each();
+    task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
+    clock.advance_by(hal::millis(5));
+  }
+}
+
 // Opens at 0, 0.5, 1.5, 3.5 and 7.5 s: restart/reopen delay 500 ms doubling to the 5 s cap.
 constexpr int kAttemptsInTenSeconds = 5;
 
@@ -185,12 +196,7 @@ TEST(LaserTask, StartsWithoutItsDeviceReportsItAndRetriesWithBackoff) {
   hal::SimClock& clock = board.sim_clock();
   std::uint64_t cycle = 0;
   auto run = [&](hal::Nanos duration, const std::function<void()>& each = {}) {
-    const hal::Nanos end = clock.now() + duration;
-    while (clock.now() < end) {
-      if (each) each();
-      task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
-      clock.advance_by(hal::millis(5));
-    }
+    step_for(task, clock, cycle, duration, each);
   };
   run(hal::seconds(10));
   EXPECT_EQ(board.attempts("laser"), kAttemptsInTenSeconds);
@@ -226,12 +232,7 @@ TEST(BaseTask, StartsWithoutItsDeviceReportsItAndRetriesWithBackoff) {
   hal::SimClock& clock = board.sim_clock();
   std::uint64_t cycle = 0;
   auto run = [&](hal::Nanos duration, const std::function<void()>& each = {}) {
-    const hal::Nanos end = clock.now() + duration;
-    while (clock.now() < end) {
-      if (each) each();
-      task.step(tasks::StepContext{clock.now(), clock.now(), cycle++});
-      clock.advance_by(hal::millis(5));
-    }
+    step_for(task, clock, cycle, duration, each);
   };
   run(hal::seconds(10));
   EXPECT_EQ(board.attempts("base"), kAttemptsInTenSeconds);
