@@ -62,7 +62,18 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
                          "mcl: need 0 < min_particles <= max_particles, kld_err > 0, 0 < kld_confidence < 1, "
                          "max_beams > 0, sigma_hit_m > 0 and a map");
   }
-  if (map.origin_yaw_rad() != 0.0) return Error::format(Errc::config, "mcl: maps with a non-zero origin yaw are not supported");
+  const bool alphas_ok = config.recovery_alpha_slow >= 0.0 && config.recovery_alpha_fast >= 0.0 &&
+                         config.recovery_alpha_slow <= 1.0 && config.recovery_alpha_fast <= 1.0;
+  const bool recovery = config.recovery_alpha_slow > 0.0 && config.recovery_alpha_fast > 0.0;
+  if (!alphas_ok || (recovery && !(config.recovery_alpha_slow < config.recovery_alpha_fast))) {
+    return Error::format(Errc::config,
+                         "mcl: recovery_alpha_slow %g and recovery_alpha_fast %g must lie in [0, 1] with slow < fast "
+                         "(0 for either turns recovery off)",
+                         config.recovery_alpha_slow, config.recovery_alpha_fast);
+  }
+  if (!(config.lost_likelihood_ratio >= 0.0 && config.lost_likelihood_ratio < 1.0)) {
+    return Error::format(Errc::config, "mcl: lost_likelihood_ratio %g must lie in [0, 1)", config.lost_likelihood_ratio);
+  }
   config_ = config;
   z_ = normal_quantile(config.kld_confidence);
   grid_ = map.geometry();
@@ -151,25 +162,42 @@ void MonteCarloLocalization::set_pose(const Pose2D& pose, double std_xy_m, doubl
                      normalize_angle(pose.theta_rad + std_theta_rad * n01(rng_)), w};
   }
   updates_since_resample_ = 0;
+  reset_likelihood_averages();
   compute_estimate();
   estimate_.valid = true;
 }
 
-void MonteCarloLocalization::global_initialize() noexcept {
-  if (free_count_ == 0) return;
+MonteCarloLocalization::Particle MonteCarloLocalization::random_free_particle() noexcept {
   std::uniform_int_distribution<std::size_t> pick(0, free_count_ - 1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const std::uint32_t cell = free_cells_[pick(rng_)];
+  const auto width = static_cast<std::uint32_t>(grid_.width());
+  double x = 0.0;
+  double y = 0.0;
+  grid_.grid_to_world(static_cast<double>(cell % width) + unit(rng_), static_cast<double>(cell / width) + unit(rng_), x, y);
+  return {x, y, (2.0 * unit(rng_) - 1.0) * std::numbers::pi, 0.0};
+}
+
+void MonteCarloLocalization::reset_likelihood_averages() noexcept {
+  w_slow_ = 0.0;
+  w_fast_ = 0.0;
+  injected_ = 0;
+  estimate_.relocalizing = false;
+  estimate_.likelihood_slow = 0.0f;
+  estimate_.likelihood_fast = 0.0f;
+  estimate_.injection = 0.0f;
+}
+
+void MonteCarloLocalization::global_initialize() noexcept {
+  if (free_count_ == 0) return;
   count_ = config_.max_particles;
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
-    const std::uint32_t cell = free_cells_[pick(rng_)];
-    const auto width = static_cast<std::uint32_t>(grid_.width());
-    const double c = static_cast<double>(cell % width) + unit(rng_);
-    const double r = static_cast<double>(cell / width) + unit(rng_);
-    particles_[i] = {grid_.origin_x_m() + c * grid_.resolution_m(), grid_.origin_y_m() + r * grid_.resolution_m(),
-                     (2.0 * unit(rng_) - 1.0) * std::numbers::pi, w};
+    particles_[i] = random_free_particle();
+    particles_[i].weight = w;
   }
   updates_since_resample_ = 0;
+  reset_likelihood_averages();
   compute_estimate();
   estimate_.valid = true;
 }
@@ -216,17 +244,43 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
     ++n;
   }
   if (n == 0) return;
-  if (config_.beam_skip && count_ > 0) {
-    // Per beam, how many particles put its end point near a mapped obstacle.
-    std::uint32_t near[512] = {};
+  const bool recovery = recovery_enabled();
+  std::uint32_t near[512] = {};
+  if ((config_.beam_skip || recovery) && count_ > 0) {
+    // Per beam, how many particles put its end point near a mapped obstacle; and the mean pz
+    // over every beam (skipped ones too: a kidnapped robot's beams must count) for recovery.
+    // The particles injected last time sit at the end; they probe the map and are left out of
+    // the mean, which would otherwise sink with every injection and feed more of them.
+    const std::size_t believed = count_ - std::min(injected_, count_ - 1);
+    double pz_sum = 0.0;
     for (std::size_t i = 0; i < count_; ++i) {
       const Particle& p = particles_[i];
       const double c = std::cos(p.theta_rad);
       const double s = std::sin(p.theta_rad);
+      double sum = 0.0;
       for (std::size_t k = 0; k < n; ++k) {
-        if (likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]) >= pz_skip_) ++near[k];
+        const float pz = likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
+        sum += pz;
+        if (pz >= pz_skip_) ++near[k];
       }
+      if (i < believed) pz_sum += sum;
     }
+    const double mean_pz = pz_sum / (static_cast<double>(believed) * static_cast<double>(n));
+    estimate_.likelihood = static_cast<float>(mean_pz);
+    if (recovery) {
+      if (w_slow_ <= 0.0) {
+        w_slow_ = mean_pz;
+        w_fast_ = mean_pz;
+      } else {
+        w_slow_ += config_.recovery_alpha_slow * (mean_pz - w_slow_);
+        w_fast_ += config_.recovery_alpha_fast * (mean_pz - w_fast_);
+      }
+      estimate_.likelihood_slow = static_cast<float>(w_slow_);
+      estimate_.likelihood_fast = static_cast<float>(w_fast_);
+      estimate_.relocalizing = config_.lost_likelihood_ratio > 0.0 && w_fast_ < config_.lost_likelihood_ratio * w_slow_;
+    }
+  }
+  if (config_.beam_skip && count_ > 0) {
     const double needed = config_.beam_skip_threshold * static_cast<double>(count_);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < n; ++k) kept += static_cast<double>(near[k]) >= needed ? 1 : 0;
@@ -289,17 +343,31 @@ void MonteCarloLocalization::resample() noexcept {
   std::size_t occupied = 0;
   std::size_t target = config_.min_particles;
   std::uniform_real_distribution<double> unit(0.0, acc);
+  std::uniform_real_distribution<double> coin(0.0, 1.0);
+  // The share of random particles; random ones count in the KLD bins, as in AMCL, so a
+  // dropping likelihood also raises the particle count.
+  const double inject = recovery_enabled() && w_slow_ > 0.0 && free_count_ > 0 ? std::max(0.0, 1.0 - w_fast_ / w_slow_) : 0.0;
+  injected_ = 0;
   std::size_t drawn = 0;
   while (drawn < config_.max_particles && (drawn < target || drawn < config_.min_particles)) {
-    const double u = unit(rng_);
-    const auto it = std::lower_bound(cumulative_.begin(), cumulative_.begin() + static_cast<std::ptrdiff_t>(count_), u);
-    const std::size_t pick = std::min<std::size_t>(static_cast<std::size_t>(it - cumulative_.begin()), count_ - 1);
-    next_[drawn] = particles_[pick];
+    // Resampled particles fill next_ from the front, random ones from the back.
+    Particle* slot_for = nullptr;
+    if (inject > 0.0 && coin(rng_) < inject) {
+      slot_for = &next_[next_.size() - 1 - injected_];
+      *slot_for = random_free_particle();
+      ++injected_;
+    } else {
+      const double u = unit(rng_);
+      const auto it = std::lower_bound(cumulative_.begin(), cumulative_.begin() + static_cast<std::ptrdiff_t>(count_), u);
+      const std::size_t pick = std::min<std::size_t>(static_cast<std::size_t>(it - cumulative_.begin()), count_ - 1);
+      slot_for = &next_[drawn - injected_];
+      *slot_for = particles_[pick];
+    }
     ++drawn;
     // The histogram bin of the drawn particle; a new bin raises the KLD target.
-    const auto bx = static_cast<std::int64_t>(std::floor(next_[drawn - 1].x_m / config_.bin_xy_m));
-    const auto by = static_cast<std::int64_t>(std::floor(next_[drawn - 1].y_m / config_.bin_xy_m));
-    const auto bt = static_cast<std::int64_t>(std::floor(next_[drawn - 1].theta_rad / config_.bin_theta_rad));
+    const auto bx = static_cast<std::int64_t>(std::floor(slot_for->x_m / config_.bin_xy_m));
+    const auto by = static_cast<std::int64_t>(std::floor(slot_for->y_m / config_.bin_xy_m));
+    const auto bt = static_cast<std::int64_t>(std::floor(slot_for->theta_rad / config_.bin_theta_rad));
     const std::uint64_t key = ((static_cast<std::uint64_t>(bx) & 0xFFFFFu) << 40) |
                               ((static_cast<std::uint64_t>(by) & 0xFFFFFu) << 20) |
                               (static_cast<std::uint64_t>(bt) & 0xFFFFFu) | (std::uint64_t{1} << 63);
@@ -313,10 +381,13 @@ void MonteCarloLocalization::resample() noexcept {
   }
   count_ = drawn;
   const double w = 1.0 / static_cast<double>(count_);
+  const std::size_t resampled = count_ - injected_;
   for (std::size_t i = 0; i < count_; ++i) {
-    particles_[i] = next_[i];
+    particles_[i] = i < resampled ? next_[i] : next_[next_.size() - 1 - (i - resampled)];
     particles_[i].weight = w;
   }
+  estimate_.particles = static_cast<std::uint32_t>(count_);
+  estimate_.injection = static_cast<float>(static_cast<double>(injected_) / static_cast<double>(count_));
 }
 
 void MonteCarloLocalization::compute_estimate() noexcept {
@@ -357,7 +428,7 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   estimate_.cov_yy = yy / wsum;
   estimate_.cov_tt = tt / wsum;
   estimate_.particles = static_cast<std::uint32_t>(count_);
-  estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m;
+  estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m || estimate_.relocalizing;
 }
 
 bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan) noexcept {
@@ -381,14 +452,17 @@ bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* s
   const bool by_time = config_.update_max_interval_s > 0.0 &&
                        static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= config_.update_max_interval_s;
   const bool first = estimate_.updates == 0;
-  if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time)) return false;
+  // Lost, every scan counts: a robot that stopped because of it must still relocalise.
+  if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time || estimate_.lost))
+    return false;
   motion_update(odom_at_update_, at);
   sensor_update(*scan);
+  // The estimate from the weighted particles, before resampling adds random ones.
+  compute_estimate();
   if (++updates_since_resample_ >= config_.resample_interval) {
     resample();
     updates_since_resample_ = 0;
   }
-  compute_estimate();
   odom_at_update_ = at;
   last_update_ns_ = odom.stamp_ns;
   ++estimate_.updates;
