@@ -50,7 +50,7 @@ std::size_t kld_particle_count(std::size_t k, double err, double z, std::size_t 
 std::size_t MonteCarloLocalization::storage_bytes(const MclConfig& c, const OccupancyMap& map) noexcept {
   const std::size_t cells = map.cell_count();
   const auto line = static_cast<std::size_t>(std::max(map.width(), map.height()));
-  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t)) + DistanceTransform::storage_bytes(line) +
+  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t) + sizeof(std::uint8_t)) + DistanceTransform::storage_bytes(line) +
          c.max_particles * (2 * sizeof(Particle) + sizeof(double) + 2 * sizeof(std::uint64_t)) + 1024;
 }
 
@@ -71,6 +71,9 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
                          "(0 for either turns recovery off)",
                          config.recovery_alpha_slow, config.recovery_alpha_fast);
   }
+  if (config.injection_headings == 0 || config.injection_headings > 360) {
+    return Error::format(Errc::config, "mcl: injection_headings %zu must lie in 1..360", config.injection_headings);
+  }
   if (!(config.lost_likelihood_ratio >= 0.0 && config.lost_likelihood_ratio < 1.0)) {
     return Error::format(Errc::config, "mcl: lost_likelihood_ratio %g must lie in [0, 1)", config.lost_likelihood_ratio);
   }
@@ -86,6 +89,7 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
     log_field_ = allocate_array<float>(resource, cells);
     auto squared = allocate_array<float>(resource, cells);
     free_cells_ = allocate_array<std::uint32_t>(resource, cells);
+    solid_ = allocate_array<std::uint8_t>(resource, cells);
     DistanceTransform transform;
     if (Status s = transform.init(static_cast<std::size_t>(std::max(width, height)), resource); !s) return s;
     particles_ = allocate_array<Particle>(resource, config.max_particles);
@@ -114,6 +118,7 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
         const double edge = std::max(0.0, dist - 0.5 * resolution_m);
         log_field_[row + c] = static_cast<float>(std::log(config.z_hit * std::exp(-edge * edge / two_sigma2) + config.z_rand / range_max));
         const int occ = map.at(c, r);
+        solid_[row + c] = occ >= config.occupied_threshold ? 1 : 0;
         if (occ >= 0 && occ < config.occupied_threshold / 2) free_cells_[free_count_++] = static_cast<std::uint32_t>(row + c);
       }
     }
@@ -143,6 +148,13 @@ float MonteCarloLocalization::log_field(double x_m, double y_m) const noexcept {
   return top + fy * (bottom - top);
 }
 
+bool MonteCarloLocalization::solid(double x_m, double y_m) const noexcept {
+  int col = 0;
+  int row = 0;
+  if (!grid_.world_to_cell(x_m, y_m, col, row)) return true;
+  return solid_[grid_.index(col, row)] != 0;
+}
+
 float MonteCarloLocalization::likelihood(double x_m, double y_m) const noexcept {
   double gx = 0.0;
   double gy = 0.0;
@@ -167,7 +179,7 @@ void MonteCarloLocalization::set_pose(const Pose2D& pose, double std_xy_m, doubl
   estimate_.valid = true;
 }
 
-MonteCarloLocalization::Particle MonteCarloLocalization::random_free_particle() noexcept {
+MonteCarloLocalization::Particle MonteCarloLocalization::random_free_particle(bool fit_heading) noexcept {
   std::uniform_int_distribution<std::size_t> pick(0, free_count_ - 1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const std::uint32_t cell = free_cells_[pick(rng_)];
@@ -175,12 +187,35 @@ MonteCarloLocalization::Particle MonteCarloLocalization::random_free_particle() 
   double x = 0.0;
   double y = 0.0;
   grid_.grid_to_world(static_cast<double>(cell % width) + unit(rng_), static_cast<double>(cell / width) + unit(rng_), x, y);
-  return {x, y, (2.0 * unit(rng_) - 1.0) * std::numbers::pi, 0.0};
+  double theta = (2.0 * unit(rng_) - 1.0) * std::numbers::pi;
+  if (fit_heading && probe_count_ > 0 && config_.injection_headings > 1) {
+    // Of injection_headings evenly spaced headings, the one the last scan fits best: a random
+    // pose then needs only its position near the truth, not its heading too.
+    const double step = 2.0 * std::numbers::pi / static_cast<double>(config_.injection_headings);
+    double best = -1.0;
+    double best_theta = theta;
+    for (std::size_t h = 0; h < config_.injection_headings; ++h) {
+      const double t = theta + step * static_cast<double>(h);
+      const double c = std::cos(t);
+      const double s = std::sin(t);
+      double sum = 0.0;
+      for (std::size_t k = 0; k < probe_count_; ++k)
+        sum += likelihood(x + c * probe_x_[k] - s * probe_y_[k], y + s * probe_x_[k] + c * probe_y_[k]);
+      if (sum > best) {
+        best = sum;
+        best_theta = t;
+      }
+    }
+    theta = normalize_angle(best_theta);
+  }
+  return {x, y, theta, 0.0};
 }
 
 void MonteCarloLocalization::reset_likelihood_averages() noexcept {
   w_slow_ = 0.0;
   w_fast_ = 0.0;
+  average_count_ = 0;
+  probe_count_ = 0;
   injected_ = 0;
   estimate_.relocalizing = false;
   estimate_.likelihood_slow = 0.0f;
@@ -193,7 +228,7 @@ void MonteCarloLocalization::global_initialize() noexcept {
   count_ = config_.max_particles;
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
-    particles_[i] = random_free_particle();
+    particles_[i] = random_free_particle(false);
     particles_[i].weight = w;
   }
   updates_since_resample_ = 0;
@@ -244,6 +279,13 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
     ++n;
   }
   if (n == 0) return;
+  // A few beams spread over the scan, for the headings of injected particles.
+  probe_count_ = std::min(n, kProbeBeams);
+  for (std::size_t k = 0; k < probe_count_; ++k) {
+    const std::size_t i = probe_count_ > 1 ? k * (n - 1) / (probe_count_ - 1) : 0;
+    probe_x_[k] = bx[i];
+    probe_y_[k] = by[i];
+  }
   const bool recovery = recovery_enabled();
   std::uint32_t near[512] = {};
   if ((config_.beam_skip || recovery) && count_ > 0) {
@@ -268,13 +310,12 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
     const double mean_pz = pz_sum / (static_cast<double>(believed) * static_cast<double>(n));
     estimate_.likelihood = static_cast<float>(mean_pz);
     if (recovery) {
-      if (w_slow_ <= 0.0) {
-        w_slow_ = mean_pz;
-        w_fast_ = mean_pz;
-      } else {
-        w_slow_ += config_.recovery_alpha_slow * (mean_pz - w_slow_);
-        w_fast_ += config_.recovery_alpha_fast * (mean_pz - w_fast_);
-      }
+      // Until 1/alpha updates have been seen an average is the plain mean so far, so the first
+      // update (often from a vague initial cloud) does not set the reference for a thousand more.
+      ++average_count_;
+      const double first = 1.0 / static_cast<double>(average_count_);
+      w_slow_ += std::max(config_.recovery_alpha_slow, first) * (mean_pz - w_slow_);
+      w_fast_ += std::max(config_.recovery_alpha_fast, first) * (mean_pz - w_fast_);
       estimate_.likelihood_slow = static_cast<float>(w_slow_);
       estimate_.likelihood_fast = static_cast<float>(w_fast_);
       estimate_.relocalizing = config_.lost_likelihood_ratio > 0.0 && w_fast_ < config_.lost_likelihood_ratio * w_slow_;
@@ -316,8 +357,18 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
       }
       score *= config_.product_exponent;
     }
+    // A robot whose centre or laser sits inside a wall is impossible, however well its beams
+    // (ending inside that wall's solid interior) score.
+    const double lx = config_.laser_mount.x_m;
+    const double ly = config_.laser_mount.y_m;
+    if (solid(p.x_m, p.y_m) || solid(p.x_m + c * lx - s * ly, p.y_m + s * lx + c * ly))
+      score = -std::numeric_limits<double>::infinity();
     cumulative_[i] = score;  // scratch until resampling
     best = std::max(best, score);
+  }
+  if (!(best > -std::numeric_limits<double>::infinity())) {
+    for (std::size_t i = 0; i < count_; ++i) particles_[i].weight = 1.0 / static_cast<double>(count_);
+    return;
   }
   double total = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
@@ -354,7 +405,7 @@ void MonteCarloLocalization::resample() noexcept {
     Particle* slot_for = nullptr;
     if (inject > 0.0 && coin(rng_) < inject) {
       slot_for = &next_[next_.size() - 1 - injected_];
-      *slot_for = random_free_particle();
+      *slot_for = random_free_particle(true);
       ++injected_;
     } else {
       const double u = unit(rng_);

@@ -244,7 +244,11 @@ void ControllerTask::step(const tasks::StepContext& context) {
   tasks::Sample<Odometry> odom;
   const bool fresh_pose = pose_.read(pose) && pose.value.valid &&
                           static_cast<double>(context.start_ns - pose.stamp_ns) <= config_.pose_timeout_s * 1e9;
-  if (fresh_pose && odom_.read(odom)) {
+  // Lost (spread, or relocalising after a drop in likelihood): stand still and let
+  // localization catch up rather than follow a pose that may be in another room.
+  if (fresh_pose && pose.value.lost) {
+    status.status = DwaStatus::localizing;
+  } else if (fresh_pose && odom_.read(odom)) {
     const ProjectedScan* scan = nullptr;
     if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
       scan_seq_ = scan_sample_.sequence;

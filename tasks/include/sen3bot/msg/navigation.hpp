@@ -100,6 +100,7 @@ enum class DwaStatus : std::uint8_t {
   rotating,     // recovery 2
   backing_off,  // recovery 3
   failed,       // recoveries exhausted
+  localizing,   // localization is lost: standing still until it is not
 };
 
 inline const char* to_string(DwaStatus status) noexcept {
@@ -111,6 +112,7 @@ inline const char* to_string(DwaStatus status) noexcept {
     case DwaStatus::rotating: return "rotating";
     case DwaStatus::backing_off: return "backing_off";
     case DwaStatus::failed: return "failed";
+    case DwaStatus::localizing: return "localizing";
   }
   return "?";
 }

@@ -22,11 +22,16 @@ struct RefereeReport {
   double min_person_distance_m = 1e9;
   double true_path_length_m = 0;
   double localization_error_max_m = 0;  // estimate vs truth, while the robot moved
+  // From a kidnapping to the first estimate after which every estimate is within
+  // kRelocalizedM and kRelocalizedRad of the truth; < 0 without a kidnapping or while not back.
+  double relocalization_s = -1;
 };
 
 class Referee {
  public:
   static constexpr std::size_t kMaxTrack = 4096;
+  static constexpr double kRelocalizedM = 0.3;
+  static constexpr double kRelocalizedRad = 10.0 * 3.14159265358979323846 / 180.0;
 
   // The firmware's pose estimate, compared with the truth at every step; null: not judged.
   void watch_estimate(const tasks::Topic<msg::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
@@ -46,6 +51,7 @@ class Referee {
   msg::Pose2D last_;
   std::array<msg::Point2D, kMaxTrack> track_{};
   std::size_t track_count_ = 0;
+  hal::Nanos close_since_ns_ = -1;  // after a kidnapping: since when every estimate was close
 };
 
 }  // namespace sen3bot::sim

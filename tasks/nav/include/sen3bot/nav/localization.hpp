@@ -24,10 +24,11 @@
 //
 // Recovery (Augmented MCL, as AMCL): w_slow and w_fast follow the mean measurement likelihood
 // (the mean pz of every particle's beams) with rates recovery_alpha_slow and
-// recovery_alpha_fast; each resampled particle is replaced, with probability
+// recovery_alpha_fast (the plain mean while fewer than 1/alpha updates were seen); each resampled particle is replaced, with probability
 // max(0, 1 - w_fast / w_slow), by one drawn uniformly over the map's free cells (listed at
 // init()). A sudden drop in likelihood (a kidnapped robot, a filter settled on a look-alike
 // place) thus spreads fresh hypotheses over the map until the likelihood recovers.
+#include <array>
 #include <cstdint>
 #include <memory_resource>
 #include <random>
@@ -76,7 +77,7 @@ struct MclConfig {
   double alpha4 = 0.2;
   double update_min_d_m = 0.25;
   double update_min_a_rad = 0.2;
-  double update_max_interval_s = 0.0;
+  double update_max_interval_s = 0.5;  // a robot standing still still notices a kidnapping
   int resample_interval = 1;
   Pose2D initial_pose;                 // map frame
   double initial_std_xy_m = 0.25;
@@ -85,8 +86,11 @@ struct MclConfig {
   // Random-particle injection; 0 for either rate turns it off. Needs 0 < slow < fast <= 1.
   double recovery_alpha_slow = 0.001;
   double recovery_alpha_fast = 0.1;
+  // An injected particle takes, of this many evenly spaced headings, the one the last scan
+  // fits best (1: a uniformly random heading, as AMCL).
+  std::size_t injection_headings = 36;
   // Also reported lost while w_fast < lost_likelihood_ratio * w_slow (0: never by likelihood).
-  double lost_likelihood_ratio = 0.5;
+  double lost_likelihood_ratio = 0.9;
   SensorMount laser_mount;            // LocalizationTask projects scans with it
   std::uint64_t seed = 1;
 };
@@ -143,9 +147,10 @@ class MonteCarloLocalization {
   void resample() noexcept;
   void compute_estimate() noexcept;
   void reset_likelihood_averages() noexcept;
-  [[nodiscard]] Particle random_free_particle() noexcept;
+  [[nodiscard]] Particle random_free_particle(bool fit_heading) noexcept;
   [[nodiscard]] float likelihood(double x_m, double y_m) const noexcept;
   [[nodiscard]] float log_field(double x_m, double y_m) const noexcept;
+  [[nodiscard]] bool solid(double x_m, double y_m) const noexcept;  // occupied or off the map
 
   MclConfig config_;
   double z_ = 2.326;
@@ -157,6 +162,7 @@ class MonteCarloLocalization {
   std::span<float> field_;
   std::span<float> log_field_;
   std::span<std::uint32_t> free_cells_;
+  std::span<std::uint8_t> solid_;  // occupied cells: no robot stands there
   std::size_t free_count_ = 0;
   // Particles.
   std::span<Particle> particles_;
@@ -174,6 +180,11 @@ class MonteCarloLocalization {
   // Recovery: running averages of the mean measurement likelihood.
   double w_slow_ = 0.0;
   double w_fast_ = 0.0;
+  std::uint64_t average_count_ = 0;
+  static constexpr std::size_t kProbeBeams = 16;
+  std::array<double, kProbeBeams> probe_x_{};  // robot frame, from the last scan
+  std::array<double, kProbeBeams> probe_y_{};
+  std::size_t probe_count_ = 0;
   std::size_t injected_ = 0;
   PoseEstimate estimate_;
 };
