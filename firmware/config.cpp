@@ -143,10 +143,11 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("recovery")) {
     // Random-particle injection (AMCL's recovery_alpha_slow/fast); 0 for either turns it off.
     const Reader p = r.child("recovery");
-    p.allow_only({"alpha_slow", "alpha_fast", "lost_ratio"});
+    p.allow_only({"alpha_slow", "alpha_fast", "lost_ratio", "headings"});
     if (p.has("alpha_slow")) n.mcl.recovery_alpha_slow = p.number("alpha_slow", 0.0, 1.0);
     if (p.has("alpha_fast")) n.mcl.recovery_alpha_fast = p.number("alpha_fast", 0.0, 1.0);
     if (p.has("lost_ratio")) n.mcl.lost_likelihood_ratio = p.number("lost_ratio", 0.0, 0.99);
+    if (p.has("headings")) n.mcl.injection_headings = static_cast<std::size_t>(p.integer("headings", 1, 360));
     if (n.mcl.recovery_alpha_slow > 0.0 && n.mcl.recovery_alpha_fast > 0.0 &&
         !(n.mcl.recovery_alpha_slow < n.mcl.recovery_alpha_fast))
       p.fail("alpha_fast", "must be larger than alpha_slow (or 0 for either to turn recovery off)", YAML::Node());
