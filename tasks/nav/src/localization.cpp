@@ -10,6 +10,12 @@
 
 namespace sen3bot::nav {
 
+namespace {
+// A scan whose mean pz is this far below w_slow fits far worse than usual (tracking, it varies
+// by about 10 % from scan to scan): the filter keeps updating even standing still.
+constexpr double kLowLikelihood = 0.8;
+}  // namespace
+
 double normal_quantile(double p) noexcept {
   // Acklam's algorithm: rational approximations in a central and two tail regions.
   static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
@@ -262,6 +268,30 @@ void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to)
   }
 }
 
+double MonteCarloLocalization::mean_likelihood(const ProjectedScan& scan) const noexcept {
+  const std::size_t beams = scan.size();
+  const std::size_t used = std::min(beams, config_.max_beams);
+  if (used == 0 || count_ == 0) return 0.0;
+  const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
+  const std::size_t believed = count_ - std::min(injected_, count_ - 1);
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < used; ++k) {
+    const auto b = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
+    if (!scan.valid(b)) continue;
+    const double ex = scan.end(b).x_m;
+    const double ey = scan.end(b).y_m;
+    for (std::size_t i = 0; i < believed; ++i) {
+      const Particle& p = particles_[i];
+      const double c = std::cos(p.theta_rad);
+      const double s = std::sin(p.theta_rad);
+      sum += likelihood(p.x_m + c * ex - s * ey, p.y_m + s * ex + c * ey);
+    }
+    ++n;
+  }
+  return n == 0 ? 0.0 : sum / (static_cast<double>(n) * static_cast<double>(believed));
+}
+
 void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
   const std::size_t beams = scan.size();
   if (beams == 0) return;
@@ -288,39 +318,25 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
   }
   const bool recovery = recovery_enabled();
   std::uint32_t near[512] = {};
+  double beam_pz[512] = {};  // per beam, summed over the believed particles
+  std::size_t believed = count_;
   if ((config_.beam_skip || recovery) && count_ > 0) {
-    // Per beam, how many particles put its end point near a mapped obstacle; and the mean pz
-    // over every beam (skipped ones too: a kidnapped robot's beams must count) for recovery.
-    // The particles injected last time sit at the end; they probe the map and are left out of
-    // the mean, which would otherwise sink with every injection and feed more of them.
-    const std::size_t believed = count_ - std::min(injected_, count_ - 1);
-    double pz_sum = 0.0;
+    // Per beam, how many particles put its end point near a mapped obstacle, and its pz summed
+    // over the particles. The particles injected last time sit at the end; they only probe the
+    // map and are left out of the sums, which would otherwise sink with every injection.
+    believed = count_ - std::min(injected_, count_ - 1);
     for (std::size_t i = 0; i < count_; ++i) {
       const Particle& p = particles_[i];
       const double c = std::cos(p.theta_rad);
       const double s = std::sin(p.theta_rad);
-      double sum = 0.0;
       for (std::size_t k = 0; k < n; ++k) {
         const float pz = likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
-        sum += pz;
         if (pz >= pz_skip_) ++near[k];
+        if (i < believed) beam_pz[k] += pz;
       }
-      if (i < believed) pz_sum += sum;
-    }
-    const double mean_pz = pz_sum / (static_cast<double>(believed) * static_cast<double>(n));
-    estimate_.likelihood = static_cast<float>(mean_pz);
-    if (recovery) {
-      // Until 1/alpha updates have been seen an average is the plain mean so far, so the first
-      // update (often from a vague initial cloud) does not set the reference for a thousand more.
-      ++average_count_;
-      const double first = 1.0 / static_cast<double>(average_count_);
-      w_slow_ += std::max(config_.recovery_alpha_slow, first) * (mean_pz - w_slow_);
-      w_fast_ += std::max(config_.recovery_alpha_fast, first) * (mean_pz - w_fast_);
-      estimate_.likelihood_slow = static_cast<float>(w_slow_);
-      estimate_.likelihood_fast = static_cast<float>(w_fast_);
-      estimate_.relocalizing = config_.lost_likelihood_ratio > 0.0 && w_fast_ < config_.lost_likelihood_ratio * w_slow_;
     }
   }
+  const std::size_t all_beams = n;
   if (config_.beam_skip && count_ > 0) {
     const double needed = config_.beam_skip_threshold * static_cast<double>(count_);
     std::size_t kept = 0;
@@ -334,6 +350,25 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
         ++m;
       }
       n = m;
+    }
+  }
+  if ((config_.beam_skip || recovery) && count_ > 0) {
+    // The mean pz over every beam, skipped ones too: beam skipping would hide most of a
+    // kidnapping (the beams that miss are skipped as unmapped obstacles).
+    double pz_sum = 0.0;
+    for (std::size_t k = 0; k < all_beams; ++k) pz_sum += beam_pz[k];
+    const double mean_pz = pz_sum / (static_cast<double>(believed) * static_cast<double>(all_beams));
+    estimate_.likelihood = static_cast<float>(mean_pz);
+    if (recovery) {
+      // Until 1/alpha updates have been seen an average is the plain mean so far, so the first
+      // update (often from a vague initial cloud) does not set the reference for a thousand more.
+      ++average_count_;
+      const double first = 1.0 / static_cast<double>(average_count_);
+      w_slow_ += std::max(config_.recovery_alpha_slow, first) * (mean_pz - w_slow_);
+      w_fast_ += std::max(config_.recovery_alpha_fast, first) * (mean_pz - w_fast_);
+      estimate_.likelihood_slow = static_cast<float>(w_slow_);
+      estimate_.likelihood_fast = static_cast<float>(w_fast_);
+      estimate_.relocalizing = config_.lost_likelihood_ratio > 0.0 && w_fast_ < config_.lost_likelihood_ratio * w_slow_;
     }
   }
   // Log-likelihood per particle first, then weights relative to the best one, so the
@@ -442,12 +477,14 @@ void MonteCarloLocalization::resample() noexcept {
 }
 
 void MonteCarloLocalization::compute_estimate() noexcept {
+  // The particles just injected have not been weighed yet: the estimate leaves them out.
+  const std::size_t count = count_ - std::min(injected_, count_ - 1);
   double wsum = 0.0;
   double mx = 0.0;
   double my = 0.0;
   double mc = 0.0;
   double ms = 0.0;
-  for (std::size_t i = 0; i < count_; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const Particle& p = particles_[i];
     wsum += p.weight;
     mx += p.weight * p.x_m;
@@ -463,7 +500,7 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   double xy = 0.0;
   double yy = 0.0;
   double tt = 0.0;
-  for (std::size_t i = 0; i < count_; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const Particle& p = particles_[i];
     const double dx = p.x_m - mx;
     const double dy = p.y_m - my;
@@ -504,16 +541,29 @@ bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* s
                        static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= config_.update_max_interval_s;
   const bool first = estimate_.updates == 0;
   // Lost, every scan counts: a robot that stopped because of it must still relocalise.
-  if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time || estimate_.lost))
-    return false;
+  bool due = first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time || estimate_.lost;
+  // A robot that stands still (or was carried off) does not trigger updates by motion: every
+  // recovery_update_interval_s the scan is checked against the particles, and a likelihood well
+  // below its long-term average starts an update.
+  // After an update that fit that badly, updates keep coming at that interval until one fits.
+  if (!due && recovery_enabled() && config_.recovery_update_interval_s > 0.0 && w_slow_ > 0.0) {
+    const double interval = config_.recovery_update_interval_s;
+    const bool fit_badly = static_cast<double>(estimate_.likelihood) < kLowLikelihood * w_slow_;
+    if (fit_badly && static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= interval) {
+      due = true;
+    } else if (static_cast<double>(odom.stamp_ns - last_check_ns_) * 1e-9 >= interval) {
+      last_check_ns_ = odom.stamp_ns;
+      due = mean_likelihood(*scan) < kLowLikelihood * w_slow_;
+    }
+  }
+  if (!due) return false;
   motion_update(odom_at_update_, at);
   sensor_update(*scan);
-  // The estimate from the weighted particles, before resampling adds random ones.
-  compute_estimate();
   if (++updates_since_resample_ >= config_.resample_interval) {
     resample();
     updates_since_resample_ = 0;
   }
+  compute_estimate();
   odom_at_update_ = at;
   last_update_ns_ = odom.stamp_ns;
   ++estimate_.updates;

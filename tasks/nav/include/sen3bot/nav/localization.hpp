@@ -18,8 +18,9 @@
 // convert a real probability.
 //
 // Updates fire when the odometry moved update_min_d_m or turned update_min_a_rad since the
-// last one, or update_max_interval_s passed (0: never by time), and on every scan while the
-// estimate is lost. Between updates pose() adds the odometry moved since the last update to the
+// last one, or update_max_interval_s passed (0: never by time), on every scan while the
+// estimate is lost, and when a scan checked every recovery_update_interval_s fits the particles
+// far worse than usual. Between updates pose() adds the odometry moved since the last update to the
 // filter's estimate.
 //
 // Recovery (Augmented MCL, as AMCL): w_slow and w_fast follow the mean measurement likelihood
@@ -77,7 +78,11 @@ struct MclConfig {
   double alpha4 = 0.2;
   double update_min_d_m = 0.25;
   double update_min_a_rad = 0.2;
-  double update_max_interval_s = 0.5;  // a robot standing still still notices a kidnapping
+  double update_max_interval_s = 0.0;
+  // Standing still, every this often the scan is checked against the particles; a likelihood
+  // well below w_slow starts an update, so a robot that stopped (or was carried off standing)
+  // still notices and relocalises (0: no check).
+  double recovery_update_interval_s = 0.5;
   int resample_interval = 1;
   Pose2D initial_pose;                 // map frame
   double initial_std_xy_m = 0.25;
@@ -90,7 +95,7 @@ struct MclConfig {
   // fits best (1: a uniformly random heading, as AMCL).
   std::size_t injection_headings = 36;
   // Also reported lost while w_fast < lost_likelihood_ratio * w_slow (0: never by likelihood).
-  double lost_likelihood_ratio = 0.9;
+  double lost_likelihood_ratio = 0.5;
   SensorMount laser_mount;            // LocalizationTask projects scans with it
   std::uint64_t seed = 1;
 };
@@ -151,6 +156,8 @@ class MonteCarloLocalization {
   [[nodiscard]] float likelihood(double x_m, double y_m) const noexcept;
   [[nodiscard]] float log_field(double x_m, double y_m) const noexcept;
   [[nodiscard]] bool solid(double x_m, double y_m) const noexcept;  // occupied or off the map
+  // The mean pz of a scan's beams over the particles, without updating anything.
+  [[nodiscard]] double mean_likelihood(const ProjectedScan& scan) const noexcept;
 
   MclConfig config_;
   double z_ = 2.326;
@@ -176,6 +183,7 @@ class MonteCarloLocalization {
   Pose2D odom_at_update_;
   Pose2D odom_latest_;
   hal::Nanos last_update_ns_ = 0;
+  hal::Nanos last_check_ns_ = 0;
   int updates_since_resample_ = 0;
   // Recovery: running averages of the mean measurement likelihood.
   double w_slow_ = 0.0;
