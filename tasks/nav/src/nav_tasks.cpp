@@ -221,6 +221,7 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
     CostmapConfig cfg = config_.local_costmap;
     cfg.lattice_x_m = map_.origin_x_m();
     cfg.lattice_y_m = map_.origin_y_m();
+    cfg.yaw_rad = map_.origin_yaw_rad();
     if (Status s = costmap_.init(cfg, arena); !s) return s;
     DwaConfig dwa = config_.dwa;
     dwa.max_costmap_cells = std::max(dwa.max_costmap_cells, costmap_.costmap().size());
