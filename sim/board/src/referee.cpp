@@ -16,7 +16,9 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   report_.min_clearance_m = std::min(report_.min_clearance_m, truth.clearance_m);
   report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.nearest_person_m);
   const msg::Pose2D& p = truth.pose;
-  if (have_last_) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
+  // Being carried off is not driving.
+  const bool carried = truth.kidnapped_ns >= 0 && truth.kidnapped_ns == truth.stamp_ns;
+  if (have_last_ && !carried) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
   last_ = p;
   have_last_ = true;
   if (track_count_ == 0 || std::hypot(p.x_m - track_[track_count_ - 1].x_m, p.y_m - track_[track_count_ - 1].y_m) >=
