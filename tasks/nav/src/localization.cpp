@@ -542,16 +542,15 @@ bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* s
   const bool first = estimate_.updates == 0;
   // Lost, every scan counts: a robot that stopped because of it must still relocalise.
   bool due = first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time || estimate_.lost;
-  // A robot that stands still (or was carried off) does not trigger updates by motion: every
-  // recovery_update_interval_s the scan is checked against the particles, and a likelihood well
-  // below its long-term average starts an update.
-  // After an update that fit that badly, updates keep coming at that interval until one fits.
-  if (!due && recovery_enabled() && config_.recovery_update_interval_s > 0.0 && w_slow_ > 0.0) {
+  // After an update that fit far worse than usual, every scan updates until one fits: the
+  // filter relocalises while the robot still moves and shows it new views. A robot standing
+  // still triggers nothing by motion, so every recovery_update_interval_s its scan is checked
+  // against the particles, and a bad fit starts an update.
+  if (!due && recovery_enabled() && w_slow_ > 0.0) {
     const double interval = config_.recovery_update_interval_s;
-    const bool fit_badly = static_cast<double>(estimate_.likelihood) < kLowLikelihood * w_slow_;
-    if (fit_badly && static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= interval) {
+    if (static_cast<double>(estimate_.likelihood) < kLowLikelihood * w_slow_) {
       due = true;
-    } else if (static_cast<double>(odom.stamp_ns - last_check_ns_) * 1e-9 >= interval) {
+    } else if (interval > 0.0 && static_cast<double>(odom.stamp_ns - last_check_ns_) * 1e-9 >= interval) {
       last_check_ns_ = odom.stamp_ns;
       due = mean_likelihood(*scan) < kLowLikelihood * w_slow_;
     }

@@ -19,8 +19,8 @@
 //
 // Updates fire when the odometry moved update_min_d_m or turned update_min_a_rad since the
 // last one, or update_max_interval_s passed (0: never by time), on every scan while the
-// estimate is lost, and when a scan checked every recovery_update_interval_s fits the particles
-// far worse than usual. Between updates pose() adds the odometry moved since the last update to the
+// estimate is lost or the last update fit far worse than usual, and when a scan checked every
+// recovery_update_interval_s (standing still) fits that badly. Between updates pose() adds the odometry moved since the last update to the
 // filter's estimate.
 //
 // Recovery (Augmented MCL, as AMCL): w_slow and w_fast follow the mean measurement likelihood
