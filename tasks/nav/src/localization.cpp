@@ -12,7 +12,7 @@ namespace sen3bot::nav {
 
 namespace {
 // A scan whose mean pz is this far below w_slow fits far worse than usual (tracking, it varies
-// by about 10 % from scan to scan): the filter keeps updating even standing still.
+// by about 10 % from scan to scan): it starts updates without waiting for motion.
 constexpr double kLowLikelihood = 0.8;
 }  // namespace
 
