@@ -125,7 +125,7 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
 }
 
 void read_navigation(const Reader& r, FirmwareConfig& c) {
-  r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "max_v_m_s", "max_w_rad_s",
+  r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
@@ -139,6 +139,18 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     n.mcl.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
     n.mcl.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
     if (n.mcl.max_particles < n.mcl.min_particles) p.fail("max", "must be at least min", YAML::Node());
+  }
+  if (r.has("recovery")) {
+    // Random-particle injection (AMCL's recovery_alpha_slow/fast); 0 for either turns it off.
+    const Reader p = r.child("recovery");
+    p.allow_only({"alpha_slow", "alpha_fast", "lost_ratio", "headings"});
+    if (p.has("alpha_slow")) n.mcl.recovery_alpha_slow = p.number("alpha_slow", 0.0, 1.0);
+    if (p.has("alpha_fast")) n.mcl.recovery_alpha_fast = p.number("alpha_fast", 0.0, 1.0);
+    if (p.has("lost_ratio")) n.mcl.lost_likelihood_ratio = p.number("lost_ratio", 0.0, 0.99);
+    if (p.has("headings")) n.mcl.injection_headings = static_cast<std::size_t>(p.integer("headings", 1, 360));
+    if (n.mcl.recovery_alpha_slow > 0.0 && n.mcl.recovery_alpha_fast > 0.0 &&
+        !(n.mcl.recovery_alpha_slow < n.mcl.recovery_alpha_fast))
+      p.fail("alpha_fast", "must be larger than alpha_slow (or 0 for either to turn recovery off)", YAML::Node());
   }
   if (r.has("max_v_m_s")) n.dwa.max_v_m_s = r.number("max_v_m_s", 0.05, 2.0);
   if (r.has("max_w_rad_s")) n.dwa.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);

@@ -31,10 +31,16 @@ using firmware::MissionTask;
 
 namespace {
 
+struct Kidnap {
+  double time_s = -1.0;  // < 0: none
+  msg::Pose2D to;
+};
+
 struct Case {
   const char* name;
   const char* description;
   std::vector<world::MoverScript> movers;
+  Kidnap kidnap = {};
 };
 
 struct Scenario {
@@ -84,6 +90,16 @@ std::vector<Scenario> scenarios() {
        "",
        {{"worker", "a person walking across the robot's way, back and forth",
          {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
+      {"kidnapped",
+       "(2.5, 2) m to (4, 7) m and back; on the way back the robot is carried into the lower work area, its odometry "
+       "not told",
+       {2.5, 2.0, std::numbers::pi / 2},
+       {{4.0, 7.0}, {2.5, 2.0}},
+       "",
+       {{"carried-downstairs",
+         "at t = 19 s, leaving (4, 7) m in the upper storage area, carried to (5, 3.5) m in the lower work area, facing east",
+         {},
+         {19.0, {5.0, 3.5, 0.0}}}}},
   };
 }
 
@@ -95,6 +111,7 @@ struct CaseResult {
   RefereeReport truth;
   double sim_time_s = 0;
   double wall_time_s = 0;
+  bool kidnapped = false;
   std::vector<tasks::TaskStats> stats;
 };
 
@@ -125,13 +142,18 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                  ", \"reached\": %s, \"collisions\": %llu, \"contacts\": %llu, \"time_s\": %.2f, "
                  "\"path_length_m\": %.3f, \"min_clearance_m\": %.3f, \"recoveries\": %u, \"replans\": %u, "
                  "\"plan_failures\": %u, \"safety_limited_steps\": %llu, \"localization_error_max_m\": %.3f, "
-                 "\"simulated_s\": %.2f, \"wall_s\": %.3f,\n     \"tasks\": [",
+                 "\"simulated_s\": %.2f, \"wall_s\": %.3f,",
                  r.state == MissionState::complete ? "true" : "false",
                  static_cast<unsigned long long>(truth.moving_contacts), static_cast<unsigned long long>(truth.contacts),
                  time_s, truth.true_path_length_m, truth.min_clearance_m, r.recoveries, r.plans > 0 ? r.plans - 1 : 0,
                  r.plan_failures, static_cast<unsigned long long>(r.safety_limited_steps),
                  truth.localization_error_max_m, c.sim_time_s,
                  c.wall_time_s);
+    if (c.kidnapped) {
+      if (truth.relocalization_s >= 0) std::fprintf(f, " \"relocalization_s\": %.2f,", truth.relocalization_s);
+      else std::fprintf(f, " \"relocalization_s\": null,");
+    }
+    std::fprintf(f, "\n     \"tasks\": [");
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
       std::fprintf(f, "%s\n       {\"name\": ", t ? "," : "");
@@ -307,6 +329,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     SimulationConfig world = base_world;
     world.start_pose = scenario->start;
     world.movers = c.movers;
+    world.kidnap_time_s = c.kidnap.time_s;
+    world.kidnap_pose = c.kidnap.to;
     if (have_seed) {
       world.seed = seed;
       world.base.noise_seed = static_cast<std::uint32_t>(seed);
@@ -324,6 +348,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     result.name = c.name;
     result.title = "case " + std::to_string(i + 1) + "/" + std::to_string(scenario->cases.size()) + ": " + c.name;
     result.description = std::string(scenario->name) + ": " + c.description;
+    result.kidnapped = c.kidnap.time_s >= 0;
     if (run_case(config, world, realtime, c.name, report_dir, result, out, err) != 0) return 1;
     if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0) rc = 3;
   }

@@ -125,6 +125,39 @@ tasks: {}
   EXPECT_NE(m.find("threads.control.cpu: expected an integer, got 'many'"), std::string::npos) << m;
 }
 
+constexpr const char* kNavigation = R"(
+robot: { name: x }
+run: { clock: lockstep, duration_s: 1 }
+tasks: {}
+navigation:
+  map: maps/lab.yaml
+  goals: [[4.0, 7.0]]
+)";
+
+TEST(Config, LocalizationRecovery) {
+  Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_slow, 0.001);
+  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_fast, 0.1);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) + "  recovery: { alpha_slow: 0.002, alpha_fast: 0.2, lost_ratio: 0.8, headings: 12 }\n",
+      "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_DOUBLE_EQ(r->navigation.mcl.recovery_alpha_slow, 0.002);
+  EXPECT_DOUBLE_EQ(r->navigation.mcl.recovery_alpha_fast, 0.2);
+  EXPECT_DOUBLE_EQ(r->navigation.mcl.lost_likelihood_ratio, 0.8);
+  EXPECT_EQ(r->navigation.mcl.injection_headings, 12u);
+  Result<FirmwareConfig> off = parse_config(std::string(kNavigation) + "  recovery: { alpha_slow: 0, alpha_fast: 0 }\n", "robot.yaml");
+  ASSERT_TRUE(off) << off.error().c_str();
+
+  std::string m = message_of(std::string(kNavigation) + "  recovery: { alpha_slow: 0.1, alpha_fast: 0.01 }\n");
+  EXPECT_NE(m.find("navigation.recovery.alpha_fast: must be larger than alpha_slow"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  recovery: { alpha_fast: 2 }\n");
+  EXPECT_NE(m.find("navigation.recovery.alpha_fast: value 2 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  recovery: { alpha: 0.1 }\n");
+  EXPECT_NE(m.find("navigation.recovery.alpha: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, AMissingFileSaysSo) {
   Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
   ASSERT_FALSE(r);

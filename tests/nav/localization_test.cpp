@@ -34,9 +34,31 @@ struct TrackResult {
   double final_error_m = 0.0;
   std::uint32_t updates = 0;
   bool allocation_free = true;
+  std::vector<double> errors_xy_m;       // per update
+  std::vector<double> errors_theta_rad;
+  std::size_t injected_max = 0;          // random particles at one resampling
+  bool reported_lost = false;
+  std::size_t kidnapped_at = 0;          // the first update after the kidnapping
 };
 
-TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
+// Updates after the kidnapping until the estimate is within 0.3 m and 10 degrees of the truth
+// and stays there to the end; -1 if it never settles.
+int settled_from(const TrackResult& r) {
+  int from = -1;
+  for (std::size_t i = r.kidnapped_at; i < r.errors_xy_m.size(); ++i) {
+    const bool close = r.errors_xy_m[i] < 0.3 && std::abs(r.errors_theta_rad[i]) < 10.0 * M_PI / 180.0;
+    if (!close) from = -1;
+    else if (from < 0) from = static_cast<int>(i - r.kidnapped_at);
+  }
+  return from;
+}
+
+const std::vector<Point2D> kLowerRoute = {{2.5, 1.0}, {2.5, 4.0}, {4.2, 4.2}, {4.2, 3.0}, {3.0, 3.0}, {3.0, 1.0}, {2.5, 1.0}};
+
+// Drives each route in turn `laps` times; between routes the truth is carried to the next
+// route's start (facing its second point) and odometry is not told: a kidnapping.
+TrackResult track(MclConfig cfg, std::uint32_t settle, bool global,
+                  const std::vector<std::vector<Point2D>>& routes = {kLowerRoute}, int laps = 2) {
   auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
   EXPECT_TRUE(map.ok());
   world::WorldConfig wc;
@@ -47,10 +69,9 @@ TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
   MonteCarloLocalization mcl;
   EXPECT_TRUE(mcl.init(cfg, *map, arena));
   if (global) mcl.global_initialize();
-  const std::vector<Point2D> route = {{2.5, 1.0}, {2.5, 4.0}, {4.2, 4.2}, {4.2, 3.0}, {3.0, 3.0}, {3.0, 1.0}, {2.5, 1.0}};
   std::mt19937_64 rng(11);
   std::normal_distribution<double> odo_noise(0.0, 0.01);
-  Pose2D pose{route[0].x_m, route[0].y_m, M_PI / 2.0};
+  Pose2D pose{routes[0][0].x_m, routes[0][0].y_m, M_PI / 2.0};
   Pose2D odom = pose;  // odometry starts equal to the map pose; it drifts from there
   std::vector<float> ranges(361);
   ScanMessage msg;
@@ -85,7 +106,13 @@ TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
     const bool updated = mcl.update(o, &view);
     if (scope.allocations() != 0) result.allocation_free = false;
     const PoseEstimate e = mcl.estimate();
-    if (updated && std::getenv("MCL_TRACE") != nullptr) std::printf("u%u true %.3f %.3f %.3f est %.3f %.3f %.3f n %u sd %.3f\n", e.updates, pose.x_m, pose.y_m, pose.theta_rad, e.pose.x_m, e.pose.y_m, e.pose.theta_rad, e.particles, std::sqrt(e.cov_xx));
+    if (updated) {
+      result.errors_xy_m.push_back(std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m));
+      result.errors_theta_rad.push_back(normalize_angle(e.pose.theta_rad - pose.theta_rad));
+      result.injected_max = std::max(result.injected_max, mcl.injected());
+      result.reported_lost = result.reported_lost || e.lost;
+    }
+    if (updated && std::getenv("MCL_TRACE") != nullptr) std::printf("u%u true %.3f %.3f %.3f est %.3f %.3f %.3f n %u sd %.3f pz %.3f slow %.3f fast %.3f inj %.2f lost %d\n", e.updates, pose.x_m, pose.y_m, pose.theta_rad, e.pose.x_m, e.pose.y_m, e.pose.theta_rad, e.particles, std::sqrt(e.cov_xx), e.likelihood, e.likelihood_slow, e.likelihood_fast, e.injection, e.lost);
     if (updated && e.updates > settle) {
       const double exy = std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m);
       const double et = normalize_angle(e.pose.theta_rad - pose.theta_rad);
@@ -94,7 +121,13 @@ TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
       ++counted;
     }
   };
-  for (int lap = 0; lap < 2; ++lap) {
+  for (std::size_t leg = 0; leg < routes.size(); ++leg) {
+   const std::vector<Point2D>& route = routes[leg];
+   if (leg > 0) {
+     pose = {route[0].x_m, route[0].y_m, std::atan2(route[1].y_m - route[0].y_m, route[1].x_m - route[0].x_m)};
+     result.kidnapped_at = result.errors_xy_m.size();
+   }
+   for (int lap = 0; lap < laps; ++lap) {
     for (std::size_t i = 1; i < route.size(); ++i) {
       const Point2D a = route[i - 1];
       const Point2D b = route[i];
@@ -111,6 +144,7 @@ TrackResult track(MclConfig cfg, std::uint32_t settle, bool global) {
         step_to({a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m), heading});
       }
     }
+   }
   }
   const PoseEstimate e = mcl.estimate();
   result.final_error_m = std::hypot(e.pose.x_m - pose.x_m, e.pose.y_m - pose.y_m);
@@ -149,6 +183,74 @@ TEST(Mcl, ConvergesFromAWrongInitialGuess) {
   const TrackResult r = track(cfg, 15, false);  // converged within 15 updates
   EXPECT_LT(r.rms_xy_m, 0.1);
   EXPECT_LT(r.final_error_m, 0.1);
+}
+
+// Tracking in the lower work area, then carried through the wall into the upper storage area
+// (odometry not told) and driven on there: the filter keeps following odometry in the wrong
+// room, and only random-particle injection gets it out.
+TrackResult kidnapped(bool recovery) {
+  MclConfig cfg;
+  cfg.initial_pose = {2.5, 1.0, M_PI / 2.0};
+  cfg.initial_std_xy_m = 0.05;
+  cfg.initial_std_theta_rad = 0.03;
+  cfg.update_min_d_m = 0.1;
+  cfg.update_min_a_rad = 0.1;
+  if (!recovery) cfg.recovery_alpha_slow = cfg.recovery_alpha_fast = 0.0;
+  const std::vector<Point2D> upper = {{4.0, 7.0}, {4.0, 5.4}, {1.0, 5.4}, {4.5, 5.4}, {4.5, 8.8}, {3.0, 8.8}, {3.0, 5.4}};
+  return track(cfg, 0, false, {kLowerRoute, upper}, 1);
+}
+
+TEST(Mcl, RecoversFromAKidnappingOnlyWithInjection) {
+  const TrackResult on = kidnapped(true);
+  const TrackResult off = kidnapped(false);
+  const int settled = settled_from(on);
+  std::printf("kidnapped after %zu updates: recovery on settles %d updates later (of %zu; at most %zu random "
+              "particles, lost %d); off: final error %.2f m\n",
+              on.kidnapped_at, settled, on.errors_xy_m.size() - on.kidnapped_at, on.injected_max, on.reported_lost,
+              off.final_error_m);
+  ASSERT_GE(settled, 0);
+  EXPECT_LE(settled, 60);
+  EXPECT_GT(on.injected_max, 0u);
+  EXPECT_TRUE(on.reported_lost);
+  EXPECT_TRUE(on.allocation_free);  // the injection path allocates nothing either
+  EXPECT_LT(settled_from(off), 0);
+  EXPECT_GT(off.final_error_m, 1.0);
+  EXPECT_EQ(off.injected_max, 0u);
+}
+
+TEST(Mcl, TrackingInjectsLittle) {
+  // Tracking correctly, the likelihood holds and injection stays rare: the estimate is no worse.
+  MclConfig cfg;
+  cfg.initial_pose = {2.5, 1.0, M_PI / 2.0};
+  cfg.initial_std_xy_m = 0.05;
+  cfg.initial_std_theta_rad = 0.03;
+  cfg.update_min_d_m = 0.1;
+  cfg.update_min_a_rad = 0.1;
+  const TrackResult r = track(cfg, 3, false);
+  std::printf("tracking with recovery on: RMS %.4f m, at most %zu random particles at once, lost %d\n", r.rms_xy_m,
+              r.injected_max, r.reported_lost);
+  EXPECT_LT(r.rms_xy_m, 0.1);
+  EXPECT_FALSE(r.reported_lost);
+}
+
+TEST(Mcl, RejectsBadRecoveryRates) {
+  auto map = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  ASSERT_TRUE(map.ok());
+  const auto rejected = [&](double slow, double fast, double ratio) {
+    MclConfig cfg;
+    cfg.recovery_alpha_slow = slow;
+    cfg.recovery_alpha_fast = fast;
+    cfg.lost_likelihood_ratio = ratio;
+    mem::BudgetArena arena("mcl", MonteCarloLocalization::storage_bytes(cfg, *map));
+    MonteCarloLocalization mcl;
+    return !mcl.init(cfg, *map, arena).ok();
+  };
+  EXPECT_TRUE(rejected(0.1, 0.001, 0.5));   // slow faster than fast
+  EXPECT_TRUE(rejected(-0.1, 0.1, 0.5));
+  EXPECT_TRUE(rejected(0.001, 1.5, 0.5));
+  EXPECT_TRUE(rejected(0.001, 0.1, 1.0));
+  EXPECT_FALSE(rejected(0.001, 0.1, 0.5));
+  EXPECT_FALSE(rejected(0.0, 0.1, 0.5));    // off
 }
 
 }  // namespace

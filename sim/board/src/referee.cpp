@@ -29,7 +29,9 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   report_.min_clearance_m = std::min(report_.min_clearance_m, truth.clearance_m);
   report_.min_person_distance_m = std::min(report_.min_person_distance_m, truth.nearest_person_m);
   const msg::Pose2D& p = truth.pose;
-  if (have_last_) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
+  // Being carried off is not driving.
+  const bool carried = truth.kidnapped_ns >= 0 && truth.kidnapped_ns == truth.stamp_ns;
+  if (have_last_ && !carried) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
   last_ = p;
   have_last_ = true;
   keep_spaced(track_, track_count_, p.x_m, p.y_m);
@@ -39,11 +41,23 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   tasks::Sample<msg::PoseEstimate> estimate;
   if (estimate_ != nullptr && estimate_->published() != estimate_sequence_ && estimate_->read(estimate)) {
     estimate_sequence_ = estimate.sequence;
+    const double error_m = std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m);
     if (estimate.value.valid)
       keep_spaced(estimate_track_, estimate_track_count_, estimate.value.pose.x_m, estimate.value.pose.y_m);
     if (estimate.value.valid && std::abs(truth.speed_m_s) > kMovingSpeedM_s)
-      report_.localization_error_max_m = std::max(
-          report_.localization_error_max_m, std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m));
+      report_.localization_error_max_m = std::max(report_.localization_error_max_m, error_m);
+    // Relocalisation: judged on every estimate after the kidnapping, moving or not.
+    if (truth.kidnapped_ns >= 0 && estimate.value.stamp_ns >= truth.kidnapped_ns) {
+      const double error_rad = std::abs(msg::normalize_angle(estimate.value.pose.theta_rad - p.theta_rad));
+      const bool close = estimate.value.valid && error_m <= kRelocalizedM && error_rad <= kRelocalizedRad;
+      if (!close) {
+        close_since_ns_ = -1;
+        report_.relocalization_s = -1;
+      } else if (close_since_ns_ < 0) {
+        close_since_ns_ = truth.stamp_ns;
+        report_.relocalization_s = static_cast<double>(truth.stamp_ns - truth.kidnapped_ns) * 1e-9;
+      }
+    }
   }
 }
 
@@ -54,6 +68,7 @@ void Referee::print(std::FILE* out) const {
                "%.2f m, true path %.2f m, localization error max %.2f m\n",
                static_cast<unsigned long long>(t.contacts), static_cast<unsigned long long>(t.moving_contacts),
                t.min_clearance_m, t.min_person_distance_m, t.true_path_length_m, t.localization_error_max_m);
+  if (t.relocalization_s >= 0) std::fprintf(out, "  relocalised %.2f s after the kidnapping\n", t.relocalization_s);
 }
 
 }  // namespace sen3bot::sim

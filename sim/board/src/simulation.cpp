@@ -87,6 +87,9 @@ Status Simulation::open(const nav::OccupancyMap& map) {
   if (world_->collides(config_.start_pose, config_.footprint))
     return Error::format(Errc::config, "simulation: the start pose (%.2f, %.2f) m overlaps an obstacle of %s",
                          config_.start_pose.x_m, config_.start_pose.y_m, config_.map_path.c_str());
+  if (config_.kidnap_time_s >= 0.0 && world_->collides(config_.kidnap_pose, config_.footprint))
+    return Error::format(Errc::config, "simulation: the kidnap pose (%.2f, %.2f) m overlaps an obstacle of %s",
+                         config_.kidnap_pose.x_m, config_.kidnap_pose.y_m, config_.map_path.c_str());
 
   ranges_ = std::make_unique<WorldRanges>(*world_, config_.laser_max_range_m);
   obstacles_ = std::make_unique<WorldObstacles>(*world_, config_.footprint);
@@ -123,6 +126,12 @@ std::string Simulation::laser_device_path() const {
 void Simulation::step(hal::Nanos now_ns) noexcept {
   world_->set_time(static_cast<double>(now_ns) / kNanosPerSecond);
   hal::ByteStream& base_stream = base_pipe_ ? static_cast<hal::ByteStream&>(base_pipe_->b()) : *base_pty_;
+  if (config_.kidnap_time_s >= 0.0 && truth_.kidnapped_ns < 0 &&
+      static_cast<double>(now_ns) >= config_.kidnap_time_s * kNanosPerSecond) {
+    const nav::Pose2D& to = config_.kidnap_pose;
+    base_.set_ground_truth({to.x_m, to.y_m, to.theta_rad});  // the controller's odometry stays
+    truth_.kidnapped_ns = now_ns;
+  }
   // A failed step means the driver's end went away; the robot keeps its state, as hardware does.
   (void)base_.step(base_stream, now_ns);
 

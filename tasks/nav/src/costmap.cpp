@@ -9,7 +9,7 @@
 
 namespace sen3bot::nav {
 
-Status Costmap2D::init(int width, int height, double resolution_m, std::pmr::memory_resource& resource) {
+Status Costmap2D::init(int width, int height, double resolution_m, std::pmr::memory_resource& resource, double yaw_rad) {
   if (width <= 0 || height <= 0 || !(resolution_m > 0.0)) {
     return Error::format(Errc::config, "costmap: bad size %d x %d at %g m", width, height, resolution_m);
   }
@@ -18,7 +18,7 @@ Status Costmap2D::init(int width, int height, double resolution_m, std::pmr::mem
   }
   return guarded("costmap", [&]() -> Status {
     cells_ = allocate_array<std::uint8_t>(resource, static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-    geometry_ = GridGeometry(width, height, resolution_m, 0.0, 0.0);
+    geometry_ = GridGeometry(width, height, resolution_m, 0.0, 0.0, yaw_rad);
     return Status::success();
   });
 }
@@ -41,16 +41,13 @@ Status LayeredCostmap::init(const CostmapConfig& config, std::pmr::memory_resour
   }
   const int width = static_cast<int>(std::lround(config.width_m / config.resolution_m));
   const int height = static_cast<int>(std::lround(config.height_m / config.resolution_m));
-  if (Status s = master_.init(width, height, config.resolution_m, resource); !s) return s;
+  if (Status s = master_.init(width, height, config.resolution_m, resource, config.yaw_rad); !s) return s;
   master_.set_origin(config.origin_x_m, config.origin_y_m);
   window_placed_ = false;
   return init_layers(resource);
 }
 
 Status LayeredCostmap::init_over_map(const OccupancyMap& map, std::pmr::memory_resource& resource) {
-  if (map.origin_yaw_rad() != 0.0) {
-    return Error::format(Errc::config, "costmap: maps with a non-zero origin yaw are not supported");
-  }
   config_ = CostmapConfig{};
   config_.rolling = false;
   config_.resolution_m = map.resolution_m();
@@ -58,7 +55,8 @@ Status LayeredCostmap::init_over_map(const OccupancyMap& map, std::pmr::memory_r
   config_.height_m = map.height() * map.resolution_m();
   config_.origin_x_m = map.origin_x_m();
   config_.origin_y_m = map.origin_y_m();
-  if (Status s = master_.init(map.width(), map.height(), map.resolution_m(), resource); !s) return s;
+  config_.yaw_rad = map.origin_yaw_rad();
+  if (Status s = master_.init(map.width(), map.height(), map.resolution_m(), resource, map.origin_yaw_rad()); !s) return s;
   master_.set_origin(map.origin_x_m(), map.origin_y_m());
   return init_layers(resource);
 }
@@ -71,19 +69,25 @@ Status LayeredCostmap::init_layers(std::pmr::memory_resource& resource) {
 }
 
 void LayeredCostmap::move_window(double robot_x_m, double robot_y_m) noexcept {
-  const double res = master_.resolution_m();
-  const double want_x = robot_x_m - master_.width() * res / 2.0;
-  const double want_y = robot_y_m - master_.height() * res / 2.0;
-  const double cells_x = std::floor((want_x - config_.lattice_x_m) / res);
-  const double cells_y = std::floor((want_y - config_.lattice_y_m) / res);
-  const double new_x = config_.lattice_x_m + cells_x * res;
-  const double new_y = config_.lattice_y_m + cells_y * res;
+  // In the lattice's own (possibly rotated) grid frame, in cells.
+  const GridGeometry lattice(1, 1, master_.resolution_m(), config_.lattice_x_m, config_.lattice_y_m, config_.yaw_rad);
+  double gx = 0.0;
+  double gy = 0.0;
+  lattice.world_to_grid(robot_x_m, robot_y_m, gx, gy);
+  const double cells_x = std::floor(gx - master_.width() / 2.0);
+  const double cells_y = std::floor(gy - master_.height() / 2.0);
   if (window_placed_) {
-    const int shift_c = static_cast<int>(std::lround((new_x - master_.origin_x_m()) / res));
-    const int shift_r = static_cast<int>(std::lround((new_y - master_.origin_y_m()) / res));
+    double ox = 0.0;
+    double oy = 0.0;
+    lattice.world_to_grid(master_.origin_x_m(), master_.origin_y_m(), ox, oy);
+    const int shift_c = static_cast<int>(std::lround(cells_x - ox));
+    const int shift_r = static_cast<int>(std::lround(cells_y - oy));
     if (shift_c == 0 && shift_r == 0) return;
     for (CostmapLayer* layer : layers_) layer->on_window_moved(shift_c, shift_r);
   }
+  double new_x = 0.0;
+  double new_y = 0.0;
+  lattice.grid_to_world(cells_x, cells_y, new_x, new_y);
   master_.set_origin(new_x, new_y);
   window_placed_ = true;
 }
@@ -101,8 +105,9 @@ Status StaticLayer::init(const Costmap2D& master, std::pmr::memory_resource& res
     return Error::format(Errc::config, "static layer: costmap resolution %g m differs from the map's %g m",
                          master.resolution_m(), map_.resolution_m());
   }
-  if (map_.origin_yaw_rad() != 0.0) {
-    return Error::format(Errc::config, "static layer: maps with a non-zero origin yaw are not supported");
+  if (std::abs(normalize_angle(master.yaw_rad() - map_.origin_yaw_rad())) > 1e-9) {
+    return Error::format(Errc::config, "static layer: costmap yaw %g rad differs from the map's origin yaw %g rad",
+                         master.yaw_rad(), map_.origin_yaw_rad());
   }
   return guarded("static layer", [&]() -> Status {
     costs_ = allocate_array<std::uint8_t>(resource, map_.cell_count());
@@ -122,9 +127,12 @@ Status StaticLayer::init(const Costmap2D& master, std::pmr::memory_resource& res
 }
 
 void StaticLayer::update(Costmap2D& master, const CostmapInputs& /*inputs*/) noexcept {
-  const double res = map_.resolution_m();
-  const int off_c = static_cast<int>(std::lround((master.origin_x_m() - map_.origin_x_m()) / res));
-  const int off_r = static_cast<int>(std::lround((master.origin_y_m() - map_.origin_y_m()) / res));
+  // The master's origin in the map's grid: both grids share the yaw and the cell lattice.
+  double gx = 0.0;
+  double gy = 0.0;
+  map_.world_to_grid(master.origin_x_m(), master.origin_y_m(), gx, gy);
+  const int off_c = static_cast<int>(std::lround(gx));
+  const int off_r = static_cast<int>(std::lround(gy));
   const std::uint8_t outside = config_.track_unknown ? kNoInformationCost : kFreeCost;
   for (int r = 0; r < master.height(); ++r) {
     const int mr = r + off_r;
@@ -138,7 +146,7 @@ void StaticLayer::update(Costmap2D& master, const CostmapInputs& /*inputs*/) noe
 // --- ObstacleLayer ------------------------------------------------------------------------
 
 Status ObstacleLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
-  if (Status s = grid_.init(master.width(), master.height(), master.resolution_m(), resource); !s) return s;
+  if (Status s = grid_.init(master.width(), master.height(), master.resolution_m(), resource, master.yaw_rad()); !s) return s;
   grid_.set_origin(master.origin_x_m(), master.origin_y_m());
   return guarded("obstacle layer", [&]() -> Status {
     scratch_ = allocate_array<std::uint8_t>(resource, master.size());
@@ -200,9 +208,9 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
     const Pose2D& p = inputs.scan_pose;
     const double pc = std::cos(p.theta_rad);
     const double ps = std::sin(p.theta_rad);
+    const GridGeometry& geometry = grid_.geometry();
     const auto to_grid = [&](double x_m, double y_m, double& gx, double& gy) {
-      gx = (p.x_m + pc * x_m - ps * y_m - grid_.origin_x_m()) / res;
-      gy = (p.y_m + ps * x_m + pc * y_m - grid_.origin_y_m()) / res;
+      geometry.world_to_grid(p.x_m + pc * x_m - ps * y_m, p.y_m + ps * x_m + pc * y_m, gx, gy);
     };
     const SensorMount& mount = scan.mount();
     double sx = 0.0;

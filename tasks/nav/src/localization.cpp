@@ -10,6 +10,12 @@
 
 namespace sen3bot::nav {
 
+namespace {
+// A scan whose mean pz is this far below w_slow fits far worse than usual (tracking, it varies
+// by about 10 % from scan to scan): it starts updates without waiting for motion.
+constexpr double kLowLikelihood = 0.8;
+}  // namespace
+
 double normal_quantile(double p) noexcept {
   // Acklam's algorithm: rational approximations in a central and two tail regions.
   static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
@@ -50,7 +56,7 @@ std::size_t kld_particle_count(std::size_t k, double err, double z, std::size_t 
 std::size_t MonteCarloLocalization::storage_bytes(const MclConfig& c, const OccupancyMap& map) noexcept {
   const std::size_t cells = map.cell_count();
   const auto line = static_cast<std::size_t>(std::max(map.width(), map.height()));
-  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t)) + DistanceTransform::storage_bytes(line) +
+  return cells * (sizeof(float) * 3 + sizeof(std::uint32_t) + sizeof(std::uint8_t)) + DistanceTransform::storage_bytes(line) +
          c.max_particles * (2 * sizeof(Particle) + sizeof(double) + 2 * sizeof(std::uint64_t)) + 1024;
 }
 
@@ -62,7 +68,21 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
                          "mcl: need 0 < min_particles <= max_particles, kld_err > 0, 0 < kld_confidence < 1, "
                          "max_beams > 0, sigma_hit_m > 0 and a map");
   }
-  if (map.origin_yaw_rad() != 0.0) return Error::format(Errc::config, "mcl: maps with a non-zero origin yaw are not supported");
+  const bool alphas_ok = config.recovery_alpha_slow >= 0.0 && config.recovery_alpha_fast >= 0.0 &&
+                         config.recovery_alpha_slow <= 1.0 && config.recovery_alpha_fast <= 1.0;
+  const bool recovery = config.recovery_alpha_slow > 0.0 && config.recovery_alpha_fast > 0.0;
+  if (!alphas_ok || (recovery && !(config.recovery_alpha_slow < config.recovery_alpha_fast))) {
+    return Error::format(Errc::config,
+                         "mcl: recovery_alpha_slow %g and recovery_alpha_fast %g must lie in [0, 1] with slow < fast "
+                         "(0 for either turns recovery off)",
+                         config.recovery_alpha_slow, config.recovery_alpha_fast);
+  }
+  if (config.injection_headings == 0 || config.injection_headings > 360) {
+    return Error::format(Errc::config, "mcl: injection_headings %zu must lie in 1..360", config.injection_headings);
+  }
+  if (!(config.lost_likelihood_ratio >= 0.0 && config.lost_likelihood_ratio < 1.0)) {
+    return Error::format(Errc::config, "mcl: lost_likelihood_ratio %g must lie in [0, 1)", config.lost_likelihood_ratio);
+  }
   config_ = config;
   z_ = normal_quantile(config.kld_confidence);
   grid_ = map.geometry();
@@ -75,6 +95,7 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
     log_field_ = allocate_array<float>(resource, cells);
     auto squared = allocate_array<float>(resource, cells);
     free_cells_ = allocate_array<std::uint32_t>(resource, cells);
+    solid_ = allocate_array<std::uint8_t>(resource, cells);
     DistanceTransform transform;
     if (Status s = transform.init(static_cast<std::size_t>(std::max(width, height)), resource); !s) return s;
     particles_ = allocate_array<Particle>(resource, config.max_particles);
@@ -103,6 +124,7 @@ Status MonteCarloLocalization::init(const MclConfig& config, const OccupancyMap&
         const double edge = std::max(0.0, dist - 0.5 * resolution_m);
         log_field_[row + c] = static_cast<float>(std::log(config.z_hit * std::exp(-edge * edge / two_sigma2) + config.z_rand / range_max));
         const int occ = map.at(c, r);
+        solid_[row + c] = occ >= config.occupied_threshold ? 1 : 0;
         if (occ >= 0 && occ < config.occupied_threshold / 2) free_cells_[free_count_++] = static_cast<std::uint32_t>(row + c);
       }
     }
@@ -132,6 +154,13 @@ float MonteCarloLocalization::log_field(double x_m, double y_m) const noexcept {
   return top + fy * (bottom - top);
 }
 
+bool MonteCarloLocalization::solid(double x_m, double y_m) const noexcept {
+  int col = 0;
+  int row = 0;
+  if (!grid_.world_to_cell(x_m, y_m, col, row)) return true;
+  return solid_[grid_.index(col, row)] != 0;
+}
+
 float MonteCarloLocalization::likelihood(double x_m, double y_m) const noexcept {
   double gx = 0.0;
   double gy = 0.0;
@@ -151,25 +180,65 @@ void MonteCarloLocalization::set_pose(const Pose2D& pose, double std_xy_m, doubl
                      normalize_angle(pose.theta_rad + std_theta_rad * n01(rng_)), w};
   }
   updates_since_resample_ = 0;
+  reset_likelihood_averages();
   compute_estimate();
   estimate_.valid = true;
 }
 
-void MonteCarloLocalization::global_initialize() noexcept {
-  if (free_count_ == 0) return;
+MonteCarloLocalization::Particle MonteCarloLocalization::random_free_particle(bool fit_heading) noexcept {
   std::uniform_int_distribution<std::size_t> pick(0, free_count_ - 1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const std::uint32_t cell = free_cells_[pick(rng_)];
+  const auto width = static_cast<std::uint32_t>(grid_.width());
+  double x = 0.0;
+  double y = 0.0;
+  grid_.grid_to_world(static_cast<double>(cell % width) + unit(rng_), static_cast<double>(cell / width) + unit(rng_), x, y);
+  double theta = (2.0 * unit(rng_) - 1.0) * std::numbers::pi;
+  if (fit_heading && probe_count_ > 0 && config_.injection_headings > 1) {
+    // Of injection_headings evenly spaced headings, the one the last scan fits best: a random
+    // pose then needs only its position near the truth, not its heading too.
+    const double step = 2.0 * std::numbers::pi / static_cast<double>(config_.injection_headings);
+    double best = -1.0;
+    double best_theta = theta;
+    for (std::size_t h = 0; h < config_.injection_headings; ++h) {
+      const double t = theta + step * static_cast<double>(h);
+      const double c = std::cos(t);
+      const double s = std::sin(t);
+      double sum = 0.0;
+      for (std::size_t k = 0; k < probe_count_; ++k)
+        sum += likelihood(x + c * probe_x_[k] - s * probe_y_[k], y + s * probe_x_[k] + c * probe_y_[k]);
+      if (sum > best) {
+        best = sum;
+        best_theta = t;
+      }
+    }
+    theta = normalize_angle(best_theta);
+  }
+  return {x, y, theta, 0.0};
+}
+
+void MonteCarloLocalization::reset_likelihood_averages() noexcept {
+  w_slow_ = 0.0;
+  w_fast_ = 0.0;
+  average_count_ = 0;
+  probe_count_ = 0;
+  injected_ = 0;
+  estimate_.relocalizing = false;
+  estimate_.likelihood_slow = 0.0f;
+  estimate_.likelihood_fast = 0.0f;
+  estimate_.injection = 0.0f;
+}
+
+void MonteCarloLocalization::global_initialize() noexcept {
+  if (free_count_ == 0) return;
   count_ = config_.max_particles;
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
-    const std::uint32_t cell = free_cells_[pick(rng_)];
-    const auto width = static_cast<std::uint32_t>(grid_.width());
-    const double c = static_cast<double>(cell % width) + unit(rng_);
-    const double r = static_cast<double>(cell / width) + unit(rng_);
-    particles_[i] = {grid_.origin_x_m() + c * grid_.resolution_m(), grid_.origin_y_m() + r * grid_.resolution_m(),
-                     (2.0 * unit(rng_) - 1.0) * std::numbers::pi, w};
+    particles_[i] = random_free_particle(false);
+    particles_[i].weight = w;
   }
   updates_since_resample_ = 0;
+  reset_likelihood_averages();
   compute_estimate();
   estimate_.valid = true;
 }
@@ -199,6 +268,30 @@ void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to)
   }
 }
 
+double MonteCarloLocalization::mean_likelihood(const ProjectedScan& scan) const noexcept {
+  const std::size_t beams = scan.size();
+  const std::size_t used = std::min(beams, config_.max_beams);
+  if (used == 0 || count_ == 0) return 0.0;
+  const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
+  const std::size_t believed = count_ - std::min(injected_, count_ - 1);
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < used; ++k) {
+    const auto b = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
+    if (!scan.valid(b)) continue;
+    const double ex = scan.end(b).x_m;
+    const double ey = scan.end(b).y_m;
+    for (std::size_t i = 0; i < believed; ++i) {
+      const Particle& p = particles_[i];
+      const double c = std::cos(p.theta_rad);
+      const double s = std::sin(p.theta_rad);
+      sum += likelihood(p.x_m + c * ex - s * ey, p.y_m + s * ex + c * ey);
+    }
+    ++n;
+  }
+  return n == 0 ? 0.0 : sum / (static_cast<double>(n) * static_cast<double>(believed));
+}
+
 void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
   const std::size_t beams = scan.size();
   if (beams == 0) return;
@@ -216,17 +309,35 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
     ++n;
   }
   if (n == 0) return;
-  if (config_.beam_skip && count_ > 0) {
-    // Per beam, how many particles put its end point near a mapped obstacle.
-    std::uint32_t near[512] = {};
+  // A few beams spread over the scan, for the headings of injected particles.
+  probe_count_ = std::min(n, kProbeBeams);
+  for (std::size_t k = 0; k < probe_count_; ++k) {
+    const std::size_t i = probe_count_ > 1 ? k * (n - 1) / (probe_count_ - 1) : 0;
+    probe_x_[k] = bx[i];
+    probe_y_[k] = by[i];
+  }
+  const bool recovery = recovery_enabled();
+  std::uint32_t near[512] = {};
+  double beam_pz[512] = {};  // per beam, summed over the believed particles
+  std::size_t believed = count_;
+  if ((config_.beam_skip || recovery) && count_ > 0) {
+    // Per beam, how many particles put its end point near a mapped obstacle, and its pz summed
+    // over the particles. The particles injected last time sit at the end; they only probe the
+    // map and are left out of the sums, which would otherwise sink with every injection.
+    believed = count_ - std::min(injected_, count_ - 1);
     for (std::size_t i = 0; i < count_; ++i) {
       const Particle& p = particles_[i];
       const double c = std::cos(p.theta_rad);
       const double s = std::sin(p.theta_rad);
       for (std::size_t k = 0; k < n; ++k) {
-        if (likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]) >= pz_skip_) ++near[k];
+        const float pz = likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
+        if (pz >= pz_skip_) ++near[k];
+        if (i < believed) beam_pz[k] += pz;
       }
     }
+  }
+  const std::size_t all_beams = n;
+  if (config_.beam_skip && count_ > 0) {
     const double needed = config_.beam_skip_threshold * static_cast<double>(count_);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < n; ++k) kept += static_cast<double>(near[k]) >= needed ? 1 : 0;
@@ -239,6 +350,25 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
         ++m;
       }
       n = m;
+    }
+  }
+  if ((config_.beam_skip || recovery) && count_ > 0) {
+    // The mean pz over every beam, skipped ones too: beam skipping would hide most of a
+    // kidnapping (the beams that miss are skipped as unmapped obstacles).
+    double pz_sum = 0.0;
+    for (std::size_t k = 0; k < all_beams; ++k) pz_sum += beam_pz[k];
+    const double mean_pz = pz_sum / (static_cast<double>(believed) * static_cast<double>(all_beams));
+    estimate_.likelihood = static_cast<float>(mean_pz);
+    if (recovery) {
+      // Until 1/alpha updates have been seen an average is the plain mean so far, so the first
+      // update (often from a vague initial cloud) does not set the reference for a thousand more.
+      ++average_count_;
+      const double first = 1.0 / static_cast<double>(average_count_);
+      w_slow_ += std::max(config_.recovery_alpha_slow, first) * (mean_pz - w_slow_);
+      w_fast_ += std::max(config_.recovery_alpha_fast, first) * (mean_pz - w_fast_);
+      estimate_.likelihood_slow = static_cast<float>(w_slow_);
+      estimate_.likelihood_fast = static_cast<float>(w_fast_);
+      estimate_.relocalizing = config_.lost_likelihood_ratio > 0.0 && w_fast_ < config_.lost_likelihood_ratio * w_slow_;
     }
   }
   // Log-likelihood per particle first, then weights relative to the best one, so the
@@ -262,8 +392,18 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
       }
       score *= config_.product_exponent;
     }
+    // A robot whose centre or laser sits inside a wall is impossible, however well its beams
+    // (ending inside that wall's solid interior) score.
+    const double lx = config_.laser_mount.x_m;
+    const double ly = config_.laser_mount.y_m;
+    if (solid(p.x_m, p.y_m) || solid(p.x_m + c * lx - s * ly, p.y_m + s * lx + c * ly))
+      score = -std::numeric_limits<double>::infinity();
     cumulative_[i] = score;  // scratch until resampling
     best = std::max(best, score);
+  }
+  if (!(best > -std::numeric_limits<double>::infinity())) {
+    for (std::size_t i = 0; i < count_; ++i) particles_[i].weight = 1.0 / static_cast<double>(count_);
+    return;
   }
   double total = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
@@ -289,17 +429,31 @@ void MonteCarloLocalization::resample() noexcept {
   std::size_t occupied = 0;
   std::size_t target = config_.min_particles;
   std::uniform_real_distribution<double> unit(0.0, acc);
+  std::uniform_real_distribution<double> coin(0.0, 1.0);
+  // The share of random particles; random ones count in the KLD bins, as in AMCL, so a
+  // dropping likelihood also raises the particle count.
+  const double inject = recovery_enabled() && w_slow_ > 0.0 && free_count_ > 0 ? std::max(0.0, 1.0 - w_fast_ / w_slow_) : 0.0;
+  injected_ = 0;
   std::size_t drawn = 0;
   while (drawn < config_.max_particles && (drawn < target || drawn < config_.min_particles)) {
-    const double u = unit(rng_);
-    const auto it = std::lower_bound(cumulative_.begin(), cumulative_.begin() + static_cast<std::ptrdiff_t>(count_), u);
-    const std::size_t pick = std::min<std::size_t>(static_cast<std::size_t>(it - cumulative_.begin()), count_ - 1);
-    next_[drawn] = particles_[pick];
+    // Resampled particles fill next_ from the front, random ones from the back.
+    Particle* slot_for = nullptr;
+    if (inject > 0.0 && coin(rng_) < inject) {
+      slot_for = &next_[next_.size() - 1 - injected_];
+      *slot_for = random_free_particle(true);
+      ++injected_;
+    } else {
+      const double u = unit(rng_);
+      const auto it = std::lower_bound(cumulative_.begin(), cumulative_.begin() + static_cast<std::ptrdiff_t>(count_), u);
+      const std::size_t pick = std::min<std::size_t>(static_cast<std::size_t>(it - cumulative_.begin()), count_ - 1);
+      slot_for = &next_[drawn - injected_];
+      *slot_for = particles_[pick];
+    }
     ++drawn;
     // The histogram bin of the drawn particle; a new bin raises the KLD target.
-    const auto bx = static_cast<std::int64_t>(std::floor(next_[drawn - 1].x_m / config_.bin_xy_m));
-    const auto by = static_cast<std::int64_t>(std::floor(next_[drawn - 1].y_m / config_.bin_xy_m));
-    const auto bt = static_cast<std::int64_t>(std::floor(next_[drawn - 1].theta_rad / config_.bin_theta_rad));
+    const auto bx = static_cast<std::int64_t>(std::floor(slot_for->x_m / config_.bin_xy_m));
+    const auto by = static_cast<std::int64_t>(std::floor(slot_for->y_m / config_.bin_xy_m));
+    const auto bt = static_cast<std::int64_t>(std::floor(slot_for->theta_rad / config_.bin_theta_rad));
     const std::uint64_t key = ((static_cast<std::uint64_t>(bx) & 0xFFFFFu) << 40) |
                               ((static_cast<std::uint64_t>(by) & 0xFFFFFu) << 20) |
                               (static_cast<std::uint64_t>(bt) & 0xFFFFFu) | (std::uint64_t{1} << 63);
@@ -313,19 +467,24 @@ void MonteCarloLocalization::resample() noexcept {
   }
   count_ = drawn;
   const double w = 1.0 / static_cast<double>(count_);
+  const std::size_t resampled = count_ - injected_;
   for (std::size_t i = 0; i < count_; ++i) {
-    particles_[i] = next_[i];
+    particles_[i] = i < resampled ? next_[i] : next_[next_.size() - 1 - (i - resampled)];
     particles_[i].weight = w;
   }
+  estimate_.particles = static_cast<std::uint32_t>(count_);
+  estimate_.injection = static_cast<float>(static_cast<double>(injected_) / static_cast<double>(count_));
 }
 
 void MonteCarloLocalization::compute_estimate() noexcept {
+  // The particles just injected have not been weighed yet: the estimate leaves them out.
+  const std::size_t count = count_ - std::min(injected_, count_ - 1);
   double wsum = 0.0;
   double mx = 0.0;
   double my = 0.0;
   double mc = 0.0;
   double ms = 0.0;
-  for (std::size_t i = 0; i < count_; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const Particle& p = particles_[i];
     wsum += p.weight;
     mx += p.weight * p.x_m;
@@ -341,7 +500,7 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   double xy = 0.0;
   double yy = 0.0;
   double tt = 0.0;
-  for (std::size_t i = 0; i < count_; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const Particle& p = particles_[i];
     const double dx = p.x_m - mx;
     const double dy = p.y_m - my;
@@ -357,7 +516,7 @@ void MonteCarloLocalization::compute_estimate() noexcept {
   estimate_.cov_yy = yy / wsum;
   estimate_.cov_tt = tt / wsum;
   estimate_.particles = static_cast<std::uint32_t>(count_);
-  estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m;
+  estimate_.lost = std::sqrt(std::max(estimate_.cov_xx, estimate_.cov_yy)) > config_.lost_std_xy_m || estimate_.relocalizing;
 }
 
 bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* scan) noexcept {
@@ -381,7 +540,22 @@ bool MonteCarloLocalization::update(const Odometry& odom, const ProjectedScan* s
   const bool by_time = config_.update_max_interval_s > 0.0 &&
                        static_cast<double>(odom.stamp_ns - last_update_ns_) * 1e-9 >= config_.update_max_interval_s;
   const bool first = estimate_.updates == 0;
-  if (!(first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time)) return false;
+  // Lost, every scan counts: a robot that stopped because of it must still relocalise.
+  bool due = first || moved >= config_.update_min_d_m || turned >= config_.update_min_a_rad || by_time || estimate_.lost;
+  // After an update that fit far worse than usual, every scan updates until one fits: the
+  // filter relocalises while the robot still moves and shows it new views. A robot standing
+  // still triggers nothing by motion, so every recovery_update_interval_s its scan is checked
+  // against the particles, and a bad fit starts an update.
+  if (!due && recovery_enabled() && w_slow_ > 0.0) {
+    const double interval = config_.recovery_update_interval_s;
+    if (static_cast<double>(estimate_.likelihood) < kLowLikelihood * w_slow_) {
+      due = true;
+    } else if (interval > 0.0 && static_cast<double>(odom.stamp_ns - last_check_ns_) * 1e-9 >= interval) {
+      last_check_ns_ = odom.stamp_ns;
+      due = mean_likelihood(*scan) < kLowLikelihood * w_slow_;
+    }
+  }
+  if (!due) return false;
   motion_update(odom_at_update_, at);
   sensor_update(*scan);
   if (++updates_since_resample_ >= config_.resample_interval) {

@@ -221,6 +221,7 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
     CostmapConfig cfg = config_.local_costmap;
     cfg.lattice_x_m = map_.origin_x_m();
     cfg.lattice_y_m = map_.origin_y_m();
+    cfg.yaw_rad = map_.origin_yaw_rad();
     if (Status s = costmap_.init(cfg, arena); !s) return s;
     DwaConfig dwa = config_.dwa;
     dwa.max_costmap_cells = std::max(dwa.max_costmap_cells, costmap_.costmap().size());
@@ -244,7 +245,11 @@ void ControllerTask::step(const tasks::StepContext& context) {
   tasks::Sample<Odometry> odom;
   const bool fresh_pose = pose_.read(pose) && pose.value.valid &&
                           static_cast<double>(context.start_ns - pose.stamp_ns) <= config_.pose_timeout_s * 1e9;
-  if (fresh_pose && odom_.read(odom)) {
+  // Lost (spread, or relocalising after a drop in likelihood): stand still and let
+  // localization catch up rather than follow a pose that may be in another room.
+  if (fresh_pose && pose.value.lost) {
+    status.status = DwaStatus::localizing;
+  } else if (fresh_pose && odom_.read(odom)) {
     const ProjectedScan* scan = nullptr;
     if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
       scan_seq_ = scan_sample_.sequence;

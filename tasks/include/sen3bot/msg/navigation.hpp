@@ -20,7 +20,14 @@ struct PoseEstimate {
   std::uint32_t particles = 0;
   std::uint32_t updates = 0;
   bool valid = false;           // initialised
-  bool lost = false;            // position spread above the filter's limit
+  bool lost = false;            // position spread above the filter's limit, or relocalising
+  bool relocalizing = false;    // the likelihood dropped: random particles are being injected
+  // The mean beam likelihood (pz) of the last update, and its slow and fast running averages;
+  // injection draws a random particle with probability max(0, 1 - fast / slow).
+  float likelihood = 0.0f;
+  float likelihood_slow = 0.0f;
+  float likelihood_fast = 0.0f;
+  float injection = 0.0f;       // share of random particles at the last resampling
   hal::Nanos stamp_ns = 0;
   // Where the robot was when the newest scan the filter was given was taken (map frame), and
   // that scan's stamp (0: none). The costmaps place that scan from here, not from pose.
@@ -93,6 +100,7 @@ enum class DwaStatus : std::uint8_t {
   rotating,     // recovery 2
   backing_off,  // recovery 3
   failed,       // recoveries exhausted
+  localizing,   // localization is lost: standing still until it is not
 };
 
 inline const char* to_string(DwaStatus status) noexcept {
@@ -104,6 +112,7 @@ inline const char* to_string(DwaStatus status) noexcept {
     case DwaStatus::rotating: return "rotating";
     case DwaStatus::backing_off: return "backing_off";
     case DwaStatus::failed: return "failed";
+    case DwaStatus::localizing: return "localizing";
   }
   return "?";
 }

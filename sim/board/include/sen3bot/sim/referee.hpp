@@ -22,6 +22,9 @@ struct RefereeReport {
   double min_person_distance_m = 1e9;
   double true_path_length_m = 0;
   double localization_error_max_m = 0;  // estimate vs truth, while the robot moved
+  // From a kidnapping to the first estimate after which every estimate is within
+  // kRelocalizedM and kRelocalizedRad of the truth; < 0 without a kidnapping or while not back.
+  double relocalization_s = -1;
 };
 
 // A true pose at a world time (the simulation clock's seconds).
@@ -37,6 +40,8 @@ class Referee {
   static constexpr std::size_t kMaxPoses = 4096;  // at kPoseIntervalS: 17 minutes
   static constexpr double kPoseIntervalS = 0.25;
   static constexpr std::size_t kMaxContacts = 64;
+  static constexpr double kRelocalizedM = 0.3;
+  static constexpr double kRelocalizedRad = 10.0 * 3.14159265358979323846 / 180.0;
 
   // The firmware's pose estimate, compared with the truth at every step; null: not judged.
   void watch_estimate(const tasks::Topic<msg::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
@@ -70,6 +75,7 @@ class Referee {
   std::size_t estimate_track_count_ = 0;
   std::array<TimedPose, kMaxContacts> contacts_{};
   std::size_t contact_count_ = 0;
+  hal::Nanos close_since_ns_ = -1;  // after a kidnapping: since when every estimate was close
 };
 
 }  // namespace sen3bot::sim

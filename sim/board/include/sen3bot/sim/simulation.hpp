@@ -37,6 +37,10 @@ struct SimulationConfig {
   double laser_max_range_m = 8.0;     // beyond this the scanner reports "no echo"
   LinkKind link = LinkKind::memory;
   std::vector<world::MoverScript> movers;  // people and boxes walking polylines
+  // A kidnapping: at kidnap_time_s (< 0: never) the robot is carried to kidnap_pose; its
+  // odometry is not told.
+  double kidnap_time_s = -1.0;
+  nav::Pose2D kidnap_pose;
   p2os::EmulatorConfig base;
   lms200::EmulatorOptions laser;
   std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
@@ -52,6 +56,7 @@ struct GroundTruth {
   std::uint64_t contacts = 0;       // times the footprint started to overlap something
   std::uint64_t moving_contacts = 0;  // of those, while the robot itself was moving
   bool in_contact = false;
+  hal::Nanos kidnapped_ns = -1;     // when the robot was carried away (-1: not yet)
 };
 static_assert(std::is_trivially_copyable_v<GroundTruth>);
 

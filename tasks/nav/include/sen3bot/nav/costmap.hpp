@@ -6,8 +6,9 @@
 // Costs: 0 free .. 252 (kMaxNonObstacle) graded, 253 inscribed (the robot centre there means
 // a collision), 254 lethal (an obstacle), 255 no information.
 //
-// The grid is axis-aligned with the map frame (a map with a non-zero origin yaw is refused).
-// A rolling window keeps its origin on the static map's cell lattice, so cells line up.
+// The grid may be rotated in the map frame by a map's origin yaw; every world<->cell
+// conversion goes through its GridGeometry. A rolling window keeps its origin on the static
+// map's cell lattice (and its yaw), so cells line up.
 #include <cmath>
 #include <cstdint>
 #include <memory_resource>
@@ -32,7 +33,7 @@ inline constexpr std::uint8_t kNoInformationCost = 255;
 class Costmap2D {
  public:
   // Takes width * height bytes from resource (once).
-  Status init(int width, int height, double resolution_m, std::pmr::memory_resource& resource);
+  Status init(int width, int height, double resolution_m, std::pmr::memory_resource& resource, double yaw_rad = 0.0);
 
   [[nodiscard]] const GridGeometry& geometry() const noexcept { return geometry_; }
   [[nodiscard]] int width() const noexcept { return geometry_.width(); }
@@ -40,6 +41,7 @@ class Costmap2D {
   [[nodiscard]] double resolution_m() const noexcept { return geometry_.resolution_m(); }
   [[nodiscard]] double origin_x_m() const noexcept { return geometry_.origin_x_m(); }
   [[nodiscard]] double origin_y_m() const noexcept { return geometry_.origin_y_m(); }
+  [[nodiscard]] double yaw_rad() const noexcept { return geometry_.origin_yaw_rad(); }
   void set_origin(double x_m, double y_m) noexcept { geometry_.set_origin(x_m, y_m); }
   [[nodiscard]] std::size_t size() const noexcept { return cells_.size(); }
   [[nodiscard]] bool in_bounds(int col, int row) const noexcept { return geometry_.in_bounds(col, row); }
@@ -94,6 +96,7 @@ struct CostmapConfig {
   double origin_y_m = 0.0;
   double lattice_x_m = 0.0;     // rolling windows snap to this point's cell lattice: the
   double lattice_y_m = 0.0;     // static map's origin
+  double yaw_rad = 0.0;         // the grid's rotation in the map frame: the static map's yaw
 };
 
 class LayeredCostmap {

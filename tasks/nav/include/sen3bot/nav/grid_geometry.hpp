@@ -67,12 +67,16 @@ class GridGeometry {
     row = static_cast<int>(std::floor(gy));
     return in_bounds(col, row);
   }
-  // The centre of a cell in the map frame.
-  void cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept {
-    const double lx = (col + 0.5) * resolution_m_;
-    const double ly = (row + 0.5) * resolution_m_;
+  // The map-frame point of continuous grid coordinates (the inverse of world_to_grid).
+  void grid_to_world(double gx, double gy, double& x_m, double& y_m) const noexcept {
+    const double lx = gx * resolution_m_;
+    const double ly = gy * resolution_m_;
     x_m = origin_x_m_ + cos_yaw_ * lx - sin_yaw_ * ly;
     y_m = origin_y_m_ + sin_yaw_ * lx + cos_yaw_ * ly;
+  }
+  // The centre of a cell in the map frame.
+  void cell_to_world(int col, int row, double& x_m, double& y_m) const noexcept {
+    grid_to_world(col + 0.5, row + 0.5, x_m, y_m);
   }
 
  private:

@@ -18,8 +18,18 @@
 // convert a real probability.
 //
 // Updates fire when the odometry moved update_min_d_m or turned update_min_a_rad since the
-// last one, or update_max_interval_s passed (0: never by time). Between updates pose() adds
-// the odometry moved since the last update to the filter's estimate.
+// last one, or update_max_interval_s passed (0: never by time), on every scan while the
+// estimate is lost or the last update fit far worse than usual, and when a scan checked every
+// recovery_update_interval_s (standing still) fits that badly. Between updates pose() adds the odometry moved since the last update to the
+// filter's estimate.
+//
+// Recovery (Augmented MCL, as AMCL): w_slow and w_fast follow the mean measurement likelihood
+// (the mean pz of every particle's beams) with rates recovery_alpha_slow and
+// recovery_alpha_fast (the plain mean while fewer than 1/alpha updates were seen); each resampled particle is replaced, with probability
+// max(0, 1 - w_fast / w_slow), by one drawn uniformly over the map's free cells (listed at
+// init()). A sudden drop in likelihood (a kidnapped robot, a filter settled on a look-alike
+// place) thus spreads fresh hypotheses over the map until the likelihood recovers.
+#include <array>
 #include <cstdint>
 #include <memory_resource>
 #include <random>
@@ -69,11 +79,23 @@ struct MclConfig {
   double update_min_d_m = 0.25;
   double update_min_a_rad = 0.2;
   double update_max_interval_s = 0.0;
+  // Standing still, every this often the scan is checked against the particles; a likelihood
+  // well below w_slow starts an update, so a robot that stopped (or was carried off standing)
+  // still notices and relocalises (0: no check).
+  double recovery_update_interval_s = 0.5;
   int resample_interval = 1;
   Pose2D initial_pose;                 // map frame
   double initial_std_xy_m = 0.25;
   double initial_std_theta_rad = 0.2;
   double lost_std_xy_m = 1.0;          // estimate reported lost above this position spread
+  // Random-particle injection; 0 for either rate turns it off. Needs 0 < slow < fast <= 1.
+  double recovery_alpha_slow = 0.001;
+  double recovery_alpha_fast = 0.1;
+  // An injected particle takes, of this many evenly spaced headings, the one the last scan
+  // fits best (1: a uniformly random heading, as AMCL).
+  std::size_t injection_headings = 36;
+  // Also reported lost while w_fast < lost_likelihood_ratio * w_slow (0: never by likelihood).
+  double lost_likelihood_ratio = 0.5;
   SensorMount laser_mount;            // LocalizationTask projects scans with it
   std::uint64_t seed = 1;
 };
@@ -111,6 +133,12 @@ class MonteCarloLocalization {
   [[nodiscard]] double z_quantile() const noexcept { return z_; }
   // The laser model's pz for a beam ending at (x, y) in the map frame.
   [[nodiscard]] float likelihood_at(double x_m, double y_m) const noexcept { return likelihood(x_m, y_m); }
+  [[nodiscard]] bool recovery_enabled() const noexcept {
+    return config_.recovery_alpha_slow > 0.0 && config_.recovery_alpha_fast > 0.0;
+  }
+  // Random particles injected at the last resampling.
+  [[nodiscard]] std::size_t injected() const noexcept { return injected_; }
+  [[nodiscard]] std::size_t free_cell_count() const noexcept { return free_count_; }
 
  private:
   struct Particle {
@@ -123,8 +151,13 @@ class MonteCarloLocalization {
   void sensor_update(const ProjectedScan& scan) noexcept;
   void resample() noexcept;
   void compute_estimate() noexcept;
+  void reset_likelihood_averages() noexcept;
+  [[nodiscard]] Particle random_free_particle(bool fit_heading) noexcept;
   [[nodiscard]] float likelihood(double x_m, double y_m) const noexcept;
   [[nodiscard]] float log_field(double x_m, double y_m) const noexcept;
+  [[nodiscard]] bool solid(double x_m, double y_m) const noexcept;  // occupied or off the map
+  // The mean pz of a scan's beams over the particles, without updating anything.
+  [[nodiscard]] double mean_likelihood(const ProjectedScan& scan) const noexcept;
 
   MclConfig config_;
   double z_ = 2.326;
@@ -136,6 +169,7 @@ class MonteCarloLocalization {
   std::span<float> field_;
   std::span<float> log_field_;
   std::span<std::uint32_t> free_cells_;
+  std::span<std::uint8_t> solid_;  // occupied cells: no robot stands there
   std::size_t free_count_ = 0;
   // Particles.
   std::span<Particle> particles_;
@@ -149,7 +183,17 @@ class MonteCarloLocalization {
   Pose2D odom_at_update_;
   Pose2D odom_latest_;
   hal::Nanos last_update_ns_ = 0;
+  hal::Nanos last_check_ns_ = 0;
   int updates_since_resample_ = 0;
+  // Recovery: running averages of the mean measurement likelihood.
+  double w_slow_ = 0.0;
+  double w_fast_ = 0.0;
+  std::uint64_t average_count_ = 0;
+  static constexpr std::size_t kProbeBeams = 16;
+  std::array<double, kProbeBeams> probe_x_{};  // robot frame, from the last scan
+  std::array<double, kProbeBeams> probe_y_{};
+  std::size_t probe_count_ = 0;
+  std::size_t injected_ = 0;
   PoseEstimate estimate_;
 };
 
