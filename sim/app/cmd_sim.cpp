@@ -31,6 +31,9 @@ using firmware::MissionTask;
 
 namespace {
 
+constexpr double kKidnapRecoveryAlphaSlow = 0.001;
+constexpr double kKidnapRecoveryAlphaFast = 0.1;
+
 struct Kidnap {
   double time_s = -1.0;  // < 0: none
   msg::Pose2D to;
@@ -334,6 +337,14 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     if (have_seed) {
       world.seed = seed;
       world.base.noise_seed = static_cast<std::uint32_t>(seed);
+    }
+    // Carrying the robot off tests recovery: on at AMCL's usual rates if the configuration
+    // leaves it off (it is off by default; docs/navigation.md says why).
+    if (c.kidnap.time_s >= 0 && !(config.navigation.mcl.recovery_alpha_slow > 0 && config.navigation.mcl.recovery_alpha_fast > 0)) {
+      config.navigation.mcl.recovery_alpha_slow = kKidnapRecoveryAlphaSlow;
+      config.navigation.mcl.recovery_alpha_fast = kKidnapRecoveryAlphaFast;
+      std::fprintf(out, "localization recovery on for this case: alpha_slow %g, alpha_fast %g\n", kKidnapRecoveryAlphaSlow,
+                   kKidnapRecoveryAlphaFast);
     }
     config.navigation.mcl.initial_pose = scenario->start;
     config.navigation.mission.goal_count = scenario->goals.size();

@@ -33,8 +33,11 @@ std::string result_line(const MissionReport& r, std::size_t goal_count, const Re
                   static_cast<unsigned long long>(truth.moving_contacts));
   const unsigned replans = r.plans > 0 ? r.plans - 1 : 0;
   char line[256];
-  std::snprintf(line, sizeof line, "%s, %s, %u recover%s, %u replan%s, min clearance %.2f m", goals, contacts,
-                r.recoveries, r.recoveries == 1 ? "y" : "ies", replans, replans == 1 ? "" : "s", truth.min_clearance_m);
+  int n = std::snprintf(line, sizeof line, "%s, %s, %u recover%s, %u replan%s, min clearance %.2f m", goals, contacts,
+                        r.recoveries, r.recoveries == 1 ? "y" : "ies", replans, replans == 1 ? "" : "s",
+                        truth.min_clearance_m);
+  if (truth.relocalization_s >= 0 && n > 0 && static_cast<std::size_t>(n) < sizeof line)
+    std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ", relocalised in %.1f s", truth.relocalization_s);
   return line;
 }
 

@@ -137,8 +137,8 @@ navigation:
 TEST(Config, LocalizationRecovery) {
   Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
-  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_slow, 0.001);
-  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_fast, 0.1);
+  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_slow, 0.0);  // off, as AMCL
+  EXPECT_DOUBLE_EQ(defaults->navigation.mcl.recovery_alpha_fast, 0.0);
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) + "  recovery: { alpha_slow: 0.002, alpha_fast: 0.2, lost_ratio: 0.8, headings: 12 }\n",
       "robot.yaml");

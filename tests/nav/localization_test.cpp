@@ -195,7 +195,8 @@ TrackResult kidnapped(bool recovery) {
   cfg.initial_std_theta_rad = 0.03;
   cfg.update_min_d_m = 0.1;
   cfg.update_min_a_rad = 0.1;
-  if (!recovery) cfg.recovery_alpha_slow = cfg.recovery_alpha_fast = 0.0;
+  cfg.recovery_alpha_slow = recovery ? 0.001 : 0.0;
+  cfg.recovery_alpha_fast = recovery ? 0.1 : 0.0;
   const std::vector<Point2D> upper = {{4.0, 7.0}, {4.0, 5.4}, {1.0, 5.4}, {4.5, 5.4}, {4.5, 8.8}, {3.0, 8.8}, {3.0, 5.4}};
   return track(cfg, 0, false, {kLowerRoute, upper}, 1);
 }
@@ -221,6 +222,8 @@ TEST(Mcl, RecoversFromAKidnappingOnlyWithInjection) {
 TEST(Mcl, TrackingInjectsLittle) {
   // Tracking correctly, the likelihood holds and injection stays rare: the estimate is no worse.
   MclConfig cfg;
+  cfg.recovery_alpha_slow = 0.001;
+  cfg.recovery_alpha_fast = 0.1;
   cfg.initial_pose = {2.5, 1.0, M_PI / 2.0};
   cfg.initial_std_xy_m = 0.05;
   cfg.initial_std_theta_rad = 0.03;

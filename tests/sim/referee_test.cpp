@@ -2,6 +2,7 @@
 // with its heading, the estimate's path, and where each contact began.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 
 #include "sen3bot/sim/referee.hpp"
@@ -32,6 +33,28 @@ TEST(Referee, KeepsTheTruePoseEveryQuarterSecondWithItsHeading) {
     EXPECT_NEAR(p.pose.x_m, 0.05 * i, 1e-9);
     EXPECT_NEAR(p.pose.theta_rad, 0.125 * i, 1e-9);
   }
+}
+
+TEST(Referee, ACarryBreaksTheDrivenPathAndIsNotDistanceDriven) {
+  auto referee = std::make_unique<Referee>();
+  for (int step = 0; step <= 100; ++step) referee->observe(at(step * 0.005, 0.2 * step * 0.005));  // 0.1 m
+  GroundTruth carried = at(0.505, 5.0);
+  carried.kidnapped_ns = carried.stamp_ns;
+  referee->observe(carried);
+  for (int step = 102; step <= 200; ++step) {
+    GroundTruth t = at(step * 0.005, 5.0 + 0.2 * (step - 101) * 0.005);
+    t.kidnapped_ns = carried.stamp_ns;
+    referee->observe(t);
+  }
+  const auto track = referee->track();
+  std::size_t breaks = 0, break_at = 0;
+  for (std::size_t i = 0; i < track.size(); ++i)
+    if (!std::isfinite(track[i].x_m)) ++breaks, break_at = i;
+  ASSERT_EQ(breaks, 1u);
+  EXPECT_LT(track[break_at - 1].x_m, 0.2);
+  EXPECT_DOUBLE_EQ(track[break_at + 1].x_m, 5.0);
+  EXPECT_GT(track.back().x_m, 5.05);  // the track goes on after the break
+  EXPECT_NEAR(referee->report().true_path_length_m, 0.1 + 0.099, 1e-6);
 }
 
 TEST(Referee, TheEstimatesPathAPointPerFiveCentimetresOfValidEstimates) {

@@ -2,6 +2,8 @@
 // where it is measured to be, and a case figure puts each layer where its data says.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -249,6 +251,18 @@ TEST(CaseFigure, TheMapAndThePathsWhereTheirDataSays) {
   const int header_bottom = Round(v(0, 3.0).y) - 30;
   EXPECT_GT(count_if(c, greenish, 0, 0, c.width(), header_bottom), 50);
   EXPECT_EQ(count_if(c, reddish, 0, 0, c.width(), header_bottom), 0);
+}
+
+TEST(CaseFigure, ADrivenPathBreaksWhereTheRobotWasCarried) {
+  const nav::OccupancyMap map = test_map();
+  CaseFigure f = test_figure(map);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  f.driven = {{0.5, 0.5}, {1.5, 0.5}, {nan, nan}, {2.5, 2.5}, {3.5, 2.5}};
+  const Canvas c = draw_case_figure(f);
+  const View v = figure_view(f);
+  EXPECT_EQ(at(c, v(1.0, 0.5)), colours::kDriven);
+  EXPECT_EQ(at(c, v(3.0, 2.5)), colours::kDriven);
+  EXPECT_EQ(at(c, v(2.0, 1.5)), colours::kPaper);  // halfway along the carry: nothing drawn
 }
 
 TEST(CaseFigure, TheRobotsFootprintOrientedAtItsPose) {

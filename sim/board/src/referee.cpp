@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace sen3bot::sim {
 
@@ -13,7 +14,7 @@ constexpr double kMovingSpeedM_s = 0.02;
 template <std::size_t N>
 void keep_spaced(std::array<msg::Point2D, N>& points, std::size_t& count, double x_m, double y_m) noexcept {
   if (count == N) return;
-  if (count == 0 || std::hypot(x_m - points[count - 1].x_m, y_m - points[count - 1].y_m) >= kTrackSpacingM)
+  if (count == 0 || !std::isfinite(points[count - 1].x_m) || std::hypot(x_m - points[count - 1].x_m, y_m - points[count - 1].y_m) >= kTrackSpacingM)
     points[count++] = {x_m, y_m};
 }
 }  // namespace
@@ -34,6 +35,8 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   if (have_last_ && !carried) report_.true_path_length_m += std::hypot(p.x_m - last_.x_m, p.y_m - last_.y_m);
   last_ = p;
   have_last_ = true;
+  if (carried && track_count_ > 0 && track_count_ < kMaxTrack)
+    track_[track_count_++] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   keep_spaced(track_, track_count_, p.x_m, p.y_m);
   // Each estimate once, against the truth of the first step after it was published (at most
   // one world step, 5 ms, later): comparing an older estimate with a newer truth would count the

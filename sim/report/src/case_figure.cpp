@@ -85,6 +85,18 @@ std::vector<Px> to_pixels(const View& view, std::span<const msg::Point2D> points
   return out;
 }
 
+// The stretches of a path between its non-finite points (where the robot was carried off):
+// a line across that gap would be a path nobody drove.
+template <class Draw>
+void for_each_stretch(std::span<const msg::Point2D> points, Draw draw) {
+  std::size_t begin = 0;
+  for (std::size_t i = 0; i <= points.size(); ++i) {
+    if (i < points.size() && std::isfinite(points[i].x_m) && std::isfinite(points[i].y_m)) continue;
+    if (i - begin >= 2) draw(points.subspan(begin, i - begin));
+    begin = i + 1;
+  }
+}
+
 // Small labels that must not overprint each other: each goes to the first of its candidate
 // places still free, or is left out; placed in order of importance, drawn over everything.
 class Labels {
@@ -292,7 +304,7 @@ Canvas draw_case_figure(const CaseFigure& f) {
       canvas.text({c.x + half_px + 4, c.y + 4}, format("appears at %.1f s", m.appear_s), kBox, kSmallSize, 1, true);
   }
   // The estimate dashed over the truth, so both show where they coincide.
-  canvas.polyline(to_pixels(view, f.driven), kDriven, 3);
+  for_each_stretch(f.driven, [&](std::span<const msg::Point2D> s) { canvas.polyline(to_pixels(view, s), kDriven, 3); });
   canvas.dashed_polyline(to_pixels(view, f.estimated), kEstimated, 2, kDashPx, kGapPx);
   for (const RobotAt& r : f.robot) {
     canvas.outline_polygon(outline(view, f.footprint, r.pose), kRobot, 2);

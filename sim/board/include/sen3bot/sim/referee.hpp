@@ -50,7 +50,8 @@ class Referee {
 
   [[nodiscard]] const RefereeReport& report() const noexcept { return report_; }
   void print(std::FILE* out) const;
-  // The true driven path, a point per 5 cm moved.
+  // The true driven path, a point per 5 cm moved; a non-finite point where the robot was
+  // carried off (a kidnapping), so nothing draws the carry as driving.
   [[nodiscard]] std::span<const msg::Point2D> track() const noexcept { return {track_.data(), track_count_}; }
   // The true pose every kPoseIntervalS, with its heading: where a figure draws the robot.
   [[nodiscard]] std::span<const TimedPose> poses() const noexcept { return {poses_.data(), pose_count_}; }

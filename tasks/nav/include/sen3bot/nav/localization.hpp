@@ -89,8 +89,10 @@ struct MclConfig {
   double initial_std_theta_rad = 0.2;
   double lost_std_xy_m = 1.0;          // estimate reported lost above this position spread
   // Random-particle injection; 0 for either rate turns it off. Needs 0 < slow < fast <= 1.
-  double recovery_alpha_slow = 0.001;
-  double recovery_alpha_fast = 0.1;
+  // Off by default, as in AMCL: on a loaded computer in real time it has perturbed a good
+  // estimate (docs/navigation.md); 0.001 / 0.1 are the usual rates when a site needs it.
+  double recovery_alpha_slow = 0.0;
+  double recovery_alpha_fast = 0.0;
   // An injected particle takes, of this many evenly spaced headings, the one the last scan
   // fits best (1: a uniformly random heading, as AMCL).
   std::size_t injection_headings = 36;

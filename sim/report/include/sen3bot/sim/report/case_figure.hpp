@@ -47,7 +47,7 @@ struct CaseFigure {
   const nav::OccupancyMap* map = nullptr;
   std::vector<msg::Point2D> waypoints;
   std::vector<std::vector<msg::Point2D>> plans;
-  std::vector<msg::Point2D> driven;     // ground truth
+  std::vector<msg::Point2D> driven;     // ground truth; a non-finite point breaks the line
   std::vector<msg::Point2D> estimated;  // the firmware's pose estimate
   nav::Footprint footprint = nav::Footprint::pioneer();
   std::vector<RobotAt> robot;  // the footprint drawn at these true poses, labelled with t
