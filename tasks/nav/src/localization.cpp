@@ -268,46 +268,44 @@ void MonteCarloLocalization::motion_update(const Pose2D& from, const Pose2D& to)
   }
 }
 
-double MonteCarloLocalization::mean_likelihood(const ProjectedScan& scan) const noexcept {
+std::size_t MonteCarloLocalization::beam_ends(const ProjectedScan& scan, double (&bx)[kMaxBeamEnds],
+                                              double (&by)[kMaxBeamEnds]) const noexcept {
   const std::size_t beams = scan.size();
-  const std::size_t used = std::min(beams, config_.max_beams);
-  if (used == 0 || count_ == 0) return 0.0;
-  const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
-  const std::size_t believed = count_ - std::min(injected_, count_ - 1);
-  double sum = 0.0;
-  std::size_t n = 0;
-  for (std::size_t k = 0; k < used; ++k) {
-    const auto b = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
-    if (!scan.valid(b)) continue;
-    const double ex = scan.end(b).x_m;
-    const double ey = scan.end(b).y_m;
-    for (std::size_t i = 0; i < believed; ++i) {
-      const Particle& p = particles_[i];
-      const double c = std::cos(p.theta_rad);
-      const double s = std::sin(p.theta_rad);
-      sum += likelihood(p.x_m + c * ex - s * ey, p.y_m + s * ex + c * ey);
-    }
-    ++n;
-  }
-  return n == 0 ? 0.0 : sum / (static_cast<double>(n) * static_cast<double>(believed));
-}
-
-void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
-  const std::size_t beams = scan.size();
-  if (beams == 0) return;
+  if (beams == 0) return 0;
   const std::size_t used = std::min(beams, config_.max_beams);
   const double step = used > 1 ? static_cast<double>(beams - 1) / static_cast<double>(used - 1) : 1.0;
-  // Beam end points in the robot frame, computed once per scan.
-  double bx[512];
-  double by[512];
   std::size_t n = 0;
-  for (std::size_t k = 0; k < used && n < 512; ++k) {
+  for (std::size_t k = 0; k < used && n < kMaxBeamEnds; ++k) {
     const auto i = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
     if (!scan.valid(i)) continue;
     bx[n] = scan.end(i).x_m;
     by[n] = scan.end(i).y_m;
     ++n;
   }
+  return n;
+}
+
+double MonteCarloLocalization::mean_likelihood(const ProjectedScan& scan) const noexcept {
+  double bx[kMaxBeamEnds];
+  double by[kMaxBeamEnds];
+  const std::size_t n = beam_ends(scan, bx, by);
+  if (n == 0 || count_ == 0) return 0.0;
+  const std::size_t believed = believed_count();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < believed; ++i) {
+    const Particle& p = particles_[i];
+    const double c = std::cos(p.theta_rad);
+    const double s = std::sin(p.theta_rad);
+    for (std::size_t k = 0; k < n; ++k) sum += likelihood(p.x_m + c * bx[k] - s * by[k], p.y_m + s * bx[k] + c * by[k]);
+  }
+  return sum / (static_cast<double>(n) * static_cast<double>(believed));
+}
+
+void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
+  // Beam end points in the robot frame, computed once per scan.
+  double bx[kMaxBeamEnds];
+  double by[kMaxBeamEnds];
+  std::size_t n = beam_ends(scan, bx, by);
   if (n == 0) return;
   // A few beams spread over the scan, for the headings of injected particles.
   probe_count_ = std::min(n, kProbeBeams);
@@ -317,14 +315,14 @@ void MonteCarloLocalization::sensor_update(const ProjectedScan& scan) noexcept {
     probe_y_[k] = by[i];
   }
   const bool recovery = recovery_enabled();
-  std::uint32_t near[512] = {};
-  double beam_pz[512] = {};  // per beam, summed over the believed particles
+  std::uint32_t near[kMaxBeamEnds] = {};
+  double beam_pz[kMaxBeamEnds] = {};  // per beam, summed over the believed particles
   std::size_t believed = count_;
   if ((config_.beam_skip || recovery) && count_ > 0) {
     // Per beam, how many particles put its end point near a mapped obstacle, and its pz summed
     // over the particles. The particles injected last time sit at the end; they only probe the
     // map and are left out of the sums, which would otherwise sink with every injection.
-    believed = count_ - std::min(injected_, count_ - 1);
+    believed = believed_count();
     for (std::size_t i = 0; i < count_; ++i) {
       const Particle& p = particles_[i];
       const double c = std::cos(p.theta_rad);
@@ -478,7 +476,7 @@ void MonteCarloLocalization::resample() noexcept {
 
 void MonteCarloLocalization::compute_estimate() noexcept {
   // The particles just injected have not been weighed yet: the estimate leaves them out.
-  const std::size_t count = count_ - std::min(injected_, count_ - 1);
+  const std::size_t count = believed_count();
   double wsum = 0.0;
   double mx = 0.0;
   double my = 0.0;

@@ -160,6 +160,11 @@ class MonteCarloLocalization {
   [[nodiscard]] bool solid(double x_m, double y_m) const noexcept;  // occupied or off the map
   // The mean pz of a scan's beams over the particles, without updating anything.
   [[nodiscard]] double mean_likelihood(const ProjectedScan& scan) const noexcept;
+  static constexpr std::size_t kMaxBeamEnds = 512;
+  // The end points of up to max_beams valid beams spread over the scan, in the robot frame.
+  std::size_t beam_ends(const ProjectedScan& scan, double (&bx)[kMaxBeamEnds], double (&by)[kMaxBeamEnds]) const noexcept;
+  // The particles that were resampled, not just injected (those sit at the end, unweighed).
+  [[nodiscard]] std::size_t believed_count() const noexcept { return count_ - std::min(injected_, count_ - 1); }
 
   MclConfig config_;
   double z_ = 2.326;
