@@ -194,11 +194,15 @@ void Lms200Emulator::start_stream(hal::Nanos now, OperatingMode mode) noexcept {
     // Means are numbered from 1; the first needs mean_samples_ scans from now.
     last_scan_sent_ = 0;
     mean_blocks_ = 0;
-    mean_taken_ = 0;
     last_scan_taken_ = now / scan_period_ns(variant_) - 1;
-    mean_sum_.fill(0);
-    mean_valid_.fill(0);
+    restart_mean();
   }
+}
+
+void Lms200Emulator::restart_mean() noexcept {
+  mean_taken_ = 0;
+  mean_sum_.fill(0);
+  mean_valid_.fill(0);
 }
 
 void Lms200Emulator::accumulate_mean(hal::Nanos now) noexcept {
@@ -208,9 +212,7 @@ void Lms200Emulator::accumulate_mean(hal::Nanos now) noexcept {
   // After a long gap between steps only the last mean's worth of scans is taken.
   if (newest - last_scan_taken_ > mean_samples_) {
     last_scan_taken_ = newest - mean_samples_;
-    mean_taken_ = 0;
-    mean_sum_.fill(0);
-    mean_valid_.fill(0);
+    restart_mean();
   }
   const MeasuringMode mode = measuring_mode();
   for (std::int64_t k = last_scan_taken_ + 1; k <= newest; ++k) {
@@ -233,9 +235,7 @@ void Lms200Emulator::accumulate_mean(hal::Nanos now) noexcept {
       mean_words_[i] = encode_value(d, 0, mode);
     }
     ++mean_blocks_;
-    mean_taken_ = 0;
-    mean_sum_.fill(0);
-    mean_valid_.fill(0);
+    restart_mean();
   }
   last_scan_taken_ = newest;
 }

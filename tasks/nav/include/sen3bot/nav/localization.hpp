@@ -29,6 +29,7 @@
 // max(0, 1 - w_fast / w_slow), by one drawn uniformly over the map's free cells (listed at
 // init()). A sudden drop in likelihood (a kidnapped robot, a filter settled on a look-alike
 // place) thus spreads fresh hypotheses over the map until the likelihood recovers.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory_resource>

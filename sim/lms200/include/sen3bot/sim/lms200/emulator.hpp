@@ -213,6 +213,7 @@ class Lms200Emulator {
   void start_stream(hal::Nanos now, OperatingMode mode) noexcept;
   // Scans streaming counts in: a mirror turn for partial scans, a complete scan otherwise.
   [[nodiscard]] hal::Nanos stream_period_ns() const noexcept;
+  void restart_mean() noexcept;  // a new mean starts with no scans taken
   void accumulate_mean(hal::Nanos now) noexcept;
   void pace_output(hal::Nanos now, bool garble) noexcept;
   [[nodiscard]] std::size_t queued() const noexcept { return static_cast<std::size_t>(q_tail_ - q_head_); }
