@@ -101,6 +101,7 @@ enum class DwaStatus : std::uint8_t {
   backing_off,  // recovery 3
   failed,       // recoveries exhausted
   localizing,   // localization is lost: standing still until it is not
+  yielding,     // letting a tracked mover pass: slowing or standing by choice, not a recovery
 };
 
 inline const char* to_string(DwaStatus status) noexcept {
@@ -113,6 +114,7 @@ inline const char* to_string(DwaStatus status) noexcept {
     case DwaStatus::backing_off: return "backing_off";
     case DwaStatus::failed: return "failed";
     case DwaStatus::localizing: return "localizing";
+    case DwaStatus::yielding: return "yielding";
   }
   return "?";
 }
@@ -162,5 +164,27 @@ struct SafetyOutput {
   double scan_age_s = 0.0;       // age of the scan that decision used (0: none)
 };
 static_assert(std::is_trivially_copyable_v<SafetyOutput>);
+
+// A moving obstacle tracked by the dynamic obstacle layer, predicted to the message's stamp
+// (map frame). Only confirmed tracks are published.
+struct MovingObstacle {
+  std::uint32_t id = 0;
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double vx_m_s = 0.0;
+  double vy_m_s = 0.0;
+  double radius_m = 0.0;          // from the extent of its blobs
+  double position_var_m2 = 0.0;   // trace of the position covariance / 2
+  double velocity_var_m2_s2 = 0.0;
+};
+static_assert(std::is_trivially_copyable_v<MovingObstacle>);
+
+struct MovingObstacles {
+  static constexpr std::size_t kMax = 16;
+  std::array<MovingObstacle, kMax> items{};
+  std::uint8_t count = 0;
+  hal::Nanos stamp_ns = 0;  // the time the positions are predicted to
+};
+static_assert(std::is_trivially_copyable_v<MovingObstacles>);
 
 }  // namespace sen3bot::msg

@@ -14,6 +14,7 @@
 #include <memory_resource>
 #include <span>
 
+#include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/mem/static_vector.hpp"
 #include "sen3bot/nav/distance_transform.hpp"
@@ -69,6 +70,7 @@ struct CostmapInputs {
   Pose2D robot_pose;  // map frame
   Pose2D scan_pose;   // map frame: where the robot was when the scan was taken
   const ProjectedScan* scan = nullptr;
+  hal::Nanos now_ns = 0;  // the update's time (layers that predict motion paint for it)
 };
 
 // A plug-in layer. Later layers (dynamic obstacles, people) implement this too.

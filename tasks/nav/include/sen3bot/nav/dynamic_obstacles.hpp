@@ -1,0 +1,241 @@
+#pragma once
+// Dynamic Obstacle Layer (navigation.md §4): finds what moves in the local costmap, tracks it
+// and paints the space it is about to occupy as expensive. Three pure stages, then the layer
+// that runs them inside the costmap update:
+//
+//   master (static + obstacle marks) as an image C(t): 255 where lethal, 0 elsewhere
+//     -> BackgroundSubtractor: fast and slow running averages per cell, each mixing the cell
+//        with its 8 neighbours; dynamic when P_f > c1 and P_f - P_s > c2 (and not next to the
+//        static map)
+//     -> BlobFinder: 8-connected dynamic cells grouped into blobs (centroid, area, extent)
+//     -> MoverTracker: blob centroids matched to tracks by the Hungarian algorithm with a gate;
+//        a constant-velocity Kalman filter per track; M hits confirm, coasting tracks die
+//     -> paint_mover(): the source's asymmetric Gaussian (front and back half-planes) around
+//        each confirmed moving track, lengthened ahead by what it covers in front_horizon_s
+//
+// The averages live on the local costmap's cells, which keep a fixed world lattice: when the
+// rolling window moves they are shifted with it, and cells that come into the window start at
+// the value they show then, so a wall entering the window is not "new".
+//
+// Every buffer comes from the memory resource in init(); update() never allocates.
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory_resource>
+#include <span>
+
+#include "sen3bot/hal/clock.hpp"
+#include "sen3bot/hal/result.hpp"
+#include "sen3bot/msg/navigation.hpp"
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/map.hpp"
+
+namespace sen3bot::nav {
+
+// --- Detection --------------------------------------------------------------------------------
+
+struct DolDetectorConfig {
+  // Anchors' defaults (ros2_costmap_to_dynamic_obstacles).
+  double alpha_fast = 0.85;
+  double alpha_slow = 0.3;
+  double beta = 0.85;
+  double c1 = 120.0;  // P_f above this...
+  double c2 = 80.0;   // ...and P_f - P_s above this: dynamic
+  // Cells within this distance of an occupied cell of the static map are never dynamic, so
+  // localization drift along a wall is not motion (0: off).
+  double static_mask_radius_m = 0.15;
+  int min_blob_cells = 1;
+  int max_blob_cells = 400;   // larger blobs are not movers (a wall the map lacks)
+};
+
+// The two running averages over a grid of width x height cells, in float.
+class BackgroundSubtractor {
+ public:
+  Status init(int width, int height, const DolDetectorConfig& config, std::pmr::memory_resource& resource);
+  // The grid moved by (cols, rows) cells: content moves by (-cols, -rows); cells that enter
+  // take the value of the next image.
+  void shift(int cols, int rows) noexcept;
+  // One step of both averages with image (width * height values 0..255), then the dynamic
+  // test; dynamic[i] = 1 or 0. mask (optional, same size): cells with mask != 0 never dynamic.
+  void apply(std::span<const std::uint8_t> image, std::span<std::uint8_t> dynamic,
+             std::span<const std::uint8_t> mask = {}) noexcept;
+  void reset() noexcept;  // every cell takes the next image's value
+  [[nodiscard]] float fast(std::size_t i) const noexcept { return fast_[i]; }
+  [[nodiscard]] float slow(std::size_t i) const noexcept { return slow_[i]; }
+  [[nodiscard]] int width() const noexcept { return width_; }
+  [[nodiscard]] int height() const noexcept { return height_; }
+
+ private:
+  DolDetectorConfig config_;
+  int width_ = 0;
+  int height_ = 0;
+  std::span<float> fast_;
+  std::span<float> slow_;
+  std::span<float> scratch_;        // the previous step's values while updating
+  std::span<std::uint8_t> fresh_;   // 1: take the next image's value
+};
+
+struct Blob {
+  double x_m = 0.0;  // centroid, world frame
+  double y_m = 0.0;
+  int cells = 0;
+  double min_x_m = 0.0;  // axis-aligned extent of its cells' centres, world frame
+  double max_x_m = 0.0;
+  double min_y_m = 0.0;
+  double max_y_m = 0.0;
+};
+
+// 8-connected components of a 0/1 grid; blobs outside [min_cells, max_cells] are dropped.
+class BlobFinder {
+ public:
+  Status init(int width, int height, std::size_t max_blobs, std::pmr::memory_resource& resource);
+  // Returns the blobs found (at most max_blobs; the largest are not preferred: first found).
+  std::span<const Blob> find(std::span<const std::uint8_t> dynamic, const GridGeometry& geometry, int min_cells,
+                             int max_cells) noexcept;
+
+ private:
+  int width_ = 0;
+  int height_ = 0;
+  std::span<std::int32_t> labels_;
+  std::span<std::uint32_t> stack_;
+  std::span<Blob> blobs_;
+  std::size_t count_ = 0;
+};
+
+// --- Assignment -------------------------------------------------------------------------------
+
+// Minimum-cost assignment of rows to columns (Kuhn-Munkres, O(n^3) with potentials), for
+// rectangular matrices up to max_n x max_n. cost is row-major rows x cols.
+class Hungarian {
+ public:
+  static constexpr int kUnassigned = -1;
+  Status init(std::size_t max_n, std::pmr::memory_resource& resource);
+  // row_to_col[r] = the column of row r, or kUnassigned (when rows > cols). Returns the total.
+  double solve(std::span<const double> cost, std::size_t rows, std::size_t cols, std::span<int> row_to_col) noexcept;
+
+ private:
+  std::size_t max_n_ = 0;
+  std::span<double> u_, v_, min_v_;
+  std::span<int> match_, way_;
+  std::span<std::uint8_t> used_;
+};
+
+// --- Tracking ---------------------------------------------------------------------------------
+
+struct DolTrackerConfig {
+  std::size_t max_tracks = 16;
+  std::size_t max_blobs = 32;
+  double gate_m = 1.0;             // a blob farther than this from a track's prediction is not it
+  int confirm_hits = 3;            // hits before a tentative track is confirmed
+  double max_coast_s = 0.6;        // unmatched for longer: deleted
+  double accel_sigma_m_s2 = 1.0;   // white-noise acceleration (process noise)
+  double measurement_sigma_m = 0.07;
+  double initial_velocity_sigma_m_s = 1.5;
+  double min_radius_m = 0.1;       // a track's size from its blobs' extent, clamped
+  double max_radius_m = 0.6;
+};
+
+struct DolTrack {
+  std::uint32_t id = 0;
+  bool confirmed = false;
+  int hits = 0;
+  hal::Nanos stamp_ns = 0;      // time of x and P
+  hal::Nanos last_hit_ns = 0;
+  Eigen::Matrix<double, 4, 1> x = Eigen::Matrix<double, 4, 1>::Zero();  // x, y, vx, vy (world)
+  Eigen::Matrix<double, 4, 4> P = Eigen::Matrix<double, 4, 4>::Identity();
+  double radius_m = 0.1;
+};
+
+class MoverTracker {
+ public:
+  Status init(const DolTrackerConfig& config, std::pmr::memory_resource& resource);
+  // Predicts every track to stamp_ns, matches the blobs, corrects, births and deaths.
+  void update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept;
+  [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return {tracks_.data(), count_}; }
+  // A track's position predicted to stamp_ns (constant velocity), without changing it.
+  [[nodiscard]] static Eigen::Matrix<double, 2, 1> predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
+  void clear() noexcept { count_ = 0; }
+
+ private:
+  DolTrackerConfig config_;
+  Hungarian hungarian_;
+  std::span<DolTrack> tracks_;
+  std::size_t count_ = 0;
+  std::uint32_t next_id_ = 1;
+  std::span<double> cost_;
+  std::span<int> assignment_;
+  std::span<std::uint8_t> blob_used_;
+};
+
+// --- Cost ---------------------------------------------------------------------------------------
+
+// The asymmetric Gaussian: with d the distance from the centroid and θ_c the velocity direction,
+//   Φ(q) = A exp(-[d cos(θ-θ_c)]² / (2 σx²) - [d sin(θ-θ_c)]² / (2 σy²))
+// front half-plane: σx² = (1 + r) sigma2_front_x, σy² = (1 - r/2) sigma2_front_y
+// back half-plane:  σx² = (1 - r) sigma2_back_x,  σy² = (1 - r/4) sigma2_back_y
+// r = min(1, speed / max_speed_m_s). Ahead, the Gaussian starts front_horizon_s * speed in
+// front of the centroid (flat before it): the space the mover reaches in that time.
+struct DolCostConfig {
+  double amplitude = 252.0;        // kMaxNonObstacleCost: painted cells are never lethal...
+  double cutoff = 30.0;            // ...and cells below this are left alone
+  double sigma2_front_x_m2 = 1.0;  // the source's 2.0, 0.7, 0.5, 0.9 m² with its exponent
+  double sigma2_front_y_m2 = 0.35; // factor csf * 0.2 = 2 folded in
+  double sigma2_back_x_m2 = 0.25;
+  double sigma2_back_y_m2 = 0.45;
+  double max_speed_m_s = 2.0;
+  double front_horizon_s = 1.0;    // 0: the source's shape
+  double lethal_radius_m = 0.1;    // ...except this core around the predicted centre: 254
+  double min_speed_m_s = 0.1;      // slower tracks are painted as a core only
+};
+
+// The Gaussian's value at (x_m, y_m) for a mover at (cx, cy) moving with (vx, vy); 0 below cutoff.
+[[nodiscard]] double mover_cost(const DolCostConfig& config, double cx, double cy, double vx, double vy, double x_m,
+                                double y_m) noexcept;
+// Max-merges mover_cost over the grid cells around the mover into grid (never lowers a cell).
+void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, double vy, Costmap2D& grid) noexcept;
+
+// --- The layer ----------------------------------------------------------------------------------
+
+struct DynamicObstacleConfig {
+  bool enabled = true;
+  DolDetectorConfig detector;
+  DolTrackerConfig tracker;
+  DolCostConfig cost;
+};
+
+// Between the obstacle layer and inflation: reads the master (static map and laser marks) as
+// C(t) on each new scan, detects and tracks, then paints every confirmed track predicted to
+// inputs.now_ns. Without a new scan it only repaints the predictions.
+class DynamicObstacleLayer final : public CostmapLayer {
+ public:
+  // static_map: for the static mask (may be null: no mask). Must outlive the layer.
+  DynamicObstacleLayer(const DynamicObstacleConfig& config, const OccupancyMap* static_map) noexcept
+      : config_(config), static_map_(static_map) {}
+  [[nodiscard]] const char* name() const noexcept override { return "dynamic_obstacles"; }
+  Status init(const Costmap2D& master, std::pmr::memory_resource& resource) override;
+  void on_window_moved(int shift_cols, int shift_rows) noexcept override;
+  void update(Costmap2D& master, const CostmapInputs& inputs) noexcept override;
+
+  [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return tracker_.tracks(); }
+  [[nodiscard]] std::span<const Blob> blobs() const noexcept { return blobs_; }
+  [[nodiscard]] std::span<const std::uint8_t> dynamic_cells() const noexcept { return dynamic_; }
+  [[nodiscard]] const BackgroundSubtractor& detector() const noexcept { return detector_; }
+  [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
+  // The confirmed tracks predicted to stamp_ns, for the planner and the safety filter.
+  void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
+  [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
+
+ private:
+  DynamicObstacleConfig config_;
+  const OccupancyMap* static_map_;
+  BackgroundSubtractor detector_;
+  BlobFinder blob_finder_;
+  MoverTracker tracker_;
+  std::span<std::uint8_t> image_;
+  std::span<std::uint8_t> dynamic_;
+  std::span<std::uint8_t> mask_;           // per window cell: near the static map
+  std::span<std::uint8_t> map_near_;       // per static-map cell: within the mask radius
+  std::span<const Blob> blobs_;
+  std::uint64_t detections_ = 0;
+};
+
+}  // namespace sen3bot::nav
