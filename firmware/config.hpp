@@ -11,6 +11,7 @@
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/camera/camera.hpp"
 #include "sen3bot/lms200/device.hpp"
+#include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
@@ -53,6 +54,7 @@ struct NavigationSection {
   nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m
+  nav::DynamicObstacleConfig dynamic_obstacles;  // the local costmap's moving-obstacle layer
   MissionConfig mission;
 };
 

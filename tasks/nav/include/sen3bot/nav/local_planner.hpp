@@ -70,6 +70,9 @@ struct DwaConfig {
   double slow_down_radius_m = 0.6;  // v is capped proportionally inside this radius of the goal
   std::size_t max_path_points = 2048;
   std::size_t max_costmap_cells = 120 * 120;  // the local costmap (6 x 6 m at 0.05 m)
+  // Tracked movers (the dynamic obstacle layer's): each rollout is checked against their
+  // predicted positions at its own time steps (the time-aware critic).
+  bool mover_prediction = true;
   // Recoveries.
   double wait_s = 1.0;
   double rotate_s = 1.5;
