@@ -58,6 +58,7 @@ class Firmware {
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
+  [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
   [[nodiscard]] std::span<const msg::Point2D> waypoints() const { return waypoints_; }
 
@@ -84,6 +85,7 @@ class Firmware {
   tasks::Topic<msg::VelocityCommand> nav_command_;
   tasks::Topic<msg::ControllerStatus> nav_controller_;
   tasks::Topic<msg::SafetyOutput> nav_safety_;
+  tasks::Topic<msg::MovingObstacles> nav_movers_;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
