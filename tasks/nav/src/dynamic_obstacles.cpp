@@ -1,5 +1,6 @@
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
