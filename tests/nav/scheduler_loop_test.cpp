@@ -124,7 +124,7 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
   // declared before the tasks so they outlive them.
   mem::BudgetArena safety_arena("safety", 1024);
   mem::BudgetArena localization_arena("localization", 1 << 20);
-  mem::BudgetArena controller_arena("controller", 512 << 10);
+  mem::BudgetArena controller_arena("controller", 1 << 20);
   mem::BudgetArena planner_arena("planner", 2 << 20);
   LocalizationTaskConfig lc;
   lc.mcl.initial_pose = {2.5, 2.0, M_PI / 2.0};

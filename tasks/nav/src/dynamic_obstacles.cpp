@@ -480,10 +480,32 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noex
   }
 }
 
+void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeometry& geometry) noexcept {
+  const auto vacated = [&](const DolTrack& track) {
+    const double reach = config_.vacated_radius_m / geometry.resolution_m();
+    const int k = static_cast<int>(std::ceil(reach));
+    int col = 0;
+    int row = 0;
+    if (!geometry.world_to_cell(track.birth(0), track.birth(1), col, row)) return false;  // not in view: unknown
+    for (int dr = -k; dr <= k; ++dr) {
+      for (int dc = -k; dc <= k; ++dc) {
+        if (dc * dc + dr * dr > reach * reach + 1e-9 || !geometry.in_bounds(col + dc, row + dr)) continue;
+        if (image[geometry.index(col + dc, row + dr)] != 0) return false;
+      }
+    }
+    return true;
+  };
+  for (std::size_t t = 0; t < count_; ++t) {
+    DolTrack& track = tracks_[t];
+    if (!track.confirmed || track.mover || track.last_hit_ns != last_update_ns_) continue;
+    if (std::hypot(track.x(2), track.x(3)) < config_.moving_min_speed_m_s) continue;
+    const double travel = std::hypot(track.x(0) - track.birth(0), track.x(1) - track.birth(1));
+    track.mover = travel >= config_.moving_far_travel_m || (travel >= config_.moving_min_travel_m && vacated(track));
+  }
+}
+
 bool MoverTracker::moving(const DolTrack& track) const noexcept {
-  if (!track.confirmed || seconds_between(track.last_hit_ns, last_update_ns_) > config_.publish_max_coast_s) return false;
-  const double travel = std::hypot(track.x(0) - track.birth(0), track.x(1) - track.birth(1));
-  return std::hypot(track.x(2), track.x(3)) >= config_.moving_min_speed_m_s && travel >= config_.moving_min_travel_m;
+  return track.mover && seconds_between(track.last_hit_ns, last_update_ns_) <= config_.publish_max_coast_s;
 }
 
 // --- Cost ---------------------------------------------------------------------------------
@@ -741,6 +763,7 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
                                config_.detector.max_blob_cells);
     detections_ += blobs_.size();
     tracker_.update(blobs_, inputs.scan->stamp_ns());
+    tracker_.classify(image_, master.geometry());
   }
   for (const DolTrack& track : tracker_.tracks()) {
     if (!tracker_.moving(track)) continue;

@@ -137,12 +137,17 @@ struct DolTrackerConfig {
   double initial_velocity_sigma_m_s = 1.5;
   double min_radius_m = 0.1;       // a track's size from its blobs' extent, clamped
   double max_radius_m = 0.6;
-  // A confirmed track counts as a mover (painted, published) only while it is faster than
-  // moving_min_speed_m_s, is at least moving_min_travel_m from where it was born and was hit
-  // no more than publish_max_coast_s before the newest detection: the laser's marks on a
-  // still object flicker as the robot passes it, and their blobs wander, but do not travel.
+  // A confirmed track becomes a mover (painted, published) once it is faster than
+  // moving_min_speed_m_s and has left where it was born: it is moving_min_travel_m away and
+  // the laser sees no mark within vacated_radius_m of its birth place any more, or it is
+  // moving_far_travel_m away. It stays one while it is hit at least every
+  // publish_max_coast_s. Why: the laser's marks on a still object flicker as the robot passes
+  // it, and a box's faces come into view one after another, so their blobs wander by up to
+  // the object's size, but they never leave the place where they were first seen.
   double moving_min_speed_m_s = 0.15;
   double moving_min_travel_m = 0.3;
+  double moving_far_travel_m = 0.45;
+  double vacated_radius_m = 0.1;
   double publish_max_coast_s = 0.25;
 };
 
@@ -156,6 +161,7 @@ struct DolTrack {
   Eigen::Matrix<double, 4, 4> P = Eigen::Matrix<double, 4, 4>::Identity();
   double radius_m = 0.1;
   Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
+  bool mover = false;  // has shown that it moves (MoverTracker::classify)
 };
 
 class MoverTracker {
@@ -168,7 +174,10 @@ class MoverTracker {
   // assignment, so one far pair cannot pull the matching away from the near ones.
   void update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept;
   [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return {tracks_.data(), count_}; }
-  // Whether a track counts as a mover (see DolTrackerConfig).
+  // Marks the confirmed tracks that have shown they move, given the image the blobs came
+  // from (255: marked) on its grid (see DolTrackerConfig).
+  void classify(std::span<const std::uint8_t> image, const GridGeometry& geometry) noexcept;
+  // Whether a track counts as a mover now (classified, and hit recently).
   [[nodiscard]] bool moving(const DolTrack& track) const noexcept;
   // A track's position predicted to stamp_ns (constant velocity), without changing it; a
   // stamp before the track's own gives its current position.
