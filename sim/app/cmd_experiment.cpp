@@ -45,9 +45,6 @@ using namespace experiment;
 namespace {
 
 constexpr const char* kName = "sen3bot-sim experiment";
-constexpr const char* kExperimentUsage =
-    "usage: sen3bot-sim experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]\n"
-    "                                  [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]\n";
 constexpr double kMaxSpeedM_s = 5.0;
 constexpr std::uint64_t kMaxRuns = 100000;
 // A worker that aborts on purpose when it reaches this seed: how the tests see a crashed worker.
@@ -532,12 +529,8 @@ int bad(std::FILE* err, const std::string& message) {
 }
 
 int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
-  if (argc < 1 || std::string_view(argv[0]) != "dol") {
-    std::fprintf(err, "%s: %s (the experiment: dol)\n%s", kName,
-                 argc < 1 ? "which experiment?" : ("no experiment named '" + std::string(argv[0]) + "'").c_str(),
-                 kExperimentUsage);
-    return 2;
-  }
+  if (argc < 1) return bad(err, "which experiment? (there is one: dol)");
+  if (std::string_view(argv[0]) != "dol") return bad(err, "no experiment named '" + std::string(argv[0]) + "' (there is one: dol)");
   bool have_speed = false, have_runs = false;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -582,8 +575,7 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
     } else if (arg == "--config" && has_value) {
       o.config_path = argv[++i];
     } else {
-      std::fprintf(err, "%s: unknown or incomplete option '%s'\n%s", kName, argv[i], kExperimentUsage);
-      return 2;
+      return bad(err, "unknown or incomplete option '" + std::string(arg) + "' (sen3bot-sim --help shows the options)");
     }
   }
   if (!have_speed) return bad(err, "--speed M_S is required (the boxes' speed, e.g. 0.6)");
@@ -624,7 +616,7 @@ void print_table(std::FILE* out, const Options& o, const std::vector<VariantResu
   row("wait recoveries", [](const Tally& t) { return t.waits; });
   row("collisions", [](const Tally& t) { return t.collisions; });
   row("successful", [](const Tally& t) { return t.smooth + t.waits; });
-  row("timeouts (not in the thesis)", [](const Tally& t) { return t.timeouts; });
+  row("timeouts (not reached)", [](const Tally& t) { return t.timeouts; });
   std::fprintf(out, "\n\ntravel time of the smooth runs:\n");
   for (const VariantResults& v : variants) {
     const Quartiles q = quartiles(v.smooth_times);
@@ -670,11 +662,11 @@ bool write_report_json(const std::string& path, const Options& o, const std::vec
       std::fprintf(f,
                    "%s\n        {\"seed\": %llu, \"reached\": %s, \"contacts\": %llu, \"moving_contacts\": %llu, "
                    "\"recoveries\": %u, \"waits\": %u, \"time_s\": %.2f, \"min_clearance_m\": %.3f, \"path_length_m\": %.3f, "
-                   "\"sim_s\": %.1f, \"wall_s\": %.3f, \"class\": \"%s\"}",
+                   "\"sim_s\": %.1f, \"wall_s\": %.3f, \"state\": \"%s\", \"class\": \"%s\"}",
                    m ? "," : "", static_cast<unsigned long long>(r.seed), r.reached ? "true" : "false",
                    static_cast<unsigned long long>(r.contacts), static_cast<unsigned long long>(r.moving_contacts),
                    r.recoveries, r.waits, r.time_s, r.min_clearance_m, r.path_length_m, r.sim_s, r.wall_s,
-                   to_string(classify(r)));
+                   firmware::to_string(r.state), to_string(classify(r)));
     }
     std::fprintf(f, "\n      ]\n    }");
   }
