@@ -124,9 +124,47 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
   }
 }
 
+// navigation.dynamic_obstacles: every constant of the layer (dynamic_obstacles.hpp).
+void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
+  r.allow_only({"enabled", "alpha_fast", "alpha_slow", "beta", "c1", "c2", "static_mask_radius_m", "min_blob_cells",
+                "max_blob_cells", "max_tracks", "gate_m", "confirm_hits", "max_coast_s", "accel_sigma_m_s2",
+                "measurement_sigma_m", "cutoff", "sigma2_front_x_m2", "sigma2_front_y_m2", "sigma2_back_x_m2",
+                "sigma2_back_y_m2", "max_speed_m_s", "front_horizon_s", "lethal_radius_m", "min_speed_m_s"});
+  if (r.has("enabled")) d.enabled = r.boolean("enabled");
+  nav::DolDetectorConfig& det = d.detector;
+  if (r.has("alpha_fast")) det.alpha_fast = r.number("alpha_fast", 0.0, 1.0);
+  if (r.has("alpha_slow")) det.alpha_slow = r.number("alpha_slow", 0.0, 1.0);
+  if (!(det.alpha_slow < det.alpha_fast)) r.fail("alpha_slow", "must be smaller than alpha_fast", YAML::Node());
+  if (r.has("beta")) det.beta = r.number("beta", 0.0, 1.0);
+  if (r.has("c1")) det.c1 = r.number("c1", 0.0, 255.0);
+  if (r.has("c2")) det.c2 = r.number("c2", 0.0, 255.0);
+  if (r.has("static_mask_radius_m")) det.static_mask_radius_m = r.number("static_mask_radius_m", 0.0, 2.0);
+  if (r.has("min_blob_cells")) det.min_blob_cells = static_cast<int>(r.integer("min_blob_cells", 1, 100'000));
+  if (r.has("max_blob_cells")) det.max_blob_cells = static_cast<int>(r.integer("max_blob_cells", 1, 100'000));
+  if (det.max_blob_cells < det.min_blob_cells) r.fail("max_blob_cells", "must be at least min_blob_cells", YAML::Node());
+  nav::DolTrackerConfig& t = d.tracker;
+  if (r.has("max_tracks")) t.max_tracks = static_cast<std::size_t>(r.integer("max_tracks", 1, msg::MovingObstacles::kMax));
+  if (r.has("gate_m")) t.gate_m = r.number("gate_m", 0.05, 10.0);
+  if (r.has("confirm_hits")) t.confirm_hits = static_cast<int>(r.integer("confirm_hits", 1, 100));
+  if (r.has("max_coast_s")) t.max_coast_s = r.number("max_coast_s", 0.0, 60.0);
+  if (r.has("accel_sigma_m_s2")) t.accel_sigma_m_s2 = r.number("accel_sigma_m_s2", 0.001, 100.0);
+  if (r.has("measurement_sigma_m")) t.measurement_sigma_m = r.number("measurement_sigma_m", 0.001, 10.0);
+  nav::DolCostConfig& k = d.cost;
+  if (r.has("cutoff")) k.cutoff = r.number("cutoff", 1.0, 252.0);
+  if (r.has("sigma2_front_x_m2")) k.sigma2_front_x_m2 = r.number("sigma2_front_x_m2", 1e-4, 100.0);
+  if (r.has("sigma2_front_y_m2")) k.sigma2_front_y_m2 = r.number("sigma2_front_y_m2", 1e-4, 100.0);
+  if (r.has("sigma2_back_x_m2")) k.sigma2_back_x_m2 = r.number("sigma2_back_x_m2", 1e-4, 100.0);
+  if (r.has("sigma2_back_y_m2")) k.sigma2_back_y_m2 = r.number("sigma2_back_y_m2", 1e-4, 100.0);
+  if (r.has("max_speed_m_s")) k.max_speed_m_s = r.number("max_speed_m_s", 0.1, 20.0);
+  if (r.has("front_horizon_s")) k.front_horizon_s = r.number("front_horizon_s", 0.0, 10.0);
+  if (r.has("lethal_radius_m")) k.lethal_radius_m = r.number("lethal_radius_m", 0.0, 2.0);
+  if (r.has("min_speed_m_s")) k.min_speed_m_s = r.number("min_speed_m_s", 0.0, 10.0);
+}
+
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
-                "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s"});
+                "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s", "dynamic_obstacles",
+                "mover_prediction"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -156,6 +194,17 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("max_w_rad_s")) n.dwa.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
   if (r.has("goal_tolerance_m")) n.dwa.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
   if (r.has("stop_distance_m")) n.safety.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
+  if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
+  if (r.has("mover_prediction")) {
+    // The DWA's time-aware check against the tracked movers (local_planner.hpp).
+    const Reader p = r.child("mover_prediction");
+    p.allow_only({"enabled", "horizon_s", "margin_m", "weight", "max_yield_s"});
+    if (p.has("enabled")) n.dwa.mover_prediction = p.boolean("enabled");
+    if (p.has("horizon_s")) n.dwa.mover_horizon_s = p.number("horizon_s", 0.1, 10.0);
+    if (p.has("margin_m")) n.dwa.mover_margin_m = p.number("margin_m", 0.0, 2.0);
+    if (p.has("weight")) n.dwa.mover_weight = p.number("weight", 0.0, 100.0);
+    if (p.has("max_yield_s")) n.dwa.max_yield_s = p.number("max_yield_s", 0.0, 600.0);
+  }
   const std::vector<Reader> goals = r.sequence("goals");
   if (goals.empty() || goals.size() > MissionConfig::kMaxGoals)
     r.fail("goals", "expected 1 to " + std::to_string(MissionConfig::kMaxGoals) + " points", YAML::Node());

@@ -55,8 +55,9 @@ Status Firmware::create_navigation() {
   nav::ControllerTaskConfig controller;
   controller.laser_mount = mount;
   controller.dwa = n.dwa;
+  controller.dynamic_obstacles = n.dynamic_obstacles;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
-                                                           nav_request_, nav_controller_);
+                                                           nav_request_, nav_controller_, nav_movers_);
 
   nav::SafetyTaskConfig safety;
   safety.safety = n.safety;
@@ -72,7 +73,7 @@ Status Firmware::create_navigation() {
                                  ? config_.devices.base.trans_decel_mm_s2 / 1000.0
                                  : kPowerUpDecelM_s2;
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
-                                                   nav_pose_, nav_command_, nav_safety_);
+                                                   nav_pose_, nav_movers_, nav_command_, nav_safety_);
 
   mission_task_ = std::make_unique<MissionTask>(
       n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});

@@ -62,6 +62,7 @@ class Firmware {
   [[nodiscard]] const nav::ControllerTask* controller() const { return controller_task_.get(); }
   [[nodiscard]] const tasks::Topic<msg::ControllerStatus>& controller_status() const { return nav_controller_; }
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
+  [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
   [[nodiscard]] std::span<const msg::Point2D> waypoints() const { return waypoints_; }
 
@@ -88,6 +89,7 @@ class Firmware {
   tasks::Topic<msg::VelocityCommand> nav_command_;
   tasks::Topic<msg::ControllerStatus> nav_controller_;
   tasks::Topic<msg::SafetyOutput> nav_safety_;
+  tasks::Topic<msg::MovingObstacles> nav_movers_;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;

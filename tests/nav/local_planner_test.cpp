@@ -143,5 +143,140 @@ TEST(Dwa, ComputeAllocatesNothing) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+// A box crossing the robot's way, as the dynamic obstacle layer would report it.
+struct Crossing {
+  double x_m;       // its lane
+  double y0_m;      // where it is at t = 0
+  double vy_m_s;
+  [[nodiscard]] msg::MovingObstacle at(double t_s) const {
+    return {1, x_m, y0_m + vy_m_s * t_s, 0.0, vy_m_s, 0.15, 0.0, 0.0};
+  }
+};
+
+// Drives the open corridor with a box crossing (seen perfectly); true when the robot's padded
+// body ever came within the box's radius.
+struct CrossingRun {
+  bool reached = false;
+  bool contact = false;
+  int yielding_steps = 0;
+  std::uint32_t recoveries = 0;
+};
+
+CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s) {
+  mem::BudgetArena arena("costmap", 1 << 20);
+  const OccupancyMap map = corridor(false);
+  StaticLayer st(map);
+  InflationLayer infl;
+  LayeredCostmap cm;
+  EXPECT_TRUE(cm.add_layer(st));
+  EXPECT_TRUE(cm.add_layer(infl));
+  EXPECT_TRUE(cm.init_over_map(map, arena));
+  cm.update({});
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  CrossingRun run;
+  Pose2D pose{1.0, 2.0, 0.0};
+  double v = 0.0;
+  double w = 0.0;
+  const double dt = dwa.config().control_period_s;
+  const Footprint body = dwa.config().footprint;
+  for (double t = 0.0; t < max_time_s; t += dt) {
+    const msg::MovingObstacle m = box.at(t);
+    const DwaCommand cmd = dwa.compute(pose, v, w, cm.costmap(), std::span<const msg::MovingObstacle>(&m, 1));
+    if (cmd.status == DwaStatus::reached) {
+      run.reached = true;
+      break;
+    }
+    if (cmd.status == DwaStatus::yielding) ++run.yielding_steps;
+    if (std::getenv("DWA_TRACE") != nullptr)
+      std::printf("t %.1f pose %.2f %.2f %.2f v %.2f w %.2f %s adm %u refused %u box y %.2f\n", t, pose.x_m, pose.y_m,
+                  pose.theta_rad, cmd.v_m_s, cmd.w_rad_s, to_string(cmd.status), cmd.admissible, cmd.mover_rejected, m.y_m);
+    v = cmd.v_m_s;
+    w = cmd.w_rad_s;
+    pose.x_m += v * dt * std::cos(pose.theta_rad + w * dt / 2.0);
+    pose.y_m += v * dt * std::sin(pose.theta_rad + w * dt / 2.0);
+    pose.theta_rad = normalize_angle(pose.theta_rad + w * dt);
+    // The box as a disc against the body rectangle.
+    const msg::MovingObstacle now = box.at(t + dt);
+    const double c = std::cos(pose.theta_rad);
+    const double s = std::sin(pose.theta_rad);
+    const double bx = c * (now.x_m - pose.x_m) + s * (now.y_m - pose.y_m);
+    const double by = -s * (now.x_m - pose.x_m) + c * (now.y_m - pose.y_m);
+    const double ex = std::max(0.0, std::abs(bx) - body.vertices[0].x_m);
+    const double ey = std::max(0.0, std::abs(by) - body.vertices[0].y_m);
+    if (std::hypot(ex, ey) < now.radius_m) run.contact = true;
+  }
+  run.recoveries = dwa.recoveries().total();
+  return run;
+}
+
+TEST(DwaMovers, TimeToContactFollowsTheRolloutAndTheMoverInTime) {
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaConfig cfg;
+  cfg.mover_margin_m = 0.0;
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init(cfg, arena));
+  const double front = cfg.footprint.vertices[0].x_m + cfg.footprint_padding_m;
+  // A mover standing on the robot's line 2 m ahead is not a mover (too slow) ...
+  msg::MovingObstacle m{1, 2.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0};
+  EXPECT_TRUE(std::isinf(dwa.time_to_contact({0, 0, 0}, 0.5, 0.0, std::span(&m, 1))));
+  // ... coming head-on at 0.5 m/s it is met where the gap of 2 - front - 0.1 m closes at 1 m/s.
+  m.vx_m_s = -0.5;
+  const double expected = 2.0 - front - 0.1;
+  const double ttc = dwa.time_to_contact({0, 0, 0}, 0.5, 0.0, std::span(&m, 1));
+  EXPECT_NEAR(ttc, expected, cfg.sim_step_s + 1e-9);
+  EXPECT_GE(ttc, expected - 1e-9);
+  // Standing still, the robot is met later; a mover passing 1 m to the side never meets it.
+  EXPECT_GT(dwa.time_to_contact({0, 0, 0}, 0.0, 0.0, std::span(&m, 1)), ttc);
+  m.y_m = 1.0;
+  EXPECT_TRUE(std::isinf(dwa.time_to_contact({0, 0, 0}, 0.5, 0.0, std::span(&m, 1))));
+  // A crossing mover: met when driving on, missed when waiting for it to pass.
+  msg::MovingObstacle crossing{2, 1.2, -1.2, 0.0, 0.8, 0.1, 0.0, 0.0};
+  EXPECT_LT(dwa.time_to_contact({0, 0, 0}, 0.5, 0.0, std::span(&crossing, 1)), cfg.mover_horizon_s);
+  EXPECT_TRUE(std::isinf(dwa.time_to_contact({0, 0, 0}, 0.0, 0.0, std::span(&crossing, 1))));
+}
+
+TEST(DwaMovers, LetsACrossingBoxPassInsteadOfDrivingIntoIt) {
+  // The box crosses y = 2 at x = 3.0 about 4.4 s in, when a robot at full speed is there.
+  const Crossing box{3.0, -1.5, 0.8};
+  {
+    mem::BudgetArena arena("dwa", 1 << 18);
+    DwaConfig cfg;
+    cfg.mover_prediction = false;
+    DwaPlanner blind;
+    ASSERT_TRUE(blind.init(cfg, arena));
+    const CrossingRun run = drive_across(blind, box, 30.0);
+    EXPECT_TRUE(run.contact) << "the scene must be a collision course without prediction";
+  }
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const CrossingRun run = drive_across(dwa, box, 30.0);
+  EXPECT_FALSE(run.contact);
+  EXPECT_TRUE(run.reached);
+  EXPECT_EQ(run.recoveries, 0u);
+}
+
+TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const OccupancyMap map = corridor(false);
+  StaticLayer st(map);
+  InflationLayer infl;
+  LayeredCostmap cm;
+  ASSERT_TRUE(cm.add_layer(st));
+  ASSERT_TRUE(cm.add_layer(infl));
+  ASSERT_TRUE(cm.init_over_map(map, arena));
+  cm.update({});
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  const Crossing box{3.0, 0.5, 0.8};
+  mem::testing::AllocationScope scope;
+  for (int i = 0; i < 50; ++i) {
+    const msg::MovingObstacle m = box.at(0.1 * i);
+    (void)dwa.compute({1.0 + 0.01 * i, 2.0, 0.0}, 0.2, 0.0, cm.costmap(), std::span(&m, 1));
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

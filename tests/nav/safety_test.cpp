@@ -222,5 +222,61 @@ TEST(Safety, AScanStampedAheadOfNowHasNoNegativeAge) {
   EXPECT_NEAR(out.stop_distance_m, expected_stop_m(f.config(), 0.3, 0.0), 1e-12);
 }
 
+TEST(Safety, AMoverComingTowardsTheRobotLengthensTheStopZone) {
+  SafetyConfig config;
+  config.reaction_s = 0.1;
+  const SafetyFilter f(config);
+  Scene s;
+  s.in.pose = {2.0, 1.0, M_PI / 2};  // facing +y in the map
+  s.in.requested = {0.4, 0.0, s.in.now_ns};
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  // 3 m ahead, coming down at 0.8 m/s.
+  movers.items[0] = {7, 2.0, 4.0, 0.0, -0.8, 0.15, 0.0, 0.0};
+  s.in.movers = &movers;
+  const double age_s = 0.1;
+  const double v = 0.4;
+  const SafetyOutput out = f.filter(s.in);
+  EXPECT_NEAR(out.closing_speed_m_s, 0.8, 1e-9);
+  EXPECT_NEAR(out.stop_distance_m,
+              expected_stop_m(config, v, age_s) + 0.8 * (config.reaction_s + age_s + v / config.decel_m_s2), 1e-9);
+
+  // Going away, beside the corridor, or behind: no closing speed.
+  movers.items[0].vy_m_s = 0.8;
+  EXPECT_EQ(f.filter(s.in).closing_speed_m_s, 0.0);
+  movers.items[0] = {7, 3.0, 4.0, 0.0, -0.8, 0.15, 0.0, 0.0};
+  EXPECT_EQ(f.filter(s.in).closing_speed_m_s, 0.0);
+  movers.items[0] = {7, 2.0, 0.5, 0.0, 0.8, 0.15, 0.0, 0.0};
+  EXPECT_EQ(f.filter(s.in).closing_speed_m_s, 0.0);
+  // The nearest mover ahead decides.
+  movers.count = 2;
+  movers.items[0] = {7, 2.0, 4.0, 0.0, -0.8, 0.15, 0.0, 0.0};
+  movers.items[1] = {8, 2.1, 2.5, 0.0, -0.3, 0.15, 0.0, 0.0};
+  EXPECT_NEAR(f.filter(s.in).closing_speed_m_s, 0.3, 1e-9);
+}
+
+TEST(Safety, AClosingMoverStopsWhereAStillObstacleOnlySlows) {
+  SafetyConfig config;
+  const SafetyFilter f(config);
+  Scene s;
+  s.in.pose = {0.0, 0.0, 0.0};
+  s.in.requested = {0.4, 0.0, s.in.now_ns};
+  // A return 0.9 m ahead: beyond the stop zone of a still obstacle.
+  for (std::size_t i = 85; i <= 95; ++i) s.msg.ranges_m[i] = 0.9f;
+  s.view.assign(s.msg.view(), {});
+  const SafetyOutput still = f.filter(s.in);
+  EXPECT_EQ(still.reasons & kSafetyObstacle, 0u);
+  EXPECT_GT(still.command.v_m_s, 0.0);
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  movers.items[0] = {3, 1.0, 0.0, -0.8, 0.0, 0.1, 0.0, 0.0};
+  s.in.movers = &movers;
+  const SafetyOutput closing = f.filter(s.in);
+  EXPECT_TRUE(closing.reasons & kSafetyObstacle);
+  EXPECT_EQ(closing.command.v_m_s, 0.0);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

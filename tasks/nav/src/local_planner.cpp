@@ -62,6 +62,14 @@ Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& reso
     };
     padded_ = outline(config.footprint_padding_m);
     bare_ = outline(0.0);
+    body_min_x_ = body_min_y_ = std::numeric_limits<double>::infinity();
+    body_max_x_ = body_max_y_ = -std::numeric_limits<double>::infinity();
+    for (const Point2D& p : padded_) {
+      body_min_x_ = std::min(body_min_x_, p.x_m);
+      body_max_x_ = std::max(body_max_x_, p.x_m);
+      body_min_y_ = std::min(body_min_y_, p.y_m);
+      body_max_y_ = std::max(body_max_y_, p.y_m);
+    }
     check_ = padded_;
     return Status::success();
   });
@@ -76,6 +84,7 @@ void DwaPlanner::set_path(std::span<const PathPoint> path) noexcept {
   recovery_state_ = DwaStatus::tracking;
   recovery_ticks_ = 0;
   recovery_cycles_ = 0;
+  yield_ticks_ = 0;
 }
 
 void DwaPlanner::clear_path() noexcept { path_count_ = 0; }
@@ -142,6 +151,52 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
     }
   }
   return r;
+}
+
+double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
+                                   bool brake) const noexcept {
+  const double dt = config_.sim_step_s;
+  const int steps = static_cast<int>(std::lround(config_.mover_horizon_s / dt));
+  const double cx = 0.5 * (body_min_x_ + body_max_x_);
+  const double cy = 0.5 * (body_min_y_ + body_max_y_);
+  const double hx = 0.5 * (body_max_x_ - body_min_x_);
+  const double hy = 0.5 * (body_max_y_ - body_min_y_);
+  Pose2D p = pose;
+  double speed = v;
+  double turn = w;
+  for (int k = 1; k <= steps; ++k) {
+    const double t = k * dt;
+    if (brake && t > config_.control_period_s + 1e-9 && speed != 0.0) {
+      // Same arc, slower: w keeps its ratio to v.
+      const double slower = std::max(0.0, std::abs(speed) - config_.acc_v_m_s2 * dt);
+      turn = v != 0.0 ? w * slower / std::abs(v) : turn;
+      speed = std::copysign(slower, speed);
+    }
+    if (std::abs(turn) < 1e-6) {
+      p.x_m += speed * dt * std::cos(p.theta_rad);
+      p.y_m += speed * dt * std::sin(p.theta_rad);
+    } else {
+      const double th = p.theta_rad + turn * dt;
+      p.x_m += speed / turn * (std::sin(th) - std::sin(p.theta_rad));
+      p.y_m -= speed / turn * (std::cos(th) - std::cos(p.theta_rad));
+      p.theta_rad = th;
+    }
+    const double c = std::cos(p.theta_rad);
+    const double s = std::sin(p.theta_rad);
+    for (const msg::MovingObstacle& m : movers) {
+      if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
+      const double dx = m.x_m + m.vx_m_s * t - p.x_m;
+      const double dy = m.y_m + m.vy_m_s * t - p.y_m;
+      // The mover's centre in the body frame, then its distance to the padded body's box.
+      const double bx = c * dx + s * dy - cx;
+      const double by = -s * dx + c * dy - cy;
+      const double ex = std::max(0.0, std::abs(bx) - hx);
+      const double ey = std::max(0.0, std::abs(by) - hy);
+      const double reach = m.radius_m + config_.mover_margin_m;
+      if (ex * ex + ey * ey < reach * reach) return t;
+    }
+  }
+  return std::numeric_limits<double>::infinity();
 }
 
 void DwaPlanner::update_window(const Pose2D& pose) noexcept {
@@ -260,7 +315,8 @@ void DwaPlanner::skip_blocked_part(const Costmap2D& costmap) noexcept {
   target_index_ = i;
 }
 
-DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap) noexcept {
+DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap,
+                               std::span<const msg::MovingObstacle> movers) noexcept {
   DwaCommand out;
   if (path_count_ == 0) return out;
   const PathPoint goal = path_[path_count_ - 1];
@@ -296,7 +352,14 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   wavefront(costmap, goal_distance_, false);
   if (!window_blocked_) wavefront(costmap, path_distance_, true);
 
+  if (!config_.mover_prediction) movers = {};
   double best_score = -std::numeric_limits<double>::infinity();
+  // The rollout whose predicted contact with a mover is latest, for when every one is refused.
+  double escape_ttc = -1.0;
+  double escape_score = -std::numeric_limits<double>::infinity();
+  double escape_v = 0.0;
+  double escape_w = 0.0;
+  bool movers_cost_progress = false;  // a moving rollout was refused or penalised for a mover
   for (int i = 0; i < config_.v_samples; ++i) {
     const double v = config_.v_samples == 1 ? v_hi : v_lo + (v_hi - v_lo) * i / (config_.v_samples - 1);
     for (int j = 0; j < config_.w_samples; ++j) {
@@ -313,9 +376,30 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
       const double path_distance =
           window_blocked_ ? 0.0 : grid_distance_m(path_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
       const double goal_distance = grid_distance_m(goal_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
-      const double score = config_.heading_weight * heading + config_.clearance_weight * clearance +
-                           config_.velocity_weight * velocity - config_.path_weight * path_distance -
-                           config_.goal_weight * goal_distance;
+      double score = config_.heading_weight * heading + config_.clearance_weight * clearance +
+                     config_.velocity_weight * velocity - config_.path_weight * path_distance -
+                     config_.goal_weight * goal_distance;
+      if (!movers.empty()) {
+        const double ttc = time_to_contact(pose, v, w, movers);
+        const bool moving = v >= config_.min_progress_v_m_s;
+        const double ttc_braking = std::isfinite(ttc) && v != 0.0 ? time_to_contact(pose, v, w, movers, true) : ttc;
+        if (std::isfinite(ttc_braking)) {  // even braking meets it: unavoidable on this arc
+          ++out.mover_rejected;
+          movers_cost_progress = movers_cost_progress || moving;
+          const double latest = std::max(ttc, ttc_braking);
+          if (latest > escape_ttc || (latest == escape_ttc && score > escape_score)) {
+            escape_ttc = latest;
+            escape_score = score;
+            escape_v = v;
+            escape_w = w;
+          }
+          continue;
+        }
+        if (std::isfinite(ttc)) {
+          score -= config_.mover_weight * (1.0 - ttc / config_.mover_horizon_s);
+          movers_cost_progress = movers_cost_progress || moving;
+        }
+      }
       if (score > best_score) {  // strict: the first best sample wins ties
         best_score = score;
         out.v_m_s = v;
@@ -327,12 +411,26 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   // then recover instead of spinning in front of an obstacle.
   const double target_bearing =
       std::abs(normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad));
+  const bool refused_all = out.admissible > 0 && out.admissible == out.mover_rejected;
+  if (refused_all) {  // every way meets a mover soon: the one that meets it latest
+    out.v_m_s = escape_v;
+    out.w_rad_s = escape_w;
+  }
   const bool progress = out.v_m_s >= config_.min_progress_v_m_s ||
                         (out.w_rad_s != 0.0 && target_bearing > config_.align_angle_rad);
-  if (out.admissible > 0 && progress) {
+  if (out.admissible > 0 && progress && !refused_all) {
     out.status = DwaStatus::tracking;
     recovery_state_ = DwaStatus::tracking;
     recovery_cycles_ = 0;
+    yield_ticks_ = 0;
+    return out;
+  }
+  // Held back by movers, not by the map: let them pass (a while) instead of recovering.
+  if (out.admissible > 0 && movers_cost_progress &&
+      yield_ticks_ < static_cast<int>(std::lround(config_.max_yield_s / dt))) {
+    ++yield_ticks_;
+    out.status = DwaStatus::yielding;
+    recovery_state_ = DwaStatus::tracking;
     return out;
   }
   out.v_m_s = 0.0;

@@ -217,6 +217,9 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
   return guarded("controller task", [&]() -> Status {
     if (Status s = costmap_.add_layer(static_layer_); !s) return s;
     if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
+    if (config_.dynamic_obstacles.enabled) {
+      if (Status s = costmap_.add_layer(dynamic_layer_); !s) return s;
+    }
     if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
     CostmapConfig cfg = config_.local_costmap;
     cfg.lattice_x_m = map_.origin_x_m();
@@ -232,6 +235,8 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
 
 void ControllerTask::step(const tasks::StepContext& context) {
   VelocityCommand command{0.0, 0.0, context.start_ns};
+  movers_message_.count = 0;
+  movers_message_.stamp_ns = context.start_ns;
   ControllerStatus status;
   if (path_.read(path_sample_) && path_sample_.value.plan_id != plan_id_) {
     plan_id_ = path_sample_.value.plan_id;
@@ -257,8 +262,11 @@ void ControllerTask::step(const tasks::StepContext& context) {
       scan = &projected_;
     }
     const Pose2D at_scan = scan != nullptr ? robot_pose_at(pose.value, *scan) : pose.value.pose;
-    costmap_.update({pose.value.pose, at_scan, scan});
-    const DwaCommand c = dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap());
+    costmap_.update({pose.value.pose, at_scan, scan, context.start_ns});
+    if (config_.dynamic_obstacles.enabled) dynamic_layer_.movers(context.start_ns, movers_message_);
+    const DwaCommand c =
+        dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap(),
+                     std::span<const msg::MovingObstacle>(movers_message_.items.data(), movers_message_.count));
     command.v_m_s = c.v_m_s;
     command.w_rad_s = c.w_rad_s;
     status.status = c.status;
@@ -269,6 +277,7 @@ void ControllerTask::step(const tasks::StepContext& context) {
   status.plan_id = plan_id_;
   command_.publish(command, context.start_ns);
   status_.publish(status, context.start_ns);
+  movers_.publish(movers_message_, context.start_ns);
 }
 
 // --- SafetyTask ---------------------------------------------------------------------------------
@@ -304,6 +313,11 @@ void SafetyTask::step(const tasks::StepContext& context) {
   }
   tasks::Sample<PoseEstimate> pose;
   in.localization_lost = !pose_.read(pose) || !pose.value.valid || pose.value.lost;
+  in.pose = pose.value.pose;
+  if (movers_.read(movers_sample_) &&
+      static_cast<double>(context.start_ns - movers_sample_.stamp_ns) <= config_.movers_timeout_s * 1e9) {
+    in.movers = &movers_sample_.value;
+  }
   const SafetyOutput out = filter_.filter(in);
   if ((in.requested.v_m_s != 0.0 || in.requested.w_rad_s != 0.0) && out.command.v_m_s == 0.0 &&
       out.command.w_rad_s == 0.0) {

@@ -20,6 +20,29 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
   turn_radius_m_ = fp.circumscribed_radius_m() + config.lateral_margin_m;
 }
 
+double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
+  if (in.movers == nullptr) return 0.0;
+  const double c = std::cos(in.pose.theta_rad);
+  const double s = std::sin(in.pose.theta_rad);
+  double nearest = std::numeric_limits<double>::infinity();
+  double closing = 0.0;
+  for (std::size_t i = 0; i < in.movers->count; ++i) {
+    const msg::MovingObstacle& m = in.movers->items[i];
+    // The mover predicted to now, in the body frame.
+    const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
+    const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
+    const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
+    const double bx = c * dx + s * dy;
+    const double by = -s * dx + c * dy;
+    if (bx <= 0.0 || std::abs(by) > half_width_m_ + config_.lateral_margin_m + m.radius_m) continue;
+    if (bx < nearest) {
+      nearest = bx;
+      closing = std::max(0.0, -(c * m.vx_m_s + s * m.vy_m_s));
+    }
+  }
+  return closing;
+}
+
 SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   SafetyOutput out;
   out.command = in.requested;
@@ -43,8 +66,10 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   double v = in.requested.v_m_s;
   double w = in.requested.w_rad_s;
   const double speed = std::max({0.0, in.measured_v_m_s, v});
+  out.closing_speed_m_s = v > 0.0 ? closing_speed(in) : 0.0;
   const double stop = config_.stop_distance_m + speed * (config_.reaction_s + out.scan_age_s) +
-                      speed * speed / (2.0 * config_.decel_m_s2);
+                      speed * speed / (2.0 * config_.decel_m_s2) +
+                      out.closing_speed_m_s * (config_.reaction_s + out.scan_age_s + speed / config_.decel_m_s2);
   out.stop_distance_m = stop;
 
   const std::span<const Point2D> points = in.scan->points();

@@ -162,6 +162,7 @@ struct SafetyOutput {
   double nearest_ahead_m = 0.0;  // free travel along the commanded arc (+inf: clear to the slow zone's end)
   double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
   double scan_age_s = 0.0;       // age of the scan that decision used (0: none)
+  double closing_speed_m_s = 0.0;  // of the nearest tracked mover ahead, towards the robot
 };
 static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 

@@ -56,6 +56,7 @@ class BackgroundSubtractor {
   void shift(int cols, int rows) noexcept;
   // One step of both averages with image (width * height values 0..255), then the dynamic
   // test; dynamic[i] = 1 or 0. mask (optional, same size): cells with mask != 0 never dynamic.
+  // Neighbours outside the grid count as the cell itself. Spans shorter than the grid: no-op.
   void apply(std::span<const std::uint8_t> image, std::span<std::uint8_t> dynamic,
              std::span<const std::uint8_t> mask = {}) noexcept;
   void reset() noexcept;  // every cell takes the next image's value
@@ -72,6 +73,7 @@ class BackgroundSubtractor {
   std::span<float> slow_;
   std::span<float> scratch_;        // the previous step's values while updating
   std::span<std::uint8_t> fresh_;   // 1: take the next image's value
+  bool any_fresh_ = false;
 };
 
 struct Blob {
@@ -82,6 +84,7 @@ struct Blob {
   double max_x_m = 0.0;
   double min_y_m = 0.0;
   double max_y_m = 0.0;
+  double radius_m = 0.0;  // half the extent's diagonal plus half a cell: the cells' footprint
 };
 
 // 8-connected components of a 0/1 grid; blobs outside [min_cells, max_cells] are dropped.
@@ -149,10 +152,17 @@ class MoverTracker {
  public:
   Status init(const DolTrackerConfig& config, std::pmr::memory_resource& resource);
   // Predicts every track to stamp_ns, matches the blobs, corrects, births and deaths.
+  // Blobs past max_blobs are ignored. A tentative track that misses a scan is deleted at once
+  // (a real mover shows up in every scan; clutter rarely twice in a row); a confirmed one
+  // coasts for max_coast_s. Pairs farther apart than gate_m all cost the same in the
+  // assignment, so one far pair cannot pull the matching away from the near ones.
   void update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept;
   [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return {tracks_.data(), count_}; }
-  // A track's position predicted to stamp_ns (constant velocity), without changing it.
+  // A track's position predicted to stamp_ns (constant velocity), without changing it; a
+  // stamp before the track's own gives its current position.
   [[nodiscard]] static Eigen::Matrix<double, 2, 1> predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
+  // The whole state and covariance predicted to stamp_ns (the filter's prediction step).
+  [[nodiscard]] DolTrack predicted(const DolTrack& track, hal::Nanos stamp_ns) const noexcept;
   void clear() noexcept { count_ = 0; }
 
  private:
@@ -174,6 +184,9 @@ class MoverTracker {
 // back half-plane:  σx² = (1 - r) sigma2_back_x,  σy² = (1 - r/4) sigma2_back_y
 // r = min(1, speed / max_speed_m_s). Ahead, the Gaussian starts front_horizon_s * speed in
 // front of the centroid (flat before it): the space the mover reaches in that time.
+// A is min(amplitude, 252). "Front" is the half-plane where d cos(θ-θc) > 0; at zero velocity
+// θc = 0 and r = 0 (the layer paints only tracks of at least min_speed_m_s). Each σ² is kept
+// at least 1e-4 m² so that r = 1 behind the mover stays finite.
 struct DolCostConfig {
   double amplitude = 252.0;        // kMaxNonObstacleCost: painted cells are never lethal...
   double cutoff = 30.0;            // ...and cells below this are left alone
@@ -191,6 +204,8 @@ struct DolCostConfig {
 [[nodiscard]] double mover_cost(const DolCostConfig& config, double cx, double cy, double vx, double vy, double x_m,
                                 double y_m) noexcept;
 // Max-merges mover_cost over the grid cells around the mover into grid (never lowers a cell).
+// Visits only the cells whose centre lies in the box around the mover outside which the
+// Gaussian is below cutoff.
 void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, double vy, Costmap2D& grid) noexcept;
 
 // --- The layer ----------------------------------------------------------------------------------
@@ -222,6 +237,7 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
   // The confirmed tracks predicted to stamp_ns, for the planner and the safety filter.
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
+  // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
 
  private:
@@ -236,6 +252,7 @@ class DynamicObstacleLayer final : public CostmapLayer {
   std::span<std::uint8_t> map_near_;       // per static-map cell: within the mask radius
   std::span<const Blob> blobs_;
   std::uint64_t detections_ = 0;
+  bool active_ = false;                    // enabled and initialised
 };
 
 }  // namespace sen3bot::nav

@@ -22,6 +22,19 @@
 // With no admissible moving rollout it recovers: wait, then rotate in place towards the
 // target, then back off, in a cycle, counting each. Every period samples again first, so a
 // recovery ends as soon as a way forward opens; after max_recovery_cycles it reports failure.
+//
+// Tracked movers (the dynamic obstacle layer's, predicted to now) are checked in time, not
+// only as painted cost. Each rollout is followed to mover_horizon_s in two ways: driving on
+// at its (v, w), and braking at acc_v_m_s2 along the same arc after one control period. The
+// first step at which the padded footprint comes within a mover's radius plus mover_margin_m
+// of that mover's constant-velocity prediction is a time to contact. A rollout that meets a
+// mover even when braking leads into an unavoidable contact and is not taken; one that meets
+// it only when driving on costs
+//   mover_weight * (1 - t_contact / mover_horizon_s)
+// so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
+// crosses ahead of it when there is time. When every admissible rollout is refused it takes
+// the one whose contact comes latest (stepping out of the way), and when movers make it stop
+// it reports `yielding`, not a recovery, for up to max_yield_s.
 #include <cstdint>
 #include <memory_resource>
 #include <span>
@@ -73,6 +86,11 @@ struct DwaConfig {
   // Tracked movers (the dynamic obstacle layer's): each rollout is checked against their
   // predicted positions at its own time steps (the time-aware critic).
   bool mover_prediction = true;
+  double mover_horizon_s = 2.5;
+  double mover_margin_m = 0.1;
+  double mover_weight = 1.5;
+  double mover_min_speed_m_s = 0.1;  // slower tracks are left to the costmap
+  double max_yield_s = 6.0;
   // Recoveries.
   double wait_s = 1.0;
   double rotate_s = 1.5;
@@ -88,6 +106,7 @@ struct DwaCommand {
   DwaStatus status = DwaStatus::idle;
   std::uint32_t admissible = 0;  // rollouts that passed the collision check
   std::uint32_t evaluated = 0;
+  std::uint32_t mover_rejected = 0;  // admissible rollouts refused: a contact even when braking
   double distance_to_goal_m = 0.0;
 };
 
@@ -101,7 +120,13 @@ class DwaPlanner {
   [[nodiscard]] std::size_t path_size() const noexcept { return path_count_; }
 
   // One control period: pose in the map frame, current body velocities, the local costmap.
-  DwaCommand compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap) noexcept;
+  // movers: tracked moving obstacles predicted to now (map frame); used when mover_prediction.
+  DwaCommand compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap,
+                     std::span<const msg::MovingObstacle> movers = {}) noexcept;
+  // The first time (s) at which the robot driving (v, w) from pose comes within a mover's
+  // reach, or infinity within mover_horizon_s; brake: braking along the arc after one period.
+  [[nodiscard]] double time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
+                                       bool brake = false) const noexcept;
 
   // True when the padded footprint at pose touches a lethal or unknown cell (or leaves the
   // costmap). When the robot already stands that close, a cycle checks the bare footprint
@@ -152,6 +177,9 @@ class DwaPlanner {
   DwaStatus recovery_state_ = DwaStatus::tracking;
   int recovery_ticks_ = 0;
   int recovery_cycles_ = 0;
+  int yield_ticks_ = 0;
+  // The padded footprint's bounding box in the robot frame (the mover check).
+  double body_min_x_ = 0.0, body_max_x_ = 0.0, body_min_y_ = 0.0, body_max_y_ = 0.0;
 };
 
 }  // namespace sen3bot::nav

@@ -6,9 +6,10 @@
 //   laser driver [ScanMessage] ---+--> LocalizationTask --[PoseEstimate]--+
 //   base driver  [Odometry]   ----+                                       |
 //   mission      [NavGoal] ------> PlannerTask (global costmap + A*) <----+--[PathMessage]
-//   PathMessage + PoseEstimate + Odometry + ScanMessage --> ControllerTask (local costmap + DWA)
-//        --[VelocityCommand requested]--> SafetyTask (+ ScanMessage, Odometry, BaseFlags,
-//        PoseEstimate) --[VelocityCommand]--> base driver
+//   PathMessage + PoseEstimate + Odometry + ScanMessage --> ControllerTask (local costmap with
+//        the dynamic obstacle layer + DWA) --[VelocityCommand requested, MovingObstacles]-->
+//        SafetyTask (+ ScanMessage, Odometry, BaseFlags, PoseEstimate) --[VelocityCommand]-->
+//        base driver
 //
 // The OccupancyMap given to LocalizationTask, PlannerTask and ControllerTask must outlive them.
 #include <atomic>
@@ -17,6 +18,7 @@
 
 #include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
@@ -142,6 +144,7 @@ struct ControllerTaskConfig {
   CostmapConfig local_costmap{.rolling = true, .width_m = 6.0, .height_m = 6.0, .resolution_m = 0.05};
   StaticLayerConfig static_layer;
   ObstacleLayerConfig obstacle;
+  DynamicObstacleConfig dynamic_obstacles;
   InflationLayerConfig inflation;
   DwaConfig dwa;
   SensorMount laser_mount;
@@ -153,13 +156,18 @@ class ControllerTask final : public tasks::Task {
   ControllerTask(const ControllerTaskConfig& config, const OccupancyMap& map, const tasks::Topic<PoseEstimate>& pose,
                  const tasks::Topic<Odometry>& odom, const tasks::Topic<ScanMessage>& scan,
                  const tasks::Topic<PathMessage>& path, tasks::Topic<VelocityCommand>& command,
-                 tasks::Topic<ControllerStatus>& status) noexcept
+                 tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers) noexcept
       : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
-        static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle), inflation_layer_(config.inflation) {}
+        movers_(movers), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+        dynamic_layer_(config.dynamic_obstacles, &map), inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
   [[nodiscard]] const DwaPlanner& planner() const noexcept { return dwa_; }
+  // Null when the configuration turns the layer off.
+  [[nodiscard]] const DynamicObstacleLayer* dynamic_layer() const noexcept {
+    return config_.dynamic_obstacles.enabled ? &dynamic_layer_ : nullptr;
+  }
 
  private:
   ControllerTaskConfig config_;
@@ -170,11 +178,14 @@ class ControllerTask final : public tasks::Task {
   const tasks::Topic<PathMessage>& path_;
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<ControllerStatus>& status_;
+  tasks::Topic<msg::MovingObstacles>& movers_;
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
+  DynamicObstacleLayer dynamic_layer_;
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   DwaPlanner dwa_;
+  msg::MovingObstacles movers_message_;
   std::uint32_t plan_id_ = 0;
   std::uint64_t scan_seq_ = 0;
   tasks::Sample<ScanMessage> scan_sample_;
@@ -187,6 +198,7 @@ class ControllerTask final : public tasks::Task {
 struct SafetyTaskConfig {
   SafetyConfig safety;
   double command_timeout_s = 0.5;  // a requested command older than this counts as zero
+  double movers_timeout_s = 0.5;   // tracked movers older than this are not used
   bool require_base_flags = true;  // with no BaseFlags ever published, stop
 };
 
@@ -195,9 +207,10 @@ class SafetyTask final : public tasks::Task {
   SafetyTask(const SafetyTaskConfig& config, const tasks::Topic<VelocityCommand>& requested,
              const tasks::Topic<ScanMessage>& scan, const tasks::Topic<Odometry>& odom,
              const tasks::Topic<BaseFlags>& base, const tasks::Topic<PoseEstimate>& pose,
-             tasks::Topic<VelocityCommand>& command, tasks::Topic<SafetyOutput>& status) noexcept
+             const tasks::Topic<msg::MovingObstacles>& movers, tasks::Topic<VelocityCommand>& command,
+             tasks::Topic<SafetyOutput>& status) noexcept
       : config_(config), filter_(config.safety), requested_(requested), scan_(scan), odom_(odom), base_(base), pose_(pose),
-        command_(command), status_(status) {}
+        movers_(movers), command_(command), status_(status) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
@@ -210,9 +223,11 @@ class SafetyTask final : public tasks::Task {
   const tasks::Topic<Odometry>& odom_;
   const tasks::Topic<BaseFlags>& base_;
   const tasks::Topic<PoseEstimate>& pose_;
+  const tasks::Topic<msg::MovingObstacles>& movers_;
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<SafetyOutput>& status_;
   tasks::Sample<ScanMessage> scan_sample_;
+  tasks::Sample<msg::MovingObstacles> movers_sample_;
   std::uint64_t scan_seq_ = 0;
   ProjectedScan projected_;  // projected once per scan, checked every step
   std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero

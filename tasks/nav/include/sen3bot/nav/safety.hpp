@@ -12,6 +12,10 @@
 //    The base cannot stop at once (the braking term), a command takes reaction_s to reach the
 //    wheels, and the robot has already moved for scan_age_s (now - the scan's stamp, at least
 //    0) towards what the scan shows: a scan may be up to stale_scan_periods periods old.
+//    A tracked mover ahead (in the swept corridor widened by its radius) coming towards the
+//    robot at closing speed u shortens the gap as well: while the command reaches the wheels
+//    and while the robot brakes (v / decel_m_s2), so the distance grows by
+//      u * (reaction_s + scan_age_s + v / decel_m_s2)
 //    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
 //    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
@@ -56,6 +60,9 @@ struct SafetyInputs {
   bool localization_lost = false;
   double measured_v_m_s = 0.0;     // odometry speed, for the braking distance
   hal::Nanos now_ns = 0;
+  // Tracked movers (map frame, predicted to movers->stamp_ns) and the robot's pose; null: none.
+  const msg::MovingObstacles* movers = nullptr;
+  Pose2D pose;
 };
 
 class SafetyFilter {
@@ -63,6 +70,9 @@ class SafetyFilter {
   explicit SafetyFilter(const SafetyConfig& config = {}) noexcept;
   [[nodiscard]] SafetyOutput filter(const SafetyInputs& in) const noexcept;
   [[nodiscard]] const SafetyConfig& config() const noexcept { return config_; }
+  // The speed at which the nearest mover ahead, inside the corridor the body sweeps, comes
+  // towards the robot (0 when none does).
+  [[nodiscard]] double closing_speed(const SafetyInputs& in) const noexcept;
 
  private:
   static constexpr double kSweepStepM = 0.02;
