@@ -1,5 +1,7 @@
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 
+#include <Eigen/LU>  // Matrix2d::inverse(), defined by the LU module
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
