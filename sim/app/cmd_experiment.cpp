@@ -53,7 +53,9 @@ constexpr const char* kCrashSeedVariable = "SEN3BOT_EXPERIMENT_CRASH_SEED";
 
 enum class Variant : std::uint8_t { dol, no_dol };
 const char* key(Variant v) { return v == Variant::dol ? "dol" : "no_dol"; }
-const char* label(Variant v) { return v == Variant::dol ? "DOL" : "no DOL"; }
+const char* label(Variant v, bool prediction = true) {
+  return v == Variant::no_dol ? "no DOL" : prediction ? "DOL" : "DOL, no pred.";
+}
 
 enum class Outcome : std::uint8_t { smooth, wait_recovery, collision, timeout };
 const char* to_string(Outcome o) {
@@ -207,6 +209,7 @@ void copy_tracks(const Controller& controller, hal::Nanos now_ns, report::Moment
 
 struct Sample {
   std::string png;
+  std::string variant;  // its label in the title
   std::string description;
   double best_gap_m = std::numeric_limits<double>::infinity();
   report::Moment moment;
@@ -319,7 +322,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
       }
       char title[160];
       std::snprintf(title, sizeof title, "moving-obstacle arena, %s, seed %llu: closest approach at t = %.1f s (gap %.2f m)",
-                    label(r.variant), static_cast<unsigned long long>(r.seed), sample->moment.t_s, sample->best_gap_m);
+                    sample->variant.c_str(), static_cast<unsigned long long>(r.seed), sample->moment.t_s, sample->best_gap_m);
       figure.title = title;
       figure.passed = classify(r) == Outcome::smooth || classify(r) == Outcome::wait_recovery;
       if (!report::draw_case_figure(figure).write_png(sample->png)) set_error(r, "cannot write " + sample->png);
@@ -601,7 +604,7 @@ void print_table(std::FILE* out, const Options& o, const std::vector<VariantResu
   char head[96];
   std::snprintf(head, sizeof head, "obstacles at %.2f m/s, N = %llu", o.speed_m_s, static_cast<unsigned long long>(o.runs));
   std::fprintf(out, "\n| %-30s |", head);
-  for (const VariantResults& v : variants) std::fprintf(out, " %-14s |", label(v.variant));
+  for (const VariantResults& v : variants) std::fprintf(out, " %-14s |", label(v.variant, o.prediction));
   std::fprintf(out, "\n|%s|", std::string(32, '-').c_str());
   for (std::size_t i = 0; i < variants.size(); ++i) std::fprintf(out, "%s|", std::string(16, '-').c_str());
   auto row = [&](const char* name, auto count) {
@@ -621,10 +624,10 @@ void print_table(std::FILE* out, const Options& o, const std::vector<VariantResu
   std::fprintf(out, "\n\ntravel time of the smooth runs:\n");
   for (const VariantResults& v : variants) {
     const Quartiles q = quartiles(v.smooth_times);
-    if (q.n == 0) std::fprintf(out, "  %-7s no smooth run\n", label(v.variant));
+    if (q.n == 0) std::fprintf(out, "  %-7s no smooth run\n", label(v.variant, o.prediction));
     else
       std::fprintf(out, "  %-7s median %.1f s, IQR %.1f s (%.1f to %.1f s), range %.1f to %.1f s, %zu runs\n",
-                   label(v.variant), q.median, q.iqr, q.q1, q.q3, q.min, q.max, q.n);
+                   label(v.variant, o.prediction), q.median, q.iqr, q.q1, q.q3, q.min, q.max, q.n);
   }
 }
 
@@ -739,7 +742,7 @@ int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       return 1;
     }
     std::vector<BoxPlotSeries> series;
-    for (const VariantResults& v : by_variant) series.push_back({label(v.variant), v.smooth_times});
+    for (const VariantResults& v : by_variant) series.push_back({label(v.variant, o.prediction), v.smooth_times});
     char title[128], subtitle[160];
     std::snprintf(title, sizeof title, "travel time of the smooth runs: %d boxes at %.2f m/s, N = %llu", o.boxes, o.speed_m_s,
                   static_cast<unsigned long long>(o.runs));
@@ -754,6 +757,7 @@ int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     // The first seed's run of the first variant again, in 100 ms slices, for its figure.
     Sample sample;
     sample.png = o.report_dir + "/sample_run.png";
+    sample.variant = label(plan.jobs[0].variant, o.prediction);
     const std::vector<Lane> lanes = dol_layout(o.seed, o.boxes);
     char head[96];
     std::snprintf(head, sizeof head, "empty 10 x 6 m arena, %d box%s of 0.2 m at %.2f m/s on lanes x =", o.boxes,
