@@ -150,26 +150,35 @@ Status ObstacleLayer::init(const Costmap2D& master, std::pmr::memory_resource& r
   grid_.set_origin(master.origin_x_m(), master.origin_y_m());
   return guarded("obstacle layer", [&]() -> Status {
     scratch_ = allocate_array<std::uint8_t>(resource, master.size());
+    seen_free_ = allocate_array<std::uint8_t>(resource, master.size());
     return Status::success();
   });
 }
 
-void ObstacleLayer::clear() noexcept { grid_.fill(kFreeCost); }
+void ObstacleLayer::clear() noexcept {
+  grid_.fill(kFreeCost);
+  std::fill(seen_free_.begin(), seen_free_.end(), std::uint8_t{0});
+}
 
 void ObstacleLayer::on_window_moved(int shift_cols, int shift_rows) noexcept {
+  shift_grid(grid_.cells(), shift_cols, shift_rows);
+  shift_grid(seen_free_, shift_cols, shift_rows);
+}
+
+void ObstacleLayer::shift_grid(std::span<std::uint8_t> cells, int shift_cols, int shift_rows) noexcept {
   const int w = grid_.width();
   const int h = grid_.height();
-  std::fill(scratch_.begin(), scratch_.end(), kFreeCost);
+  std::fill(scratch_.begin(), scratch_.end(), std::uint8_t{0});
   for (int r = 0; r < h; ++r) {
     const int src_r = r + shift_rows;
     if (src_r < 0 || src_r >= h) continue;
     for (int c = 0; c < w; ++c) {
       const int src_c = c + shift_cols;
       if (src_c < 0 || src_c >= w) continue;
-      scratch_[grid_.index(c, r)] = grid_.at(src_c, src_r);
+      scratch_[grid_.index(c, r)] = cells[grid_.index(src_c, src_r)];
     }
   }
-  std::memcpy(grid_.cells().data(), scratch_.data(), scratch_.size());
+  std::memcpy(cells.data(), scratch_.data(), scratch_.size());
 }
 
 void ObstacleLayer::raytrace(int c0, int r0, int c1, int r1, int max_cells) noexcept {
@@ -184,6 +193,7 @@ void ObstacleLayer::raytrace(int c0, int r0, int c1, int r1, int max_cells) noex
   for (int steps = 0; steps < max_cells && (c != c1 || r != r1); ++steps) {
     if (grid_.in_bounds(c, r)) {
       grid_.set(c, r, kFreeCost);
+      seen_free_[grid_.index(c, r)] = 1;
     } else if (steps > 0) {
       break;  // left the window; nothing further can be inside again on a straight line
     }
@@ -234,7 +244,10 @@ void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexc
       const int r1 = static_cast<int>(std::floor(ey));
       raytrace(c0, r0, c1, r1, max_cells);
       // A ray cut short by the range limit clears its last cell too.
-      if (clear_range < range && grid_.in_bounds(c1, r1)) grid_.set(c1, r1, kFreeCost);
+      if (clear_range < range && grid_.in_bounds(c1, r1)) {
+        grid_.set(c1, r1, kFreeCost);
+        seen_free_[grid_.index(c1, r1)] = 1;
+      }
     }
     for (std::size_t i = 0; i < scan.size(); ++i) {
       if (!scan.valid(i)) continue;

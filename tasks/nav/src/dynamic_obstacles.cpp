@@ -1,7 +1,6 @@
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 
-#include <Eigen/LU>  // Matrix2d::inverse(), defined by the LU module
-
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -399,6 +398,7 @@ DolTrack MoverTracker::predicted(const DolTrack& track, hal::Nanos stamp_ns) con
 
 void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept {
   const std::size_t blob_count = std::min(blobs.size(), config_.max_blobs);
+  last_update_ns_ = std::max(last_update_ns_, stamp_ns);
   for (std::size_t t = 0; t < count_; ++t) {
     DolTrack& track = tracks_[t];
     predict_state(track, seconds_between(track.stamp_ns, stamp_ns), config_.accel_sigma_m_s2);
@@ -474,9 +474,16 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noex
     track.stamp_ns = stamp_ns;
     track.last_hit_ns = stamp_ns;
     track.x << blobs[b].x_m, blobs[b].y_m, 0.0, 0.0;
+    track.birth << blobs[b].x_m, blobs[b].y_m;
     track.P = Vector4(s2, s2, v2, v2).asDiagonal();
     track.radius_m = std::clamp(blobs[b].radius_m, config_.min_radius_m, config_.max_radius_m);
   }
+}
+
+bool MoverTracker::moving(const DolTrack& track) const noexcept {
+  if (!track.confirmed || seconds_between(track.last_hit_ns, last_update_ns_) > config_.publish_max_coast_s) return false;
+  const double travel = std::hypot(track.x(0) - track.birth(0), track.x(1) - track.birth(1));
+  return std::hypot(track.x(2), track.x(3)) >= config_.moving_min_speed_m_s && travel >= config_.moving_min_travel_m;
 }
 
 // --- Cost ---------------------------------------------------------------------------------
@@ -700,21 +707,31 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     const auto cells = master.cells();
     for (std::size_t i = 0; i < cells.size(); ++i) image_[i] = cells[i] == kLethalCost ? 255 : 0;
     std::span<const std::uint8_t> mask;
-    if (!map_near_.empty()) {
-      // The window and the map share the lattice and the yaw: a fixed cell offset.
-      const OccupancyMap& map = *static_map_;
-      double gx = 0.0;
-      double gy = 0.0;
-      map.world_to_grid(master.origin_x_m(), master.origin_y_m(), gx, gy);
-      const int off_c = static_cast<int>(std::lround(gx));
-      const int off_r = static_cast<int>(std::lround(gy));
+    const std::span<const std::uint8_t> seen =
+        observations_ != nullptr && observations_->seen_free().size() == mask_.size() ? observations_->seen_free()
+                                                                                      : std::span<const std::uint8_t>{};
+    if (!map_near_.empty() || !seen.empty()) {
+      // Never dynamic: next to the static map, or where the laser never saw free floor (a face
+      // that just came into view, not something that moved in). The window and the map share
+      // the lattice and the yaw: a fixed cell offset.
+      int off_c = 0;
+      int off_r = 0;
+      if (!map_near_.empty()) {
+        double gx = 0.0;
+        double gy = 0.0;
+        static_map_->world_to_grid(master.origin_x_m(), master.origin_y_m(), gx, gy);
+        off_c = static_cast<int>(std::lround(gx));
+        off_r = static_cast<int>(std::lround(gy));
+      }
       for (int r = 0; r < master.height(); ++r) {
         const int mr = r + off_r;
         const std::size_t row = master.index(0, r);
         for (int c = 0; c < master.width(); ++c) {
           const int mc = c + off_c;
-          mask_[row + static_cast<std::size_t>(c)] =
-              map.in_bounds(mc, mr) ? map_near_[map.geometry().index(mc, mr)] : std::uint8_t{0};
+          const std::size_t i = row + static_cast<std::size_t>(c);
+          const bool near_map = !map_near_.empty() && static_map_->in_bounds(mc, mr) &&
+                                map_near_[static_map_->geometry().index(mc, mr)] != 0;
+          mask_[i] = near_map || (!seen.empty() && seen[i] == 0) ? 1 : 0;
         }
       }
       mask = mask_;
@@ -726,7 +743,7 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     tracker_.update(blobs_, inputs.scan->stamp_ns());
   }
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!track.confirmed) continue;
+    if (!tracker_.moving(track)) continue;
     const Vector2 p = MoverTracker::predict_position(track, inputs.now_ns);
     if (std::hypot(track.x(2), track.x(3)) >= config_.cost.min_speed_m_s) {
       paint_mover(config_.cost, p(0), p(1), track.x(2), track.x(3), master);
@@ -740,7 +757,7 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
   out.stamp_ns = stamp_ns;
   if (!active_) return;
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!track.confirmed) continue;
+    if (!tracker_.moving(track)) continue;
     if (out.count >= msg::MovingObstacles::kMax) break;
     const DolTrack at = tracker_.predicted(track, stamp_ns);
     msg::MovingObstacle& m = out.items[out.count++];

@@ -386,9 +386,12 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
         if (std::isfinite(ttc_braking)) {  // even braking meets it: unavoidable on this arc
           ++out.mover_rejected;
           movers_cost_progress = movers_cost_progress || moving;
-          const double latest = std::max(ttc, ttc_braking);
-          if (latest > escape_ttc || (latest == escape_ttc && score > escape_score)) {
-            escape_ttc = latest;
+          // Met whatever it does: brake where the contact comes latest, and as slow as
+          // possible, so that if it comes the robot is (nearly) standing.
+          const bool later = ttc_braking > escape_ttc;
+          const bool as_late = ttc_braking == escape_ttc;
+          if (later || (as_late && v < escape_v) || (as_late && v == escape_v && score > escape_score)) {
+            escape_ttc = ttc_braking;
             escape_score = score;
             escape_v = v;
             escape_w = w;

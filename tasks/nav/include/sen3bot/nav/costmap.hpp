@@ -171,13 +171,19 @@ class ObstacleLayer final : public CostmapLayer {
   void update(Costmap2D& master, const CostmapInputs& inputs) noexcept override;
   void clear() noexcept;
   [[nodiscard]] std::uint8_t mark(int col, int row) const noexcept { return grid_.at(col, row); }
+  // Per cell of the window: 1 once a beam has passed through it (the laser saw it free) since
+  // it entered the window. Something there now moved in; a face never seen through may just
+  // have come into view (the dynamic obstacle layer tells the two apart with it).
+  [[nodiscard]] std::span<const std::uint8_t> seen_free() const noexcept { return seen_free_; }
 
  private:
   void raytrace(int c0, int r0, int c1, int r1, int max_cells) noexcept;
+  void shift_grid(std::span<std::uint8_t> cells, int shift_cols, int shift_rows) noexcept;
 
   ObstacleLayerConfig config_;
-  Costmap2D grid_;                  // persistent marks (0 or 254), same geometry as the master
-  std::span<std::uint8_t> scratch_; // for window shifts
+  Costmap2D grid_;                    // persistent marks (0 or 254), same geometry as the master
+  std::span<std::uint8_t> seen_free_;  // see seen_free()
+  std::span<std::uint8_t> scratch_;   // for window shifts
 };
 
 // Inflation with Nav2 semantics: exact Euclidean distance transform from lethal cells, then

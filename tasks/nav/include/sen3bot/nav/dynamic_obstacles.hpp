@@ -128,13 +128,22 @@ struct DolTrackerConfig {
   std::size_t max_tracks = 16;
   std::size_t max_blobs = 32;
   double gate_m = 1.0;             // a blob farther than this from a track's prediction is not it
-  int confirm_hits = 3;            // hits before a tentative track is confirmed
+  // Hits before a tentative track is confirmed. A static object coming into view is dynamic
+  // for 3 updates with the default averages (P_s catches up), so 4 keeps it out.
+  int confirm_hits = 4;
   double max_coast_s = 0.6;        // unmatched for longer: deleted
   double accel_sigma_m_s2 = 1.0;   // white-noise acceleration (process noise)
   double measurement_sigma_m = 0.07;
   double initial_velocity_sigma_m_s = 1.5;
   double min_radius_m = 0.1;       // a track's size from its blobs' extent, clamped
   double max_radius_m = 0.6;
+  // A confirmed track counts as a mover (painted, published) only while it is faster than
+  // moving_min_speed_m_s, is at least moving_min_travel_m from where it was born and was hit
+  // no more than publish_max_coast_s before the newest detection: the laser's marks on a
+  // still object flicker as the robot passes it, and their blobs wander, but do not travel.
+  double moving_min_speed_m_s = 0.15;
+  double moving_min_travel_m = 0.3;
+  double publish_max_coast_s = 0.25;
 };
 
 struct DolTrack {
@@ -146,6 +155,7 @@ struct DolTrack {
   Eigen::Matrix<double, 4, 1> x = Eigen::Matrix<double, 4, 1>::Zero();  // x, y, vx, vy (world)
   Eigen::Matrix<double, 4, 4> P = Eigen::Matrix<double, 4, 4>::Identity();
   double radius_m = 0.1;
+  Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
 };
 
 class MoverTracker {
@@ -158,6 +168,8 @@ class MoverTracker {
   // assignment, so one far pair cannot pull the matching away from the near ones.
   void update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept;
   [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return {tracks_.data(), count_}; }
+  // Whether a track counts as a mover (see DolTrackerConfig).
+  [[nodiscard]] bool moving(const DolTrack& track) const noexcept;
   // A track's position predicted to stamp_ns (constant velocity), without changing it; a
   // stamp before the track's own gives its current position.
   [[nodiscard]] static Eigen::Matrix<double, 2, 1> predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
@@ -171,6 +183,7 @@ class MoverTracker {
   std::span<DolTrack> tracks_;
   std::size_t count_ = 0;
   std::uint32_t next_id_ = 1;
+  hal::Nanos last_update_ns_ = 0;
   std::span<double> cost_;
   std::span<int> assignment_;
   std::span<std::uint8_t> blob_used_;
@@ -222,9 +235,12 @@ struct DynamicObstacleConfig {
 // inputs.now_ns. Without a new scan it only repaints the predictions.
 class DynamicObstacleLayer final : public CostmapLayer {
  public:
-  // static_map: for the static mask (may be null: no mask). Must outlive the layer.
-  DynamicObstacleLayer(const DynamicObstacleConfig& config, const OccupancyMap* static_map) noexcept
-      : config_(config), static_map_(static_map) {}
+  // static_map: for the static mask (may be null: no mask). observations: the obstacle layer
+  // of the same costmap; with it, only cells the laser has seen free can become dynamic
+  // (may be null). Both must outlive the layer.
+  DynamicObstacleLayer(const DynamicObstacleConfig& config, const OccupancyMap* static_map,
+                       const ObstacleLayer* observations = nullptr) noexcept
+      : config_(config), static_map_(static_map), observations_(observations) {}
   [[nodiscard]] const char* name() const noexcept override { return "dynamic_obstacles"; }
   Status init(const Costmap2D& master, std::pmr::memory_resource& resource) override;
   void on_window_moved(int shift_cols, int shift_rows) noexcept override;
@@ -243,6 +259,7 @@ class DynamicObstacleLayer final : public CostmapLayer {
  private:
   DynamicObstacleConfig config_;
   const OccupancyMap* static_map_;
+  const ObstacleLayer* observations_;
   BackgroundSubtractor detector_;
   BlobFinder blob_finder_;
   MoverTracker tracker_;

@@ -33,8 +33,9 @@
 //   mover_weight * (1 - t_contact / mover_horizon_s)
 // so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
 // crosses ahead of it when there is time. When every admissible rollout is refused it takes
-// the one whose contact comes latest (stepping out of the way), and when movers make it stop
-// it reports `yielding`, not a recovery, for up to max_yield_s.
+// the one whose contact when braking comes latest (if a contact comes, the robot is nearly
+// standing), and when movers make it stop it reports `yielding`, not a recovery, for up to
+// max_yield_s.
 #include <cstdint>
 #include <memory_resource>
 #include <span>

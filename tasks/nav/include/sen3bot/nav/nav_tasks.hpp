@@ -159,7 +159,7 @@ class ControllerTask final : public tasks::Task {
                  tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers) noexcept
       : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
         movers_(movers), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
-        dynamic_layer_(config.dynamic_obstacles, &map), inflation_layer_(config.inflation) {}
+        dynamic_layer_(config.dynamic_obstacles, &map, &obstacle_layer_), inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
