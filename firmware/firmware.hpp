@@ -57,6 +57,10 @@ class Firmware {
   [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
+  // The local planner and its costmap, for a simulator's figures; read while the scheduler is
+  // stopped or between lockstep slices. Null without a `navigation` section.
+  [[nodiscard]] const nav::ControllerTask* controller() const { return controller_task_.get(); }
+  [[nodiscard]] const tasks::Topic<msg::ControllerStatus>& controller_status() const { return nav_controller_; }
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
   [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }

@@ -1,7 +1,8 @@
 #pragma once
 // The simulator's commands; sim_cli.cpp dispatches to them. Each takes the arguments after its
 // command word and returns the exit status (0 success, 1 run-time failure, 2 bad command line,
-// 3 a mission or a scenario case failed).
+// 3 a mission or a scenario case failed). `experiment` returns 0 when its runs completed,
+// whatever they measured.
 #include <cstdio>
 
 namespace sen3bot::sim {
@@ -12,6 +13,9 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err);
 int run_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]
+//   [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]
+int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]
 int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--baud B] [--variant A/R]

@@ -57,6 +57,46 @@ TEST(World, MoversWalkPolylinesDeterministically) {
   EXPECT_NEAR(w.mover_position(id2).y_m, 1.0, 1e-9);
 }
 
+TEST(World, PhaseStartsAMoverPartWayRoundItsCycle) {
+  World w(room());
+  MoverScript box;
+  box.path = {{1.0, 1.0}, {1.0, 3.0}};  // 2 m there, 2 m back: a 4 m ping-pong cycle
+  box.speed_m_s = 0.5;
+  box.shape = MoverShape::square;
+  box.size_m = 0.2;
+  box.start_time_s = 1.0;
+  box.phase_m = 1.5;
+  const auto there = w.add_mover(box);
+  box.phase_m = 3.0;  // past the far end: on the way back
+  const auto back = w.add_mover(box);
+  box.phase_m = 4.0 + 0.5;  // a whole cycle and 0.5 m
+  const auto wrapped = w.add_mover(box);
+  w.set_time(0.0);  // before the start: waits at its phase's place
+  EXPECT_NEAR(w.mover_position(there).y_m, 2.5, 1e-12);
+  EXPECT_NEAR(w.mover_position(back).y_m, 2.0, 1e-12);
+  EXPECT_NEAR(w.mover_position(wrapped).y_m, 1.5, 1e-12);
+  w.set_time(2.0);  // 0.5 m walked since the start
+  EXPECT_NEAR(w.mover_position(there).y_m, 3.0, 1e-12);
+  EXPECT_NEAR(w.mover_position(back).y_m, 1.5, 1e-12);
+  EXPECT_NEAR(w.mover_position(wrapped).y_m, 2.0, 1e-12);
+  EXPECT_NEAR(w.mover_position(there).x_m, 1.0, 1e-12);
+  w.set_time(3.0);  // 1 m walked: `there` turned at the far end and came 0.5 m back
+  EXPECT_NEAR(w.mover_position(there).y_m, 2.5, 1e-12);
+
+  MoverScript loop;  // a loop's cycle is once round: 1 + 1 + sqrt(2) m
+  loop.path = {{1.0, 1.0}, {2.0, 1.0}, {2.0, 2.0}};
+  loop.loop = true;
+  loop.speed_m_s = 1.0;
+  loop.phase_m = 1.25;
+  const auto round = w.add_mover(loop);
+  w.set_time(0.0);
+  EXPECT_NEAR(w.mover_position(round).x_m, 2.0, 1e-9);
+  EXPECT_NEAR(w.mover_position(round).y_m, 1.25, 1e-9);
+  w.set_time(2.0 + std::sqrt(2.0));  // once round more: the same place
+  EXPECT_NEAR(w.mover_position(round).x_m, 2.0, 1e-9);
+  EXPECT_NEAR(w.mover_position(round).y_m, 1.25, 1e-9);
+}
+
 TEST(World, ScanSeesMoversOnlyOnceVisible) {
   World w(room());
   MoverScript box;

@@ -6,6 +6,7 @@
 #include <functional>
 #include <initializer_list>
 #include <numbers>
+#include <utility>
 
 namespace sen3bot::sim::report {
 
@@ -133,6 +134,30 @@ class Labels {
   std::vector<Text> texts_;
 };
 
+bool moves(const MoverTrack& m) {
+  return std::any_of(m.path.begin(), m.path.end(), [&](const msg::Point2D& p) {
+    return std::hypot(p.x_m - m.path.front().x_m, p.y_m - m.path.front().y_m) > 1e-6;
+  });
+}
+
+// Paper for cost 0 to kCost for the highest graded cost.
+Rgb cost_shade(std::uint8_t cost) {
+  const double a = 0.15 + 0.85 * std::min(1.0, cost / 252.0);
+  auto mix = [a](std::uint8_t paper, std::uint8_t full) {
+    return static_cast<std::uint8_t>(std::lround(paper + a * (full - paper)));
+  };
+  return {mix(kPaper.r, kCost.r), mix(kPaper.g, kCost.g), mix(kPaper.b, kCost.b)};
+}
+
+void draw_arrow(Canvas& canvas, Px from, Px to, Rgb colour, int thickness) {
+  canvas.line(from, to, colour, thickness);
+  const double dx = to.x - from.x, dy = to.y - from.y, len = std::hypot(dx, dy);
+  if (len < 1) return;
+  const double ux = dx / len, uy = dy / len, head = std::min(9.0, len / 2);
+  canvas.line(to, {to.x - head * (ux * 0.87 - uy * 0.5), to.y - head * (uy * 0.87 + ux * 0.5)}, colour, thickness);
+  canvas.line(to, {to.x - head * (ux * 0.87 + uy * 0.5), to.y - head * (uy * 0.87 - ux * 0.5)}, colour, thickness);
+}
+
 void draw_cross(Canvas& canvas, Px c, double half, Rgb colour, int thickness) {
   canvas.line({c.x - half, c.y - half}, {c.x + half, c.y + half}, colour, thickness);
   canvas.line({c.x - half, c.y + half}, {c.x + half, c.y - half}, colour, thickness);
@@ -200,8 +225,24 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
                          c.outline_polygon(outline(v, f.footprint, {}), kRobot, 2);
                          c.line(p, v(front_m(f.footprint), 0), kRobot, 2);
                        }});
+  if (f.moment.t_s >= 0 && !f.moment.cells.empty())
+    entries.push_back({"local costmap at the moment, 0 < cost < 253", [](Canvas& c, Px p) {
+                         for (int i = 0; i < 4; ++i)
+                           c.fill_rect(static_cast<int>(p.x) - 12 + 6 * i, static_cast<int>(p.y) - 6, 6, 12,
+                                       cost_shade(static_cast<std::uint8_t>(40 + 70 * i)));
+                       }});
+  if (f.moment.t_s >= 0 && !f.moment.tracks.empty())
+    entries.push_back({"tracked mover, its velocity (1 s ahead)", [](Canvas& c, Px p) {
+                         c.ring({p.x - 7, p.y}, 5, kTrack, 2);
+                         draw_arrow(c, {p.x - 7, p.y}, {p.x + 13, p.y}, kTrack, 2);
+                       }});
+  if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return !m.person && moves(m); }))
+    entries.push_back({"moving box's track (ground truth)", [](Canvas& c, Px p) {
+                         c.line({p.x - 12, p.y}, {p.x + 12, p.y}, kBoxTrack, 2);
+                       }});
   if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return !m.person; }))
-    entries.push_back({"box", [](Canvas& c, Px p) {
+    entries.push_back({f.moment.t_s >= 0 ? format("box, at the moment t = %.1f s", f.moment.t_s) : std::string("box"),
+                       [](Canvas& c, Px p) {
                          c.fill_rect(static_cast<int>(p.x) - 6, static_cast<int>(p.y) - 6, 12, 12, kBox);
                        }});
   if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return m.person; }))
@@ -278,6 +319,16 @@ Canvas draw_case_figure(const CaseFigure& f) {
   canvas.text({kMargin, static_cast<double>(header.result_y)}, f.result, f.passed ? kPassed : kFailed, 0.5, 1);
 
   draw_map(canvas, view, map);
+  if (f.moment.t_s >= 0) {
+    // The cells as rotated squares, in the costmap's own frame.
+    const double h = f.moment.cell_m / 2, c = std::cos(f.moment.cell_yaw_rad), s = std::sin(f.moment.cell_yaw_rad);
+    for (const CostCell& cell : f.moment.cells) {
+      std::vector<Px> square;
+      for (const auto& [dx, dy] : {std::pair{-h, -h}, std::pair{h, -h}, std::pair{h, h}, std::pair{-h, h}})
+        square.push_back(view(cell.at.x_m + c * dx - s * dy, cell.at.y_m + s * dx + c * dy));
+      canvas.fill_polygon(square, cost_shade(cell.cost));
+    }
+  }
   for (const std::vector<msg::Point2D>& plan : f.plans) canvas.polyline(to_pixels(view, plan), kPlan, 2);
   for (const msg::Point2D& w : f.waypoints) canvas.disc(view(w.x_m, w.y_m), 3.5, kWaypoint);
   for (const MoverTrack& m : f.movers) {
@@ -291,8 +342,15 @@ Canvas draw_case_figure(const CaseFigure& f) {
       }
       continue;
     }
-    // A box stands where it was first seen.
-    const Px c = view(m.path.front().x_m, m.path.front().y_m);
+    // A box stands where it was first seen; a moving one shows its track, and where it was at
+    // the moment when there is one.
+    msg::Point2D at = m.path.front();
+    if (moves(m)) {
+      canvas.polyline(to_pixels(view, m.path), kBoxTrack, 2);
+      const std::size_t i = static_cast<std::size_t>(&m - f.movers.data());
+      if (f.moment.t_s >= 0 && i < f.moment.movers.size()) at = f.moment.movers[i];
+    }
+    const Px c = view(at.x_m, at.y_m);
     if (m.square) {
       const std::vector<Px> square{{c.x - half_px, c.y - half_px}, {c.x + half_px, c.y - half_px},
                                    {c.x + half_px, c.y + half_px}, {c.x - half_px, c.y + half_px}};
@@ -302,6 +360,11 @@ Canvas draw_case_figure(const CaseFigure& f) {
     }
     if (m.appear_s > 0)
       canvas.text({c.x + half_px + 4, c.y + 4}, format("appears at %.1f s", m.appear_s), kBox, kSmallSize, 1, true);
+  }
+  for (const TrackMark& t : f.moment.tracks) {
+    const Px c = view(t.at.x_m, t.at.y_m);
+    canvas.ring(c, std::max(3.0, t.radius_m * view.px_per_m), kTrack, 2);
+    draw_arrow(canvas, c, view(t.at.x_m + t.vx_m_s * Moment::kArrowS, t.at.y_m + t.vy_m_s * Moment::kArrowS), kTrack, 2);
   }
   // The estimate dashed over the truth, so both show where they coincide.
   for_each_stretch(f.driven, [&](std::span<const msg::Point2D> s) { canvas.polyline(to_pixels(view, s), kDriven, 3); });

@@ -164,7 +164,8 @@ Point2D World::position_at(const Mover& mover, double time_s) noexcept {
   const auto& path = mover.script.path;
   const double total = mover.cumulative_m.back();
   if (path.size() < 2 || mover.script.speed_m_s <= 0.0 || total <= 0.0) return path.front();
-  const double walked = std::max(0.0, time_s - mover.script.start_time_s) * mover.script.speed_m_s;
+  const double walked =
+      std::max(0.0, time_s - mover.script.start_time_s) * mover.script.speed_m_s + std::max(0.0, mover.script.phase_m);
   double s = 0.0;
   if (mover.script.loop) {
     s = std::fmod(walked, total);

@@ -24,14 +24,17 @@ enum class MoverShape : std::uint8_t { circle, square };
 
 // One scripted obstacle. With one vertex (or speed 0) it stands still. Otherwise it walks
 // the polyline at speed_m_s from start_time_s on, back and forth (ping-pong) or around
-// (loop, closing the last vertex to the first).
+// (loop, closing the last vertex to the first). phase_m shifts where in that cycle it is: at
+// start_time_s it has already walked phase_m (a ping-pong cycle is twice the polyline, there
+// and back; a loop's is once round), and it waits there before.
 struct MoverScript {
   std::vector<Point2D> path;
   double speed_m_s = 0.0;
   double size_m = 0.4;      // circle diameter or square side
   MoverShape shape = MoverShape::circle;
   bool loop = false;
-  double start_time_s = 0.0;   // before this it waits at the first vertex
+  double start_time_s = 0.0;   // before this it waits where phase_m puts it (the first vertex at 0)
+  double phase_m = 0.0;        // distance already walked along the cycle at start_time_s (>= 0)
   double appear_time_s = 0.0;  // invisible (not hit by rays, no collisions) before this
   double vanish_time_s = 1e300;  // and again from this time on (walked out of the scene)
   bool person = false;

@@ -3,6 +3,7 @@
 // the safe path's waypoints, the global plans, the true and the estimated path, the robot's
 // footprint at a few instants, the boxes and people with their tracks, the contacts, start and
 // goals, and a legend; above it the case's name, description and result line.
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -39,6 +40,30 @@ struct Contact {
   bool moving = false;  // the robot was moving: a collision
 };
 
+// One moment of the run drawn over the rest (a box's closest approach): the local costmap's
+// graded cells, the dynamic obstacle layer's tracks, and every mover's true place then.
+struct CostCell {
+  msg::Point2D at;  // the cell's centre
+  std::uint8_t cost = 0;
+};
+
+struct TrackMark {
+  msg::Point2D at;
+  double vx_m_s = 0;
+  double vy_m_s = 0;
+  double radius_m = 0;
+};
+
+struct Moment {
+  double t_s = -1;  // < 0: no moment drawn
+  double cell_m = 0.05;
+  double cell_yaw_rad = 0;
+  std::vector<CostCell> cells;         // shaded by cost; 0 < cost < 253
+  std::vector<TrackMark> tracks;       // the velocity drawn as what is covered in kArrowS
+  std::vector<msg::Point2D> movers;    // per movers[i] of the figure: its centre at t_s
+  static constexpr double kArrowS = 1.0;
+};
+
 struct CaseFigure {
   std::string title;        // "case 2/3: obstacle-before-planning"
   std::string description;  // what the case is
@@ -55,6 +80,7 @@ struct CaseFigure {
   std::vector<Contact> contacts;
   msg::Pose2D start;
   std::vector<msg::Point2D> goals;
+  Moment moment;
 };
 
 // The colours, shared by the drawing and its legend (and the tests).
@@ -75,6 +101,9 @@ inline constexpr Rgb kStart{0, 150, 150};
 inline constexpr Rgb kGoal{0, 0, 0};
 inline constexpr Rgb kPassed{0, 130, 0};
 inline constexpr Rgb kFailed{180, 0, 50};
+inline constexpr Rgb kCost{60, 90, 230};     // the local costmap's cells, lighter for lower costs
+inline constexpr Rgb kTrack{0, 110, 90};     // a tracked mover and its velocity
+inline constexpr Rgb kBoxTrack{235, 170, 110};  // a moving box's true track
 }  // namespace colours
 
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
