@@ -32,11 +32,12 @@ world::MoverScript read_mover(const Reader& r, bool person) {
 }
 
 void read_sim(const Reader& r, SimulationConfig& w) {
-  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "people", "boxes", "laser_status"});
+  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "laser_max_range_m", "people", "boxes", "laser_status"});
   w.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));
   if (r.has("seed")) w.seed = static_cast<std::uint64_t>(r.integer("seed", 0, INT64_MAX));
   if (r.has("range_noise_m")) w.range_noise_sigma_m = r.number("range_noise_m", 0.0, 1.0);
+  if (r.has("laser_max_range_m")) w.laser_max_range_m = r.number("laser_max_range_m", 1.0, 80.0);
   if (r.has("people"))
     for (const Reader& m : r.sequence("people")) w.movers.push_back(read_mover(m, true));
   if (r.has("boxes"))

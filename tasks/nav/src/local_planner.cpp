@@ -166,9 +166,9 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   double turn = w;
   for (int k = 1; k <= steps; ++k) {
     const double t = k * dt;
-    if (brake && t > config_.control_period_s + 1e-9 && speed != 0.0) {
+    if (brake && t > config_.control_period_s + config_.mover_brake_delay_s + 1e-9 && speed != 0.0) {
       // Same arc, slower: w keeps its ratio to v.
-      const double slower = std::max(0.0, std::abs(speed) - config_.acc_v_m_s2 * dt);
+      const double slower = std::max(0.0, std::abs(speed) - config_.mover_brake_decel_m_s2 * dt);
       turn = v != 0.0 ? w * slower / std::abs(v) : turn;
       speed = std::copysign(slower, speed);
     }
@@ -386,12 +386,13 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
         if (std::isfinite(ttc_braking)) {  // even braking meets it: unavoidable on this arc
           ++out.mover_rejected;
           movers_cost_progress = movers_cost_progress || moving;
-          // Met whatever it does: brake where the contact comes latest, and as slow as
-          // possible, so that if it comes the robot is (nearly) standing.
-          const bool later = ttc_braking > escape_ttc;
-          const bool as_late = ttc_braking == escape_ttc;
+          // Met whatever it does: the way (on or braking) whose contact comes latest; among
+          // equals the slowest, so that if it comes the robot is (nearly) standing.
+          const double latest = std::max(ttc, ttc_braking);
+          const bool later = latest > escape_ttc;
+          const bool as_late = latest == escape_ttc;
           if (later || (as_late && v < escape_v) || (as_late && v == escape_v && score > escape_score)) {
-            escape_ttc = ttc_braking;
+            escape_ttc = latest;
             escape_score = score;
             escape_v = v;
             escape_w = w;

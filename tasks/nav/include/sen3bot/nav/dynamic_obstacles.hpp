@@ -131,7 +131,8 @@ struct DolTrackerConfig {
   // Hits before a tentative track is confirmed. A static object coming into view is dynamic
   // for 3 updates with the default averages (P_s catches up), so 4 keeps it out.
   int confirm_hits = 4;
-  double max_coast_s = 0.6;        // unmatched for longer: deleted
+  double max_coast_s = 1.5;        // unmatched for longer: deleted (beside the robot the
+                                   // LMS200 cannot see it; its prediction goes on)
   double accel_sigma_m_s2 = 1.0;   // white-noise acceleration (process noise)
   double measurement_sigma_m = 0.07;
   double initial_velocity_sigma_m_s = 1.5;
@@ -148,7 +149,7 @@ struct DolTrackerConfig {
   double moving_min_travel_m = 0.3;
   double moving_far_travel_m = 0.45;
   double vacated_radius_m = 0.1;
-  double publish_max_coast_s = 0.25;
+  double publish_max_coast_s = 1.5;
 };
 
 struct DolTrack {

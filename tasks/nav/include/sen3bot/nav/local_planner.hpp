@@ -25,7 +25,8 @@
 //
 // Tracked movers (the dynamic obstacle layer's, predicted to now) are checked in time, not
 // only as painted cost. Each rollout is followed to mover_horizon_s in two ways: driving on
-// at its (v, w), and braking at acc_v_m_s2 along the same arc after one control period. The
+// at its (v, w), and braking along the same arc (at mover_brake_decel_m_s2, from one control
+// period plus mover_brake_delay_s on). The
 // first step at which the padded footprint comes within a mover's radius plus mover_margin_m
 // of that mover's constant-velocity prediction is a time to contact. A rollout that meets a
 // mover even when braking leads into an unavoidable contact and is not taken; one that meets
@@ -33,9 +34,8 @@
 //   mover_weight * (1 - t_contact / mover_horizon_s)
 // so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
 // crosses ahead of it when there is time. When every admissible rollout is refused it takes
-// the one whose contact when braking comes latest (if a contact comes, the robot is nearly
-// standing), and when movers make it stop it reports `yielding`, not a recovery, for up to
-// max_yield_s.
+// the one whose contact (driving on or braking) comes latest, the slowest among equals, and
+// when movers make it stop it reports `yielding`, not a recovery, for up to max_yield_s.
 #include <cstdint>
 #include <memory_resource>
 #include <span>
@@ -87,7 +87,11 @@ struct DwaConfig {
   // Tracked movers (the dynamic obstacle layer's): each rollout is checked against their
   // predicted positions at its own time steps (the time-aware critic).
   bool mover_prediction = true;
-  double mover_horizon_s = 2.5;
+  double mover_horizon_s = 4.0;  // long enough that standing in a mover's way counts
+  // The braking the check counts on: it starts this long after the next period (the command
+  // still has to reach the wheels), at this deceleration (below the base's, for margin).
+  double mover_brake_delay_s = 0.2;
+  double mover_brake_decel_m_s2 = 0.45;
   double mover_margin_m = 0.1;
   double mover_weight = 1.5;
   double mover_min_speed_m_s = 0.1;  // slower tracks are left to the costmap
