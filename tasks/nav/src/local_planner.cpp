@@ -199,6 +199,22 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   return std::numeric_limits<double>::infinity();
 }
 
+bool DwaPlanner::braking_is_clear(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept {
+  // The base decelerates at acc_v_m_s2 along the arc it is on; w falls in proportion.
+  const double dt = config_.sim_step_s;
+  Pose2D p = pose;
+  double speed = v;
+  while (speed > 0.0) {
+    const double turn = w * speed / v;
+    p.x_m += speed * dt * std::cos(p.theta_rad + 0.5 * turn * dt);
+    p.y_m += speed * dt * std::sin(p.theta_rad + 0.5 * turn * dt);
+    p.theta_rad += turn * dt;
+    if (outline_hits(p, costmap, check_)) return false;
+    speed -= config_.acc_v_m_s2 * dt;
+  }
+  return true;
+}
+
 void DwaPlanner::update_window(const Pose2D& pose) noexcept {
   // The nearest path point, searched forward from the last one (the robot does not go back
   // along its plan) within a bounded look-ahead, so a looping path cannot make it jump.
@@ -427,6 +443,16 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
     recovery_state_ = DwaStatus::tracking;
     recovery_cycles_ = 0;
     yield_ticks_ = 0;
+    return out;
+  }
+  // Nothing admissible at this speed (the window holds only fast arcs) but the robot can
+  // still stop clear of everything: brake as hard as the window allows and choose again from
+  // lower speed, rather than give up.
+  if (out.admissible == 0 && v_m_s >= config_.min_progress_v_m_s && braking_is_clear(pose, v_m_s, w_rad_s, costmap)) {
+    out.v_m_s = v_lo;
+    out.w_rad_s = std::clamp(0.0, w_lo, w_hi);
+    out.status = DwaStatus::braking;
+    recovery_state_ = DwaStatus::tracking;
     return out;
   }
   // Held back by movers, not by the map: let them pass (a while) instead of recovering.

@@ -102,6 +102,7 @@ enum class DwaStatus : std::uint8_t {
   failed,       // recoveries exhausted
   localizing,   // localization is lost: standing still until it is not
   yielding,     // letting a tracked mover pass: slowing or standing by choice, not a recovery
+  braking,      // no way on at this speed: stopping under control, then choosing again
 };
 
 inline const char* to_string(DwaStatus status) noexcept {
@@ -115,6 +116,7 @@ inline const char* to_string(DwaStatus status) noexcept {
     case DwaStatus::failed: return "failed";
     case DwaStatus::localizing: return "localizing";
     case DwaStatus::yielding: return "yielding";
+    case DwaStatus::braking: return "braking";
   }
   return "?";
 }

@@ -19,7 +19,9 @@
 // lethal or inscribed cell (an obstacle the plan did not know) are skipped: the target moves
 // past them so the rollouts bend around the obstacle, and while any window point is blocked
 // the path-distance term is off (the robot has to leave the path to pass).
-// With no admissible moving rollout it recovers: wait, then rotate in place towards the
+// With no admissible rollout while moving it brakes (status `braking`) if stopping along
+// the current arc stays clear, and samples again from the lower speed. Otherwise, or with no
+// admissible moving rollout at a standstill, it recovers: wait, then rotate in place towards the
 // target, then back off, in a cycle, counting each. Every period samples again first, so a
 // recovery ends as soon as a way forward opens; after max_recovery_cycles it reports failure.
 //
@@ -153,6 +155,7 @@ class DwaPlanner {
   };
   Rollout roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
   [[nodiscard]] double distance_to_window(double x_m, double y_m) const noexcept;
+  [[nodiscard]] bool braking_is_clear(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
   void update_window(const Pose2D& pose) noexcept;
   void wavefront(const Costmap2D& costmap, std::span<std::uint16_t> distance, bool from_path) noexcept;
   [[nodiscard]] double grid_distance_m(std::span<const std::uint16_t> distance, const Costmap2D& costmap, double x_m,
