@@ -45,6 +45,10 @@ struct DolDetectorConfig {
   double static_mask_radius_m = 0.15;
   int min_blob_cells = 1;
   int max_blob_cells = 400;   // larger blobs are not movers (a wall the map lacks)
+  // Dynamic cells up to this many cells apart (in rows and in columns) join one blob; 1 is
+  // plain 8-connectivity. A box sliding along one of its faces shows only that face's leading
+  // end and the face across the motion as new, two pieces a cell or two apart: 2 joins them.
+  int blob_link_cells = 1;
 };
 
 // The two running averages over a grid of width x height cells, in float.
@@ -87,13 +91,14 @@ struct Blob {
   double radius_m = 0.0;  // half the extent's diagonal plus half a cell: the cells' footprint
 };
 
-// 8-connected components of a 0/1 grid; blobs outside [min_cells, max_cells] are dropped.
+// Connected components of a 0/1 grid (8-connected, or cells up to link_cells apart in both
+// directions); blobs outside [min_cells, max_cells] are dropped.
 class BlobFinder {
  public:
   Status init(int width, int height, std::size_t max_blobs, std::pmr::memory_resource& resource);
   // Returns the blobs found (at most max_blobs; the largest are not preferred: first found).
   std::span<const Blob> find(std::span<const std::uint8_t> dynamic, const GridGeometry& geometry, int min_cells,
-                             int max_cells) noexcept;
+                             int max_cells, int link_cells = 1) noexcept;
 
  private:
   int width_ = 0;
