@@ -171,6 +171,13 @@ TEST(DynamicBlob, EightConnectedComponentsWithSizeLimits) {
   EXPECT_NEAR(blobs[1].y_m, 2.9, 1e-9);
   const auto all = finder.find(grid, geometry, 1, 400);
   EXPECT_EQ(all.size(), 4u);
+  // Linked across one empty cell: the diagonal pair and the line stay apart (gap of 6 columns),
+  // the corner block and the diagonal pair too; a piece one cell off the line joins it.
+  on(17, 5);
+  EXPECT_EQ(finder.find(grid, geometry, 1, 400).size(), 5u);
+  const auto linked = finder.find(grid, geometry, 1, 400, 2);
+  ASSERT_EQ(linked.size(), 4u);
+  EXPECT_EQ(linked[1].cells, 7);
 }
 
 // --- Hungarian ------------------------------------------------------------------------------
