@@ -571,6 +571,12 @@ TEST(MoverGaussian, PaintMatchesTheCostAndNeverLowersACell) {
       }
     }
     EXPECT_GT(raised, 500);
+    // Far off the grid (or nonsense): nothing painted, nothing out of bounds.
+    const std::vector<std::uint8_t> painted(grid.cells().begin(), grid.cells().end());
+    paint_mover(cfg, 1e12, -1e12, 0.5, 0.5, grid);
+    paint_mover(cfg, 20.0, 1.0, 0.5, 0.0, grid);
+    paint_mover(cfg, std::nan(""), 1.0, 0.5, 0.0, grid);
+    EXPECT_TRUE(std::equal(painted.begin(), painted.end(), grid.cells().begin()));
   }
 }
 

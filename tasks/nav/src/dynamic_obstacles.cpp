@@ -562,6 +562,12 @@ double shape_value(const MoverShape& shape, double dx, double dy) noexcept {
   return value < shape.cutoff ? 0.0 : value;
 }
 
+// floor() or ceil() of a cell coordinate as an int, clamped to [-1, limit] first so that a
+// point far off the grid cannot overflow the cast.
+int clamped_cell(double v, int limit) noexcept {
+  return static_cast<int>(std::clamp(std::isnan(v) ? -1.0 : v, -1.0, static_cast<double>(limit)));
+}
+
 // The dx with a * dx in [lo, hi], intersected into [dx_min, dx_max].
 void restrict_interval(double a, double lo, double hi, double& dx_min, double& dx_max) noexcept {
   if (std::abs(a) < 1e-12) {
@@ -584,10 +590,10 @@ void paint_core(double x_m, double y_m, double radius_m, Costmap2D& grid) noexce
   int row = 0;
   if (grid.world_to_cell(x_m, y_m, col, row)) grid.set(col, row, kLethalCost);
   const double reach = std::max(0.0, radius_m) / g.resolution_m();
-  const int r0 = std::max(0, static_cast<int>(std::floor(gy - 0.5 - reach)));
-  const int r1 = std::min(g.height() - 1, static_cast<int>(std::ceil(gy - 0.5 + reach)));
-  const int c0 = std::max(0, static_cast<int>(std::floor(gx - 0.5 - reach)));
-  const int c1 = std::min(g.width() - 1, static_cast<int>(std::ceil(gx - 0.5 + reach)));
+  const int r0 = std::max(0, clamped_cell(std::floor(gy - 0.5 - reach), g.height()));
+  const int r1 = std::min(g.height() - 1, clamped_cell(std::ceil(gy - 0.5 + reach), g.height()));
+  const int c0 = std::max(0, clamped_cell(std::floor(gx - 0.5 - reach), g.width()));
+  const int c1 = std::min(g.width() - 1, clamped_cell(std::ceil(gx - 0.5 + reach), g.width()));
   const double reach2 = reach * reach;
   for (int r = r0; r <= r1; ++r) {
     const double dy = r + 0.5 - gy;
@@ -621,8 +627,8 @@ void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, d
   double gy = 0.0;
   g.world_to_grid(cx, cy, gx, gy);
   const double reach = std::max({shape.reach_front_m, shape.reach_back_m, shape.reach_side_m}) / res;
-  const int r0 = std::max(0, static_cast<int>(std::floor(gy - 0.5 - reach)));
-  const int r1 = std::min(g.height() - 1, static_cast<int>(std::ceil(gy - 0.5 + reach)));
+  const int r0 = std::max(0, clamped_cell(std::floor(gy - 0.5 - reach), g.height()));
+  const int r1 = std::min(g.height() - 1, clamped_cell(std::ceil(gy - 0.5 + reach), g.height()));
   constexpr double kSlack = 1e-9;
   const auto cells = grid.cells();
   // Per piece, exp(-2 a res²) with a the exponent's x² coefficient along a row.
@@ -641,10 +647,8 @@ void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, d
     restrict_interval(-sin_h, -shape.reach_side_m - dy * cos_h - kSlack, shape.reach_side_m - dy * cos_h + kSlack,
                       dx_min, dx_max);
     if (!(dx_min <= dx_max)) continue;
-    const double first = std::max(-1.0, std::ceil(gx - 0.5 + dx_min / res));
-    const double last = std::min(static_cast<double>(g.width()), std::floor(gx - 0.5 + dx_max / res));
-    const int c0 = std::max(0, static_cast<int>(first));
-    const int c1 = std::min(g.width() - 1, static_cast<int>(last));
+    const int c0 = std::max(0, clamped_cell(std::ceil(gx - 0.5 + dx_min / res), g.width()));
+    const int c1 = std::min(g.width() - 1, clamped_cell(std::floor(gx - 0.5 + dx_max / res), g.width()));
     // Along a row each piece's exponent is a quadratic in the column, so exp(-exponent) follows
     // from cell to cell by two multiplications: g(k+1) = g(k) ratio(k), ratio(k+1) = ratio(k) m,
     // with m = exp(-2 a res²) for the quadratic's leading coefficient a. exp() is called only
@@ -774,7 +778,7 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     tracker_.update(blobs_, inputs.scan->stamp_ns());
   }
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!track.confirmed) continue;
+    if (!track.confirmed || !track.x.allFinite()) continue;
     const Vector2 p = MoverTracker::predict_position(track, inputs.now_ns);
     if (std::hypot(track.x(2), track.x(3)) >= config_.cost.min_speed_m_s) {
       paint_mover(config_.cost, p(0), p(1), track.x(2), track.x(3), master);
@@ -788,7 +792,7 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
   out.stamp_ns = stamp_ns;
   if (!active_) return;
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!track.confirmed) continue;
+    if (!track.confirmed || !track.x.allFinite()) continue;
     if (out.count >= msg::MovingObstacles::kMax) break;
     const DolTrack at = tracker_.predicted(track, stamp_ns);
     msg::MovingObstacle& m = out.items[out.count++];
