@@ -41,7 +41,8 @@ struct DolDetectorConfig {
   double c1 = 120.0;  // P_f above this...
   double c2 = 80.0;   // ...and P_f - P_s above this: dynamic
   // Cells within this distance of an occupied cell of the static map are never dynamic, so
-  // localization drift along a wall is not motion (0: off).
+  // localization drift along a wall is not motion (0: off). Occupied: kOccupiedOccupancy, what
+  // the static layer marks lethal by default. Distances between cell centres.
   double static_mask_radius_m = 0.15;
   int min_blob_cells = 1;
   int max_blob_cells = 400;   // larger blobs are not movers (a wall the map lacks)
@@ -223,8 +224,10 @@ struct DynamicObstacleConfig {
 };
 
 // Between the obstacle layer and inflation: reads the master (static map and laser marks) as
-// C(t) on each new scan, detects and tracks, then paints every confirmed track predicted to
-// inputs.now_ns. Without a new scan it only repaints the predictions.
+// C(t) on each new scan, detects and tracks (at the scan's stamp), then paints every confirmed
+// track predicted to inputs.now_ns: the Gaussian for tracks of at least cost.min_speed_m_s,
+// and a lethal core for all. Without a new scan it only repaints the predictions. Disabled
+// (config.enabled false), it takes no memory and does nothing.
 class DynamicObstacleLayer final : public CostmapLayer {
  public:
   // static_map: for the static mask (may be null: no mask). Must outlive the layer.
@@ -240,7 +243,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] std::span<const std::uint8_t> dynamic_cells() const noexcept { return dynamic_; }
   [[nodiscard]] const BackgroundSubtractor& detector() const noexcept { return detector_; }
   [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
-  // The confirmed tracks predicted to stamp_ns, for the planner and the safety filter.
+  // The confirmed tracks predicted to stamp_ns (state and covariance), for the planner and
+  // the safety filter; count 0 when the layer is disabled.
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
   // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
