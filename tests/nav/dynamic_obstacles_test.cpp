@@ -601,13 +601,13 @@ struct Rig {
     wc.seed = 5;
     return wc;
   }
-  Status init(bool with_inflation = true) {
+  Status init(bool with_dol = true) {
     if (Status s = costmap.add_layer(statics); !s) return s;
     if (Status s = costmap.add_layer(obstacles); !s) return s;
-    if (Status s = costmap.add_layer(dol); !s) return s;
-    if (with_inflation) {
-      if (Status s = costmap.add_layer(inflation); !s) return s;
+    if (with_dol) {
+      if (Status s = costmap.add_layer(dol); !s) return s;
     }
+    if (Status s = costmap.add_layer(inflation); !s) return s;
     CostmapConfig cfg;
     cfg.rolling = true;
     cfg.lattice_x_m = map.origin_x_m();
@@ -801,21 +801,45 @@ TEST(DynamicObstacleLayer, DisabledLayerDoesNothing) {
   DynamicObstacleConfig cfg;
   cfg.enabled = false;
   Rig rig(cfg);
-  world::MoverScript box;
-  box.path = {{2.8, 7.5}, {5.4, 7.5}};
-  box.speed_m_s = 0.6;
-  box.size_m = 0.2;
-  box.shape = world::MoverShape::square;
-  rig.truth.add_mover(box);
+  Rig without(cfg);  // the same costmap with no dynamic obstacle layer at all
+  for (Rig* r : {&rig, &without}) {
+    world::MoverScript box;
+    box.path = {{3.3, 7.2}, {5.3, 7.2}};
+    box.speed_m_s = 0.6;
+    box.size_m = 0.2;
+    box.shape = world::MoverShape::square;
+    r->truth.add_mover(box);
+  }
   ASSERT_TRUE(rig.init());
-  const Pose2D robot{4.0, 6.3, M_PI / 2.0};
-  for (int k = 0; k < 40; ++k) rig.tick(k, robot, robot);
+  ASSERT_TRUE(without.init(false));
+  EXPECT_EQ(rig.arena.used_bytes(), without.arena.used_bytes());  // no memory taken
+  const Pose2D robot{3.0, 6.3, M_PI / 2.0};
+  for (int k = 0; k < 40; ++k) {
+    rig.tick(k, robot, robot);
+    without.tick(k, robot, robot);
+  }
+  const auto a = rig.costmap.costmap().cells();
+  const auto b = without.costmap.costmap().cells();
+  EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin()));
   EXPECT_TRUE(rig.dol.tracks().empty());
   EXPECT_TRUE(rig.dol.dynamic_cells().empty());
   msg::MovingObstacles movers;
   movers.count = 3;
   rig.dol.movers(0, movers);
   EXPECT_EQ(movers.count, 0);
+  // Enabled, the same run does paint the box.
+  DynamicObstacleConfig on;
+  Rig enabled(on);
+  world::MoverScript box;
+  box.path = {{3.3, 7.2}, {5.3, 7.2}};
+  box.speed_m_s = 0.6;
+  box.size_m = 0.2;
+  box.shape = world::MoverShape::square;
+  enabled.truth.add_mover(box);
+  ASSERT_TRUE(enabled.init());
+  for (int k = 0; k < 40; ++k) enabled.tick(k, robot, robot);
+  const auto c = enabled.costmap.costmap().cells();
+  EXPECT_FALSE(std::equal(c.begin(), c.end(), b.begin()));
 }
 
 TEST(DynamicObstacleLayer, UpdatesAllocateNothing) {
