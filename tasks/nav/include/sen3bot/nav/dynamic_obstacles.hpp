@@ -48,8 +48,9 @@ struct DolDetectorConfig {
   int max_blob_cells = 400;   // larger blobs are not movers (a wall the map lacks)
   // Dynamic cells up to this many cells apart (in rows and in columns) join one blob; 1 is
   // plain 8-connectivity. A box sliding along one of its faces shows only that face's leading
-  // end and the face across the motion as new, two pieces a cell or two apart: 2 joins them.
-  int blob_link_cells = 1;
+  // end and the face across the motion as new, two pieces a cell or two apart, which 8-connected
+  // become two tracks: 2 joins them (people walking side by side 10 cm apart become one).
+  int blob_link_cells = 2;
 };
 
 // The two running averages over a grid of width x height cells, in float.
