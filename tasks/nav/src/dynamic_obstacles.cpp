@@ -179,12 +179,13 @@ Status BlobFinder::init(int width, int height, std::size_t max_blobs, std::pmr::
 }
 
 std::span<const Blob> BlobFinder::find(std::span<const std::uint8_t> dynamic, const GridGeometry& geometry,
-                                       int min_cells, int max_cells) noexcept {
+                                       int min_cells, int max_cells, int link_cells) noexcept {
   count_ = 0;
   const std::size_t n = labels_.size();
   if (dynamic.size() < n || geometry.width() != width_ || geometry.height() != height_) return {};
   std::fill(labels_.begin(), labels_.end(), 0);
   const auto w = static_cast<std::uint32_t>(width_);
+  const int link = std::max(1, link_cells);
   std::int32_t label = 0;
   for (std::size_t seed = 0; seed < n && count_ < blobs_.size(); ++seed) {
     if (dynamic[seed] == 0 || labels_[seed] != 0) continue;
@@ -212,8 +213,8 @@ std::span<const Blob> BlobFinder::find(std::span<const std::uint8_t> dynamic, co
       blob.min_y_m = std::min(blob.min_y_m, y);
       blob.max_y_m = std::max(blob.max_y_m, y);
       ++blob.cells;
-      for (int dr = -1; dr <= 1; ++dr) {
-        for (int dc = -1; dc <= 1; ++dc) {
+      for (int dr = -link; dr <= link; ++dr) {
+        for (int dc = -link; dc <= link; ++dc) {
           const int nc = c + dc;
           const int nr = r + dr;
           if (!geometry.in_bounds(nc, nr)) continue;
@@ -559,20 +560,42 @@ MoverShape make_shape(const DolCostConfig& config, double vx, double vy) noexcep
   return shape;
 }
 
+// The three pieces of the shape along the velocity: behind, the flat stretch, ahead of it.
+enum Piece : int { kBack = 0, kPlateau = 1, kFront = 2 };
+
+Piece piece_of(const MoverShape& shape, double along) noexcept {
+  if (along <= 0.0) return kBack;
+  return along <= shape.plateau_m ? kPlateau : kFront;
+}
+
+// The exponent with one piece's formula (each a quadratic in along and across).
+double piece_exponent(const MoverShape& shape, Piece piece, double along, double across) noexcept {
+  switch (piece) {
+    case kBack:
+      return along * along * shape.inv_back_x + across * across * shape.inv_back_y;
+    case kPlateau:
+      return across * across * shape.inv_front_y;
+    case kFront:
+      break;
+  }
+  const double ahead = along - shape.plateau_m;
+  return ahead * ahead * shape.inv_front_x + across * across * shape.inv_front_y;
+}
+
 // The value at offset (dx, dy) from the mover's centre; 0 below the cutoff.
 double shape_value(const MoverShape& shape, double dx, double dy) noexcept {
   const double along = dx * shape.cos_h + dy * shape.sin_h;
   const double across = -dx * shape.sin_h + dy * shape.cos_h;
-  double exponent = 0.0;
-  if (along > 0.0) {
-    const double ahead = std::max(0.0, along - shape.plateau_m);
-    exponent = ahead * ahead * shape.inv_front_x + across * across * shape.inv_front_y;
-  } else {
-    exponent = along * along * shape.inv_back_x + across * across * shape.inv_back_y;
-  }
+  const double exponent = piece_exponent(shape, piece_of(shape, along), along, across);
   if (exponent > shape.limit) return 0.0;
   const double value = shape.amplitude * std::exp(-exponent);
   return value < shape.cutoff ? 0.0 : value;
+}
+
+// floor() or ceil() of a cell coordinate as an int, clamped to [-1, limit] first so that a
+// point far off the grid cannot overflow the cast.
+int clamped_cell(double v, int limit) noexcept {
+  return static_cast<int>(std::clamp(std::isnan(v) ? -1.0 : v, -1.0, static_cast<double>(limit)));
 }
 
 // The dx with a * dx in [lo, hi], intersected into [dx_min, dx_max].
@@ -597,10 +620,10 @@ void paint_core(double x_m, double y_m, double radius_m, Costmap2D& grid) noexce
   int row = 0;
   if (grid.world_to_cell(x_m, y_m, col, row)) grid.set(col, row, kLethalCost);
   const double reach = std::max(0.0, radius_m) / g.resolution_m();
-  const int r0 = std::max(0, static_cast<int>(std::floor(gy - 0.5 - reach)));
-  const int r1 = std::min(g.height() - 1, static_cast<int>(std::ceil(gy - 0.5 + reach)));
-  const int c0 = std::max(0, static_cast<int>(std::floor(gx - 0.5 - reach)));
-  const int c1 = std::min(g.width() - 1, static_cast<int>(std::ceil(gx - 0.5 + reach)));
+  const int r0 = std::max(0, clamped_cell(std::floor(gy - 0.5 - reach), g.height()));
+  const int r1 = std::min(g.height() - 1, clamped_cell(std::ceil(gy - 0.5 + reach), g.height()));
+  const int c0 = std::max(0, clamped_cell(std::floor(gx - 0.5 - reach), g.width()));
+  const int c1 = std::min(g.width() - 1, clamped_cell(std::ceil(gx - 0.5 + reach), g.width()));
   const double reach2 = reach * reach;
   for (int r = r0; r <= r1; ++r) {
     const double dy = r + 0.5 - gy;
@@ -634,10 +657,16 @@ void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, d
   double gy = 0.0;
   g.world_to_grid(cx, cy, gx, gy);
   const double reach = std::max({shape.reach_front_m, shape.reach_back_m, shape.reach_side_m}) / res;
-  const int r0 = std::max(0, static_cast<int>(std::floor(gy - 0.5 - reach)));
-  const int r1 = std::min(g.height() - 1, static_cast<int>(std::ceil(gy - 0.5 + reach)));
+  const int r0 = std::max(0, clamped_cell(std::floor(gy - 0.5 - reach), g.height()));
+  const int r1 = std::min(g.height() - 1, clamped_cell(std::ceil(gy - 0.5 + reach), g.height()));
   constexpr double kSlack = 1e-9;
   const auto cells = grid.cells();
+  // Per piece, exp(-2 a res²) with a the exponent's x² coefficient along a row.
+  const double res2 = res * res;
+  const double step_ratio[3] = {
+      std::exp(-2.0 * res2 * (shape.inv_back_x * cos_h * cos_h + shape.inv_back_y * sin_h * sin_h)),
+      std::exp(-2.0 * res2 * (shape.inv_front_y * sin_h * sin_h)),
+      std::exp(-2.0 * res2 * (shape.inv_front_x * cos_h * cos_h + shape.inv_front_y * sin_h * sin_h))};
   for (int r = r0; r <= r1; ++r) {
     const double dy = (r + 0.5 - gy) * res;
     // The cells of this row inside the box along ∈ [-back, front], across ∈ [-side, side].
@@ -648,15 +677,39 @@ void paint_mover(const DolCostConfig& config, double cx, double cy, double vx, d
     restrict_interval(-sin_h, -shape.reach_side_m - dy * cos_h - kSlack, shape.reach_side_m - dy * cos_h + kSlack,
                       dx_min, dx_max);
     if (!(dx_min <= dx_max)) continue;
-    const double first = std::max(-1.0, std::ceil(gx - 0.5 + dx_min / res));
-    const double last = std::min(static_cast<double>(g.width()), std::floor(gx - 0.5 + dx_max / res));
-    const int c0 = std::max(0, static_cast<int>(first));
-    const int c1 = std::min(g.width() - 1, static_cast<int>(last));
+    const int c0 = std::max(0, clamped_cell(std::ceil(gx - 0.5 + dx_min / res), g.width()));
+    const int c1 = std::min(g.width() - 1, clamped_cell(std::floor(gx - 0.5 + dx_max / res), g.width()));
+    // Along a row each piece's exponent is a quadratic in the column, so exp(-exponent) follows
+    // from cell to cell by two multiplications: g(k+1) = g(k) ratio(k), ratio(k+1) = ratio(k) m,
+    // with m = exp(-2 a res²) for the quadratic's leading coefficient a. exp() is called only
+    // where a row enters a piece.
     const std::size_t row = g.index(0, r);
+    const double x0 = (c0 + 0.5 - gx) * res;
+    const double along0 = x0 * cos_h + dy * sin_h;
+    const double across0 = -x0 * sin_h + dy * cos_h;
+    const double step_along = res * cos_h;
+    const double step_across = -res * sin_h;
+    const double floor_g = shape.cutoff / shape.amplitude;
+    int piece = -1;
+    double g_value = 0.0;
+    double ratio = 0.0;
     for (int c = c0; c <= c1; ++c) {
-      const double value = shape_value(shape, (c + 0.5 - gx) * res, dy);
-      if (value <= 0.0) continue;
-      const auto cost = static_cast<std::uint8_t>(value);
+      const double k = c - c0;
+      const double along = along0 + k * step_along;
+      const Piece here = piece_of(shape, along);
+      if (here != piece) {
+        piece = here;
+        const double across = across0 + k * step_across;
+        const double e = piece_exponent(shape, here, along, across);
+        const double e_next = piece_exponent(shape, here, along + step_along, across + step_across);
+        g_value = std::exp(-e);
+        ratio = std::exp(e - e_next);
+      } else {
+        g_value *= ratio;
+        ratio *= step_ratio[piece];
+      }
+      if (g_value < floor_g) continue;
+      const auto cost = static_cast<std::uint8_t>(std::min(shape.amplitude, shape.amplitude * g_value));
       std::uint8_t& cell = cells[row + static_cast<std::size_t>(c)];
       if (cost > cell) cell = cost;
     }
@@ -760,13 +813,13 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     }
     detector_.apply(image_, dynamic_, mask);
     blobs_ = blob_finder_.find(dynamic_, master.geometry(), config_.detector.min_blob_cells,
-                               config_.detector.max_blob_cells);
+                               config_.detector.max_blob_cells, config_.detector.blob_link_cells);
     detections_ += blobs_.size();
     tracker_.update(blobs_, inputs.scan->stamp_ns());
     tracker_.classify(image_, master.geometry());
   }
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!tracker_.moving(track)) continue;
+    if (!tracker_.moving(track) || !track.x.allFinite()) continue;
     const Vector2 p = MoverTracker::predict_position(track, inputs.now_ns);
     if (std::hypot(track.x(2), track.x(3)) >= config_.cost.min_speed_m_s) {
       paint_mover(config_.cost, p(0), p(1), track.x(2), track.x(3), master);
@@ -780,7 +833,7 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
   out.stamp_ns = stamp_ns;
   if (!active_) return;
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!tracker_.moving(track)) continue;
+    if (!tracker_.moving(track) || !track.x.allFinite()) continue;
     if (out.count >= msg::MovingObstacles::kMax) break;
     const DolTrack at = tracker_.predicted(track, stamp_ns);
     msg::MovingObstacle& m = out.items[out.count++];

@@ -41,10 +41,16 @@ struct DolDetectorConfig {
   double c1 = 120.0;  // P_f above this...
   double c2 = 80.0;   // ...and P_f - P_s above this: dynamic
   // Cells within this distance of an occupied cell of the static map are never dynamic, so
-  // localization drift along a wall is not motion (0: off).
+  // localization drift along a wall is not motion (0: off). Occupied: kOccupiedOccupancy, what
+  // the static layer marks lethal by default. Distances between cell centres.
   double static_mask_radius_m = 0.15;
   int min_blob_cells = 1;
   int max_blob_cells = 400;   // larger blobs are not movers (a wall the map lacks)
+  // Dynamic cells up to this many cells apart (in rows and in columns) join one blob; 1 is
+  // plain 8-connectivity. A box sliding along one of its faces shows only that face's leading
+  // end and the face across the motion as new, two pieces a cell or two apart, which 8-connected
+  // become two tracks: 2 joins them (people walking side by side 10 cm apart become one).
+  int blob_link_cells = 2;
 };
 
 // The two running averages over a grid of width x height cells, in float.
@@ -87,13 +93,14 @@ struct Blob {
   double radius_m = 0.0;  // half the extent's diagonal plus half a cell: the cells' footprint
 };
 
-// 8-connected components of a 0/1 grid; blobs outside [min_cells, max_cells] are dropped.
+// Connected components of a 0/1 grid (8-connected, or cells up to link_cells apart in both
+// directions); blobs outside [min_cells, max_cells] are dropped.
 class BlobFinder {
  public:
   Status init(int width, int height, std::size_t max_blobs, std::pmr::memory_resource& resource);
   // Returns the blobs found (at most max_blobs; the largest are not preferred: first found).
   std::span<const Blob> find(std::span<const std::uint8_t> dynamic, const GridGeometry& geometry, int min_cells,
-                             int max_cells) noexcept;
+                             int max_cells, int link_cells = 1) noexcept;
 
  private:
   int width_ = 0;
@@ -241,8 +248,10 @@ struct DynamicObstacleConfig {
 };
 
 // Between the obstacle layer and inflation: reads the master (static map and laser marks) as
-// C(t) on each new scan, detects and tracks, then paints every confirmed track predicted to
-// inputs.now_ns. Without a new scan it only repaints the predictions.
+// C(t) on each new scan, detects and tracks (at the scan's stamp), then paints every confirmed
+// track predicted to inputs.now_ns: the Gaussian for tracks of at least cost.min_speed_m_s,
+// and a lethal core for all. Without a new scan it only repaints the predictions. Disabled
+// (config.enabled false), it takes no memory and does nothing.
 class DynamicObstacleLayer final : public CostmapLayer {
  public:
   // static_map: for the static mask (may be null: no mask). observations: the obstacle layer
@@ -261,7 +270,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] std::span<const std::uint8_t> dynamic_cells() const noexcept { return dynamic_; }
   [[nodiscard]] const BackgroundSubtractor& detector() const noexcept { return detector_; }
   [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
-  // The confirmed tracks predicted to stamp_ns, for the planner and the safety filter.
+  // The confirmed tracks predicted to stamp_ns (state and covariance), for the planner and
+  // the safety filter; count 0 when the layer is disabled.
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
   // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
