@@ -288,6 +288,8 @@ TEST(MoverTracker, ConfirmsAfterHitsAndTwoPointVelocity) {
   mem::BudgetArena arena("test", 1 << 16);
   MoverTracker tracker;
   DolTrackerConfig cfg;
+  cfg.confirm_hits = 3;
+  cfg.max_coast_s = 0.6;
   ASSERT_TRUE(tracker.init(cfg, arena));
   const Blob first = blob_at(1.0, 2.0);
   tracker.update(std::span(&first, 1), 0);
@@ -327,6 +329,7 @@ TEST(MoverTracker, GateLeavesFarBlobsUnmatched) {
   mem::BudgetArena arena("test", 1 << 16);
   MoverTracker tracker;
   DolTrackerConfig cfg;  // gate 1 m
+  cfg.confirm_hits = 3;
   ASSERT_TRUE(tracker.init(cfg, arena));
   hal::Nanos t = 0;
   for (int i = 0; i < 3; ++i, t += kScanPeriodNs) {
@@ -783,7 +786,7 @@ void track_crossing_box(double robot_heading_rad, double robot_speed_m_s) {
     }
   }
   ASSERT_GT(confirmed_after, 0);
-  EXPECT_LE(confirmed_after, 3);  // measured: 3 (hits on three consecutive scans)
+  EXPECT_LE(confirmed_after, cfg.tracker.confirm_hits);  // measured: hits on consecutive scans
   EXPECT_TRUE(checked_cost);
   msg::MovingObstacles movers;
   rig.dol.movers(5'100'000'000LL, movers);
