@@ -164,7 +164,7 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s", "dynamic_obstacles",
-                "mover_prediction"});
+                "mover_prediction", "local_costmap"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -195,6 +195,18 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("goal_tolerance_m")) n.dwa.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
   if (r.has("stop_distance_m")) n.safety.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
+  if (r.has("local_costmap")) {
+    // A larger window with longer marking sees movers earlier (costing memory and time).
+    const Reader p = r.child("local_costmap");
+    p.allow_only({"size_m", "obstacle_range_m", "raytrace_range_m"});
+    if (p.has("size_m")) n.local_costmap_size_m = p.number("size_m", 2.0, 20.0);
+    if (p.has("obstacle_range_m")) n.local_obstacles.obstacle_max_range_m = p.number("obstacle_range_m", 0.5, 10.0);
+    if (p.has("raytrace_range_m")) n.local_obstacles.raytrace_max_range_m = p.number("raytrace_range_m", 0.5, 10.0);
+    if (n.local_obstacles.raytrace_max_range_m < n.local_obstacles.obstacle_max_range_m)
+      p.fail("raytrace_range_m", "must be at least obstacle_range_m (a mark must be clearable)", YAML::Node());
+    if (n.local_obstacles.raytrace_max_range_m > n.local_costmap_size_m / 2.0)
+      p.fail("raytrace_range_m", "reaches beyond the window (size_m / 2)", YAML::Node());
+  }
   if (r.has("mover_prediction")) {
     // The DWA's time-aware check against the tracked movers (local_planner.hpp).
     const Reader p = r.child("mover_prediction");

@@ -55,6 +55,9 @@ struct NavigationSection {
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m
   nav::DynamicObstacleConfig dynamic_obstacles;  // the local costmap's moving-obstacle layer
+  // The local costmap: its square window and how far its obstacle layer marks and clears.
+  double local_costmap_size_m = 6.0;
+  nav::ObstacleLayerConfig local_obstacles;
   MissionConfig mission;
 };
 

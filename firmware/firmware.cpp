@@ -56,6 +56,9 @@ Status Firmware::create_navigation() {
   controller.laser_mount = mount;
   controller.dwa = n.dwa;
   controller.dynamic_obstacles = n.dynamic_obstacles;
+  controller.local_costmap.width_m = n.local_costmap_size_m;
+  controller.local_costmap.height_m = n.local_costmap_size_m;
+  controller.obstacle = n.local_obstacles;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
                                                            nav_request_, nav_controller_, nav_movers_);
 

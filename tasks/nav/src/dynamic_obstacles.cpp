@@ -397,7 +397,7 @@ DolTrack MoverTracker::predicted(const DolTrack& track, hal::Nanos stamp_ns) con
   return out;
 }
 
-void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept {
+void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view) noexcept {
   const std::size_t blob_count = std::min(blobs.size(), config_.max_blobs);
   last_update_ns_ = std::max(last_update_ns_, stamp_ns);
   for (std::size_t t = 0; t < count_; ++t) {
@@ -450,12 +450,18 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noex
       }
       ++track.hits;
       track.last_hit_ns = stamp_ns;
+      track.in_view = true;
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
       track.radius_m += kRadiusGain * (radius - track.radius_m);
     } else {
-      const bool lost = !track.confirmed || seconds_between(track.last_hit_ns, stamp_ns) > config_.max_coast_s;
+      const double dx = track.x(0) - view.x_m;
+      const double dy = track.x(1) - view.y_m;
+      const double bearing = std::abs(normalize_angle(std::atan2(dy, dx) - view.heading_rad));
+      track.in_view = bearing <= view.half_angle_rad && std::hypot(dx, dy) <= view.range_m;
+      const double limit = track.in_view ? config_.max_coast_s : config_.max_coast_unseen_s;
+      const bool lost = !track.confirmed || seconds_between(track.last_hit_ns, stamp_ns) > limit;
       if (lost) continue;
     }
     if (kept != t) tracks_[kept] = track;
@@ -506,7 +512,8 @@ void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeome
 }
 
 bool MoverTracker::moving(const DolTrack& track) const noexcept {
-  return track.mover && seconds_between(track.last_hit_ns, last_update_ns_) <= config_.publish_max_coast_s;
+  return track.mover &&
+         (!track.in_view || seconds_between(track.last_hit_ns, last_update_ns_) <= config_.publish_max_coast_s);
 }
 
 // --- Cost ---------------------------------------------------------------------------------
@@ -815,7 +822,24 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     blobs_ = blob_finder_.find(dynamic_, master.geometry(), config_.detector.min_blob_cells,
                                config_.detector.max_blob_cells, config_.detector.blob_link_cells);
     detections_ += blobs_.size();
-    tracker_.update(blobs_, inputs.scan->stamp_ns());
+    // Where the laser looked: from the sensor at the scan's pose, over the beams' sector, as
+    // far as the obstacle layer marks (what lies beyond is not detected).
+    const ProjectedScan& scan = *inputs.scan;
+    LaserView view;
+    const Pose2D& at = inputs.scan_pose;
+    const double c = std::cos(at.theta_rad);
+    const double s = std::sin(at.theta_rad);
+    view.x_m = at.x_m + c * scan.mount().x_m - s * scan.mount().y_m;
+    view.y_m = at.y_m + s * scan.mount().x_m + c * scan.mount().y_m;
+    view.heading_rad = at.theta_rad + scan.mount().theta_rad;
+    if (scan.size() > 1) {
+      const Point2D first = scan.direction(0);
+      const Point2D last = scan.direction(scan.size() - 1);
+      view.half_angle_rad =
+          0.5 * std::abs(normalize_angle(std::atan2(last.y_m, last.x_m) - std::atan2(first.y_m, first.x_m)));
+    }
+    if (observations_ != nullptr) view.range_m = observations_->config().obstacle_max_range_m;
+    tracker_.update(blobs_, scan.stamp_ns(), view);
     tracker_.classify(image_, master.geometry());
   }
   for (const DolTrack& track : tracker_.tracks()) {

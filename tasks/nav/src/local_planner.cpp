@@ -154,7 +154,8 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
 }
 
 double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
-                                   bool brake) const noexcept {
+                                   MoverMotion motion) const noexcept {
+  const bool brake = motion == MoverMotion::brake;
   const double dt = config_.sim_step_s;
   const int steps = static_cast<int>(std::lround(config_.mover_horizon_s / dt));
   const double cx = 0.5 * (body_min_x_ + body_max_x_);
@@ -171,6 +172,12 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
       const double slower = std::max(0.0, std::abs(speed) - config_.mover_brake_decel_m_s2 * dt);
       turn = v != 0.0 ? w * slower / std::abs(v) : turn;
       speed = std::copysign(slower, speed);
+    } else if (motion == MoverMotion::speed_up && v > 0.0 && t > config_.control_period_s + 1e-9) {
+      // The next periods may go on speeding up along the same arc, as their windows allow
+      // (from a standstill the window itself holds only a crawl).
+      const double faster = std::min(config_.max_v_m_s, speed + config_.acc_v_m_s2 * dt);
+      turn = w * faster / v;
+      speed = faster;
     }
     if (std::abs(turn) < 1e-6) {
       p.x_m += speed * dt * std::cos(p.theta_rad);
@@ -398,13 +405,16 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
       if (!movers.empty()) {
         const double ttc = time_to_contact(pose, v, w, movers);
         const bool moving = v >= config_.min_progress_v_m_s;
-        const double ttc_braking = std::isfinite(ttc) && v != 0.0 ? time_to_contact(pose, v, w, movers, true) : ttc;
+        const double ttc_braking =
+            std::isfinite(ttc) && v != 0.0 ? time_to_contact(pose, v, w, movers, MoverMotion::brake) : ttc;
         if (std::isfinite(ttc_braking)) {  // even braking meets it: unavoidable on this arc
           ++out.mover_rejected;
           movers_cost_progress = movers_cost_progress || moving;
-          // Met whatever it does: the way (on or braking) whose contact comes latest; among
-          // equals the slowest, so that if it comes the robot is (nearly) standing.
-          const double latest = std::max(ttc, ttc_braking);
+          // Met whatever it does: the way (on, speeding up or braking) whose contact comes
+          // latest; among equals the slowest, so that if it comes the robot is (nearly)
+          // standing. Speeding up is how a robot standing in a mover's way gets out of it.
+          const double ttc_faster = v > 0.0 ? time_to_contact(pose, v, w, movers, MoverMotion::speed_up) : ttc;
+          const double latest = std::max({ttc, ttc_braking, ttc_faster});
           const bool later = latest > escape_ttc;
           const bool as_late = latest == escape_ttc;
           if (later || (as_late && v < escape_v) || (as_late && v == escape_v && score > escape_score)) {

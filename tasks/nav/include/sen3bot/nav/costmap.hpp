@@ -171,6 +171,7 @@ class ObstacleLayer final : public CostmapLayer {
   void update(Costmap2D& master, const CostmapInputs& inputs) noexcept override;
   void clear() noexcept;
   [[nodiscard]] std::uint8_t mark(int col, int row) const noexcept { return grid_.at(col, row); }
+  [[nodiscard]] const ObstacleLayerConfig& config() const noexcept { return config_; }
   // Per cell of the window: 1 once a beam has passed through it (the laser saw it free) since
   // it entered the window. Something there now moved in; a face never seen through may just
   // have come into view (the dynamic obstacle layer tells the two apart with it).

@@ -138,8 +138,9 @@ struct DolTrackerConfig {
   // Hits before a tentative track is confirmed. A static object coming into view is dynamic
   // for 3 updates with the default averages (P_s catches up), so 4 keeps it out.
   int confirm_hits = 4;
-  double max_coast_s = 1.5;        // unmatched for longer: deleted (beside the robot the
-                                   // LMS200 cannot see it; its prediction goes on)
+  double max_coast_s = 0.6;        // unmatched for longer where the laser should see it: deleted
+  double max_coast_unseen_s = 4.0; // the same where it cannot (beside or behind the robot, out
+                                   // of range): its prediction goes on meanwhile
   double accel_sigma_m_s2 = 1.0;   // white-noise acceleration (process noise)
   double measurement_sigma_m = 0.07;
   double initial_velocity_sigma_m_s = 1.5;
@@ -149,14 +150,14 @@ struct DolTrackerConfig {
   // moving_min_speed_m_s and has left where it was born: it is moving_min_travel_m away and
   // the laser sees no mark within vacated_radius_m of its birth place any more, or it is
   // moving_far_travel_m away. It stays one while it is hit at least every
-  // publish_max_coast_s. Why: the laser's marks on a still object flicker as the robot passes
+  // publish_max_coast_s, or, out of the laser's view, while it lives. Why: the laser's marks on a still object flicker as the robot passes
   // it, and a box's faces come into view one after another, so their blobs wander by up to
   // the object's size, but they never leave the place where they were first seen.
   double moving_min_speed_m_s = 0.15;
   double moving_min_travel_m = 0.3;
   double moving_far_travel_m = 0.45;
   double vacated_radius_m = 0.1;
-  double publish_max_coast_s = 1.5;
+  double publish_max_coast_s = 0.6;
 };
 
 struct DolTrack {
@@ -170,6 +171,16 @@ struct DolTrack {
   double radius_m = 0.1;
   Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
   bool mover = false;  // has shown that it moves (MoverTracker::classify)
+  bool in_view = true;  // where the laser should see it, at the last update
+};
+
+// Where the laser looked: a sector around the sensor (world frame).
+struct LaserView {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double heading_rad = 0.0;
+  double half_angle_rad = 3.2;  // > pi: all around
+  double range_m = 1e9;
 };
 
 class MoverTracker {
@@ -178,9 +189,10 @@ class MoverTracker {
   // Predicts every track to stamp_ns, matches the blobs, corrects, births and deaths.
   // Blobs past max_blobs are ignored. A tentative track that misses a scan is deleted at once
   // (a real mover shows up in every scan; clutter rarely twice in a row); a confirmed one
-  // coasts for max_coast_s. Pairs farther apart than gate_m all cost the same in the
-  // assignment, so one far pair cannot pull the matching away from the near ones.
-  void update(std::span<const Blob> blobs, hal::Nanos stamp_ns) noexcept;
+  // coasts for max_coast_s, or max_coast_unseen_s outside view (where the laser looked for
+  // these blobs). Pairs farther apart than gate_m all cost the same in the assignment, so
+  // one far pair cannot pull the matching away from the near ones.
+  void update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view = {}) noexcept;
   [[nodiscard]] std::span<const DolTrack> tracks() const noexcept { return {tracks_.data(), count_}; }
   // Marks the confirmed tracks that have shown they move, given the image the blobs came
   // from (255: marked) on its grid (see DolTrackerConfig).

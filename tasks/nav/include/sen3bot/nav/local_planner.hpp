@@ -26,9 +26,9 @@
 // recovery ends as soon as a way forward opens; after max_recovery_cycles it reports failure.
 //
 // Tracked movers (the dynamic obstacle layer's, predicted to now) are checked in time, not
-// only as painted cost. Each rollout is followed to mover_horizon_s in two ways: driving on
-// at its (v, w), and braking along the same arc (at mover_brake_decel_m_s2, from one control
-// period plus mover_brake_delay_s on). The
+// only as painted cost. Each rollout is followed to mover_horizon_s in two ways along its arc:
+// driving on at its (v, w), and braking (at mover_brake_decel_m_s2, from one control period
+// plus mover_brake_delay_s on). The
 // first step at which the padded footprint comes within a mover's radius plus mover_margin_m
 // of that mover's constant-velocity prediction is a time to contact. A rollout that meets a
 // mover even when braking leads into an unavoidable contact and is not taken; one that meets
@@ -36,7 +36,9 @@
 //   mover_weight * (1 - t_contact / mover_horizon_s)
 // so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
 // crosses ahead of it when there is time. When every admissible rollout is refused it takes
-// the one whose contact (driving on or braking) comes latest, the slowest among equals, and
+// the one whose contact comes latest (driving on, braking, or speeding up to max_v_m_s at
+// acc_v_m_s2 as later windows allow: how a robot standing in a mover's way gets out of it),
+// the slowest among equals, and
 // when movers make it stop it reports `yielding`, not a recovery, for up to max_yield_s.
 #include <cstdint>
 #include <memory_resource>
@@ -131,9 +133,10 @@ class DwaPlanner {
   DwaCommand compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap,
                      std::span<const msg::MovingObstacle> movers = {}) noexcept;
   // The first time (s) at which the robot driving (v, w) from pose comes within a mover's
-  // reach, or infinity within mover_horizon_s; brake: braking along the arc after one period.
+  // reach, or infinity within mover_horizon_s, holding (v, w), braking or speeding up.
+  enum class MoverMotion : std::uint8_t { hold, brake, speed_up };
   [[nodiscard]] double time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
-                                       bool brake = false) const noexcept;
+                                       MoverMotion motion = MoverMotion::hold) const noexcept;
 
   // True when the padded footprint at pose touches a lethal or unknown cell (or leaves the
   // costmap). When the robot already stands that close, a cycle checks the bare footprint
