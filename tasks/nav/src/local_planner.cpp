@@ -190,17 +190,24 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
     }
     const double c = std::cos(p.theta_rad);
     const double s = std::sin(p.theta_rad);
+    // Where braking ends, or standing, the robot stays: a mover that goes back and forth may
+    // turn and come back along its way meanwhile, so that counts too.
+    const bool stays = brake || std::abs(v) < config_.min_progress_v_m_s;
+    const int ways = stays && config_.mover_may_return ? 2 : 1;
     for (const msg::MovingObstacle& m : movers) {
       if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
-      const double dx = m.x_m + m.vx_m_s * t - p.x_m;
-      const double dy = m.y_m + m.vy_m_s * t - p.y_m;
-      // The mover's centre in the body frame, then its distance to the padded body's box.
-      const double bx = c * dx + s * dy - cx;
-      const double by = -s * dx + c * dy - cy;
-      const double ex = std::max(0.0, std::abs(bx) - hx);
-      const double ey = std::max(0.0, std::abs(by) - hy);
       const double reach = m.radius_m + config_.mover_margin_m;
-      if (ex * ex + ey * ey < reach * reach) return t;
+      for (int way = 0; way < ways; ++way) {
+        const double sign = way == 0 ? 1.0 : -1.0;
+        const double dx = m.x_m + sign * m.vx_m_s * t - p.x_m;
+        const double dy = m.y_m + sign * m.vy_m_s * t - p.y_m;
+        // The mover's centre in the body frame, then its distance to the padded body's box.
+        const double bx = c * dx + s * dy - cx;
+        const double by = -s * dx + c * dy - cy;
+        const double ex = std::max(0.0, std::abs(bx) - hx);
+        const double ey = std::max(0.0, std::abs(by) - hy);
+        if (ex * ex + ey * ey < reach * reach) return t;
+      }
     }
   }
   return std::numeric_limits<double>::infinity();
