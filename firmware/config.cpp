@@ -210,10 +210,15 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("mover_prediction")) {
     // The DWA's time-aware check against the tracked movers (local_planner.hpp).
     const Reader p = r.child("mover_prediction");
-    p.allow_only({"enabled", "horizon_s", "margin_m", "weight", "max_yield_s"});
+    p.allow_only({"enabled", "horizon_s", "stay_horizon_s", "margin_m", "weight", "max_yield_s", "brake_delay_s",
+                  "brake_decel_m_s2", "may_return"});
     if (p.has("enabled")) n.dwa.mover_prediction = p.boolean("enabled");
     if (p.has("horizon_s")) n.dwa.mover_horizon_s = p.number("horizon_s", 0.1, 10.0);
     if (p.has("margin_m")) n.dwa.mover_margin_m = p.number("margin_m", 0.0, 2.0);
+    if (p.has("stay_horizon_s")) n.dwa.mover_stay_horizon_s = p.number("stay_horizon_s", 0.0, 60.0);
+    if (p.has("brake_delay_s")) n.dwa.mover_brake_delay_s = p.number("brake_delay_s", 0.0, 2.0);
+    if (p.has("brake_decel_m_s2")) n.dwa.mover_brake_decel_m_s2 = p.number("brake_decel_m_s2", 0.05, 5.0);
+    if (p.has("may_return")) n.dwa.mover_may_return = p.boolean("may_return");
     if (p.has("weight")) n.dwa.mover_weight = p.number("weight", 0.0, 100.0);
     if (p.has("max_yield_s")) n.dwa.max_yield_s = p.number("max_yield_s", 0.0, 600.0);
   }

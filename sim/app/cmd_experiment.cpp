@@ -281,8 +281,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
     const MissionTask& mission = *fw.mission();
     hal::SimClock& clock = *board.lockstep_clock();
     const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
-    const bool trace = std::getenv("S3B_EXP_TRACE") != nullptr;  // TEMP
-    const hal::Nanos slice = sample != nullptr || trace ? hal::millis(100) : hal::millis(500);
+    const hal::Nanos slice = sample != nullptr ? hal::millis(100) : hal::millis(500);
     double sim_s = 0;
     while (!mission.finished() && sim_s < limit_s) {
       if (Status s = scheduler.run_lockstep(clock, slice); !s) {
@@ -292,15 +291,6 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
       }
       sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
       if (sample != nullptr) capture(fw, board, clock.now(), board.simulation().world().time_s(), *sample);
-      if (trace) {  // TEMP
-        const auto& tr = board.simulation().truth();
-        world::World& wd = board.simulation().world();
-        std::fprintf(stderr, "TRUTH %.1f robot %.2f %.2f %.2f contacts %llu boxes", wd.time_s(), tr.pose.x_m, tr.pose.y_m,
-                     tr.pose.theta_rad, static_cast<unsigned long long>(tr.contacts));
-        for (std::size_t i = 0; i < wd.mover_count(); ++i)
-          std::fprintf(stderr, " (%.2f %.2f)", wd.mover_position(i).x_m, wd.mover_position(i).y_m);
-        std::fprintf(stderr, "\n");
-      }
     }
     fw.shutdown();
     board.stop();

@@ -157,7 +157,11 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
                                    MoverMotion motion) const noexcept {
   const bool brake = motion == MoverMotion::brake;
   const double dt = config_.sim_step_s;
-  const int steps = static_cast<int>(std::lround(config_.mover_horizon_s / dt));
+  // Where braking ends, or standing, the robot stays: a mover that goes back and forth may
+  // turn and come back along its way meanwhile, and over a longer time.
+  const bool stays = brake || std::abs(v) < config_.min_progress_v_m_s;
+  const double horizon_s = stays ? std::max(config_.mover_horizon_s, config_.mover_stay_horizon_s) : config_.mover_horizon_s;
+  const int steps = static_cast<int>(std::lround(horizon_s / dt));
   const double cx = 0.5 * (body_min_x_ + body_max_x_);
   const double cy = 0.5 * (body_min_y_ + body_max_y_);
   const double hx = 0.5 * (body_max_x_ - body_min_x_);
@@ -190,9 +194,6 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
     }
     const double c = std::cos(p.theta_rad);
     const double s = std::sin(p.theta_rad);
-    // Where braking ends, or standing, the robot stays: a mover that goes back and forth may
-    // turn and come back along its way meanwhile, so that counts too.
-    const bool stays = brake || std::abs(v) < config_.min_progress_v_m_s;
     const int ways = stays && config_.mover_may_return ? 2 : 1;
     for (const msg::MovingObstacle& m : movers) {
       if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;

@@ -1,6 +1,4 @@
 #include "sen3bot/nav/nav_tasks.hpp"
-#include <cstdio>
-#include <cstdlib>  // TEMP
 
 #include <algorithm>
 #include <chrono>
@@ -271,16 +269,6 @@ void ControllerTask::step(const tasks::StepContext& context) {
                      std::span<const msg::MovingObstacle>(movers_message_.items.data(), movers_message_.count));
     command.v_m_s = c.v_m_s;
     command.w_rad_s = c.w_rad_s;
-    if (std::getenv("S3B_DOL_TRACE") != nullptr) {  // TEMP
-      std::fprintf(stderr, "t %.1f pose %.2f %.2f v %.2f w %.2f %s adm %u ref %u tracks %zu movers %u", static_cast<double>(context.start_ns) * 1e-9,
-                   pose.value.pose.x_m, pose.value.pose.y_m, c.v_m_s, c.w_rad_s, to_string(c.status), c.admissible,
-                   c.mover_rejected, dynamic_layer_.tracks().size(), movers_message_.count);
-      for (std::size_t i = 0; i < movers_message_.count; ++i) {
-        const auto& m = movers_message_.items[i];
-        std::fprintf(stderr, " [%u %.2f %.2f v %.2f %.2f r %.2f]", m.id, m.x_m, m.y_m, m.vx_m_s, m.vy_m_s, m.radius_m);
-      }
-      std::fprintf(stderr, "\n");
-    }
     status.status = c.status;
     status.distance_to_goal_m = c.distance_to_goal_m;
     status.admissible = c.admissible;

@@ -96,9 +96,11 @@ struct DwaConfig {
   // still has to reach the wheels), at this deceleration (below the base's, for margin).
   double mover_brake_delay_s = 0.2;
   double mover_brake_decel_m_s2 = 0.45;
-  // Braking counts a mover coming back along its way too (forklifts, trolleys and workers
-  // go back and forth): the robot does not stop where it would stand in a mover's way.
+  // Braking or standing counts a mover coming back along its way too (forklifts, trolleys
+  // and workers go back and forth), and looks mover_stay_horizon_s ahead: the robot does not
+  // stop where it would stand in a mover's way.
   bool mover_may_return = true;
+  double mover_stay_horizon_s = 10.0;
   double mover_margin_m = 0.1;
   double mover_weight = 1.5;
   double mover_min_speed_m_s = 0.1;  // slower tracks are left to the costmap
