@@ -158,6 +158,59 @@ TEST(Config, LocalizationRecovery) {
   EXPECT_NE(m.find("navigation.recovery.alpha: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
+  Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_TRUE(defaults->navigation.dynamic_obstacles.enabled);  // on unless turned off
+  EXPECT_TRUE(defaults->navigation.dwa.mover_prediction);
+  EXPECT_DOUBLE_EQ(defaults->navigation.local_costmap_size_m, 6.0);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  dynamic_obstacles: { enabled: false, alpha_fast: 0.9, alpha_slow: 0.2, beta: 0.8, c1: 100, c2: 60,\n"
+          "    confirm_hits: 5, gate_m: 0.8, max_tracks: 12, front_horizon_s: 0.5, max_speed_m_s: 1.5 }\n"
+          "  mover_prediction: { enabled: false, horizon_s: 3, stay_horizon_s: 8, margin_m: 0.2, weight: 2,\n"
+          "    brake_delay_s: 0.3, brake_decel_m_s2: 0.4, may_return: false }\n"
+          "  local_costmap: { size_m: 8, obstacle_range_m: 3.5, raytrace_range_m: 4 }\n",
+      "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const NavigationSection& n = r->navigation;
+  EXPECT_FALSE(n.dynamic_obstacles.enabled);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.alpha_fast, 0.9);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.alpha_slow, 0.2);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.beta, 0.8);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.c1, 100.0);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.c2, 60.0);
+  EXPECT_EQ(n.dynamic_obstacles.tracker.confirm_hits, 5);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.tracker.gate_m, 0.8);
+  EXPECT_EQ(n.dynamic_obstacles.tracker.max_tracks, 12u);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.cost.front_horizon_s, 0.5);
+  EXPECT_DOUBLE_EQ(n.dynamic_obstacles.cost.max_speed_m_s, 1.5);
+  EXPECT_FALSE(n.dwa.mover_prediction);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_horizon_s, 3.0);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_stay_horizon_s, 8.0);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_margin_m, 0.2);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_weight, 2.0);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_brake_delay_s, 0.3);
+  EXPECT_DOUBLE_EQ(n.dwa.mover_brake_decel_m_s2, 0.4);
+  EXPECT_FALSE(n.dwa.mover_may_return);
+  EXPECT_DOUBLE_EQ(n.local_costmap_size_m, 8.0);
+  EXPECT_DOUBLE_EQ(n.local_obstacles.obstacle_max_range_m, 3.5);
+  EXPECT_DOUBLE_EQ(n.local_obstacles.raytrace_max_range_m, 4.0);
+
+  std::string m = message_of(std::string(kNavigation) + "  dynamic_obstacles: { alpha_fast: 0.2, alpha_slow: 0.3 }\n");
+  EXPECT_NE(m.find("navigation.dynamic_obstacles.alpha_slow: must be smaller than alpha_fast"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  dynamic_obstacles: { max_tracks: 40 }\n");
+  EXPECT_NE(m.find("navigation.dynamic_obstacles.max_tracks: value 40 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  dynamic_obstacles: { c3: 1 }\n");
+  EXPECT_NE(m.find("navigation.dynamic_obstacles.c3: unknown key"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  mover_prediction: { weight: -1 }\n");
+  EXPECT_NE(m.find("navigation.mover_prediction.weight: value -1 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  local_costmap: { size_m: 6, obstacle_range_m: 3, raytrace_range_m: 2.5 }\n");
+  EXPECT_NE(m.find("navigation.local_costmap.raytrace_range_m: must be at least obstacle_range_m"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  local_costmap: { size_m: 6, obstacle_range_m: 3, raytrace_range_m: 3.5 }\n");
+  EXPECT_NE(m.find("navigation.local_costmap.raytrace_range_m: reaches beyond the window"), std::string::npos) << m;
+}
+
 TEST(Config, AMissingFileSaysSo) {
   Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
   ASSERT_FALSE(r);

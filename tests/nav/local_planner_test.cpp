@@ -278,5 +278,59 @@ TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+TEST(DwaMovers, StandingInAMoversWayCountsItComingBack) {
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaConfig cfg;
+  cfg.mover_margin_m = 0.0;
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init(cfg, arena));
+  // A box 2 m to the robot's left, going away along a lane through the robot.
+  const msg::MovingObstacle away{1, 0.0, 2.0, 0.0, 0.6, 0.1, 0.0, 0.0};
+  // Standing: it may turn and come back: met when it has come the 2 m less the reaches back.
+  const double back = dwa.time_to_contact({0, 0, 0}, 0.0, 0.0, std::span(&away, 1));
+  const double gap = 2.0 - 0.1 - (cfg.footprint.vertices[0].y_m + cfg.footprint_padding_m);
+  EXPECT_NEAR(back, gap / 0.6, cfg.sim_step_s + 1e-9);
+  // Driving out of its lane at speed: it is never met.
+  EXPECT_TRUE(std::isinf(dwa.time_to_contact({0, 0, 0}, 0.5, 0.0, std::span(&away, 1))));
+  // Without the assumption, standing there is safe.
+  cfg.mover_may_return = false;
+  DwaPlanner trusting;
+  ASSERT_TRUE(trusting.init(cfg, arena));
+  EXPECT_TRUE(std::isinf(trusting.time_to_contact({0, 0, 0}, 0.0, 0.0, std::span(&away, 1))));
+}
+
+TEST(DwaMovers, BrakesUnderControlWhenNothingIsAdmissibleAtSpeed) {
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  // A wall across the corridor 0.7 m ahead of a robot at full speed: every arc at 0.44 m/s
+  // or more reaches it within the rollout, but braking from 0.5 m/s stops 0.21 m on.
+  OccupancyMap map = corridor(false);
+  for (int r = 0; r < 80; ++r) map.set(34, r, 100);
+  StaticLayer st(map);
+  InflationLayer infl;
+  LayeredCostmap cm;
+  ASSERT_TRUE(cm.add_layer(st));
+  ASSERT_TRUE(cm.add_layer(infl));
+  ASSERT_TRUE(cm.init_over_map(map, arena));
+  cm.update({});
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  // A box crossing far behind the robot: movers are about.
+  const msg::MovingObstacle behind{1, -2.0, 0.0, 0.0, 0.6, 0.1, 0.0, 0.0};
+  const DwaCommand c = dwa.compute({1.0, 2.0, 0.0}, 0.5, 0.0, cm.costmap(), std::span(&behind, 1));
+  EXPECT_EQ(c.admissible, 0u);
+  EXPECT_EQ(c.status, DwaStatus::braking);
+  EXPECT_NEAR(c.v_m_s, 0.5 - dwa.config().acc_v_m_s2 * dwa.config().control_period_s, 1e-9);
+  EXPECT_EQ(dwa.recoveries().total(), 0u);
+  // Among still obstacles only, the recoveries keep their timing.
+  DwaPlanner plain;
+  ASSERT_TRUE(plain.init({}, arena));
+  plain.set_path(straight(1.0, 7.0, 2.0));
+  EXPECT_EQ(plain.compute({1.0, 2.0, 0.0}, 0.5, 0.0, cm.costmap()).status, DwaStatus::waiting);
+  // Braking is for a moving robot only: standing, it samples the crawl the window allows.
+  const DwaCommand stopped = dwa.compute({1.0, 2.0, 0.0}, 0.0, 0.0, cm.costmap());
+  EXPECT_NE(stopped.status, DwaStatus::braking);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

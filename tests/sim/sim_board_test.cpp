@@ -113,6 +113,13 @@ TEST(SimConfig, TheShippedSectionAndItsErrors) {
             std::string::npos);
   EXPECT_NE(sim_error("sim: { map: m.yaml, people: [ { path: [] } ] }\n").find("sim.people[0].path: needs at least one point"),
             std::string::npos);
+  EXPECT_NE(sim_error("sim: { map: m.yaml, laser_max_range_m: 200 }\n").find("sim.laser_max_range_m: value 200 is outside"),
+            std::string::npos);
+  Result<SimulationConfig> ranged =
+      parse_sim_config("robot: { name: x }\nsim: { map: m.yaml, laser_max_range_m: 30 }\n", "sim.yaml", {});
+  ASSERT_TRUE(ranged) << ranged.error().c_str();
+  EXPECT_DOUBLE_EQ(ranged->laser_max_range_m, 30.0);
+  EXPECT_DOUBLE_EQ(rig.world.laser_max_range_m, 8.0);  // the LMS200's mm mode, the default
 }
 
 }  // namespace

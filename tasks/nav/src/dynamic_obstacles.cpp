@@ -451,6 +451,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       ++track.hits;
       track.last_hit_ns = stamp_ns;
       track.in_view = true;
+      track.seen = z;
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
@@ -482,6 +483,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     track.last_hit_ns = stamp_ns;
     track.x << blobs[b].x_m, blobs[b].y_m, 0.0, 0.0;
     track.birth << blobs[b].x_m, blobs[b].y_m;
+    track.seen = track.birth;
     track.P = Vector4(s2, s2, v2, v2).asDiagonal();
     track.radius_m = std::clamp(blobs[b].radius_m, config_.min_radius_m, config_.max_radius_m);
   }
@@ -506,7 +508,8 @@ void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeome
     DolTrack& track = tracks_[t];
     if (!track.confirmed || track.mover || track.last_hit_ns != last_update_ns_) continue;
     if (std::hypot(track.x(2), track.x(3)) < config_.moving_min_speed_m_s) continue;
-    const double travel = std::hypot(track.x(0) - track.birth(0), track.x(1) - track.birth(1));
+    // Measured, not filtered: a filter's overshoot is no evidence of travel.
+    const double travel = std::hypot(track.seen(0) - track.birth(0), track.seen(1) - track.birth(1));
     track.mover = travel >= config_.moving_far_travel_m || (travel >= config_.moving_min_travel_m && vacated(track));
   }
 }

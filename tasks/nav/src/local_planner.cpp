@@ -463,10 +463,12 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
     yield_ticks_ = 0;
     return out;
   }
-  // Nothing admissible at this speed (the window holds only fast arcs) but the robot can
-  // still stop clear of everything: brake as hard as the window allows and choose again from
-  // lower speed, rather than give up.
-  if (out.admissible == 0 && v_m_s >= config_.min_progress_v_m_s && braking_is_clear(pose, v_m_s, w_rad_s, costmap)) {
+  // Among movers, nothing admissible at this speed (the window holds only fast arcs) while
+  // the robot can still stop clear of everything: brake as hard as the window allows and
+  // choose again from lower speed, rather than give up. (Among still obstacles the recoveries
+  // keep their old timing.)
+  if (out.admissible == 0 && !movers.empty() && v_m_s >= config_.min_progress_v_m_s &&
+      braking_is_clear(pose, v_m_s, w_rad_s, costmap)) {
     out.v_m_s = v_lo;
     out.w_rad_s = std::clamp(0.0, w_lo, w_hi);
     out.status = DwaStatus::braking;

@@ -170,6 +170,7 @@ struct DolTrack {
   Eigen::Matrix<double, 4, 4> P = Eigen::Matrix<double, 4, 4>::Identity();
   double radius_m = 0.1;
   Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
+  Eigen::Matrix<double, 2, 1> seen = Eigen::Matrix<double, 2, 1>::Zero();   // last blob centroid
   bool mover = false;  // has shown that it moves (MoverTracker::classify)
   bool in_view = true;  // where the laser should see it, at the last update
 };

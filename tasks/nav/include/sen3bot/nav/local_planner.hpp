@@ -19,8 +19,9 @@
 // lethal or inscribed cell (an obstacle the plan did not know) are skipped: the target moves
 // past them so the rollouts bend around the obstacle, and while any window point is blocked
 // the path-distance term is off (the robot has to leave the path to pass).
-// With no admissible rollout while moving it brakes (status `braking`) if stopping along
-// the current arc stays clear, and samples again from the lower speed. Otherwise, or with no
+// With tracked movers around and no admissible rollout while moving, it brakes (status
+// `braking`) if stopping along the current arc stays clear, and samples again from the lower
+// speed. Otherwise, or with no
 // admissible moving rollout at a standstill, it recovers: wait, then rotate in place towards the
 // target, then back off, in a cycle, counting each. Every period samples again first, so a
 // recovery ends as soon as a way forward opens; after max_recovery_cycles it reports failure.
