@@ -40,15 +40,23 @@ struct DriveResult {
   DwaStatus last = DwaStatus::idle;
 };
 
-DriveResult drive(const OccupancyMap& map, DwaPlanner& dwa, Pose2D pose, int max_steps) {
-  mem::BudgetArena arena("costmap", 1 << 20);
-  StaticLayer st(map);
+// The map as a costmap (static and inflation layers), updated once.
+struct MapCostmap {
+  explicit MapCostmap(const OccupancyMap& map) : st(map) {
+    EXPECT_TRUE(cm.add_layer(st));
+    EXPECT_TRUE(cm.add_layer(infl));
+    EXPECT_TRUE(cm.init_over_map(map, arena));
+    cm.update({});
+  }
+  [[nodiscard]] const Costmap2D& costmap() const { return cm.costmap(); }
+  mem::BudgetArena arena{"costmap", 1 << 20};
+  StaticLayer st;
   InflationLayer infl;
   LayeredCostmap cm;
-  EXPECT_TRUE(cm.add_layer(st));
-  EXPECT_TRUE(cm.add_layer(infl));
-  EXPECT_TRUE(cm.init_over_map(map, arena));
-  cm.update({});
+};
+
+DriveResult drive(const OccupancyMap& map, DwaPlanner& dwa, Pose2D pose, int max_steps) {
+  const MapCostmap cm(map);
   const world::World truth(map);
   DriveResult run;
   double v = 0.0;
@@ -129,13 +137,7 @@ TEST(Dwa, ComputeAllocatesNothing) {
   DwaPlanner dwa;
   ASSERT_TRUE(dwa.init({}, arena));
   const OccupancyMap map = corridor(true);
-  StaticLayer st(map);
-  InflationLayer infl;
-  LayeredCostmap cm;
-  ASSERT_TRUE(cm.add_layer(st));
-  ASSERT_TRUE(cm.add_layer(infl));
-  ASSERT_TRUE(cm.init_over_map(map, arena));
-  cm.update({});
+  const MapCostmap cm(map);
   const auto path = straight(1.0, 7.0, 2.0);
   dwa.set_path(path);
   mem::testing::AllocationScope scope;
@@ -163,15 +165,8 @@ struct CrossingRun {
 };
 
 CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s) {
-  mem::BudgetArena arena("costmap", 1 << 20);
   const OccupancyMap map = corridor(false);
-  StaticLayer st(map);
-  InflationLayer infl;
-  LayeredCostmap cm;
-  EXPECT_TRUE(cm.add_layer(st));
-  EXPECT_TRUE(cm.add_layer(infl));
-  EXPECT_TRUE(cm.init_over_map(map, arena));
-  cm.update({});
+  const MapCostmap cm(map);
   dwa.set_path(straight(1.0, 7.0, 2.0));
   CrossingRun run;
   Pose2D pose{1.0, 2.0, 0.0};
@@ -261,13 +256,7 @@ TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {
   DwaPlanner dwa;
   ASSERT_TRUE(dwa.init({}, arena));
   const OccupancyMap map = corridor(false);
-  StaticLayer st(map);
-  InflationLayer infl;
-  LayeredCostmap cm;
-  ASSERT_TRUE(cm.add_layer(st));
-  ASSERT_TRUE(cm.add_layer(infl));
-  ASSERT_TRUE(cm.init_over_map(map, arena));
-  cm.update({});
+  const MapCostmap cm(map);
   dwa.set_path(straight(1.0, 7.0, 2.0));
   const Crossing box{3.0, 0.5, 0.8};
   mem::testing::AllocationScope scope;
@@ -307,13 +296,7 @@ TEST(DwaMovers, BrakesUnderControlWhenNothingIsAdmissibleAtSpeed) {
   // or more reaches it within the rollout, but braking from 0.5 m/s stops 0.21 m on.
   OccupancyMap map = corridor(false);
   for (int r = 0; r < 80; ++r) map.set(34, r, 100);
-  StaticLayer st(map);
-  InflationLayer infl;
-  LayeredCostmap cm;
-  ASSERT_TRUE(cm.add_layer(st));
-  ASSERT_TRUE(cm.add_layer(infl));
-  ASSERT_TRUE(cm.init_over_map(map, arena));
-  cm.update({});
+  const MapCostmap cm(map);
   dwa.set_path(straight(1.0, 7.0, 2.0));
   // A box crossing far behind the robot: movers are about.
   const msg::MovingObstacle behind{1, -2.0, 0.0, 0.0, 0.6, 0.1, 0.0, 0.0};

@@ -13,6 +13,19 @@ constexpr double kPerimeterStepM = 0.025;  // half a 0.05 m cell: no cell is ski
 constexpr std::size_t kMaxPerimeterPoints = 512;
 constexpr std::uint16_t kUnreached = 0xFFFF;
 constexpr double kUnreachedPenaltyM = 10.0;  // a rollout ending where the target cannot be reached
+
+// Exact arc for constant (v, w) over dt.
+void advance_arc(Pose2D& p, double v, double w, double dt) noexcept {
+  if (std::abs(w) < 1e-6) {
+    p.x_m += v * dt * std::cos(p.theta_rad);
+    p.y_m += v * dt * std::sin(p.theta_rad);
+  } else {
+    const double th = p.theta_rad + w * dt;
+    p.x_m += v / w * (std::sin(th) - std::sin(p.theta_rad));
+    p.y_m -= v / w * (std::cos(th) - std::cos(p.theta_rad));
+    p.theta_rad = th;
+  }
+}
 }  // namespace
 
 Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& resource) {
@@ -112,16 +125,7 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
   const int steps = static_cast<int>(std::lround(config_.sim_time_s / config_.sim_step_s));
   const double dt = config_.sim_step_s;
   for (int k = 0; k < steps; ++k) {
-    // Exact arc for constant (v, w) over one step.
-    if (std::abs(w) < 1e-6) {
-      p.x_m += v * dt * std::cos(p.theta_rad);
-      p.y_m += v * dt * std::sin(p.theta_rad);
-    } else {
-      const double th = p.theta_rad + w * dt;
-      p.x_m += v / w * (std::sin(th) - std::sin(p.theta_rad));
-      p.y_m -= v / w * (std::cos(th) - std::cos(p.theta_rad));
-      p.theta_rad = th;
-    }
+    advance_arc(p, v, w, dt);
     int col = 0;
     int row = 0;
     if (!costmap.world_to_cell(p.x_m, p.y_m, col, row)) return r;
@@ -183,15 +187,7 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
       turn = w * faster / v;
       speed = faster;
     }
-    if (std::abs(turn) < 1e-6) {
-      p.x_m += speed * dt * std::cos(p.theta_rad);
-      p.y_m += speed * dt * std::sin(p.theta_rad);
-    } else {
-      const double th = p.theta_rad + turn * dt;
-      p.x_m += speed / turn * (std::sin(th) - std::sin(p.theta_rad));
-      p.y_m -= speed / turn * (std::cos(th) - std::cos(p.theta_rad));
-      p.theta_rad = th;
-    }
+    advance_arc(p, speed, turn, dt);
     const double c = std::cos(p.theta_rad);
     const double s = std::sin(p.theta_rad);
     const int ways = stays && config_.mover_may_return ? 2 : 1;
