@@ -1,6 +1,5 @@
-// `sen3bot-sim experiment dol`: the layout drawn from a seed, the box plot's statistics, the
-// command's errors, a small experiment's report, and that a run's result does not depend on how
-// many worker processes ran it.
+// `sen3bot-sim experiment dol`: the layout drawn from a seed, the box plot's statistics and the
+// command's errors (experiment_runs_test.cpp runs missions).
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
@@ -16,67 +15,13 @@
 #include <vector>
 
 #include "experiment.hpp"
-#include "sim_commands.hpp"
+#include "experiment_support.hpp"
 
 namespace sen3bot::sim {
 namespace {
 
 using namespace experiment;
-
-const std::string kConfig = SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml";
-
-std::string read_file(const std::string& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
-std::string read_all(std::FILE* f) {
-  std::fflush(f);
-  std::rewind(f);
-  std::string text;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
-  return text;
-}
-
-struct CommandRun {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-CommandRun experiment(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::FILE* out = std::tmpfile();
-  std::FILE* err = std::tmpfile();
-  CommandRun run;
-  run.code = experiment_command(static_cast<int>(argv.size()), argv.data(), out, err);
-  run.out = read_all(out);
-  run.err = read_all(err);
-  std::fclose(out);
-  std::fclose(err);
-  return run;
-}
-
-std::string temp_dir() {
-  char dir[] = "/tmp/sen3bot-experiment-XXXXXX";
-  return ::mkdtemp(dir) != nullptr ? dir : "";
-}
-
-// `"name": {"count": N` in a variant's part of report.json.
-long count(const std::string& json, const std::string& name) {
-  const std::size_t at = json.find("\"" + name + "\": {\"count\": ");
-  if (at == std::string::npos) return -1;
-  return std::strtol(json.c_str() + at + name.size() + 14, nullptr, 10);
-}
-
-long file_size(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 ? static_cast<long>(st.st_size) : -1;
-}
+using namespace testing;
 
 TEST(DolLayout, LanesInsideTheStripAndFarEnoughApart) {
   for (std::uint64_t seed = 0; seed < 2000; ++seed)
@@ -172,7 +117,7 @@ TEST(ExperimentCommand, BadArgumentsAreOneLineErrors) {
       {{"dol", "--speed", "0.6", "--runs", "2", "--config", kConfig, "--report", dir + "/no/such/dir"}, "cannot create"},
   };
   for (const Case& c : cases) {
-    const CommandRun run = experiment(c.args);
+    const CommandRun run = run_experiment(c.args);
     std::string line;
     for (const std::string& a : c.args) line += a + " ";
     EXPECT_EQ(run.code, 2) << line;
@@ -180,66 +125,6 @@ TEST(ExperimentCommand, BadArgumentsAreOneLineErrors) {
     EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << line << "\n" << run.err;
     EXPECT_EQ(run.out, "") << line;
   }
-}
-
-TEST(ExperimentCommand, SmallExperimentWritesItsReport) {
-  const std::string dir = temp_dir() + "/report";
-  const CommandRun run = experiment({"dol", "--speed", "0.6", "--runs", "2", "--jobs", "2", "--no-baseline", "--seed", "5",
-                              "--config", kConfig, "--report", dir});
-  ASSERT_EQ(run.code, 0) << run.err;
-  EXPECT_NE(run.out.find("2/2 runs"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("| smooth navigations"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("| successful"), std::string::npos) << run.out;
-  const std::string json = read_file(dir + "/report.json");
-  ASSERT_FALSE(json.empty());
-  EXPECT_NE(json.find("\"experiment\": \"dol\""), std::string::npos);
-  EXPECT_NE(json.find("\"runs\": 2,"), std::string::npos);
-  EXPECT_NE(json.find("\"seed\": 5,"), std::string::npos);
-  EXPECT_NE(json.find("\"dol\": {"), std::string::npos);
-  EXPECT_EQ(json.find("\"no_dol\""), std::string::npos) << "--no-baseline";
-  const long smooth = count(json, "smooth"), waits = count(json, "wait_recoveries"), collisions = count(json, "collisions"),
-             timeouts = count(json, "timeouts"), successful = count(json, "successful");
-  ASSERT_GE(smooth, 0);
-  ASSERT_GE(waits, 0);
-  ASSERT_GE(collisions, 0);
-  ASSERT_GE(timeouts, 0);
-  EXPECT_EQ(smooth + waits + collisions + timeouts, 2);
-  EXPECT_EQ(successful, smooth + waits);
-  EXPECT_NE(json.find("\"travel_time_s\": {"), std::string::npos);
-  EXPECT_NE(json.find("{\"seed\": 5,"), std::string::npos);
-  EXPECT_NE(json.find("{\"seed\": 6,"), std::string::npos);
-  EXPECT_GT(file_size(dir + "/travel_times.png"), 1000);
-  EXPECT_GT(file_size(dir + "/sample_run.png"), 1000);
-}
-
-// The missions of a report without their wall times.
-std::string missions(const std::string& json) {
-  const std::size_t at = json.find("\"missions\": [");
-  if (at == std::string::npos) return {};
-  return std::regex_replace(json.substr(at), std::regex("\"wall_s\": [0-9.]+"), "");
-}
-
-TEST(ExperimentCommand, AResultDoesNotDependOnTheWorkers) {
-  const std::string one = temp_dir(), two = temp_dir();
-  const CommandRun a = experiment({"dol", "--speed", "0.8", "--runs", "2", "--jobs", "1", "--no-baseline", "--seed", "11", "--config",
-                            kConfig, "--report", one});
-  const CommandRun b = experiment({"dol", "--speed", "0.8", "--runs", "2", "--jobs", "2", "--no-baseline", "--seed", "11", "--config",
-                            kConfig, "--report", two});
-  ASSERT_EQ(a.code, 0) << a.err;
-  ASSERT_EQ(b.code, 0) << b.err;
-  const std::string ma = missions(read_file(one + "/report.json")), mb = missions(read_file(two + "/report.json"));
-  ASSERT_FALSE(ma.empty());
-  EXPECT_EQ(ma, mb);
-}
-
-TEST(ExperimentCommand, ACrashedWorkerNamesItsSeed) {
-  ::setenv("SEN3BOT_EXPERIMENT_CRASH_SEED", "22", 1);
-  const CommandRun run = experiment({"dol", "--speed", "0.6", "--runs", "2", "--jobs", "2", "--no-baseline", "--seed", "21",
-                              "--config", kConfig});
-  ::unsetenv("SEN3BOT_EXPERIMENT_CRASH_SEED");
-  EXPECT_EQ(run.code, 1);
-  EXPECT_NE(run.err.find("seed 22"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("signal"), std::string::npos) << run.err;
 }
 
 }  // namespace
