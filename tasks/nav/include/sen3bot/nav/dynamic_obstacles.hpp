@@ -5,13 +5,15 @@
 //
 //   master (static + obstacle marks) as an image C(t): 255 where lethal, 0 elsewhere
 //     -> BackgroundSubtractor: fast and slow running averages per cell, each mixing the cell
-//        with its 8 neighbours; dynamic when P_f > c1 and P_f - P_s > c2 (and not next to the
-//        static map)
-//     -> BlobFinder: 8-connected dynamic cells grouped into blobs (centroid, area, extent)
+//        with its 8 neighbours; dynamic when P_f > c1 and P_f - P_s > c2, unless masked (next
+//        to the static map, or never seen free by the laser: ObstacleLayer::seen_free())
+//     -> BlobFinder: dynamic cells linked within blob_link_cells grouped into blobs
+//        (centroid, area, extent)
 //     -> MoverTracker: blob centroids matched to tracks by the Hungarian algorithm with a gate;
-//        a constant-velocity Kalman filter per track; M hits confirm, coasting tracks die
+//        a constant-velocity Kalman filter per track; M hits confirm; a confirmed track that
+//        has left its birth place is a mover; coasting tracks die (later out of view)
 //     -> paint_mover(): the source's asymmetric Gaussian (front and back half-planes) around
-//        each confirmed moving track, lengthened ahead by what it covers in front_horizon_s
+//        each mover, lengthened ahead by what it covers in front_horizon_s
 //
 // The averages live on the local costmap's cells, which keep a fixed world lattice: when the
 // rolling window moves they are shifted with it, and cells that come into the window start at
@@ -149,10 +151,11 @@ struct DolTrackerConfig {
   // A confirmed track becomes a mover (painted, published) once it is faster than
   // moving_min_speed_m_s and has left where it was born: it is moving_min_travel_m away and
   // the laser sees no mark within vacated_radius_m of its birth place any more, or it is
-  // moving_far_travel_m away. It stays one while it is hit at least every
-  // publish_max_coast_s, or, out of the laser's view, while it lives. Why: the laser's marks on a still object flicker as the robot passes
-  // it, and a box's faces come into view one after another, so their blobs wander by up to
-  // the object's size, but they never leave the place where they were first seen.
+  // moving_far_travel_m away (measured on blob centroids, not on the filter). It stays one
+  // while it is hit at least every publish_max_coast_s, or, out of the laser's view, while it
+  // lives. Why: the laser's marks on a still object flicker as the robot passes it, and a
+  // box's faces come into view one after another, so their blobs wander by up to the object's
+  // size, but they never leave the place where they were first seen.
   double moving_min_speed_m_s = 0.15;
   double moving_min_travel_m = 0.3;
   double moving_far_travel_m = 0.45;
@@ -261,9 +264,10 @@ struct DynamicObstacleConfig {
 };
 
 // Between the obstacle layer and inflation: reads the master (static map and laser marks) as
-// C(t) on each new scan, detects and tracks (at the scan's stamp), then paints every confirmed
-// track predicted to inputs.now_ns: the Gaussian for tracks of at least cost.min_speed_m_s,
-// and a lethal core for all. Without a new scan it only repaints the predictions. Disabled
+// C(t) on each new scan, detects and tracks (at the scan's stamp), then paints every mover
+// (MoverTracker::moving) predicted to inputs.now_ns: the Gaussian when at least
+// cost.min_speed_m_s fast, and a lethal core. Without a new scan it only repaints the
+// predictions. Disabled
 // (config.enabled false), it takes no memory and does nothing.
 class DynamicObstacleLayer final : public CostmapLayer {
  public:
@@ -283,8 +287,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] std::span<const std::uint8_t> dynamic_cells() const noexcept { return dynamic_; }
   [[nodiscard]] const BackgroundSubtractor& detector() const noexcept { return detector_; }
   [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
-  // The confirmed tracks predicted to stamp_ns (state and covariance), for the planner and
-  // the safety filter; count 0 when the layer is disabled.
+  // The movers predicted to stamp_ns (state and covariance), for the planner and the safety
+  // filter; count 0 when the layer is disabled.
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
   // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
