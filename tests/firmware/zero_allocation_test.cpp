@@ -24,6 +24,10 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   ASSERT_NE(rig.board, nullptr);
   FirmwareConfig* config = &rig.config;
   config->telemetry_status_period_ms = 1'000;  // exercise the status path often
+  // The moving-obstacle layer and the DWA's time-aware check too (config/sim.yaml leaves them
+  // off): the worker walking across is detected, tracked and painted meanwhile.
+  config->navigation.dynamic_obstacles.enabled = true;
+  config->navigation.dwa.mover_prediction = true;
   hal::SimClock& clock = rig.clock();
 
   std::FILE* sink = std::fopen("/dev/null", "w");
