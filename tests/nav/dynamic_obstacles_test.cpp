@@ -469,6 +469,96 @@ TEST(MoverTracker, TrackSurvivesAnOcclusion) {
   EXPECT_TRUE(tracker.tracks()[0].confirmed);
 }
 
+// A box going up its lane at x = 2 at 0.8 m/s; for its last 0.5 s in view its centroid slides
+// sideways (the laser sees less of it at the edge of its field), then it is out of view for
+// 1.5 s. Returns how far the coasting track went sideways meanwhile.
+double lane_error_after_coasting(const DolTrackerConfig& cfg) {
+  mem::BudgetArena arena("test", 1 << 16);
+  MoverTracker tracker;
+  EXPECT_TRUE(tracker.init(cfg, arena));
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  LaserView blind;
+  blind.half_angle_rad = 0.1;
+  blind.heading_rad = -M_PI / 2.0;  // looking away: the track is out of view and coasts
+  int k = 0;
+  for (; k <= 30; ++k) {
+    const double t = 0.1 * k;
+    const double slide = k > 25 ? 0.04 * (k - 25) : 0.0;
+    const Blob b = blob_at(2.0 + slide + noise(rng), 0.5 + 0.8 * t + noise(rng));
+    tracker.update(std::span(&b, 1), k * kScanPeriodNs);
+  }
+  if (tracker.tracks().size() != 1u) return 1e9;
+  const double x0 = tracker.tracks()[0].x(0);
+  EXPECT_NEAR(x0, 2.2, 0.1);  // where the slide left it
+  for (; k <= 45; ++k) tracker.update({}, k * kScanPeriodNs, blind);
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+  if (tracker.tracks().empty()) return 1e9;
+  const DolTrack& track = tracker.tracks()[0];
+  EXPECT_NEAR(track.x(1), 0.5 + 0.8 * 4.5, 0.25);
+  return std::abs(track.x(0) - x0);
+}
+
+TEST(MoverTracker, TheAxisKeepsACoastingTrackInItsLane) {
+  DolTrackerConfig cfg;
+  const double held = lane_error_after_coasting(cfg);
+  cfg.axis_min_travel_m = 1e9;  // no axis: the filter's velocity as it is
+  const double drifting = lane_error_after_coasting(cfg);
+  // Held: only the axis' own tilt from the slide (0.2 m over its 2 m); free: the slide's speed.
+  EXPECT_LT(held, 0.15);
+  EXPECT_GT(drifting, 0.3);
+  EXPECT_GT(drifting, 2.5 * held);
+}
+
+TEST(MoverTracker, TheAxisFollowsAWalkerWhoTurns) {
+  mem::BudgetArena arena("test", 1 << 16);
+  MoverTracker tracker;
+  DolTrackerConfig cfg;
+  ASSERT_TRUE(tracker.init(cfg, arena));
+  std::mt19937 rng(6);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  // 3 s up at 0.8 m/s, then a right-angle turn and 3 s along +x.
+  for (int k = 0; k <= 60; ++k) {
+    const double t = 0.1 * k;
+    const double x = t <= 3.0 ? 1.0 : 1.0 + 0.8 * (t - 3.0);
+    const double y = t <= 3.0 ? 0.8 * t : 2.4;
+    const Blob b = blob_at(x + noise(rng), y + noise(rng));
+    tracker.update(std::span(&b, 1), k * kScanPeriodNs);
+    if (k == 30) {  // held to the axis: straight up
+      ASSERT_EQ(tracker.tracks().size(), 1u);
+      const auto v = tracker.velocity(tracker.tracks()[0]);
+      EXPECT_NEAR(std::atan2(v(1), v(0)), M_PI / 2.0, 0.03);
+    }
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const DolTrack& track = tracker.tracks()[0];
+  EXPECT_EQ(track.id, 1u);
+  const auto v = tracker.velocity(track);
+  EXPECT_LT(std::abs(std::atan2(v(1), v(0))), 5.0 * M_PI / 180.0);
+  EXPECT_NEAR(v(0), 0.8, 0.1);
+}
+
+TEST(MoverTracker, TurnBackReversesTheVelocityOnly) {
+  mem::BudgetArena arena("test", 1 << 16);
+  MoverTracker tracker;
+  DolTrackerConfig cfg;
+  ASSERT_TRUE(tracker.init(cfg, arena));
+  for (int k = 0; k < 6; ++k) {
+    const Blob b = blob_at(1.0, 0.06 * k);
+    tracker.update(std::span(&b, 1), k * kScanPeriodNs);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  const DolTrack before = tracker.tracks()[0];
+  tracker.turn_back(0);
+  tracker.turn_back(7);  // no such track: nothing
+  const DolTrack& after = tracker.tracks()[0];
+  EXPECT_EQ(after.x(0), before.x(0));
+  EXPECT_EQ(after.x(1), before.x(1));
+  EXPECT_EQ(after.x(2), -before.x(2));
+  EXPECT_EQ(after.x(3), -before.x(3));
+  EXPECT_GT(before.x(3), 0.4);
+}
+
 // --- Cost -----------------------------------------------------------------------------------
 
 TEST(MoverGaussian, MatchesTheFormulaAtSamplePoints) {
@@ -587,15 +677,19 @@ TEST(MoverGaussian, PaintMatchesTheCostAndNeverLowersACell) {
 // --- The layer in a costmap -------------------------------------------------------------------
 
 struct Rig {
-  explicit Rig(const DynamicObstacleConfig& config, double noise_sigma_m = 0.01)
-      : map(load_lab()), truth(map, world_config(noise_sigma_m)), statics(map), dol(config, &map) {
+  explicit Rig(const DynamicObstacleConfig& config, double noise_sigma_m = 0.01,
+               const char* map_file = SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml", bool as_in_the_firmware = false)
+      : map(load(map_file)),
+        truth(map, world_config(noise_sigma_m)),
+        statics(map),
+        dol(config, &map, as_in_the_firmware ? &obstacles : nullptr) {
     scan.count = 361;
     scan.angle_min_rad = static_cast<float>(-M_PI / 2.0);
     scan.increment_rad = static_cast<float>(M_PI / 360.0);
     scan.range_max_m = 8.0f;
   }
-  static OccupancyMap load_lab() {
-    auto m = load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+  static OccupancyMap load(const char* file) {
+    auto m = load_map(file);
     EXPECT_TRUE(m.ok());
     return m.ok() ? std::move(*m) : OccupancyMap(10, 10, 0.05, 0.0, 0.0);
   }
@@ -654,6 +748,12 @@ struct Rig {
   ScanMessage scan;
   ProjectedScan view;
 };
+
+const DolTrack* find_track_by_id(std::span<const DolTrack> tracks, std::uint32_t id) {
+  for (const DolTrack& t : tracks)
+    if (t.id == id) return &t;
+  return nullptr;
+}
 
 const DolTrack* find_confirmed(std::span<const DolTrack> tracks) {
   for (const DolTrack& t : tracks)
@@ -814,6 +914,62 @@ TEST(DynamicObstacleLayer, MovingBoxIsTrackedWhileTheRobotDrives) {
   // 8-connectivity) they are two blobs and two confirmed tracks.
   SCOPED_TRACE("robot driving +x at 0.3 m/s");
   track_crossing_box(0.0, 0.3);
+}
+
+// A box goes up its lane in the arena, out of the laser's marking range, turns at the wall
+// and comes back; the robot stands. Returns whether the track that comes back is the one that
+// left, and the largest gap between the box and that track's prediction while it was away.
+struct WallReturn {
+  bool same_id = false;
+  double worst_gap_m = 0.0;
+};
+
+WallReturn box_returning_from_a_wall(bool walls) {
+  DynamicObstacleConfig cfg;
+  cfg.tracker.max_coast_unseen_s = 8.0;
+  // Without the static mask the layer has no wall zone: the prediction goes on.
+  if (!walls) cfg.detector.static_mask_radius_m = 0.0;
+  // With the obstacle layer, as the controller has it: the laser's range bounds its view.
+  Rig rig(cfg, 0.01, SEN3BOT_SOURCE_DIR "/config/maps/arena.yaml", true);
+  world::MoverScript box;
+  box.path = {{3.0, 0.25}, {3.0, 5.75}};
+  box.speed_m_s = 0.8;
+  box.size_m = 0.2;
+  box.shape = world::MoverShape::square;
+  box.phase_m = 1.25;  // at y = 1.5, going up
+  rig.truth.add_mover(box);
+  EXPECT_TRUE(rig.init());
+  const Pose2D robot{2.0, 1.5, 0.0};
+  WallReturn out;
+  std::uint32_t id = 0;
+  for (int k = 0; k <= 20 * 12; ++k) {  // up 4.25 m, back 4.25 m: 10.6 s
+    rig.tick(k, robot, robot);
+    const double t = k * 0.05;
+    const world::Point2D p = rig.truth.mover_position(0);
+    const DolTrack* track = find_confirmed(rig.dol.tracks());
+    if (t < 2.0) {
+      if (track != nullptr && track->mover) id = track->id;
+      continue;
+    }
+    if (id == 0) break;
+    const DolTrack* first = find_track_by_id(rig.dol.tracks(), id);
+    if (first == nullptr) break;  // lost
+    out.worst_gap_m = std::max(out.worst_gap_m, std::hypot(first->x(0) - p.x_m, first->x(1) - p.y_m));
+    if (t > 10.0) {  // back in sight, going down
+      out.same_id = k * kTickNs - first->last_hit_ns <= 2 * kTickNs && first->x(3) < -0.5;
+      break;
+    }
+  }
+  EXPECT_NE(id, 0u) << "the box was never tracked as a mover";
+  return out;
+}
+
+TEST(DynamicObstacleLayer, AMoverOutOfSightTurnsBackAtTheWall) {
+  const WallReturn with_walls = box_returning_from_a_wall(true);
+  EXPECT_TRUE(with_walls.same_id);  // matched again where the box came back
+  EXPECT_LT(with_walls.worst_gap_m, 0.6);
+  const WallReturn through = box_returning_from_a_wall(false);
+  EXPECT_FALSE(through.same_id);
 }
 
 TEST(DynamicObstacleLayer, DisabledLayerDoesNothing) {

@@ -397,6 +397,24 @@ DolTrack MoverTracker::predicted(const DolTrack& track, hal::Nanos stamp_ns) con
   return out;
 }
 
+void MoverTracker::follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept {
+  const Vector2 d = z - track.anchor;
+  const double length = d.norm();
+  if (length > config_.axis_memory_m) track.anchor = z - d * (config_.axis_memory_m / length);
+}
+
+Eigen::Matrix<double, 2, 1> MoverTracker::velocity(const DolTrack& track) const noexcept {
+  const Vector2 v(track.x(2), track.x(3));
+  const Vector2 axis = track.seen - track.anchor;
+  const double travel = axis.norm();
+  if (travel < config_.axis_min_travel_m) return v;
+  const Vector2 u = axis / travel;
+  const double along = v.dot(u);
+  const double across = std::abs(u(0) * v(1) - u(1) * v(0));
+  if (std::atan2(across, std::abs(along)) > config_.axis_max_angle_rad) return v;  // turning: the filter's
+  return along * u;
+}
+
 void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view) noexcept {
   const std::size_t blob_count = std::min(blobs.size(), config_.max_blobs);
   last_update_ns_ = std::max(last_update_ns_, stamp_ns);
@@ -452,6 +470,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       track.last_hit_ns = stamp_ns;
       track.in_view = true;
       track.seen = z;
+      follow_axis(track, z);
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
@@ -464,6 +483,10 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       const double limit = track.in_view ? config_.max_coast_s : config_.max_coast_unseen_s;
       const bool lost = !track.confirmed || seconds_between(track.last_hit_ns, stamp_ns) > limit;
       if (lost) continue;
+      // Coasting: on along the axis, not off it with the last scans' sideways slide.
+      const Vector2 v = velocity(track);
+      track.x(2) = v(0);
+      track.x(3) = v(1);
     }
     if (kept != t) tracks_[kept] = track;
     ++kept;
@@ -484,6 +507,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     track.x << blobs[b].x_m, blobs[b].y_m, 0.0, 0.0;
     track.birth << blobs[b].x_m, blobs[b].y_m;
     track.seen = track.birth;
+    track.anchor = track.birth;
     track.P = Vector4(s2, s2, v2, v2).asDiagonal();
     track.radius_m = std::clamp(blobs[b].radius_m, config_.min_radius_m, config_.max_radius_m);
   }
@@ -512,6 +536,12 @@ void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeome
     const double travel = std::hypot(track.seen(0) - track.birth(0), track.seen(1) - track.birth(1));
     track.mover = travel >= config_.moving_far_travel_m || (travel >= config_.moving_min_travel_m && vacated(track));
   }
+}
+
+void MoverTracker::turn_back(std::size_t index) noexcept {
+  if (index >= count_) return;
+  tracks_[index].x(2) = -tracks_[index].x(2);
+  tracks_[index].x(3) = -tracks_[index].x(3);
 }
 
 bool MoverTracker::moving(const DolTrack& track) const noexcept {
@@ -786,6 +816,28 @@ void DynamicObstacleLayer::on_window_moved(int shift_cols, int shift_rows) noexc
   }
 }
 
+bool DynamicObstacleLayer::near_wall(double x_m, double y_m) const noexcept {
+  int col = 0;
+  int row = 0;
+  if (!static_map_->world_to_cell(x_m, y_m, col, row)) return true;  // off the map: walled in
+  return map_near_[static_map_->geometry().index(col, row)] != 0;
+}
+
+void DynamicObstacleLayer::turn_back_at_walls(hal::Nanos stamp_ns) noexcept {
+  if (map_near_.empty()) return;
+  const auto tracks = tracker_.tracks();
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const DolTrack& track = tracks[i];
+    if (!track.mover || track.last_hit_ns == stamp_ns) continue;  // seen: the filter follows it
+    const double speed = std::hypot(track.x(2), track.x(3));
+    if (speed < config_.tracker.moving_min_speed_m_s) continue;
+    const double ux = track.x(2) / speed * kWallLookahead_m;
+    const double uy = track.x(3) / speed * kWallLookahead_m;
+    if (near_wall(track.x(0) + ux, track.x(1) + uy) && !near_wall(track.x(0) - ux, track.x(1) - uy))
+      tracker_.turn_back(i);
+  }
+}
+
 void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcept {
   if (!active_ || master.size() != image_.size()) return;
   if (inputs.scan != nullptr) {
@@ -844,12 +896,14 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     if (observations_ != nullptr) view.range_m = observations_->config().obstacle_max_range_m;
     tracker_.update(blobs_, scan.stamp_ns(), view);
     tracker_.classify(image_, master.geometry());
+    turn_back_at_walls(scan.stamp_ns());
   }
   for (const DolTrack& track : tracker_.tracks()) {
     if (!tracker_.moving(track) || !track.x.allFinite()) continue;
     const Vector2 p = MoverTracker::predict_position(track, inputs.now_ns);
-    if (std::hypot(track.x(2), track.x(3)) >= config_.cost.min_speed_m_s) {
-      paint_mover(config_.cost, p(0), p(1), track.x(2), track.x(3), master);
+    const Vector2 v = tracker_.velocity(track);
+    if (v.norm() >= config_.cost.min_speed_m_s) {
+      paint_mover(config_.cost, p(0), p(1), v(0), v(1), master);
     }
     paint_core(p(0), p(1), config_.cost.lethal_radius_m, master);
   }
@@ -867,8 +921,9 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
     m.id = track.id;
     m.x_m = at.x(0);
     m.y_m = at.x(1);
-    m.vx_m_s = at.x(2);
-    m.vy_m_s = at.x(3);
+    const Vector2 v = tracker_.velocity(at);
+    m.vx_m_s = v(0);
+    m.vy_m_s = v(1);
     m.radius_m = track.radius_m;
     m.position_var_m2 = (at.P(0, 0) + at.P(1, 1)) / 2.0;
     m.velocity_var_m2_s2 = (at.P(2, 2) + at.P(3, 3)) / 2.0;

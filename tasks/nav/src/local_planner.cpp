@@ -385,6 +385,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   double escape_ttc = -1.0;
   double escape_score = -std::numeric_limits<double>::infinity();
   double escape_v = 0.0;
+  double escape_preference = -std::numeric_limits<double>::infinity();
   double escape_w = 0.0;
   bool movers_cost_progress = false;  // a moving rollout was refused or penalised for a mover
   for (int i = 0; i < config_.v_samples; ++i) {
@@ -415,15 +416,19 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
           ++out.mover_rejected;
           movers_cost_progress = movers_cost_progress || moving;
           // Met whatever it does: the way (on, speeding up or braking) whose contact comes
-          // latest; among equals the slowest, so that if it comes the robot is (nearly)
-          // standing. Speeding up is how a robot standing in a mover's way gets out of it.
+          // latest. Speeding up is how a robot standing in a mover's way gets out of it;
+          // then, among equals, the fastest, so that the robot does go through. Otherwise the
+          // slowest, so that if the contact comes the robot is (nearly) standing.
           const double ttc_faster = v > 0.0 ? time_to_contact(pose, v, w, movers, MoverMotion::speed_up) : ttc;
           const double latest = std::max({ttc, ttc_braking, ttc_faster});
+          const double preference = ttc_faster >= std::max(ttc, ttc_braking) && ttc_faster > ttc ? v : -v;
           const bool later = latest > escape_ttc;
           const bool as_late = latest == escape_ttc;
-          if (later || (as_late && v < escape_v) || (as_late && v == escape_v && score > escape_score)) {
+          if (later || (as_late && preference > escape_preference) ||
+              (as_late && preference == escape_preference && score > escape_score)) {
             escape_ttc = latest;
             escape_score = score;
+            escape_preference = preference;
             escape_v = v;
             escape_w = w;
           }

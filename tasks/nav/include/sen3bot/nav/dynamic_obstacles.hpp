@@ -161,6 +161,15 @@ struct DolTrackerConfig {
   double moving_far_travel_m = 0.45;
   double vacated_radius_m = 0.1;
   double publish_max_coast_s = 0.6;
+  // The axis a track travels along: from an anchor that follows its measured centroids at
+  // most axis_memory_m behind, to the last one. Once that is axis_min_travel_m long, a
+  // velocity within axis_max_angle_rad of the axis is turned onto it: in what is published
+  // and painted, and in the state while the track coasts. Why: a box seen at the edge of the
+  // laser's field of view, or half hidden, shows less and less of itself; its centroid slides
+  // sideways, and a coasting track would drift with it out of its lane.
+  double axis_memory_m = 2.0;
+  double axis_min_travel_m = 0.5;
+  double axis_max_angle_rad = 0.5;
 };
 
 struct DolTrack {
@@ -174,6 +183,7 @@ struct DolTrack {
   double radius_m = 0.1;
   Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
   Eigen::Matrix<double, 2, 1> seen = Eigen::Matrix<double, 2, 1>::Zero();   // last blob centroid
+  Eigen::Matrix<double, 2, 1> anchor = Eigen::Matrix<double, 2, 1>::Zero();  // see axis_memory_m
   bool mover = false;  // has shown that it moves (MoverTracker::classify)
   bool in_view = true;  // where the laser should see it, at the last update
 };
@@ -209,8 +219,14 @@ class MoverTracker {
   // The whole state and covariance predicted to stamp_ns (the filter's prediction step).
   [[nodiscard]] DolTrack predicted(const DolTrack& track, hal::Nanos stamp_ns) const noexcept;
   void clear() noexcept { count_ = 0; }
+  // The track's velocity, held to its travel axis (DolTrackerConfig::axis_memory_m).
+  [[nodiscard]] Eigen::Matrix<double, 2, 1> velocity(const DolTrack& track) const noexcept;
+  // The track's velocity reversed: a coasting mover predicted into a wall has turned there.
+  void turn_back(std::size_t index) noexcept;
 
  private:
+  void follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept;
+
   DolTrackerConfig config_;
   Hungarian hungarian_;
   std::span<DolTrack> tracks_;
@@ -294,6 +310,13 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
 
  private:
+  // How far ahead of a coasting mover its way is checked for a wall.
+  static constexpr double kWallLookahead_m = 0.2;
+  [[nodiscard]] bool near_wall(double x_m, double y_m) const noexcept;
+  // A mover out of sight whose prediction runs into the static map turns back there, as
+  // something going back and forth along an aisle does; it does not go through the wall.
+  void turn_back_at_walls(hal::Nanos stamp_ns) noexcept;
+
   DynamicObstacleConfig config_;
   const OccupancyMap* static_map_;
   const ObstacleLayer* observations_;

@@ -38,8 +38,8 @@
 // so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
 // crosses ahead of it when there is time. When every admissible rollout is refused it takes
 // the one whose contact comes latest (driving on, braking, or speeding up to max_v_m_s at
-// acc_v_m_s2 as later windows allow: how a robot standing in a mover's way gets out of it),
-// the slowest among equals, and
+// acc_v_m_s2 as later windows allow: how a robot standing in a mover's way gets out of it);
+// among equals the fastest when speeding up is what puts the contact off, else the slowest; and
 // when movers make it stop it reports `yielding`, not a recovery, for up to max_yield_s.
 #include <cstdint>
 #include <memory_resource>
