@@ -162,14 +162,15 @@ struct CrossingRun {
   bool contact = false;
   int yielding_steps = 0;
   std::uint32_t recoveries = 0;
+  double max_turn_rad = 0.0;  // the largest heading away from the corridor's direction
 };
 
-CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s) {
+CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s, double start_x_m = 1.0) {
   const OccupancyMap map = corridor(false);
   const MapCostmap cm(map);
-  dwa.set_path(straight(1.0, 7.0, 2.0));
+  dwa.set_path(straight(start_x_m, 7.0, 2.0));
   CrossingRun run;
-  Pose2D pose{1.0, 2.0, 0.0};
+  Pose2D pose{start_x_m, 2.0, 0.0};
   double v = 0.0;
   double w = 0.0;
   const double dt = dwa.config().control_period_s;
@@ -190,6 +191,7 @@ CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s
     pose.x_m += v * dt * std::cos(pose.theta_rad + w * dt / 2.0);
     pose.y_m += v * dt * std::sin(pose.theta_rad + w * dt / 2.0);
     pose.theta_rad = normalize_angle(pose.theta_rad + w * dt);
+    run.max_turn_rad = std::max(run.max_turn_rad, std::abs(pose.theta_rad));
     // The box as a disc against the body rectangle.
     const msg::MovingObstacle now = box.at(t + dt);
     const double c = std::cos(pose.theta_rad);
@@ -249,6 +251,20 @@ TEST(DwaMovers, LetsACrossingBoxPassInsteadOfDrivingIntoIt) {
   EXPECT_FALSE(run.contact);
   EXPECT_TRUE(run.reached);
   EXPECT_EQ(run.recoveries, 0u);
+  // It waits facing its way: no loop in front of the lane, no turning away from the box.
+  EXPECT_LT(run.max_turn_rad, 0.5);
+}
+
+TEST(DwaMovers, StandingInALaneItSpeedsUpOutOfIt) {
+  // The robot starts at rest in the middle of a lane; its box comes down from 2.4 m away at
+  // 0.8 m/s. Braking or creeping, it is hit; speeding up all the way, it clears the lane.
+  const Crossing box{1.0, 3.7, -0.8};
+  mem::BudgetArena arena("dwa", 1 << 18);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  const CrossingRun run = drive_across(dwa, box, 30.0, 1.0);
+  EXPECT_FALSE(run.contact);
+  EXPECT_TRUE(run.reached);
 }
 
 TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {

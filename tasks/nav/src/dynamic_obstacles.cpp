@@ -471,6 +471,9 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       track.in_view = true;
       track.seen = z;
       follow_axis(track, z);
+      const Vector2 v = velocity(track);  // held to the axis, seen or not
+      track.x(2) = v(0);
+      track.x(3) = v(1);
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "sen3bot/nav/arena.hpp"
 
@@ -98,6 +99,7 @@ void DwaPlanner::set_path(std::span<const PathPoint> path) noexcept {
   recovery_ticks_ = 0;
   recovery_cycles_ = 0;
   yield_ticks_ = 0;
+  held_by_movers_ = false;
 }
 
 void DwaPlanner::clear_path() noexcept { path_count_ = 0; }
@@ -208,6 +210,10 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
     }
   }
   return std::numeric_limits<double>::infinity();
+}
+
+bool DwaPlanner::meets_mover(const Pose2D& pose, double v, double w) const noexcept {
+  return !movers_.empty() && std::isfinite(time_to_contact(pose, v, w, movers_));
 }
 
 bool DwaPlanner::braking_is_clear(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept {
@@ -380,6 +386,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   if (!window_blocked_) wavefront(costmap, path_distance_, true);
 
   if (!config_.mover_prediction) movers = {};
+  movers_ = movers;
   double best_score = -std::numeric_limits<double>::infinity();
   // The rollout whose predicted contact with a mover is latest, for when every one is refused.
   double escape_ttc = -1.0;
@@ -455,6 +462,12 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
     out.v_m_s = escape_v;
     out.w_rad_s = escape_w;
   }
+  // Turning on the spot among movers swings the body's corners out: not into a mover's way
+  // when standing still keeps out of it.
+  if (out.v_m_s < config_.min_progress_v_m_s && out.w_rad_s != 0.0 && w_lo <= 0.0 && w_hi >= 0.0 &&
+      meets_mover(pose, out.v_m_s, out.w_rad_s) && !meets_mover(pose, 0.0, 0.0)) {
+    out.w_rad_s = 0.0;
+  }
   const bool progress = out.v_m_s >= config_.min_progress_v_m_s ||
                         (out.w_rad_s != 0.0 && target_bearing > config_.align_angle_rad);
   if (out.admissible > 0 && progress && !refused_all) {
@@ -517,6 +530,13 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
         const double bearing = normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad);
         const double w = bearing >= 0.0 ? config_.rotate_w_rad_s : -config_.rotate_w_rad_s;
         const Pose2D ahead{pose.x_m, pose.y_m, pose.theta_rad + w * dt * 3.0};
+        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && meets_mover(pose, 0.0, w)) {
+          held_by_movers_ = true;  // the turn would swing into a mover's way: stand instead
+          out.status = DwaStatus::waiting;
+          out.v_m_s = 0.0;
+          out.w_rad_s = 0.0;
+          return out;
+        }
         if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !outline_hits(ahead, costmap, check_)) {
           out.status = DwaStatus::rotating;
           out.v_m_s = 0.0;
@@ -529,13 +549,21 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
       case DwaStatus::backing_off: {
         const double back = config_.backoff_v_m_s * dt * 3.0;
         const Pose2D behind{pose.x_m + back * std::cos(pose.theta_rad), pose.y_m + back * std::sin(pose.theta_rad), pose.theta_rad};
+        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && meets_mover(pose, config_.backoff_v_m_s, 0.0)) {
+          held_by_movers_ = true;
+          out.status = DwaStatus::waiting;
+          out.v_m_s = 0.0;
+          out.w_rad_s = 0.0;
+          return out;
+        }
         if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !outline_hits(behind, costmap, check_)) {
           out.status = DwaStatus::backing_off;
           out.v_m_s = config_.backoff_v_m_s;
           out.w_rad_s = 0.0;
           return out;
         }
-        if (++recovery_cycles_ >= config_.max_recovery_cycles) {
+        // A cycle that movers held back is not a failure of the way: it does not count.
+        if (!std::exchange(held_by_movers_, false) && ++recovery_cycles_ >= config_.max_recovery_cycles) {
           recovery_state_ = DwaStatus::failed;
           out.status = DwaStatus::failed;
           out.v_m_s = 0.0;

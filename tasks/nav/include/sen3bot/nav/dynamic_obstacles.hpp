@@ -163,8 +163,8 @@ struct DolTrackerConfig {
   double publish_max_coast_s = 0.6;
   // The axis a track travels along: from an anchor that follows its measured centroids at
   // most axis_memory_m behind, to the last one. Once that is axis_min_travel_m long, a
-  // velocity within axis_max_angle_rad of the axis is turned onto it: in what is published
-  // and painted, and in the state while the track coasts. Why: a box seen at the edge of the
+  // velocity within axis_max_angle_rad of the axis is turned onto it, in the state after
+  // every correction and every coasting step, and so in what is published and painted. Why: a box seen at the edge of the
   // laser's field of view, or half hidden, shows less and less of itself; its centroid slides
   // sideways, and a coasting track would drift with it out of its lane.
   double axis_memory_m = 2.0;

@@ -165,6 +165,8 @@ class DwaPlanner {
   Rollout roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
   [[nodiscard]] double distance_to_window(double x_m, double y_m) const noexcept;
   [[nodiscard]] bool braking_is_clear(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
+  // Whether (v, w) held meets one of this compute()'s movers (time_to_contact finite).
+  [[nodiscard]] bool meets_mover(const Pose2D& pose, double v, double w) const noexcept;
   void update_window(const Pose2D& pose) noexcept;
   void wavefront(const Costmap2D& costmap, std::span<std::uint16_t> distance, bool from_path) noexcept;
   [[nodiscard]] double grid_distance_m(std::span<const std::uint16_t> distance, const Costmap2D& costmap, double x_m,
@@ -195,6 +197,8 @@ class DwaPlanner {
   int recovery_ticks_ = 0;
   int recovery_cycles_ = 0;
   int yield_ticks_ = 0;
+  std::span<const msg::MovingObstacle> movers_;  // the current compute()'s; read only within it
+  bool held_by_movers_ = false;  // this recovery cycle stood instead of turning or backing off
   // The padded footprint's bounding box in the robot frame (the mover check).
   double body_min_x_ = 0.0, body_max_x_ = 0.0, body_min_y_ = 0.0, body_max_y_ = 0.0;
 };
