@@ -128,9 +128,10 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
 // navigation.dynamic_obstacles: every constant of the layer (dynamic_obstacles.hpp).
 void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
   r.allow_only({"enabled", "alpha_fast", "alpha_slow", "beta", "c1", "c2", "static_mask_radius_m", "min_blob_cells",
-                "max_blob_cells", "max_tracks", "gate_m", "confirm_hits", "max_coast_s", "max_coast_unseen_s", "accel_sigma_m_s2",
-                "measurement_sigma_m", "axis_memory_m", "axis_min_travel_m", "axis_max_angle_deg", "cutoff", "sigma2_front_x_m2", "sigma2_front_y_m2", "sigma2_back_x_m2",
-                "sigma2_back_y_m2", "max_speed_m_s", "front_horizon_s", "lethal_radius_m", "min_speed_m_s"});
+                "max_blob_cells", "max_tracks", "gate_m", "confirm_hits", "max_coast_s", "max_coast_unseen_s",
+                "accel_sigma_m_s2", "measurement_sigma_m", "axis_memory_m", "axis_min_travel_m", "axis_max_angle_deg",
+                "cutoff", "sigma2_front_x_m2", "sigma2_front_y_m2", "sigma2_back_x_m2", "sigma2_back_y_m2",
+                "max_speed_m_s", "front_horizon_s", "lethal_radius_m", "min_speed_m_s"});
   if (r.has("enabled")) d.enabled = r.boolean("enabled");
   nav::DolDetectorConfig& det = d.detector;
   if (r.has("alpha_fast")) det.alpha_fast = r.number("alpha_fast", 0.0, 1.0);
@@ -153,7 +154,8 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
   if (r.has("measurement_sigma_m")) t.measurement_sigma_m = r.number("measurement_sigma_m", 0.001, 10.0);
   if (r.has("axis_memory_m")) t.axis_memory_m = r.number("axis_memory_m", 0.1, 100.0);
   if (r.has("axis_min_travel_m")) t.axis_min_travel_m = r.number("axis_min_travel_m", 0.0, 100.0);
-  if (r.has("axis_max_angle_deg")) t.axis_max_angle_rad = r.number("axis_max_angle_deg", 0.0, 90.0) * std::numbers::pi / 180.0;
+  if (r.has("axis_max_angle_deg"))
+    t.axis_max_angle_rad = r.number("axis_max_angle_deg", 0.0, 90.0) * std::numbers::pi / 180.0;
   nav::DolCostConfig& k = d.cost;
   if (r.has("cutoff")) k.cutoff = r.number("cutoff", 1.0, 252.0);
   if (r.has("sigma2_front_x_m2")) k.sigma2_front_x_m2 = r.number("sigma2_front_x_m2", 1e-4, 100.0);

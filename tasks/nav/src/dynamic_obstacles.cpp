@@ -415,6 +415,12 @@ Eigen::Matrix<double, 2, 1> MoverTracker::velocity(const DolTrack& track) const 
   return along * u;
 }
 
+void MoverTracker::hold_to_axis(DolTrack& track) const noexcept {
+  const Vector2 v = velocity(track);
+  track.x(2) = v(0);
+  track.x(3) = v(1);
+}
+
 void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view) noexcept {
   const std::size_t blob_count = std::min(blobs.size(), config_.max_blobs);
   last_update_ns_ = std::max(last_update_ns_, stamp_ns);
@@ -471,9 +477,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       track.in_view = true;
       track.seen = z;
       follow_axis(track, z);
-      const Vector2 v = velocity(track);  // held to the axis, seen or not
-      track.x(2) = v(0);
-      track.x(3) = v(1);
+      hold_to_axis(track);
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
@@ -486,10 +490,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       const double limit = track.in_view ? config_.max_coast_s : config_.max_coast_unseen_s;
       const bool lost = !track.confirmed || seconds_between(track.last_hit_ns, stamp_ns) > limit;
       if (lost) continue;
-      // Coasting: on along the axis, not off it with the last scans' sideways slide.
-      const Vector2 v = velocity(track);
-      track.x(2) = v(0);
-      track.x(3) = v(1);
+      hold_to_axis(track);  // coasting on along the axis, not off it with a sideways slide
     }
     if (kept != t) tracks_[kept] = track;
     ++kept;

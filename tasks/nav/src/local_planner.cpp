@@ -512,6 +512,14 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
     if (state == DwaStatus::rotating) ++recoveries_.rotations;
     if (state == DwaStatus::backing_off) ++recoveries_.backoffs;
   };
+  // The turn or the back-off would swing into a mover's way: stand instead, this period.
+  const auto stand_for_movers = [&] {
+    held_by_movers_ = true;
+    out.status = DwaStatus::waiting;
+    out.v_m_s = 0.0;
+    out.w_rad_s = 0.0;
+    return out;
+  };
   if (recovery_state_ == DwaStatus::tracking) enter(DwaStatus::waiting);
   for (int guard = 0; guard < 4; ++guard) {
     ++recovery_ticks_;
@@ -530,13 +538,7 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
         const double bearing = normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad);
         const double w = bearing >= 0.0 ? config_.rotate_w_rad_s : -config_.rotate_w_rad_s;
         const Pose2D ahead{pose.x_m, pose.y_m, pose.theta_rad + w * dt * 3.0};
-        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && meets_mover(pose, 0.0, w)) {
-          held_by_movers_ = true;  // the turn would swing into a mover's way: stand instead
-          out.status = DwaStatus::waiting;
-          out.v_m_s = 0.0;
-          out.w_rad_s = 0.0;
-          return out;
-        }
+        if (recovery_ticks_ <= ticks_for(config_.rotate_s) && meets_mover(pose, 0.0, w)) return stand_for_movers();
         if (recovery_ticks_ <= ticks_for(config_.rotate_s) && !outline_hits(ahead, costmap, check_)) {
           out.status = DwaStatus::rotating;
           out.v_m_s = 0.0;
@@ -549,13 +551,8 @@ DwaCommand DwaPlanner::recover(const Pose2D& pose, const Costmap2D& costmap, Dwa
       case DwaStatus::backing_off: {
         const double back = config_.backoff_v_m_s * dt * 3.0;
         const Pose2D behind{pose.x_m + back * std::cos(pose.theta_rad), pose.y_m + back * std::sin(pose.theta_rad), pose.theta_rad};
-        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && meets_mover(pose, config_.backoff_v_m_s, 0.0)) {
-          held_by_movers_ = true;
-          out.status = DwaStatus::waiting;
-          out.v_m_s = 0.0;
-          out.w_rad_s = 0.0;
-          return out;
-        }
+        if (recovery_ticks_ <= ticks_for(config_.backoff_s) && meets_mover(pose, config_.backoff_v_m_s, 0.0))
+          return stand_for_movers();
         if (recovery_ticks_ <= ticks_for(config_.backoff_s) && !outline_hits(behind, costmap, check_)) {
           out.status = DwaStatus::backing_off;
           out.v_m_s = config_.backoff_v_m_s;

@@ -164,9 +164,10 @@ struct DolTrackerConfig {
   // The axis a track travels along: from an anchor that follows its measured centroids at
   // most axis_memory_m behind, to the last one. Once that is axis_min_travel_m long, a
   // velocity within axis_max_angle_rad of the axis is turned onto it, in the state after
-  // every correction and every coasting step, and so in what is published and painted. Why: a box seen at the edge of the
-  // laser's field of view, or half hidden, shows less and less of itself; its centroid slides
-  // sideways, and a coasting track would drift with it out of its lane.
+  // every correction and every coasting step, and so in what is published and painted.
+  // Why: a box seen at the edge of the laser's field of view, or half hidden, shows less and
+  // less of itself; its centroid slides sideways, and a coasting track would drift with it
+  // out of its lane.
   double axis_memory_m = 2.0;
   double axis_min_travel_m = 0.5;
   double axis_max_angle_rad = 0.5;
@@ -226,6 +227,7 @@ class MoverTracker {
 
  private:
   void follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept;
+  void hold_to_axis(DolTrack& track) const noexcept;  // the state's velocity := velocity(track)
 
   DolTrackerConfig config_;
   Hungarian hungarian_;
@@ -283,8 +285,7 @@ struct DynamicObstacleConfig {
 // C(t) on each new scan, detects and tracks (at the scan's stamp), then paints every mover
 // (MoverTracker::moving) predicted to inputs.now_ns: the Gaussian when at least
 // cost.min_speed_m_s fast, and a lethal core. Without a new scan it only repaints the
-// predictions. Disabled
-// (config.enabled false), it takes no memory and does nothing.
+// predictions. Disabled (config.enabled false), it takes no memory and does nothing.
 class DynamicObstacleLayer final : public CostmapLayer {
  public:
   // static_map: for the static mask (may be null: no mask). observations: the obstacle layer
