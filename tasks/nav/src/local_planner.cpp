@@ -14,6 +14,9 @@ constexpr double kPerimeterStepM = 0.025;  // half a 0.05 m cell: no cell is ski
 constexpr std::size_t kMaxPerimeterPoints = 512;
 constexpr std::uint16_t kUnreached = 0xFFFF;
 constexpr double kUnreachedPenaltyM = 10.0;  // a rollout ending where the target cannot be reached
+// How far around a tracked mover's centre its own laser marks may lie (the track lags the box
+// and its radius comes from what the laser saw of it): two cells.
+constexpr double kMoverCellSlackM = 0.1;
 
 // Exact arc for constant (v, w) over dt.
 void advance_arc(Pose2D& p, double v, double w, double dt) noexcept {
@@ -85,6 +88,7 @@ Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& reso
       body_max_y_ = std::max(body_max_y_, p.y_m);
     }
     check_ = padded_;
+    inscribed_m_ = config.footprint.inscribed_radius_m();
     return Status::success();
   });
 }
@@ -108,15 +112,30 @@ bool DwaPlanner::footprint_collides(const Pose2D& pose, const Costmap2D& costmap
   return outline_hits(pose, costmap, padded_);
 }
 
-bool DwaPlanner::outline_hits(const Pose2D& pose, const Costmap2D& costmap, std::span<const Point2D> outline) const noexcept {
+bool DwaPlanner::outline_hits(const Pose2D& pose, const Costmap2D& costmap, std::span<const Point2D> outline,
+                              bool movers_move_on) const noexcept {
   const double c = std::cos(pose.theta_rad);
   const double s = std::sin(pose.theta_rad);
   for (const Point2D& p : outline) {
     int col = 0;
     int row = 0;
-    if (!costmap.world_to_cell(pose.x_m + c * p.x_m - s * p.y_m, pose.y_m + s * p.x_m + c * p.y_m, col, row)) return true;
+    const double x = pose.x_m + c * p.x_m - s * p.y_m;
+    const double y = pose.y_m + s * p.x_m + c * p.y_m;
+    if (!costmap.world_to_cell(x, y, col, row)) return true;
     const std::uint8_t cost = costmap.at(col, row);
-    if (cost == kLethalCost || cost == kNoInformationCost) return true;
+    if (cost == kNoInformationCost) return true;
+    if (cost == kLethalCost && !(movers_move_on && near_mover(x, y, kMoverCellSlackM))) return true;
+  }
+  return false;
+}
+
+bool DwaPlanner::near_mover(double x_m, double y_m, double reach_m) const noexcept {
+  for (const msg::MovingObstacle& m : movers_) {
+    if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
+    const double r = m.radius_m + reach_m;
+    const double dx = x_m - m.x_m;
+    const double dy = y_m - m.y_m;
+    if (dx * dx + dy * dy <= r * r) return true;
   }
   return false;
 }
@@ -132,9 +151,14 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
     int row = 0;
     if (!costmap.world_to_cell(p.x_m, p.y_m, col, row)) return r;
     const std::uint8_t cost = costmap.at(col, row);
-    if (cost >= kInscribedCost) return r;  // the centre inside the inscribed radius: certain collision
-    if (cost >= config_.footprint_check_min_cost && outline_hits(p, costmap, check_)) return r;
-    r.max_cost = std::max(r.max_cost, cost);
+    // Where a tracked mover stands now, the costmap holds its present, not where it will be:
+    // the time-aware check decides about it, so that the robot may pass behind it.
+    if (cost >= kInscribedCost) {  // the centre inside the inscribed radius: certain collision
+      if (!near_mover(p.x_m, p.y_m, inscribed_m_ + kMoverCellSlackM)) return r;
+    } else {
+      if (cost >= config_.footprint_check_min_cost && outline_hits(p, costmap, check_, true)) return r;
+      r.max_cost = std::max(r.max_cost, cost);
+    }
   }
   r.admissible = true;
   r.end = p;
@@ -150,7 +174,7 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
       q.y_m += step * std::sin(q.theta_rad + 0.5 * w_per_m * step);
       q.theta_rad += w_per_m * step;
       travelled += step;
-      if (outline_hits(q, costmap, check_)) {
+      if (outline_hits(q, costmap, check_, true)) {
         r.admissible = false;
         return r;
       }

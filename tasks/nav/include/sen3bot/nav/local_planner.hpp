@@ -180,8 +180,11 @@ class DwaPlanner {
   std::span<std::uint16_t> goal_distance_;  // cells from the target, through free space
   std::span<std::uint16_t> path_distance_;  // cells from the pruned path window
   std::span<std::uint32_t> queue_;
-  [[nodiscard]] bool outline_hits(const Pose2D& pose, const Costmap2D& costmap,
-                                  std::span<const Point2D> outline) const noexcept;
+  // movers_move_on: lethal cells where a tracked mover stands now do not count (rollouts,
+  // which the time-aware check covers); otherwise they do (braking, recoveries, escaping).
+  [[nodiscard]] bool outline_hits(const Pose2D& pose, const Costmap2D& costmap, std::span<const Point2D> outline,
+                                  bool movers_move_on = false) const noexcept;
+  [[nodiscard]] bool near_mover(double x_m, double y_m, double reach_m) const noexcept;
 
   std::span<Point2D> padded_;        // footprint outline + padding, every half cell (robot frame)
   std::span<Point2D> bare_;          // the footprint outline itself
@@ -201,6 +204,7 @@ class DwaPlanner {
   bool held_by_movers_ = false;  // this recovery cycle stood instead of turning or backing off
   // The padded footprint's bounding box in the robot frame (the mover check).
   double body_min_x_ = 0.0, body_max_x_ = 0.0, body_min_y_ = 0.0, body_max_y_ = 0.0;
+  double inscribed_m_ = 0.0;
 };
 
 }  // namespace sen3bot::nav
