@@ -89,6 +89,7 @@ Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& reso
     }
     check_ = padded_;
     inscribed_m_ = config.footprint.inscribed_radius_m();
+    padding_m_ = config.footprint_padding_m;
     return Status::success();
   });
 }
@@ -184,7 +185,7 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
 }
 
 double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
-                                   MoverMotion motion) const noexcept {
+                                   MoverMotion motion, MoverReach reach_of) const noexcept {
   const bool brake = motion == MoverMotion::brake;
   const double dt = config_.sim_step_s;
   // Where braking ends, or standing, the robot stays: a mover that goes back and forth may
@@ -194,8 +195,10 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   const int steps = static_cast<int>(std::lround(horizon_s / dt));
   const double cx = 0.5 * (body_min_x_ + body_max_x_);
   const double cy = 0.5 * (body_min_y_ + body_max_y_);
-  const double hx = 0.5 * (body_max_x_ - body_min_x_);
-  const double hy = 0.5 * (body_max_y_ - body_min_y_);
+  const bool touching = reach_of == MoverReach::touching;
+  const double hx = 0.5 * (body_max_x_ - body_min_x_) - (touching ? padding_m_ : 0.0);
+  const double hy = 0.5 * (body_max_y_ - body_min_y_) - (touching ? padding_m_ : 0.0);
+  const double margin = touching ? 0.0 : config_.mover_margin_m;
   Pose2D p = pose;
   double speed = v;
   double turn = w;
@@ -219,7 +222,7 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
     const int ways = stays && config_.mover_may_return ? 2 : 1;
     for (const msg::MovingObstacle& m : movers) {
       if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
-      const double reach = m.radius_m + config_.mover_margin_m;
+      const double reach = m.radius_m + margin;
       for (int way = 0; way < ways; ++way) {
         const double sign = way == 0 ? 1.0 : -1.0;
         const double dx = m.x_m + sign * m.vx_m_s * t - p.x_m;
@@ -414,10 +417,15 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   double best_score = -std::numeric_limits<double>::infinity();
   // The rollout whose predicted contact with a mover is latest, for when every one is refused.
   double escape_ttc = -1.0;
+  double escape_hit = -1.0;  // the same, touching: without padding and margin
   double escape_score = -std::numeric_limits<double>::infinity();
   double escape_v = 0.0;
   double escape_preference = -std::numeric_limits<double>::infinity();
   double escape_w = 0.0;
+  int best_free_class = 0;  // > 0: some refused rollout has a way of going on that touches nothing
+  double free_key = -std::numeric_limits<double>::infinity();
+  double free_v = 0.0;
+  double free_w = 0.0;
   bool movers_cost_progress = false;  // a moving rollout was refused or penalised for a mover
   for (int i = 0; i < config_.v_samples; ++i) {
     const double v = config_.v_samples == 1 ? v_hi : v_lo + (v_hi - v_lo) * i / (config_.v_samples - 1);
@@ -453,10 +461,31 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
           const double ttc_faster = v > 0.0 ? time_to_contact(pose, v, w, movers, MoverMotion::speed_up) : ttc;
           const double latest = std::max({ttc, ttc_braking, ttc_faster});
           const double preference = ttc_faster >= std::max(ttc, ttc_braking) && ttc_faster > ttc ? v : -v;
-          const bool later = latest > escape_ttc;
-          const bool as_late = latest == escape_ttc;
+          // First what would really touch (a graze of the margin is not a hit), then the margin.
+          const auto touch = [&](MoverMotion motion) {
+            return time_to_contact(pose, v, w, movers, motion, MoverReach::touching);
+          };
+          const double hit_hold = touch(MoverMotion::hold);
+          const double hit_brake = std::isfinite(hit_hold) && v != 0.0 ? touch(MoverMotion::brake) : hit_hold;
+          const double hit_faster = v > 0.0 ? touch(MoverMotion::speed_up) : hit_hold;
+          const double hit = std::max({hit_hold, hit_brake, hit_faster});
+          // Some way of going on touches nothing: if holding or braking is that way, the usual
+          // score with the margin's penalty picks; if only speeding up is, the fastest does.
+          const int free_class = std::isinf(hit_hold) || std::isinf(hit_brake) ? 2 : std::isinf(hit_faster) ? 1 : 0;
+          if (free_class > 0) {
+            const double key = free_class == 2 ? score - config_.mover_weight * (1.0 - latest / config_.mover_horizon_s) : v;
+            if (free_class > best_free_class || (free_class == best_free_class && key > free_key)) {
+              best_free_class = free_class;
+              free_key = key;
+              free_v = v;
+              free_w = w;
+            }
+          }
+          const bool later = hit > escape_hit || (hit == escape_hit && latest > escape_ttc);
+          const bool as_late = hit == escape_hit && latest == escape_ttc;
           if (later || (as_late && preference > escape_preference) ||
               (as_late && preference == escape_preference && score > escape_score)) {
+            escape_hit = hit;
             escape_ttc = latest;
             escape_score = score;
             escape_preference = preference;
@@ -483,8 +512,8 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
       std::abs(normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad));
   const bool refused_all = out.admissible > 0 && out.admissible == out.mover_rejected;
   if (refused_all) {  // every way meets a mover soon: the one that meets it latest
-    out.v_m_s = escape_v;
-    out.w_rad_s = escape_w;
+    out.v_m_s = best_free_class > 0 ? free_v : escape_v;
+    out.w_rad_s = best_free_class > 0 ? free_w : escape_w;
   }
   // Turning on the spot among movers swings the body's corners out: not into a mover's way
   // when standing still keeps out of it.

@@ -43,6 +43,45 @@ double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
   return closing;
 }
 
+SafetyFilter::Crossers SafetyFilter::crossing_movers(const SafetyInputs& in, double half_width_m,
+                                                     double scan_age_s) const noexcept {
+  Crossers out;
+  if (in.movers == nullptr) return out;
+  const double c = std::cos(in.pose.theta_rad);
+  const double s = std::sin(in.pose.theta_rad);
+  const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
+  for (std::size_t i = 0; i < in.movers->count && out.count < out.items.size(); ++i) {
+    const msg::MovingObstacle& m = in.movers->items[i];
+    const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
+    const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
+    Crosser k;
+    const double y_now = -s * dx + c * dy;
+    k.vx_m_s = c * m.vx_m_s + s * m.vy_m_s;
+    k.vy_m_s = -s * m.vx_m_s + c * m.vy_m_s;
+    // Its points are where it was when the scan was taken.
+    k.x_m = c * dx + s * dy - k.vx_m_s * scan_age_s;
+    k.y_m = y_now - k.vy_m_s * scan_age_s;
+    k.radius_m = m.radius_m + config_.mover_point_slack_m;
+    // Only a mover going across and not towards the robot; it is out of the way once its near
+    // side has passed the corridor's far edge.
+    if (std::abs(k.vy_m_s) < config_.min_crossing_speed_m_s || k.vx_m_s < -config_.min_crossing_speed_m_s) continue;
+    const double edge = std::copysign(half_width_m + k.radius_m + config_.crossing_margin_m, k.vy_m_s);
+    k.leaves_s = std::max(0.0, (edge - y_now) / k.vy_m_s);
+    out.items[out.count++] = k;
+  }
+  return out;
+}
+
+bool SafetyFilter::Crossers::gone_before(const Point2D& q, double arrival_s) const noexcept {
+  for (std::size_t i = 0; i < count; ++i) {
+    const Crosser& k = items[i];
+    const double dx = q.x_m - k.x_m;
+    const double dy = q.y_m - k.y_m;
+    if (dx * dx + dy * dy <= k.radius_m * k.radius_m) return k.leaves_s < arrival_s;
+  }
+  return false;
+}
+
 SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   SafetyOutput out;
   out.command = in.requested;
@@ -85,6 +124,7 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
     const double curvature = w / v;
     const double reach = stop + config_.slow_distance_m;
     const double half_width = half_width_m_ + config_.lateral_margin_m;
+    const Crossers crossers = crossing_movers(in, half_width, out.scan_age_s);
     for (double travelled = 0.0; travelled <= reach + 1e-9 && !std::isfinite(out.nearest_ahead_m);
          travelled += kSweepStepM) {
       const double heading = curvature * travelled;
@@ -99,6 +139,9 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
         const double bx = c * dx + s * dy;  // the point in the body frame at this step
         const double by = -s * dx + c * dy;
         if (bx >= 0.0 && bx <= front_m_ && std::abs(by) <= half_width) {
+          // Beyond the fixed stop distance, a point of a mover that will have crossed out of the
+          // way before the robot gets there neither stops nor slows it.
+          if (travelled > config_.stop_distance_m && crossers.gone_before(q, travelled / std::max(speed, 1e-3))) continue;
           out.nearest_ahead_m = travelled;
           break;
         }

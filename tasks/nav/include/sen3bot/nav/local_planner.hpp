@@ -140,9 +140,13 @@ class DwaPlanner {
                      std::span<const msg::MovingObstacle> movers = {}) noexcept;
   // The first time (s) at which the robot driving (v, w) from pose comes within a mover's
   // reach, or infinity within mover_horizon_s, holding (v, w), braking or speeding up.
+  // margin: the padded footprint within mover_margin_m of the mover's radius; touching: the
+  // bare footprint within the radius itself (how bad a contact is, when every way has one).
   enum class MoverMotion : std::uint8_t { hold, brake, speed_up };
+  enum class MoverReach : std::uint8_t { margin, touching };
   [[nodiscard]] double time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
-                                       MoverMotion motion = MoverMotion::hold) const noexcept;
+                                       MoverMotion motion = MoverMotion::hold,
+                                       MoverReach reach = MoverReach::margin) const noexcept;
 
   // True when the padded footprint at pose touches a lethal or unknown cell (or leaves the
   // costmap). When the robot already stands that close, a cycle checks the bare footprint
@@ -204,6 +208,7 @@ class DwaPlanner {
   bool held_by_movers_ = false;  // this recovery cycle stood instead of turning or backing off
   // The padded footprint's bounding box in the robot frame (the mover check).
   double body_min_x_ = 0.0, body_max_x_ = 0.0, body_min_y_ = 0.0, body_max_y_ = 0.0;
+  double padding_m_ = 0.0;
   double inscribed_m_ = 0.0;
 };
 

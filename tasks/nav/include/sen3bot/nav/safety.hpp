@@ -19,8 +19,15 @@
 //    Up to slow_distance_m beyond it the command is scaled down (v and w alike, so the arc
 //    stays the one checked). Turning on the spot is refused when a point is inside the
 //    circumscribed circle plus lateral_margin_m.
+//  * Crossing movers: beyond stop_distance_m (the fixed part), a point that belongs to a
+//    tracked mover going across the corridor (not towards the robot faster than
+//    min_crossing_speed_m_s) counts neither for stopping nor for slowing when the mover will
+//    have left the corridor, by crossing_margin_m, before the robot at its speed reaches the
+//    point. Braking for a box that is gone when the robot gets there would stop the robot
+//    short, in the way of whatever comes next.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
+#include <array>
 #include <cstdint>
 
 #include "sen3bot/hal/clock.hpp"
@@ -47,6 +54,11 @@ struct SafetyConfig {
   double decel_m_s2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
   double max_reverse_m_s = 0.1;
+  // Crossing movers in the slow zone: a laser point within the mover's radius plus
+  // mover_point_slack_m of its predicted centre is the mover's.
+  double mover_point_slack_m = 0.1;
+  double min_crossing_speed_m_s = 0.1;
+  double crossing_margin_m = 0.1;
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;          // SafetyTask projects scans with it
 };
@@ -76,6 +88,19 @@ class SafetyFilter {
 
  private:
   static constexpr double kSweepStepM = 0.02;
+
+  struct Crosser {
+    double x_m = 0.0, y_m = 0.0, vx_m_s = 0.0, vy_m_s = 0.0;  // body frame, now
+    double radius_m = 0.0;
+    double leaves_s = 0.0;  // when it is out of the corridor
+  };
+  struct Crossers {
+    std::array<Crosser, msg::MovingObstacles::kMax> items{};
+    std::size_t count = 0;
+    // Whether q (body frame) is a crossing mover's point and the mover leaves before arrival_s.
+    [[nodiscard]] bool gone_before(const Point2D& q, double arrival_s) const noexcept;
+  };
+  [[nodiscard]] Crossers crossing_movers(const SafetyInputs& in, double half_width_m, double scan_age_s) const noexcept;
 
   SafetyConfig config_;
   double front_m_ = 0.0;
