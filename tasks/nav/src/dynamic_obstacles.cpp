@@ -398,27 +398,63 @@ DolTrack MoverTracker::predicted(const DolTrack& track, hal::Nanos stamp_ns) con
 }
 
 void MoverTracker::follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept {
-  const Vector2 d = z - track.anchor;
-  const double length = d.norm();
-  if (length > config_.axis_memory_m) track.anchor = z - d * (config_.axis_memory_m / length);
+  const double forget = std::exp(-(z - track.seen).norm() / std::max(config_.axis_memory_m, 1e-6));
+  const Vector2 r = z - track.birth;
+  track.axis_weight = forget * track.axis_weight + 1.0;
+  track.axis_sum = forget * track.axis_sum + r;
+  track.axis_squares = forget * track.axis_squares + r * r.transpose();
+}
+
+bool MoverTracker::axis(const DolTrack& track, Axis& out) const noexcept {
+  constexpr double kMinWeight = 3.0;   // a line needs a few centroids
+  constexpr double kMinElongation = 16.0;  // variance ratio: 4 times as long as wide
+  if (track.axis_weight < kMinWeight) return false;
+  const Vector2 mean = track.axis_sum / track.axis_weight;
+  const Eigen::Matrix<double, 2, 2> c = track.axis_squares / track.axis_weight - mean * mean.transpose();
+  const double half_sum = 0.5 * (c(0, 0) + c(1, 1));
+  const double root = std::hypot(0.5 * (c(0, 0) - c(1, 1)), c(0, 1));
+  const double major = half_sum + root;
+  const double minor = std::max(0.0, half_sum - root);
+  // A uniform spread over a segment of length L has variance L^2 / 12.
+  if (!(12.0 * major >= config_.axis_min_travel_m * config_.axis_min_travel_m) || minor * kMinElongation > major) return false;
+  const double angle = 0.5 * std::atan2(2.0 * c(0, 1), c(0, 0) - c(1, 1));
+  out.centre = track.birth + mean;
+  out.direction = Vector2(std::cos(angle), std::sin(angle));
+  return true;
+}
+
+bool MoverTracker::along_axis(const DolTrack& track, Axis& a) const noexcept {
+  if (!axis(track, a)) return false;
+  const Vector2 v(track.x(2), track.x(3));
+  const double along = v.dot(a.direction);
+  const double across = std::abs(a.direction(0) * v(1) - a.direction(1) * v(0));
+  return std::atan2(across, std::abs(along)) <= config_.axis_max_angle_rad;  // else turning: the filter's
 }
 
 Eigen::Matrix<double, 2, 1> MoverTracker::velocity(const DolTrack& track) const noexcept {
   const Vector2 v(track.x(2), track.x(3));
-  const Vector2 axis = track.seen - track.anchor;
-  const double travel = axis.norm();
-  if (travel < config_.axis_min_travel_m) return v;
-  const Vector2 u = axis / travel;
-  const double along = v.dot(u);
-  const double across = std::abs(u(0) * v(1) - u(1) * v(0));
-  if (std::atan2(across, std::abs(along)) > config_.axis_max_angle_rad) return v;  // turning: the filter's
-  return along * u;
+  Axis a;
+  return along_axis(track, a) ? Vector2(a.direction * v.dot(a.direction)) : v;
 }
 
-void MoverTracker::hold_to_axis(DolTrack& track) const noexcept {
-  const Vector2 v = velocity(track);
-  track.x(2) = v(0);
-  track.x(3) = v(1);
+void MoverTracker::hold_to_axis(DolTrack& track, Hold hold) const noexcept {
+  Axis a;
+  if (!along_axis(track, a)) return;
+  const Vector2& u = a.direction;
+  double along = Vector2(track.x(2), track.x(3)).dot(u);
+  if (hold == Hold::measured) {
+    constexpr double kSpeedGain = 0.1;  // a few seconds: the last, half-seen scans do not rule it
+    track.axis_speed_m_s += kSpeedGain * (std::abs(along) - track.axis_speed_m_s);
+  } else if (hold == Hold::unseen) {
+    // Out of sight: on the line, at the speed it kept while seen.
+    const Vector2 p(track.x(0), track.x(1));
+    const Vector2 on_line = a.centre + u * (p - a.centre).dot(u);
+    track.x(0) = on_line(0);
+    track.x(1) = on_line(1);
+    if (std::abs(along) < track.axis_speed_m_s) along = std::copysign(track.axis_speed_m_s, along);
+  }
+  track.x(2) = along * u(0);
+  track.x(3) = along * u(1);
 }
 
 void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view) noexcept {
@@ -475,9 +511,9 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       ++track.hits;
       track.last_hit_ns = stamp_ns;
       track.in_view = true;
-      track.seen = z;
       follow_axis(track, z);
-      hold_to_axis(track);
+      track.seen = z;
+      hold_to_axis(track, Hold::measured);
       if (track.hits >= config_.confirm_hits) track.confirmed = true;
       constexpr double kRadiusGain = 0.3;  // blobs flicker with the scan; the size does not
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
@@ -490,7 +526,8 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       const double limit = track.in_view ? config_.max_coast_s : config_.max_coast_unseen_s;
       const bool lost = !track.confirmed || seconds_between(track.last_hit_ns, stamp_ns) > limit;
       if (lost) continue;
-      hold_to_axis(track);  // coasting on along the axis, not off it with a sideways slide
+      // Coasting on along the axis, not off it with a sideways slide.
+      hold_to_axis(track, track.in_view ? Hold::coasting : Hold::unseen);
     }
     if (kept != t) tracks_[kept] = track;
     ++kept;
@@ -511,7 +548,6 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     track.x << blobs[b].x_m, blobs[b].y_m, 0.0, 0.0;
     track.birth << blobs[b].x_m, blobs[b].y_m;
     track.seen = track.birth;
-    track.anchor = track.birth;
     track.P = Vector4(s2, s2, v2, v2).asDiagonal();
     track.radius_m = std::clamp(blobs[b].radius_m, config_.min_radius_m, config_.max_radius_m);
   }

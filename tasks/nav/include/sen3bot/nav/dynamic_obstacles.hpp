@@ -161,14 +161,17 @@ struct DolTrackerConfig {
   double moving_far_travel_m = 0.45;
   double vacated_radius_m = 0.1;
   double publish_max_coast_s = 0.6;
-  // The axis a track travels along: from an anchor that follows its measured centroids at
-  // most axis_memory_m behind, to the last one. Once that is axis_min_travel_m long, a
-  // velocity within axis_max_angle_rad of the axis is turned onto it, in the state after
-  // every correction and every coasting step, and so in what is published and painted.
+  // The axis a track travels along: the line fitted (least squares, principal direction)
+  // through its measured centroids, each older one weighed down by exp(-d / axis_memory_m)
+  // for the distance d the track has travelled since. Once the fitted segment is
+  // axis_min_travel_m long and at least four times as long as it is wide, a velocity within
+  // axis_max_angle_rad of the axis is turned onto it, in the state after every correction
+  // and every coasting step, and so in what is published and painted; a track coasting
+  // unseen is also held on the line, at the along-axis speed it kept while in view.
   // Why: a box seen at the edge of the laser's field of view, or half hidden, shows less and
-  // less of itself; its centroid slides sideways, and a coasting track would drift with it
-  // out of its lane.
-  double axis_memory_m = 2.0;
+  // less of itself; its centroid slides sideways and lags, and a coasting track would drift
+  // with it out of its lane and fall behind the box.
+  double axis_memory_m = 3.0;
   double axis_min_travel_m = 0.5;
   double axis_max_angle_rad = 0.5;
 };
@@ -184,7 +187,11 @@ struct DolTrack {
   double radius_m = 0.1;
   Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
   Eigen::Matrix<double, 2, 1> seen = Eigen::Matrix<double, 2, 1>::Zero();   // last blob centroid
-  Eigen::Matrix<double, 2, 1> anchor = Eigen::Matrix<double, 2, 1>::Zero();  // see axis_memory_m
+  // The axis fit (axis_memory_m): weighed sums of the centroids relative to birth.
+  double axis_weight = 1.0;
+  Eigen::Matrix<double, 2, 1> axis_sum = Eigen::Matrix<double, 2, 1>::Zero();
+  Eigen::Matrix<double, 2, 2> axis_squares = Eigen::Matrix<double, 2, 2>::Zero();
+  double axis_speed_m_s = 0.0;  // along the axis, averaged while in view
   bool mover = false;  // has shown that it moves (MoverTracker::classify)
   bool in_view = true;  // where the laser should see it, at the last update
 };
@@ -226,8 +233,19 @@ class MoverTracker {
   void turn_back(std::size_t index) noexcept;
 
  private:
+  struct Axis {
+    Eigen::Matrix<double, 2, 1> centre;
+    Eigen::Matrix<double, 2, 1> direction;  // unit
+  };
+  [[nodiscard]] bool axis(const DolTrack& track, Axis& out) const noexcept;  // false: none yet
+  // Adds the centroid z (before track.seen becomes z) to the axis fit.
   void follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept;
-  void hold_to_axis(DolTrack& track) const noexcept;  // the state's velocity := velocity(track)
+  // axis() exists and the filter's velocity lies within axis_max_angle_rad of it.
+  [[nodiscard]] bool along_axis(const DolTrack& track, Axis& out) const noexcept;
+  // The state's velocity := velocity(track); measured: the along-axis speed is averaged;
+  // unseen: the position goes onto the line, and the speed up to that average.
+  enum class Hold : std::uint8_t { measured, coasting, unseen };
+  void hold_to_axis(DolTrack& track, Hold hold) const noexcept;
 
   DolTrackerConfig config_;
   Hungarian hungarian_;
