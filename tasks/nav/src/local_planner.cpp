@@ -89,7 +89,6 @@ Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& reso
     }
     check_ = padded_;
     inscribed_m_ = config.footprint.inscribed_radius_m();
-    padding_m_ = config.footprint_padding_m;
     return Status::success();
   });
 }
@@ -195,10 +194,9 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   const int steps = static_cast<int>(std::lround(horizon_s / dt));
   const double cx = 0.5 * (body_min_x_ + body_max_x_);
   const double cy = 0.5 * (body_min_y_ + body_max_y_);
-  const bool touching = reach_of == MoverReach::touching;
-  const double hx = 0.5 * (body_max_x_ - body_min_x_) - (touching ? padding_m_ : 0.0);
-  const double hy = 0.5 * (body_max_y_ - body_min_y_) - (touching ? padding_m_ : 0.0);
-  const double margin = touching ? 0.0 : config_.mover_margin_m;
+  const double hx = 0.5 * (body_max_x_ - body_min_x_);
+  const double hy = 0.5 * (body_max_y_ - body_min_y_);
+  const double margin = reach_of == MoverReach::touching ? 0.0 : config_.mover_margin_m;
   Pose2D p = pose;
   double speed = v;
   double turn = w;

@@ -36,11 +36,17 @@
 // it only when driving on costs
 //   mover_weight * (1 - t_contact / mover_horizon_s)
 // so the robot slows down for a crossing mover, stops short of its way and lets it pass, or
-// crosses ahead of it when there is time. When every admissible rollout is refused it takes
-// the one whose contact comes latest (driving on, braking, or speeding up to max_v_m_s at
-// acc_v_m_s2 as later windows allow: how a robot standing in a mover's way gets out of it);
-// among equals the fastest when speeding up is what puts the contact off, else the slowest; and
-// when movers make it stop it reports `yielding`, not a recovery, for up to max_yield_s.
+// crosses ahead of it when there is time. The costmap check of a rollout leaves out the cells
+// where a tracked mover stands now (its laser marks and painted core): they hold its present,
+// and the time check above decides about its future, so the robot may pass behind it.
+// When every admissible rollout is refused, each is looked at once more without the margin
+// (would it really touch?), driving on, braking, or speeding up to max_v_m_s at acc_v_m_s2 as
+// later windows allow (how a robot standing in a mover's way gets out of it). Among those where
+// holding or braking touches nothing, the usual score less the margin's penalty picks; else,
+// among those where speeding up touches nothing, the fastest; else the one whose touch comes
+// latest, then whose margin contact comes latest (among equals the fastest when speeding up
+// puts it off, else the slowest). When movers make it stop it reports `yielding`, not a
+// recovery, for up to max_yield_s.
 #include <cstdint>
 #include <memory_resource>
 #include <span>
@@ -140,8 +146,8 @@ class DwaPlanner {
                      std::span<const msg::MovingObstacle> movers = {}) noexcept;
   // The first time (s) at which the robot driving (v, w) from pose comes within a mover's
   // reach, or infinity within mover_horizon_s, holding (v, w), braking or speeding up.
-  // margin: the padded footprint within mover_margin_m of the mover's radius; touching: the
-  // bare footprint within the radius itself (how bad a contact is, when every way has one).
+  // margin: the padded footprint within mover_margin_m of the mover's radius; touching:
+  // within the radius itself (how bad a contact is, when every way has one).
   enum class MoverMotion : std::uint8_t { hold, brake, speed_up };
   enum class MoverReach : std::uint8_t { margin, touching };
   [[nodiscard]] double time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
@@ -208,7 +214,6 @@ class DwaPlanner {
   bool held_by_movers_ = false;  // this recovery cycle stood instead of turning or backing off
   // The padded footprint's bounding box in the robot frame (the mover check).
   double body_min_x_ = 0.0, body_max_x_ = 0.0, body_min_y_ = 0.0, body_max_y_ = 0.0;
-  double padding_m_ = 0.0;
   double inscribed_m_ = 0.0;
 };
 
