@@ -470,8 +470,8 @@ TEST(MoverTracker, TrackSurvivesAnOcclusion) {
 }
 
 // A box going up its lane at x = 2 at 0.8 m/s; for its last 0.5 s in view its centroid slides
-// sideways (the laser sees less of it at the edge of its field), then it is out of view for
-// 1.5 s. Returns how far the coasting track went sideways meanwhile.
+// sideways and lags (the laser sees less and less of it at the edge of its field), then it is
+// out of view for 1.5 s. Returns how far from its lane the coasting track is then.
 double lane_error_after_coasting(const DolTrackerConfig& cfg) {
   mem::BudgetArena arena("test", 1 << 16);
   MoverTracker tracker;
@@ -485,7 +485,7 @@ double lane_error_after_coasting(const DolTrackerConfig& cfg) {
   for (; k <= 30; ++k) {
     const double t = 0.1 * k;
     const double slide = k > 25 ? 0.04 * (k - 25) : 0.0;
-    const Blob b = blob_at(2.0 + slide + noise(rng), 0.5 + 0.8 * t + noise(rng));
+    const Blob b = blob_at(2.0 + slide + noise(rng), 0.5 + 0.8 * t - 0.5 * slide + noise(rng));
     tracker.update(std::span(&b, 1), k * kScanPeriodNs);
   }
   if (tracker.tracks().size() != 1u) return 1e9;
@@ -495,19 +495,22 @@ double lane_error_after_coasting(const DolTrackerConfig& cfg) {
   EXPECT_EQ(tracker.tracks().size(), 1u);
   if (tracker.tracks().empty()) return 1e9;
   const DolTrack& track = tracker.tracks()[0];
-  EXPECT_NEAR(track.x(1), 0.5 + 0.8 * 4.5, 0.25);
-  return std::abs(track.x(0) - x0);
+  if (cfg.axis_min_travel_m < 10.0) {
+    // On its line, at the speed it kept while seen, not the lagging centroids' slower one.
+    EXPECT_NEAR(track.x(1), 0.5 + 0.8 * 4.5, 0.15);
+    EXPECT_NEAR(track.x(3), 0.8, 0.08);
+  }
+  return std::abs(track.x(0) - 2.0);
 }
 
-TEST(MoverTracker, TheAxisKeepsACoastingTrackInItsLane) {
+TEST(MoverTracker, TheAxisKeepsACoastingTrackInItsLaneAtItsSpeed) {
   DolTrackerConfig cfg;
   const double held = lane_error_after_coasting(cfg);
   cfg.axis_min_travel_m = 1e9;  // no axis: the filter's velocity as it is
   const double drifting = lane_error_after_coasting(cfg);
-  // Held: only the axis' own tilt from the slide (0.2 m over its 2 m); free: the slide's speed.
+  // Held: the fitted line's own small tilt from the slide; free: the slide and its speed.
   EXPECT_LT(held, 0.15);
   EXPECT_GT(drifting, 0.3);
-  EXPECT_GT(drifting, 2.5 * held);
 }
 
 TEST(MoverTracker, TheAxisFollowsAWalkerWhoTurns) {

@@ -267,6 +267,51 @@ TEST(DwaMovers, StandingInALaneItSpeedsUpOutOfIt) {
   EXPECT_TRUE(run.reached);
 }
 
+TEST(DwaMovers, AMoversPresentCellsDoNotRefuseARolloutThatPassesBehindIt) {
+  // The laser's marks of a box 0.8 m ahead, on the robot's line; the box is leaving it sideways
+  // at 1 m/s and is long gone when the robot gets there.
+  OccupancyMap map = corridor(false);
+  for (int r = 38; r < 42; ++r)
+    for (int c = 36; c < 40; ++c) map.set(c, r, 100);
+  const MapCostmap cm(map);
+  const msg::MovingObstacle box{1, 1.9, 2.0, 0.0, 1.0, 0.15, 0.0, 0.0};
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init({}, arena));
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  const Pose2D pose{1.0, 2.0, 0.0};
+  // Known only as marks, the box closes every arc in the window: the robot cannot go on.
+  const DwaCommand still = dwa.compute(pose, 0.5, 0.0, cm.costmap());
+  // Known as a mover, its marks are its present: the time check lets the robot drive on.
+  const DwaCommand moving = dwa.compute(pose, 0.5, 0.0, cm.costmap(), std::span(&box, 1));
+  EXPECT_GT(moving.admissible, still.admissible);
+  EXPECT_GE(moving.v_m_s, 0.45);
+  EXPECT_LT(std::abs(moving.w_rad_s), 0.25);
+  EXPECT_LT(still.v_m_s, 0.1);
+}
+
+TEST(DwaMovers, WhenEveryWayGrazesTheMarginItDoesNotBrakeForNothing) {
+  // A box keeping pace beside the robot, inside its margin but clear of its body: every
+  // rollout meets the margin at once, holding or braking, and none touches the box.
+  mem::BudgetArena arena("dwa", 1 << 20);
+  DwaConfig cfg;
+  DwaPlanner dwa;
+  ASSERT_TRUE(dwa.init(cfg, arena));
+  const OccupancyMap map = corridor(false);
+  const MapCostmap cm(map);
+  dwa.set_path(straight(1.0, 7.0, 2.0));
+  const double side = cfg.footprint.vertices[0].y_m + cfg.footprint_padding_m;
+  const msg::MovingObstacle beside{1, 1.0, 2.0 + side + 0.15 + 0.05, 0.5, 0.0, 0.15, 0.0, 0.0};
+  const Pose2D pose{1.0, 2.0, 0.0};
+  const DwaCommand cmd = dwa.compute(pose, 0.5, 0.0, cm.costmap(), std::span(&beside, 1));
+  ASSERT_EQ(cmd.mover_rejected, cmd.admissible) << "the scene must refuse every rollout at the margin";
+  EXPECT_TRUE(std::isinf(dwa.time_to_contact(pose, cmd.v_m_s, cmd.w_rad_s, std::span(&beside, 1),
+                                             DwaPlanner::MoverMotion::hold, DwaPlanner::MoverReach::touching)));
+  EXPECT_GE(cmd.v_m_s, 0.45);
+  // Whatever it does, it does not turn into the box.
+  EXPECT_LE(cmd.w_rad_s, 0.0);
+}
+
 TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {
   mem::BudgetArena arena("dwa", 1 << 20);
   DwaPlanner dwa;

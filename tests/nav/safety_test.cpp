@@ -278,5 +278,46 @@ TEST(Safety, AClosingMoverStopsWhereAStillObstacleOnlySlows) {
   EXPECT_EQ(closing.command.v_m_s, 0.0);
 }
 
+// A return straight ahead `gap` m beyond the front of the body, and a mover there (radius 0.1)
+// going across at vy with its own vx, as the tracker publishes it; the robot asks for 0.6 m/s.
+SafetyOutput crossing(double gap, double vx, double vy) {
+  const SafetyFilter f;
+  Scene s;
+  s.in.pose = {0.0, 0.0, 0.0};
+  s.in.requested = {0.6, 0.0, s.in.now_ns};
+  s.in.measured_v_m_s = 0.6;
+  const double front = 0.455 / 2.0;
+  s.msg.ranges_m[90] = static_cast<float>(front + gap);
+  s.view.assign(s.msg.view(), {});
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  // Where the scan saw it, 0.1 s ago, moved on to now.
+  movers.items[0] = {4, front + gap + 0.05 + 0.1 * vx, 0.1 * vy, vx, vy, 0.1, 0.0, 0.0};
+  s.in.movers = &movers;
+  return f.filter(s.in);
+}
+
+TEST(Safety, AMoverGoneAcrossBeforeTheRobotGetsThereNeitherStopsNorSlows) {
+  // 0.6 m/s with a 0.1 s old scan: a still return 0.5 m ahead is inside the stop distance.
+  const SafetyOutput still = crossing(0.5, 0.0, 0.0);
+  EXPECT_TRUE(still.reasons & kSafetyObstacle);
+  EXPECT_EQ(still.command.v_m_s, 0.0);
+  // Going across at 1.2 m/s it has left the corridor before the robot covers the 0.5 m.
+  const SafetyOutput gone = crossing(0.5, 0.0, 1.2);
+  EXPECT_EQ(gone.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(gone.command.v_m_s, 0.6);
+  // Too slow to be gone in time: it still stops the robot.
+  const SafetyOutput slow = crossing(0.5, 0.0, 0.3);
+  EXPECT_TRUE(slow.reasons & kSafetyObstacle);
+  // Crossing but also coming towards the robot: it counts.
+  const SafetyOutput towards = crossing(0.5, -0.5, 1.2);
+  EXPECT_TRUE(towards.reasons & kSafetyObstacle);
+  // Inside the fixed stop distance every point counts, crossing or not.
+  const SafetyOutput near = crossing(0.2, 0.0, 1.2);
+  EXPECT_TRUE(near.reasons & kSafetyObstacle);
+  EXPECT_EQ(near.command.v_m_s, 0.0);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

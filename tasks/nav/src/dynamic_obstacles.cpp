@@ -443,8 +443,10 @@ void MoverTracker::hold_to_axis(DolTrack& track, Hold hold) const noexcept {
   const Vector2& u = a.direction;
   double along = Vector2(track.x(2), track.x(3)).dot(u);
   if (hold == Hold::measured) {
-    constexpr double kSpeedGain = 0.1;  // a few seconds: the last, half-seen scans do not rule it
-    track.axis_speed_m_s += kSpeedGain * (std::abs(along) - track.axis_speed_m_s);
+    // Averaged over some 20 scans: the last, half-seen ones do not rule it.
+    constexpr double kSpeedGain = 0.05;
+    track.axis_speed_m_s = track.axis_speed_m_s > 0.0 ? track.axis_speed_m_s + kSpeedGain * (std::abs(along) - track.axis_speed_m_s)
+                                                      : std::abs(along);
   } else if (hold == Hold::unseen) {
     // Out of sight: on the line, at the speed it kept while seen.
     const Vector2 p(track.x(0), track.x(1));
