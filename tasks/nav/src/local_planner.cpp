@@ -468,10 +468,10 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
           const double hit_faster = v > 0.0 ? touch(MoverMotion::speed_up) : hit_hold;
           const double hit = std::max({hit_hold, hit_brake, hit_faster});
           // Some way of going on touches nothing: if holding or braking is that way, the usual
-          // score with the margin's penalty picks; if only speeding up is, the fastest does.
+          // score picks; if only speeding up is, the fastest does.
           const int free_class = std::isinf(hit_hold) || std::isinf(hit_brake) ? 2 : std::isinf(hit_faster) ? 1 : 0;
           if (free_class > 0) {
-            const double key = free_class == 2 ? score - config_.mover_weight * (1.0 - latest / config_.mover_horizon_s) : v;
+            const double key = free_class == 2 ? score : v;
             if (free_class > best_free_class || (free_class == best_free_class && key > free_key)) {
               best_free_class = free_class;
               free_key = key;

@@ -42,7 +42,8 @@
 // When every admissible rollout is refused, each is looked at once more without the margin
 // (would it really touch?), driving on, braking, or speeding up to max_v_m_s at acc_v_m_s2 as
 // later windows allow (how a robot standing in a mover's way gets out of it). Among those where
-// holding or braking touches nothing, the usual score less the margin's penalty picks; else,
+// holding or braking touches nothing, the usual score picks (not the margin's penalty, which
+// favours arcs that turn away and leads the robot in loops among lanes); else,
 // among those where speeding up touches nothing, the fastest; else the one whose touch comes
 // latest, then whose margin contact comes latest (among equals the fastest when speeding up
 // puts it off, else the slowest). When movers make it stop it reports `yielding`, not a
