@@ -21,14 +21,15 @@ namespace sen3bot::firmware {
 // same cycle; on "control" localization feeds the controller. A row runs when its task is
 // configured: the devices under `devices`, localization, planners, safety and the mission
 // under `navigation`; the rest always. Budgets are for the Pi 3; the camera's allows one
-// 15 fps stream decoded at up to 1280 x 720.
+// 15 fps stream decoded at up to 1280 x 720; the controller's a worst DWA cycle among movers
+// (docs/navigation.md, benchmarks).
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
     tasks::TaskSpec{"laser",        5'000,     500,       74,       "io"},
     tasks::TaskSpec{"safety",       10'000,    1'000,     73,       "io"},
     tasks::TaskSpec{"base",         10'000,    500,       72,       "io"},
     tasks::TaskSpec{"localization", 50'000,    15'000,    66,       "control"},
-    tasks::TaskSpec{"controller",   100'000,   10'000,    65,       "control"},
+    tasks::TaskSpec{"controller",   100'000,   20'000,    65,       "control"},
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},

@@ -130,8 +130,9 @@ bool DwaPlanner::outline_hits(const Pose2D& pose, const Costmap2D& costmap, std:
 }
 
 bool DwaPlanner::near_mover(double x_m, double y_m, double reach_m) const noexcept {
+  const double min_speed2 = config_.mover_min_speed_m_s * config_.mover_min_speed_m_s;
   for (const msg::MovingObstacle& m : movers_) {
-    if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
+    if (m.vx_m_s * m.vx_m_s + m.vy_m_s * m.vy_m_s < min_speed2) continue;
     const double r = m.radius_m + reach_m;
     const double dx = x_m - m.x_m;
     const double dy = y_m - m.y_m;
@@ -197,7 +198,16 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   const double hx = 0.5 * (body_max_x_ - body_min_x_);
   const double hy = 0.5 * (body_max_y_ - body_min_y_);
   const double margin = reach_of == MoverReach::touching ? 0.0 : config_.mover_margin_m;
-  Pose2D p = pose;
+  const double min_speed2 = config_.mover_min_speed_m_s * config_.mover_min_speed_m_s;
+  // The heading's cosine and sine are carried by rotation, not recomputed: this loop runs for
+  // every rollout and every mover, and libm's sin and cos were most of its time.
+  double px = pose.x_m;
+  double py = pose.y_m;
+  double c = std::cos(pose.theta_rad);
+  double s = std::sin(pose.theta_rad);
+  double step_turn = std::numeric_limits<double>::quiet_NaN();
+  double step_c = 1.0;
+  double step_s = 0.0;
   double speed = v;
   double turn = w;
   for (int k = 1; k <= steps; ++k) {
@@ -214,17 +224,30 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
       turn = w * faster / v;
       speed = faster;
     }
-    advance_arc(p, speed, turn, dt);
-    const double c = std::cos(p.theta_rad);
-    const double s = std::sin(p.theta_rad);
+    if (std::abs(turn) < 1e-6) {
+      px += speed * dt * c;
+      py += speed * dt * s;
+    } else {
+      if (turn != step_turn) {
+        step_turn = turn;
+        step_c = std::cos(turn * dt);
+        step_s = std::sin(turn * dt);
+      }
+      const double c1 = c * step_c - s * step_s;
+      const double s1 = s * step_c + c * step_s;
+      px += speed / turn * (s1 - s);
+      py -= speed / turn * (c1 - c);
+      c = c1;
+      s = s1;
+    }
     const int ways = stays && config_.mover_may_return ? 2 : 1;
     for (const msg::MovingObstacle& m : movers) {
-      if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.mover_min_speed_m_s) continue;
+      if (m.vx_m_s * m.vx_m_s + m.vy_m_s * m.vy_m_s < min_speed2) continue;
       const double reach = m.radius_m + margin;
       for (int way = 0; way < ways; ++way) {
         const double sign = way == 0 ? 1.0 : -1.0;
-        const double dx = m.x_m + sign * m.vx_m_s * t - p.x_m;
-        const double dy = m.y_m + sign * m.vy_m_s * t - p.y_m;
+        const double dx = m.x_m + sign * m.vx_m_s * t - px;
+        const double dy = m.y_m + sign * m.vy_m_s * t - py;
         // The mover's centre in the body frame, then its distance to the padded body's box.
         const double bx = c * dx + s * dy - cx;
         const double by = -s * dx + c * dy - cy;
@@ -415,7 +438,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   double best_score = -std::numeric_limits<double>::infinity();
   // The rollout whose predicted contact with a mover is latest, for when every one is refused.
   double escape_ttc = -1.0;
-  double escape_hit = -1.0;  // the same, touching: without padding and margin
+  double escape_hit = -1.0;  // the same, touching: without the margin
   double escape_score = -std::numeric_limits<double>::infinity();
   double escape_v = 0.0;
   double escape_preference = -std::numeric_limits<double>::infinity();

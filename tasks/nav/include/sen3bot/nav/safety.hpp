@@ -54,8 +54,8 @@ struct SafetyConfig {
   double decel_m_s2 = 0.6;          // the base's braking deceleration
   double lateral_margin_m = 0.05;
   double max_reverse_m_s = 0.1;
-  // Crossing movers in the slow zone: a laser point within the mover's radius plus
-  // mover_point_slack_m of its predicted centre is the mover's.
+  // Crossing movers: a laser point within the mover's radius plus mover_point_slack_m of
+  // where the mover was at the scan's time is the mover's.
   double mover_point_slack_m = 0.1;
   double min_crossing_speed_m_s = 0.1;
   double crossing_margin_m = 0.1;
@@ -90,7 +90,8 @@ class SafetyFilter {
   static constexpr double kSweepStepM = 0.02;
 
   struct Crosser {
-    double x_m = 0.0, y_m = 0.0, vx_m_s = 0.0, vy_m_s = 0.0;  // body frame, now
+    double x_m = 0.0, y_m = 0.0;      // body frame, at the scan's time (where its points are)
+    double vx_m_s = 0.0, vy_m_s = 0.0;  // body frame
     double radius_m = 0.0;
     double leaves_s = 0.0;  // when it is out of the corridor
   };
