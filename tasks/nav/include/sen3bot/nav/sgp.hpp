@@ -1,0 +1,137 @@
+#pragma once
+// Supervisory global planner (SGP): the thesis' vector field (navigation.md §1, eq. 1.4) that
+// makes a site's safe curve V = {x : p(x) = 0} attractive and invariant while a barrier keeps
+// every trajectory out of the obstacles' ellipses,
+//
+//   xi' = b^2 phi + b^2 psi zeta - k p^2 eta,   eta = grad(p^2 / b),
+//   phi = -p grad p (onto V),   psi = J grad p (along V, J the 90 degree rotation),
+//
+// integrated from the robot's position into waypoints for the global planner.
+//
+// Choices (the spec leaves them open):
+// - p is kept close to a signed distance near V: a line's p is the distance along its unit
+//   normal, a circle's (|x - c|^2 - r^2) / 2r, an ellipse's the same with its axes. Then
+//   |grad p| is about 1 near V, and the on-curve tolerance is in metres.
+// - b is the product over the ellipses of e_i / (1 + e_i), e_i(x) = (x - c)'A(x - c) - 1: zero
+//   on each boundary, positive outside, below 1, so that with tens of ellipses it neither
+//   overflows nor vanishes far from all of them (the plain product of e_i would reach 1e60 in a
+//   room).
+// - The path is the field's streamline: the field is normalised and integrated by arc length
+//   (RK4, step_m), so the waypoints are evenly spaced whatever the field's magnitude; scaling a
+//   field by a positive function does not change its streamlines.
+// - Where to stop: the goal's foot on V (Newton's steps on p from the goal along grad p), where
+//   the curve passes closest to the goal; the global planner finishes the approach. A path
+//   ends when, on V (|p| < on_curve_m), it comes within on_curve_m + step_m of that point (or,
+//   when there is none, where on V its distance to the goal stops falling).
+// - zeta's sign: both are integrated; the one whose path ends nearer the goal wins, and of two
+//   ends within two steps of each other, the shorter path.
+// Deterministic: the same obstacles, curve, start and goal give bit-identical waypoints. All
+// buffers are sized at init(); plan() allocates nothing.
+#include <array>
+#include <cstdint>
+#include <memory_resource>
+#include <span>
+
+#include "sen3bot/hal/result.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/map_ellipses.hpp"
+
+namespace sen3bot::nav {
+
+// p(x, y) = sum of c_ij x^i y^j over i + j <= kMaxDegree.
+class SafeCurve {
+ public:
+  static constexpr int kMaxDegree = 4;
+  static constexpr std::size_t kTerms = (kMaxDegree + 1) * (kMaxDegree + 2) / 2;
+
+  // The coefficient of x^i y^j (i + j <= kMaxDegree).
+  [[nodiscard]] double coefficient(int i, int j) const noexcept { return c_[index(i, j)]; }
+  void set_coefficient(int i, int j, double value) noexcept { c_[index(i, j)] = value; }
+  [[nodiscard]] static constexpr bool valid_term(int i, int j) noexcept {
+    return i >= 0 && j >= 0 && i + j <= kMaxDegree;
+  }
+
+  // Named shapes, scaled so that p is about the signed distance near V.
+  [[nodiscard]] static SafeCurve line(Point2D a, Point2D b) noexcept;  // a != b
+  [[nodiscard]] static SafeCurve circle(Point2D centre, double radius_m) noexcept;
+  [[nodiscard]] static SafeCurve ellipse(Point2D centre, double semi_major_m, double semi_minor_m,
+                                         double angle_rad) noexcept;
+
+  [[nodiscard]] double value(double x_m, double y_m) const noexcept;
+  [[nodiscard]] Point2D gradient(double x_m, double y_m) const noexcept;
+
+ private:
+  [[nodiscard]] static constexpr std::size_t index(int i, int j) noexcept {
+    // Terms ordered by total degree, then by the power of y.
+    const int d = i + j;
+    return static_cast<std::size_t>(d * (d + 1) / 2 + j);
+  }
+  std::array<double, kTerms> c_{};
+};
+
+struct SgpConfig {
+  double step_m = 0.02;             // arc length per RK4 step
+  int max_steps = 20000;            // per direction
+  double waypoint_spacing_m = 0.25;
+  double barrier_k = 1.0;           // k of eq. 1.4
+  double zeta = 1.0;                // |zeta|: how strongly the field runs along V
+  double on_curve_m = 0.05;         // |p| below this is on V
+  double min_field = 1e-9;          // a field weaker than this is a standstill (an equilibrium)
+  std::size_t max_waypoints = 4096;
+  std::size_t max_ellipses = 256;
+};
+
+enum class SgpStop : std::uint8_t {
+  nearest_to_goal,  // on V, where it passes closest to the goal
+  step_cap,         // max_steps without that
+  stalled,          // the field vanished (an equilibrium of eq. 1.4)
+  blocked,          // a step would have entered an ellipse (the barrier failed: a bug or a bad curve)
+  start_inside,     // the start is inside an obstacle's ellipse
+  waypoint_cap,     // more waypoints than max_waypoints
+};
+[[nodiscard]] const char* to_string(SgpStop stop) noexcept;
+
+struct SgpResult {
+  SgpStop stop = SgpStop::step_cap;
+  int direction = 1;          // zeta's sign taken
+  int steps = 0;              // of that direction
+  double length_m = 0.0;
+  double min_barrier = 0.0;   // the least b along the path
+  double goal_distance_m = 0.0;  // from the last waypoint
+  bool on_curve = false;      // the path reached V
+};
+
+class SupervisoryPlanner {
+ public:
+  Status init(const SgpConfig& config, std::pmr::memory_resource& resource);
+  // Copies the ellipses (at most max_ellipses) and the curve.
+  Status set_obstacles(std::span<const Ellipse> ellipses) noexcept;
+  void set_curve(const SafeCurve& curve) noexcept { curve_ = curve; }
+
+  // b(x) and its gradient.
+  [[nodiscard]] double barrier(double x_m, double y_m) const noexcept;
+  [[nodiscard]] Point2D barrier_gradient(double x_m, double y_m) const noexcept;
+  // xi' of eq. 1.4 with zeta = sign * config.zeta; zero inside an ellipse.
+  [[nodiscard]] Point2D field(double x_m, double y_m, int sign) const noexcept;
+
+  // Integrates from start in both directions along V and keeps the better path's waypoints
+  // (the start first, then every waypoint_spacing_m, the path's end last). direction +1 or -1
+  // takes that sign of zeta only (+1: counter-clockwise about grad p).
+  SgpResult plan(Point2D start, Point2D goal, int direction = 0) noexcept;
+  [[nodiscard]] std::span<const Point2D> waypoints() const noexcept { return best_.first(best_count_); }
+
+ private:
+  SgpResult integrate(Point2D start, Point2D goal, int sign, std::span<Point2D> out, std::size_t& count) noexcept;
+  [[nodiscard]] bool inside_any(double x_m, double y_m) const noexcept;
+  [[nodiscard]] bool project_onto_curve(Point2D from, Point2D& on) const noexcept;
+
+  SgpConfig config_;
+  SafeCurve curve_;
+  std::span<Ellipse> ellipses_;
+  std::size_t ellipse_count_ = 0;
+  std::span<Point2D> best_;
+  std::span<Point2D> other_;
+  std::size_t best_count_ = 0;
+};
+
+}  // namespace sen3bot::nav
