@@ -17,6 +17,8 @@
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/map_ellipses.hpp"
+#include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "sen3bot/world/world.hpp"
 
@@ -257,6 +259,29 @@ int main(int argc, char** argv) {
                   beside ? "one beside inside the margin (every rollout refused)" : "crossing ahead", s.p50_ms, s.p99_ms,
                   cmd.admissible, cmd.mover_rejected);
     }
+  }
+
+  // SGP on the lab: the map's ellipses (once per map), then the field's path for the thesis
+  // query from (2.5, 2) m through the door along the line x = 2.8 m (a stand-in: the lab has no
+  // site curve yet, and this line crosses a rack's ellipse further up).
+  {
+    MapEllipsesConfig ecfg;
+    mem::BudgetArena earena("ellipses", MapEllipses::storage_bytes(ecfg));
+    MapEllipses ellipses;
+    (void)ellipses.init(ecfg, earena);
+    s = measure(reps, [&](int) { (void)ellipses.fit(*map); });
+    std::printf("SGP map ellipses (lab, %zu ellipses, %zu splits): p50 %.3f ms  p99 %.3f ms\n", ellipses.ellipses().size(),
+                ellipses.splits(), s.p50_ms, s.p99_ms);
+    mem::BudgetArena sarena("sgp", 1 << 20);
+    SupervisoryPlanner sgp;
+    (void)sgp.init({}, sarena);
+    (void)sgp.set_obstacles(ellipses.ellipses());
+    sgp.set_curve(SafeCurve::line({2.8, 0.0}, {2.8, 9.0}));
+    SgpResult sr;
+    s = measure(reps, [&](int) { sr = sgp.plan({2.5, 2.0}, {3.5, 5.5}); });
+    std::printf("SGP plan (lab, (2.5, 2) -> (3.5, 5.5) m along x = 2.8 m through the door, both directions): "
+                "p50 %.3f ms  p99 %.3f ms  (%s, %zu waypoints, %.2f m, %d steps, min b %.3g)\n",
+                s.p50_ms, s.p99_ms, to_string(sr.stop), sgp.waypoints().size(), sr.length_m, sr.steps, sr.min_barrier);
   }
 
   // MCL sensor update: particles x 60 beams.
