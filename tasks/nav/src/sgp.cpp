@@ -23,6 +23,15 @@ const char* to_string(SgpStop stop) noexcept {
 
 // --- The safe curve --------------------------------------------------------------------------------
 
+namespace {
+using Powers = std::array<double, SafeCurve::kMaxDegree + 1>;
+// v^0 .. v^kMaxDegree.
+void powers(double v, Powers& out) noexcept {
+  out[0] = 1.0;
+  for (std::size_t k = 1; k < out.size(); ++k) out[k] = out[k - 1] * v;
+}
+}  // namespace
+
 SafeCurve SafeCurve::line(Point2D a, Point2D b) noexcept {
   SafeCurve p;
   const double dx = b.x_m - a.x_m;
@@ -60,13 +69,10 @@ SafeCurve SafeCurve::ellipse(Point2D centre, double semi_major_m, double semi_mi
 }
 
 double SafeCurve::value(double x_m, double y_m) const noexcept {
-  std::array<double, kMaxDegree + 1> xp{};
-  std::array<double, kMaxDegree + 1> yp{};
-  xp[0] = yp[0] = 1.0;
-  for (int k = 1; k <= kMaxDegree; ++k) {
-    xp[static_cast<std::size_t>(k)] = xp[static_cast<std::size_t>(k - 1)] * x_m;
-    yp[static_cast<std::size_t>(k)] = yp[static_cast<std::size_t>(k - 1)] * y_m;
-  }
+  Powers xp{};
+  Powers yp{};
+  powers(x_m, xp);
+  powers(y_m, yp);
   double sum = 0.0;
   for (int d = 0; d <= kMaxDegree; ++d) {
     for (int j = 0; j <= d; ++j) {
@@ -78,13 +84,10 @@ double SafeCurve::value(double x_m, double y_m) const noexcept {
 }
 
 Point2D SafeCurve::gradient(double x_m, double y_m) const noexcept {
-  std::array<double, kMaxDegree + 1> xp{};
-  std::array<double, kMaxDegree + 1> yp{};
-  xp[0] = yp[0] = 1.0;
-  for (int k = 1; k <= kMaxDegree; ++k) {
-    xp[static_cast<std::size_t>(k)] = xp[static_cast<std::size_t>(k - 1)] * x_m;
-    yp[static_cast<std::size_t>(k)] = yp[static_cast<std::size_t>(k - 1)] * y_m;
-  }
+  Powers xp{};
+  Powers yp{};
+  powers(x_m, xp);
+  powers(y_m, yp);
   Point2D g{0.0, 0.0};
   for (int d = 1; d <= kMaxDegree; ++d) {
     for (int j = 0; j <= d; ++j) {
