@@ -285,6 +285,21 @@ TEST(MapEllipses, TooLargeAMapOrTooManyEllipsesIsAClearError) {
   ASSERT_FALSE(too_many);
   EXPECT_NE(std::string(too_many.error().c_str()).find("more than 2 ellipses"), std::string::npos);
   EXPECT_TRUE(f.ellipses.ellipses().empty());
+  // Exactly as many occupied cells as there is room for fit; one more does not.
+  MapEllipsesConfig tight;
+  tight.max_obstacle_cells = 12;
+  Fitter g(tight);
+  OccupancyMap bars = empty_map(40, 40);
+  for (int c = 5; c < 11; ++c) {
+    bars.set(c, 10, 100);
+    bars.set(c, 30, 100);
+  }
+  ASSERT_TRUE(g.ellipses.fit(bars));
+  EXPECT_EQ(g.ellipses.ellipses().size(), 2u);
+  bars.set(20, 20, 100);
+  const Status full = g.ellipses.fit(bars);
+  ASSERT_FALSE(full);
+  EXPECT_NE(std::string(full.error().c_str()).find("more than 12 occupied cells"), std::string::npos);
 }
 
 TEST(MapEllipses, TheLabsObstaclesLeaveItsSafePathsFree) {

@@ -250,7 +250,10 @@ Status MapEllipses::fit(const OccupancyMap& map) noexcept {
     if (visited_[start] != 0 || !occupied(start)) continue;
     // One 8-connected group, gathered breadth-first into cells_[begin, total).
     const std::size_t begin = total;
-    if (total >= cells_.size()) break;
+    if (total >= cells_.size()) {
+      count_ = 0;
+      return Error::format(Errc::capacity, "map ellipses: more than %zu occupied cells", cells_.size());
+    }
     visited_[start] = 1;
     cells_[total++] = static_cast<std::uint32_t>(start);
     for (std::size_t head = begin; head < total; ++head) {
@@ -276,10 +279,6 @@ Status MapEllipses::fit(const OccupancyMap& map) noexcept {
       count_ = 0;
       return s;
     }
-  }
-  if (total >= cells_.size()) {
-    count_ = 0;
-    return Error::format(Errc::capacity, "map ellipses: more than %zu occupied cells", cells_.size());
   }
   return Status::success();
 }
