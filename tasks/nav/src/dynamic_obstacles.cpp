@@ -411,15 +411,13 @@ bool MoverTracker::axis(const DolTrack& track, Axis& out) const noexcept {
   if (track.axis_weight < kMinWeight) return false;
   const Vector2 mean = track.axis_sum / track.axis_weight;
   const Eigen::Matrix<double, 2, 2> c = track.axis_squares / track.axis_weight - mean * mean.transpose();
-  const double half_sum = 0.5 * (c(0, 0) + c(1, 1));
-  const double root = std::hypot(0.5 * (c(0, 0) - c(1, 1)), c(0, 1));
-  const double major = half_sum + root;
-  const double minor = std::max(0.0, half_sum - root);
+  const SymmetricEigen spread = symmetric_eigen(c(0, 0), c(0, 1), c(1, 1));
+  const double major = spread.larger;
+  const double minor = std::max(0.0, spread.smaller);
   // A uniform spread over a segment of length L has variance L^2 / 12.
   if (!(12.0 * major >= config_.axis_min_travel_m * config_.axis_min_travel_m) || minor * kMinElongation > major) return false;
-  const double angle = 0.5 * std::atan2(2.0 * c(0, 1), c(0, 0) - c(1, 1));
   out.centre = track.birth + mean;
-  out.direction = Vector2(std::cos(angle), std::sin(angle));
+  out.direction = Vector2(std::cos(spread.larger_angle_rad), std::sin(spread.larger_angle_rad));
   return true;
 }
 

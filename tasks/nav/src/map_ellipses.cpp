@@ -187,10 +187,9 @@ bool enclosing_ellipse(std::span<const Point2D> points, std::span<double> work, 
   a11 /= worst;
   a12 /= worst;
   a22 /= worst;
-  const double half_sum = 0.5 * (a11 + a22);
-  const double root = std::hypot(0.5 * (a11 - a22), a12);
-  const double small = half_sum - root;  // along the major axis
-  const double large = half_sum + root;
+  const SymmetricEigen form = symmetric_eigen(a11, a12, a22);
+  const double small = form.smaller;  // along the major axis
+  const double large = form.larger;
   if (!(small > 0.0)) return false;
   out.cx_m = mx + cx;
   out.cy_m = my + cy;
@@ -199,8 +198,8 @@ bool enclosing_ellipse(std::span<const Point2D> points, std::span<double> work, 
   out.a22 = a22;
   out.semi_major_m = 1.0 / std::sqrt(small);
   out.semi_minor_m = 1.0 / std::sqrt(large);
-  // 0.5 atan2(2 a12, a11 - a22) is the direction of the larger eigenvalue: the minor axis.
-  double angle = 0.5 * std::atan2(2.0 * a12, a11 - a22) + 0.5 * std::numbers::pi;
+  // The larger eigenvalue's direction is the minor axis.
+  double angle = form.larger_angle_rad + 0.5 * std::numbers::pi;
   if (angle > 0.5 * std::numbers::pi) angle -= std::numbers::pi;
   out.angle_rad = angle;
   return true;
@@ -409,7 +408,7 @@ void MapEllipses::split(const OccupancyMap& map, std::uint32_t begin, std::uint3
     sxy += dx * dy;
     syy += dy * dy;
   }
-  const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);  // the larger spread
+  const double angle = symmetric_eigen(sxx, sxy, syy).larger_angle_rad;  // the larger spread
   const double ux = std::cos(angle);
   const double uy = std::sin(angle);
   const auto key = [&](std::uint32_t cell) {

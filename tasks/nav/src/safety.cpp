@@ -20,24 +20,32 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
   turn_radius_m_ = fp.circumscribed_radius_m() + config.lateral_margin_m;
 }
 
-double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
-  if (in.movers == nullptr) return 0.0;
+namespace {
+// A published mover predicted to now, position and velocity in the robot's body frame.
+struct BodyMover {
+  double x_m, y_m, vx_m_s, vy_m_s;
+};
+BodyMover in_body(const SafetyInputs& in, const msg::MovingObstacle& m) noexcept {
   const double c = std::cos(in.pose.theta_rad);
   const double s = std::sin(in.pose.theta_rad);
+  const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
+  const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
+  const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy, c * m.vx_m_s + s * m.vy_m_s, -s * m.vx_m_s + c * m.vy_m_s};
+}
+}  // namespace
+
+double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
+  if (in.movers == nullptr) return 0.0;
   double nearest = std::numeric_limits<double>::infinity();
   double closing = 0.0;
   for (std::size_t i = 0; i < in.movers->count; ++i) {
     const msg::MovingObstacle& m = in.movers->items[i];
-    // The mover predicted to now, in the body frame.
-    const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
-    const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
-    const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
-    const double bx = c * dx + s * dy;
-    const double by = -s * dx + c * dy;
-    if (bx <= 0.0 || std::abs(by) > half_width_m_ + config_.lateral_margin_m + m.radius_m) continue;
-    if (bx < nearest) {
-      nearest = bx;
-      closing = std::max(0.0, -(c * m.vx_m_s + s * m.vy_m_s));
+    const BodyMover b = in_body(in, m);
+    if (b.x_m <= 0.0 || std::abs(b.y_m) > half_width_m_ + config_.lateral_margin_m + m.radius_m) continue;
+    if (b.x_m < nearest) {
+      nearest = b.x_m;
+      closing = std::max(0.0, -b.vx_m_s);
     }
   }
   return closing;
@@ -47,26 +55,19 @@ SafetyFilter::Crossers SafetyFilter::crossing_movers(const SafetyInputs& in, dou
                                                      double scan_age_s) const noexcept {
   Crossers out;
   if (in.movers == nullptr) return out;
-  const double c = std::cos(in.pose.theta_rad);
-  const double s = std::sin(in.pose.theta_rad);
-  const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
   for (std::size_t i = 0; i < in.movers->count && out.count < out.items.size(); ++i) {
     const msg::MovingObstacle& m = in.movers->items[i];
-    const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
-    const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
-    Crosser k;
-    const double y_now = -s * dx + c * dy;
-    k.vx_m_s = c * m.vx_m_s + s * m.vy_m_s;
-    k.vy_m_s = -s * m.vx_m_s + c * m.vy_m_s;
-    // Its points are where it was when the scan was taken.
-    k.x_m = c * dx + s * dy - k.vx_m_s * scan_age_s;
-    k.y_m = y_now - k.vy_m_s * scan_age_s;
-    k.radius_m = m.radius_m + config_.mover_point_slack_m;
+    const BodyMover b = in_body(in, m);
     // Only a mover going across and not towards the robot; it is out of the way once its near
     // side has passed the corridor's far edge.
-    if (std::abs(k.vy_m_s) < config_.min_crossing_speed_m_s || k.vx_m_s < -config_.min_crossing_speed_m_s) continue;
-    const double edge = std::copysign(half_width_m + k.radius_m + config_.crossing_margin_m, k.vy_m_s);
-    k.leaves_s = std::max(0.0, (edge - y_now) / k.vy_m_s);
+    if (std::abs(b.vy_m_s) < config_.min_crossing_speed_m_s || b.vx_m_s < -config_.min_crossing_speed_m_s) continue;
+    Crosser k;
+    // Its points are where it was when the scan was taken.
+    k.x_m = b.x_m - b.vx_m_s * scan_age_s;
+    k.y_m = b.y_m - b.vy_m_s * scan_age_s;
+    k.radius_m = m.radius_m + config_.mover_point_slack_m;
+    const double edge = std::copysign(half_width_m + k.radius_m + config_.crossing_margin_m, b.vy_m_s);
+    k.leaves_s = std::max(0.0, (edge - b.y_m) / b.vy_m_s);
     out.items[out.count++] = k;
   }
   return out;

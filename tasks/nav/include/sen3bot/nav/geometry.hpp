@@ -83,4 +83,17 @@ struct Footprint {
   }
 };
 
+// The eigenvalues of the symmetric 2 x 2 matrix [[a, b], [b, c]] and the direction of the
+// larger one's eigenvector (a scatter's principal axis, an ellipse's minor axis).
+struct SymmetricEigen {
+  double larger = 0.0;
+  double smaller = 0.0;
+  double larger_angle_rad = 0.0;
+};
+[[nodiscard]] inline SymmetricEigen symmetric_eigen(double a, double b, double c) noexcept {
+  const double half_sum = 0.5 * (a + c);
+  const double root = std::hypot(0.5 * (a - c), b);
+  return {half_sum + root, half_sum - root, 0.5 * std::atan2(2.0 * b, a - c)};
+}
+
 }  // namespace sen3bot::nav

@@ -90,8 +90,7 @@ class SafetyFilter {
   static constexpr double kSweepStepM = 0.02;
 
   struct Crosser {
-    double x_m = 0.0, y_m = 0.0;      // body frame, at the scan's time (where its points are)
-    double vx_m_s = 0.0, vy_m_s = 0.0;  // body frame
+    double x_m = 0.0, y_m = 0.0;  // body frame, at the scan's time (where its points are)
     double radius_m = 0.0;
     double leaves_s = 0.0;  // when it is out of the corridor
   };
