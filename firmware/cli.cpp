@@ -36,6 +36,14 @@ constexpr const char* kUsage =
     "        One global plan (A* with waypoint attraction) on the map's costmap, as\n"
     "        JSON: length_m, cells, expansions, time_ms, path [[x, y], ...] in metres.\n"
     "        --unit-cost plans on the bare occupancy grid (no inflation, no footprint).\n"
+    "  sgp --map MAP.yaml --curve CURVE.yaml --start X,Y --goal X,Y [--direction 1|-1]\n"
+    "      [--png FILE]\n"
+    "        The supervisory planner's safe path: the map's obstacle ellipses, the safe\n"
+    "        curve checked against them, the field integrated from the start to where\n"
+    "        the curve passes closest to the goal. JSON: stop, waypoints [[x, y], ...],\n"
+    "        length_m, iterations, time_ms, min_barrier, ellipses. --png draws the map,\n"
+    "        ellipses, curve, field and waypoints. Exit status 1 when the path stops\n"
+    "        short of that place (the reason in stop).\n"
     "  capture dump FILE\n"
     "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
     "  decode p2os CAPTURE\n"
@@ -113,6 +121,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   static constexpr Command kCommands[] = {
       {"run", "", run_command},
       {"plan", "", plan_command},
+      {"sgp", "", sgp_command},
       {"capture", "", capture_command},
       {"decode", "p2os", decode_p2os_command},
       {"decode", "lms200", decode_lms200_command},

@@ -38,6 +38,15 @@ bool parse_double(std::string_view text, double& out) {
 bool parse_u32(std::string_view text, std::uint32_t& out) { return parse_unsigned(text, out, 0xFFFFFFFFull); }
 bool parse_u64(std::string_view text, std::uint64_t& out) { return parse_unsigned(text, out, ~0ull); }
 
+bool parse_point_m(std::string_view text, msg::Point2D& out) {
+  const std::size_t comma = text.find(',');
+  double x = 0, y = 0;
+  if (comma == std::string_view::npos || !parse_double(text.substr(0, comma), x) || !parse_double(text.substr(comma + 1), y))
+    return false;
+  out = {x, y};
+  return true;
+}
+
 bool parse_lms200_variant(std::string_view text, lms200::Variant& out) {
   const std::size_t slash = text.find('/');
   if (slash == std::string_view::npos) return false;

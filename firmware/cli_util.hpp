@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "sen3bot/lms200/protocol.hpp"
+#include "sen3bot/msg/geometry.hpp"
 
 namespace sen3bot::firmware {
 
@@ -17,6 +18,8 @@ bool parse_double(std::string_view text, double& out);
 // Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
 bool parse_u32(std::string_view text, std::uint32_t& out);
 bool parse_u64(std::string_view text, std::uint64_t& out);
+// "X,Y" in metres, both finite.
+bool parse_point_m(std::string_view text, msg::Point2D& out);
 // An LMS200 variant as angle/resolution in degrees ("180/0.5" -> {180, 50}); only the five
 // variants the scanner has.
 bool parse_lms200_variant(std::string_view text, lms200::Variant& out);

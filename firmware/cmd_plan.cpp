@@ -25,17 +25,6 @@ namespace {
 constexpr const char* kPlanUsage =
     "usage: sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]\n";
 
-// "X,Y" in metres, both finite.
-bool parse_point(std::string_view text, nav::Point2D& out) {
-  const std::size_t comma = text.find(',');
-  double x = 0, y = 0;
-  if (comma == std::string_view::npos || !parse_double(text.substr(0, comma), x) ||
-      !parse_double(text.substr(comma + 1), y))
-    return false;
-  out = {x, y};
-  return true;
-}
-
 }  // namespace
 
 int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
@@ -53,7 +42,7 @@ int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       waypoints_path = argv[++i];
     } else if ((arg == "--start" || arg == "--goal") && has_value) {
       nav::Point2D& p = arg == "--start" ? start : goal;
-      if (!parse_point(argv[++i], p)) {
+      if (!parse_point_m(argv[++i], p)) {
         std::fprintf(err, "sen3bot plan: %s: expected X,Y in metres, got '%s'\n", argv[i - 1], argv[i]);
         return 2;
       }

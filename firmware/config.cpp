@@ -171,11 +171,30 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s", "dynamic_obstacles",
-                "mover_prediction", "local_costmap"});
+                "mover_prediction", "local_costmap", "safe_curve", "sgp"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("waypoints")) n.waypoints_path = relative_to(r.file(), r.text("waypoints"));
+  if (r.has("safe_curve")) {
+    if (r.has("waypoints"))
+      r.fail("safe_curve", "waypoints and safe_curve are alternatives: a fixed path, or the supervisory planner's",
+             YAML::Node());
+    n.safe_curve_path = relative_to(r.file(), r.text("safe_curve"));
+  }
+  if (r.has("sgp")) {
+    // The supervisory planner's integration (sgp.hpp); used with safe_curve.
+    const Reader p = r.child("sgp");
+    p.allow_only({"step_m", "max_steps", "waypoint_spacing_m", "barrier_k", "zeta", "on_curve_m", "max_waypoints"});
+    if (p.has("step_m")) n.sgp.step_m = p.number("step_m", 0.001, 0.5);
+    if (p.has("max_steps")) n.sgp.max_steps = static_cast<int>(p.integer("max_steps", 10, 1'000'000));
+    if (p.has("waypoint_spacing_m")) n.sgp.waypoint_spacing_m = p.number("waypoint_spacing_m", 0.02, 5.0);
+    if (p.has("barrier_k")) n.sgp.barrier_k = p.number("barrier_k", 0.0, 100.0);
+    if (p.has("zeta")) n.sgp.zeta = p.number("zeta", 0.01, 100.0);
+    if (p.has("on_curve_m")) n.sgp.on_curve_m = p.number("on_curve_m", 0.005, 1.0);
+    if (p.has("max_waypoints")) n.sgp.max_waypoints = static_cast<std::size_t>(p.integer("max_waypoints", 2, 65'536));
+    if (n.sgp.waypoint_spacing_m < n.sgp.step_m) p.fail("waypoint_spacing_m", "is shorter than step_m", YAML::Node());
+  }
   if (r.has("initial_pose")) n.mcl.initial_pose = read_pose(r.child("initial_pose"));
   if (r.has("initial_std_m")) n.mcl.initial_std_xy_m = r.number("initial_std_m", 0.0, 10.0);
   if (r.has("particles")) {

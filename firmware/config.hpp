@@ -16,6 +16,7 @@
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
 #include "sen3bot/nav/safety.hpp"
+#include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "mission.hpp"
 
@@ -50,7 +51,11 @@ struct DevicesConfig {
 struct NavigationSection {
   bool enabled = false;        // a `navigation` section is present
   std::string map_path;        // ROS map_server YAML
-  std::string waypoints_path;  // optional: "x y" per line, map frame (the supervisory path)
+  std::string waypoints_path;  // optional: "x y" per line, map frame (a fixed supervisory path)
+  // Optional, instead of waypoints: the site's safe curve (safe_curve.hpp); the supervisory
+  // planner then computes each goal's waypoints from where the robot is.
+  std::string safe_curve_path;
+  nav::SgpConfig sgp;
   nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m

@@ -81,25 +81,20 @@ class Reader {
 
   [[nodiscard]] std::int64_t integer(const std::string& key, std::int64_t min, std::int64_t max) const {
     const YAML::Node n = scalar(key);
-    std::int64_t v = 0;
-    if (!YAML::convert<std::int64_t>::decode(n, v))
-      fail(key, "expected an integer, got '" + n.Scalar() + "'", n);
-    if (v < min || v > max)
-      fail(key, "value " + std::to_string(v) + " is outside [" + std::to_string(min) + ", " + std::to_string(max) + "]", n);
-    return v;
+    return integer_of(n, min, max, [&](const std::string& problem) { fail(key, problem, n); });
   }
-
   [[nodiscard]] double number(const std::string& key, double min, double max) const {
     const YAML::Node n = scalar(key);
-    double v = 0;
-    if (!YAML::convert<double>::decode(n, v) || !std::isfinite(v))
-      fail(key, "expected a number, got '" + n.Scalar() + "'", n);
-    if (v < min || v > max) {
-      std::ostringstream msg;
-      msg << "value " << v << " is outside [" << min << ", " << max << "]";
-      fail(key, msg.str(), n);
-    }
-    return v;
+    return number_of(n, min, max, [&](const std::string& problem) { fail(key, problem, n); });
+  }
+  // This node itself (an element of a list).
+  [[nodiscard]] std::int64_t integer_here(std::int64_t min, std::int64_t max) const {
+    if (!node_.IsScalar()) fail_here("expected a single value");
+    return integer_of(node_, min, max, [&](const std::string& problem) { fail_here(problem); });
+  }
+  [[nodiscard]] double number_here(double min, double max) const {
+    if (!node_.IsScalar()) fail_here("expected a single value");
+    return number_of(node_, min, max, [&](const std::string& problem) { fail_here(problem); });
   }
 
   [[nodiscard]] bool boolean(const std::string& key) const {
@@ -124,6 +119,14 @@ class Reader {
     std::vector<Reader> items;
     for (std::size_t i = 0; i < n.size(); ++i)
       items.emplace_back(n[i], file_, full(key) + "[" + std::to_string(i) + "]");
+    return items;
+  }
+
+  // This node as a list, each element a Reader named path[i].
+  [[nodiscard]] std::vector<Reader> sequence_here() const {
+    if (!node_.IsSequence()) fail_here("expected a list");
+    std::vector<Reader> items;
+    for (std::size_t i = 0; i < node_.size(); ++i) items.emplace_back(node_[i], file_, path_ + "[" + std::to_string(i) + "]");
     return items;
   }
 
@@ -154,6 +157,26 @@ class Reader {
     if (!n.IsDefined() || n.IsNull()) fail(key, "missing", node_);
     if (!n.IsScalar()) fail(key, "expected a single value", n);
     return n;
+  }
+
+  template <typename Fail>
+  static std::int64_t integer_of(const YAML::Node& n, std::int64_t min, std::int64_t max, Fail&& fail_with) {
+    std::int64_t v = 0;
+    if (!YAML::convert<std::int64_t>::decode(n, v)) fail_with("expected an integer, got '" + n.Scalar() + "'");
+    if (v < min || v > max)
+      fail_with("value " + std::to_string(v) + " is outside [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+    return v;
+  }
+  template <typename Fail>
+  static double number_of(const YAML::Node& n, double min, double max, Fail&& fail_with) {
+    double v = 0;
+    if (!YAML::convert<double>::decode(n, v) || !std::isfinite(v)) fail_with("expected a number, got '" + n.Scalar() + "'");
+    if (v < min || v > max) {
+      std::ostringstream msg;
+      msg << "value " << v << " is outside [" << min << ", " << max << "]";
+      fail_with(msg.str());
+    }
+    return v;
   }
 
   YAML::Node node_;

@@ -1,5 +1,6 @@
 #include "firmware.hpp"
 
+#include "safe_curve.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {
@@ -50,6 +51,14 @@ Status Firmware::create_navigation() {
 
   nav::PlannerTaskConfig planner;
   planner.laser_mount = mount;
+  if (!n.safe_curve_path.empty()) {
+    Result<SiteCurve> curve = load_safe_curve(n.safe_curve_path);
+    if (!curve) return Error::format(curve.error().code(), "%s: navigation.safe_curve: %s", file, curve.error().c_str());
+    planner.use_sgp = true;
+    planner.sgp = n.sgp;
+    planner.curve = curve->curve;
+    planner.curve_bounds = curve->has_bounds ? curve->bounds : nav::map_extent(map_);
+  }
   planner_task_ = std::make_unique<nav::PlannerTask>(planner, map_, waypoints_, nav_goal_, nav_pose_, nav_scan_, nav_path_);
 
   nav::ControllerTaskConfig controller;

@@ -64,7 +64,13 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
   [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
-  [[nodiscard]] std::span<const msg::Point2D> waypoints() const { return waypoints_; }
+  // The waypoints the global planner follows: the file's, or the supervisory planner's path
+  // for the newest goal. The planner task, for its supervisory planner. Null or empty without
+  // a `navigation` section; read while the scheduler is stopped.
+  [[nodiscard]] std::span<const msg::Point2D> safe_path() const {
+    return planner_task_ ? planner_task_->safe_path() : std::span<const msg::Point2D>(waypoints_);
+  }
+  [[nodiscard]] const nav::PlannerTask* planner() const { return planner_task_.get(); }
 
  private:
   tasks::Task* task_named(std::string_view name);

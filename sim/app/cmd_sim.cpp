@@ -51,7 +51,10 @@ struct Scenario {
   const char* description;
   msg::Pose2D start;
   std::vector<msg::Point2D> goals;
-  const char* waypoints;  // relative to the base configuration's folder; "" keeps the base's
+  // The safe path, relative to the base configuration's folder: a curve file for the
+  // supervisory planner, or a waypoint file; both "" keep the base configuration's.
+  const char* safe_curve;
+  const char* waypoints;
   std::vector<Case> cases;
 };
 
@@ -81,15 +84,17 @@ std::vector<Scenario> scenarios() {
        "the thesis' supervised-planning test: (4, 7) m to (2.5, 2) m on the lab map along the safe path",
        thesis_start,
        {{2.5, 2.0}},
-       "maps/lab_waypoints_thesis.txt",
+       "maps/lab_curve.yaml",
+       "",
        {{"no-obstacle", "nothing unexpected on the way", {}},
-        {"obstacle-before-planning", "a 40 cm box on the safe path, there from the start", {box_at(3.3, 5.8, 0.0)}},
+        {"obstacle-before-planning", "a 40 cm box on the safe path, there from the start", {box_at(3.3, 5.37, 0.0)}},
         {"obstacle-during-motion", "a 40 cm box that appears on the safe path while the robot drives",
          {box_at(2.81, 3.25, 8.2)}}}},
       {"person-crossing",
        "the main mission: (2.5, 2) m to (4, 7) m and back while a worker crosses the upper area",
        {2.5, 2.0, std::numbers::pi / 2},
        {{4.0, 7.0}, {2.5, 2.0}},
+       "",
        "",
        {{"worker", "a person walking across the robot's way, back and forth",
          {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
@@ -98,6 +103,7 @@ std::vector<Scenario> scenarios() {
        "not told",
        {2.5, 2.0, std::numbers::pi / 2},
        {{4.0, 7.0}, {2.5, 2.0}},
+       "",
        "",
        {{"carried-downstairs",
          "at t = 19 s, leaving (4, 7) m in the upper storage area, carried to (5, 3.5) m in the lower work area, facing east",
@@ -349,10 +355,14 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     config.navigation.mcl.initial_pose = scenario->start;
     config.navigation.mission.goal_count = scenario->goals.size();
     for (std::size_t g = 0; g < scenario->goals.size(); ++g) config.navigation.mission.goals[g] = scenario->goals[g];
-    if (scenario->waypoints[0] != '\0') {
-      const std::size_t slash = config_path.find_last_of('/');
-      const std::string folder = slash == std::string::npos ? "" : config_path.substr(0, slash + 1);
+    const std::size_t slash = config_path.find_last_of('/');
+    const std::string folder = slash == std::string::npos ? "" : config_path.substr(0, slash + 1);
+    if (scenario->safe_curve[0] != '\0') {
+      config.navigation.safe_curve_path = folder + scenario->safe_curve;
+      config.navigation.waypoints_path.clear();
+    } else if (scenario->waypoints[0] != '\0') {
       config.navigation.waypoints_path = folder + scenario->waypoints;
+      config.navigation.safe_curve_path.clear();
     }
     std::fprintf(out, "\ncase %zu/%zu %s: %s\n", i + 1, scenario->cases.size(), c.name, c.description);
     CaseResult& result = results.emplace_back();

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sen3bot/sim/report/sgp_layer.hpp"
+
 namespace sen3bot::sim {
 
 using firmware::MissionReport;
@@ -53,7 +55,9 @@ report::CaseFigure case_figure(std::string title, std::string description, const
   f.result = result_line(mission.report(), goals.goal_count, referee.report());
   f.passed = mission.report().state == MissionState::complete && referee.report().moving_contacts == 0;
   f.map = &fw.map();
-  f.waypoints.assign(fw.waypoints().begin(), fw.waypoints().end());
+  f.waypoints.assign(fw.safe_path().begin(), fw.safe_path().end());
+  if (const nav::SupervisoryPlanner* sgp = fw.planner() ? fw.planner()->sgp() : nullptr)
+    report::add_sgp_layer(f, *sgp, fw.planner()->sgp_result().direction, 0.0);
   for (std::size_t g = 0; g <= mission.report().goals_reached && g < goals.goal_count; ++g) {
     const msg::PathMessage& plan = mission.first_plan(g);
     if (plan.count < 2) continue;

@@ -261,9 +261,9 @@ int main(int argc, char** argv) {
     }
   }
 
-  // SGP on the lab: the map's ellipses (once per map), then the field's path for the thesis
-  // query from (2.5, 2) m through the door along the line x = 2.8 m (a stand-in: the lab has no
-  // site curve yet, and this line crosses a rack's ellipse further up).
+  // SGP on the lab: the map's ellipses (once per map, with the curve's check), then the field's
+  // path for the thesis query (4, 7) -> (2.5, 2) m on the lab's safe curve (lab_curve.yaml, a
+  // loop through the door), both directions of zeta integrated as the planner task does.
   {
     MapEllipsesConfig ecfg;
     mem::BudgetArena earena("ellipses", MapEllipses::storage_bytes(ecfg));
@@ -272,16 +272,23 @@ int main(int argc, char** argv) {
     s = measure(reps, [&](int) { (void)ellipses.fit(*map); });
     std::printf("SGP map ellipses (lab, %zu ellipses, %zu splits): p50 %.3f ms  p99 %.3f ms\n", ellipses.ellipses().size(),
                 ellipses.splits(), s.p50_ms, s.p99_ms);
+    const SafeCurve loop = SafeCurve::ellipse({4.95, 4.78}, 2.1, 0.8, 0.0);  // config/maps/lab_curve.yaml
+    s = measure(reps, [&](int) { (void)check_curve(loop, map_extent(*map), ellipses.ellipses()); });
+    std::printf("SGP curve check (lab loop against %zu ellipses): p50 %.3f ms  p99 %.3f ms\n", ellipses.ellipses().size(),
+                s.p50_ms, s.p99_ms);
     mem::BudgetArena sarena("sgp", 1 << 20);
     SupervisoryPlanner sgp;
     (void)sgp.init({}, sarena);
-    (void)sgp.set_obstacles(ellipses.ellipses());
-    sgp.set_curve(SafeCurve::line({2.8, 0.0}, {2.8, 9.0}));
+    (void)sgp.set_site(loop, map_extent(*map), ellipses.ellipses());
     SgpResult sr;
-    s = measure(reps, [&](int) { sr = sgp.plan({2.5, 2.0}, {3.5, 5.5}); });
-    std::printf("SGP plan (lab, (2.5, 2) -> (3.5, 5.5) m along x = 2.8 m through the door, both directions): "
+    s = measure(reps, [&](int) { sr = sgp.plan({4.0, 7.0}, {2.5, 2.0}); });
+    std::printf("SGP plan (lab, thesis query (4, 7) -> (2.5, 2) m on the lab loop, both directions): "
                 "p50 %.3f ms  p99 %.3f ms  (%s, %zu waypoints, %.2f m, %d steps, min b %.3g)\n",
                 s.p50_ms, s.p99_ms, to_string(sr.stop), sgp.waypoints().size(), sr.length_m, sr.steps, sr.min_barrier);
+    s = measure(reps, [&](int) { sr = sgp.plan({1.0, 8.9}, {7.0, 1.0}); });
+    std::printf("SGP plan (lab, (1, 8.9) -> (7, 1) m: from the far corner round the racks): "
+                "p50 %.3f ms  p99 %.3f ms  (%s, %zu waypoints, %.2f m, %d steps)\n",
+                s.p50_ms, s.p99_ms, to_string(sr.stop), sgp.waypoints().size(), sr.length_m, sr.steps);
   }
 
   // MCL sensor update: particles x 60 beams.

@@ -211,6 +211,35 @@ TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
   EXPECT_NE(m.find("navigation.local_costmap.raytrace_range_m: reaches beyond the window"), std::string::npos) << m;
 }
 
+TEST(Config, TheSafeCurveAndTheSupervisoryPlanner) {
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  safe_curve: maps/lab_curve.yaml\n"
+          "  sgp: { step_m: 0.01, max_steps: 5000, waypoint_spacing_m: 0.5, barrier_k: 2, zeta: 0.5, on_curve_m: 0.02,\n"
+          "    max_waypoints: 100 }\n",
+      "/robot/robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const NavigationSection& n = r->navigation;
+  EXPECT_EQ(n.safe_curve_path, "/robot/maps/lab_curve.yaml");
+  EXPECT_TRUE(n.waypoints_path.empty());
+  EXPECT_DOUBLE_EQ(n.sgp.step_m, 0.01);
+  EXPECT_EQ(n.sgp.max_steps, 5000);
+  EXPECT_DOUBLE_EQ(n.sgp.waypoint_spacing_m, 0.5);
+  EXPECT_DOUBLE_EQ(n.sgp.barrier_k, 2.0);
+  EXPECT_DOUBLE_EQ(n.sgp.zeta, 0.5);
+  EXPECT_DOUBLE_EQ(n.sgp.on_curve_m, 0.02);
+  EXPECT_EQ(n.sgp.max_waypoints, 100u);
+
+  std::string m = message_of(std::string(kNavigation) + "  waypoints: a.txt\n  safe_curve: c.yaml\n");
+  EXPECT_NE(m.find("navigation.safe_curve: waypoints and safe_curve are alternatives"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  sgp: { step_m: 0 }\n");
+  EXPECT_NE(m.find("navigation.sgp.step_m: value 0 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  sgp: { step_m: 0.2, waypoint_spacing_m: 0.1 }\n");
+  EXPECT_NE(m.find("navigation.sgp.waypoint_spacing_m: is shorter than step_m"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  sgp: { zeta_sign: 1 }\n");
+  EXPECT_NE(m.find("navigation.sgp.zeta_sign: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, AMissingFileSaysSo) {
   Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
   ASSERT_FALSE(r);

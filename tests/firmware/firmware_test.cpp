@@ -53,6 +53,43 @@ TEST(Firmware, AnExceededBudgetFailsInitNamingTaskArenaAndKey) {
   EXPECT_NE(m.find("tasks.telemetry.arena_bytes"), std::string::npos) << m;
 }
 
+TEST(Firmware, TheSupervisoryPlannerChecksItsCurveAtInit) {
+  FirmwareConfig config = sim_config();
+  config.navigation.waypoints_path.clear();
+  config.navigation.safe_curve_path = SEN3BOT_SOURCE_DIR "/config/maps/lab_curve.yaml";
+  {
+    testing::SimRig rig = testing::load_sim_rig();
+    Firmware fw(config, *rig.board, stdout);
+    ASSERT_TRUE(fw.init());
+    ASSERT_NE(fw.planner(), nullptr);
+    ASSERT_NE(fw.planner()->sgp(), nullptr);
+    EXPECT_EQ(fw.planner()->sgp()->obstacles().size(), 31u);  // every wall, rack and the pillar of lab.yaml
+    EXPECT_TRUE(fw.safe_path().empty());                      // until a goal comes
+  }
+  // A circle through the upper racks: refused at init, naming the task, the ellipse and the place.
+  const std::string bad = ::testing::TempDir() + "through_racks.yaml";
+  std::FILE* f = std::fopen(bad.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("shape: circle\ncentre: [1.6, 7.0]\nradius_m: 0.8\n", f);
+  std::fclose(f);
+  config.navigation.safe_curve_path = bad;
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, stdout);
+  const Status s = fw.init();
+  ASSERT_FALSE(s);
+  const std::string m(s.error().message());
+  EXPECT_NE(m.find("planner task: safe curve: the safe curve crosses obstacle ellipse"), std::string::npos) << m;
+  EXPECT_NE(m.find("centre (1.60, 6.25) m"), std::string::npos) << m;
+  // A file that is not there: the configuration key says which.
+  config.navigation.safe_curve_path = ::testing::TempDir() + "none.yaml";
+  testing::SimRig rig2 = testing::load_sim_rig();
+  Firmware fw2(config, *rig2.board, stdout);
+  const Status missing = fw2.init();
+  ASSERT_FALSE(missing);
+  EXPECT_NE(std::string(missing.error().message()).find("navigation.safe_curve: "), std::string::npos)
+      << missing.error().c_str();
+}
+
 TEST(Firmware, ACameraBudgetWithoutACameraIsAConfigurationError) {
   FirmwareConfig config = sim_config();
   config.tasks["camera"].arena_bytes = 1024;

@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -191,6 +193,74 @@ TEST(Sgp, AStartInsideAnObstacleOrTooManyEllipsesIsReported) {
   p.sgp.set_curve(SafeCurve::circle({0, 0}, 3.0));
   EXPECT_EQ(p.sgp.plan({0.2, 0.1}, {3.0, 0.0}).stop, SgpStop::start_inside);
   EXPECT_EQ(p.sgp.waypoints().size(), 1u);
+}
+
+TEST(SgpSite, ACurveThroughAnEllipseIsRefusedWithThePlace) {
+  // A 2 m bar along y = 1 around x = 3; the line x = 3.5 passes through its ellipse at y = 1.
+  const Ellipse bar = Ellipse::from_axes(3.0, 1.0, 1.4, 0.15, 0.0);
+  const CurveBounds bounds{0.0, -2.0, 8.0, 4.0};
+  const Status s = check_curve(SafeCurve::line({3.5, -5.0}, {3.5, 5.0}), bounds, std::span(&bar, 1));
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code(), Errc::config);
+  const std::string message = s.error().c_str();
+  EXPECT_NE(message.find("crosses obstacle ellipse 0"), std::string::npos) << message;
+  EXPECT_NE(message.find("centre (3.00, 1.00) m"), std::string::npos) << message;
+  // The place: on the line, within the bar's ellipse.
+  double x = 0, y = 0;
+  ASSERT_EQ(std::sscanf(message.c_str() + message.rfind(" at ("), " at (%lf, %lf)", &x, &y), 2) << message;
+  EXPECT_NEAR(x, 3.5, 1e-6);
+  EXPECT_LT(bar.value(x, y), 1e-6);
+  // Clear of it, or with bounds that leave the crossing out, the curve is accepted.
+  EXPECT_TRUE(check_curve(SafeCurve::line({5.0, -5.0}, {5.0, 5.0}), bounds, std::span(&bar, 1)));
+  EXPECT_TRUE(check_curve(SafeCurve::line({3.5, -5.0}, {3.5, 5.0}), CurveBounds{0.0, -2.0, 8.0, 0.5}, std::span(&bar, 1)));
+  // A curve that merely grazes the ellipse (tangent at its top) is refused too.
+  const Status graze = check_curve(SafeCurve::line({0.0, 1.15}, {8.0, 1.15}), bounds, std::span(&bar, 1));
+  EXPECT_FALSE(graze);
+  // A circle wholly outside the bounds is not there at all.
+  const Status away = check_curve(SafeCurve::circle({20.0, 20.0}, 1.0), bounds, {});
+  ASSERT_FALSE(away);
+  EXPECT_NE(std::string(away.error().c_str()).find("does not pass through its bounds"), std::string::npos);
+}
+
+TEST(SgpSite, OnlyEllipsesReachingTheBoundsCountAndAPathStopsAtThem) {
+  Planner p;
+  const std::vector<Ellipse> es = {Ellipse::from_axes(2.0, 2.0, 0.5, 0.3, 0.0), Ellipse::from_axes(20.0, 2.0, 0.5, 0.3, 0.0)};
+  const CurveBounds bounds{0.0, 0.0, 6.0, 4.0};
+  ASSERT_TRUE(p.sgp.set_site(SafeCurve::line({-10.0, 1.0}, {10.0, 1.0}), bounds, es));
+  ASSERT_EQ(p.sgp.obstacles().size(), 1u);
+  EXPECT_EQ(p.sgp.obstacles()[0].cx_m, 2.0);
+  // The goal's foot (9, 1) lies beyond the bounds: the path ends at their edge, on V.
+  const SgpResult r = p.sgp.plan({1.0, 3.0}, {9.0, 1.0});
+  EXPECT_EQ(r.stop, SgpStop::left_bounds) << to_string(r.stop);
+  EXPECT_TRUE(r.on_curve);
+  EXPECT_GT(p.sgp.waypoints().back().x_m, 6.0 - 0.03);
+  EXPECT_NEAR(p.sgp.waypoints().back().y_m, 1.0, 0.05);
+  for (const Point2D& q : p.sgp.waypoints()) EXPECT_TRUE(bounds.contains(q.x_m, q.y_m));
+  // A start outside them has no path.
+  EXPECT_EQ(p.sgp.plan({7.0, 2.0}, {9.0, 1.0}).stop, SgpStop::left_bounds);
+  EXPECT_EQ(p.sgp.waypoints().size(), 1u);
+}
+
+TEST(SgpSite, AScaledPolynomialIsOnItsCurveByDistanceNotByValue) {
+  // p = 40 (y - 1): |p| reaches 0.05 at 1.25 mm from V; on V is |p| / |grad p| < on_curve_m.
+  SafeCurve steep;
+  steep.set_coefficient(0, 1, 40.0);
+  steep.set_coefficient(0, 0, -40.0);
+  Planner p;
+  p.sgp.set_curve(steep);
+  const SgpResult r = p.sgp.plan({0.0, 3.0}, {5.0, 0.0});
+  EXPECT_EQ(r.stop, SgpStop::nearest_to_goal) << to_string(r.stop);
+  EXPECT_NEAR(p.sgp.waypoints().back().x_m, 5.0, 0.08);
+  EXPECT_NEAR(p.sgp.waypoints().back().y_m, 1.0, 0.05);
+}
+
+TEST(SgpSite, TheMapExtentCoversARotatedMap) {
+  OccupancyMap map(40, 20, 0.05, 1.0, 2.0, kPi / 2);  // 2 m x 1 m, turned a quarter
+  const CurveBounds b = map_extent(map);
+  EXPECT_NEAR(b.x0_m, 0.0, 1e-9);
+  EXPECT_NEAR(b.x1_m, 1.0, 1e-9);
+  EXPECT_NEAR(b.y0_m, 2.0, 1e-9);
+  EXPECT_NEAR(b.y1_m, 4.0, 1e-9);
 }
 
 }  // namespace

@@ -163,6 +163,17 @@ void draw_cross(Canvas& canvas, Px c, double half, Rgb colour, int thickness) {
   canvas.line({c.x - half, c.y + half}, {c.x + half, c.y - half}, colour, thickness);
 }
 
+std::vector<Px> ellipse_outline(const View& view, const EllipseMark& e) {
+  std::vector<Px> pts;
+  const double c = std::cos(e.angle_rad), s = std::sin(e.angle_rad);
+  for (int i = 0; i < 48; ++i) {
+    const double t = 2 * std::numbers::pi * i / 48;
+    const double u = e.semi_major_m * std::cos(t), v = e.semi_minor_m * std::sin(t);
+    pts.push_back(view(e.centre.x_m + c * u - s * v, e.centre.y_m + s * u + c * v));
+  }
+  return pts;
+}
+
 void draw_start(Canvas& canvas, Px c) { canvas.ring(c, 11, kStart, 3); }
 
 void draw_goal(Canvas& canvas, Px c) {
@@ -198,6 +209,18 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
   if (std::any_of(f.map->cells().begin(), f.map->cells().end(), [](std::int8_t v) { return v < 0; }))
     entries.push_back({"unknown (map)", [](Canvas& c, Px p) {
                          c.fill_rect(static_cast<int>(p.x) - 10, static_cast<int>(p.y) - 6, 20, 12, kUnknown);
+                       }});
+  if (!f.ellipses.empty())
+    entries.push_back({"obstacle ellipse (SGP)", [](Canvas& c, Px p) {
+                         c.outline_polygon(ellipse_outline({0, 0, 1, p.x, p.y}, {{0, 0}, 11, 6, 0}), kEllipse, 2);
+                       }});
+  if (!f.field.empty())
+    entries.push_back({"field direction (SGP)", [](Canvas& c, Px p) {
+                         draw_arrow(c, {p.x - 10, p.y}, {p.x + 10, p.y}, kField, 1);
+                       }});
+  if (!f.curve.empty())
+    entries.push_back({"safe curve V: p(x, y) = 0", [](Canvas& c, Px p) {
+                         c.line({p.x - 12, p.y}, {p.x + 12, p.y}, kCurve, 2);
                        }});
   if (!f.waypoints.empty())
     entries.push_back({"safe path waypoints", [](Canvas& c, Px p) {
@@ -329,6 +352,10 @@ Canvas draw_case_figure(const CaseFigure& f) {
       canvas.fill_polygon(square, cost_shade(cell.cost));
     }
   }
+  for (const Arrow& a : f.field) draw_arrow(canvas, view(a.from.x_m, a.from.y_m), view(a.to.x_m, a.to.y_m), kField, 1);
+  for (const EllipseMark& e : f.ellipses) canvas.outline_polygon(ellipse_outline(view, e), kEllipse, 2);
+  for (const auto& segment : f.curve)
+    canvas.line(view(segment[0].x_m, segment[0].y_m), view(segment[1].x_m, segment[1].y_m), kCurve, 2);
   for (const std::vector<msg::Point2D>& plan : f.plans) canvas.polyline(to_pixels(view, plan), kPlan, 2);
   for (const msg::Point2D& w : f.waypoints) canvas.disc(view(w.x_m, w.y_m), 3.5, kWaypoint);
   for (const MoverTrack& m : f.movers) {

@@ -71,10 +71,29 @@ Status PlannerTask::init(std::pmr::memory_resource& arena) {
       planner.blocked_cost = std::min(planner.blocked_cost, bar);
     }
     planner.max_cells = std::max(planner.max_cells, costmap_.costmap().size());
-    planner.max_waypoints = std::max(planner.max_waypoints, waypoints_in_.size());
+    std::size_t capacity = waypoints_in_.size();
+    if (config_.use_sgp) {
+      MapEllipsesConfig fit = config_.ellipses;
+      // Sized for this map: it is fitted once, here.
+      fit.max_map_cells = map_.cells().size();
+      fit.max_map_rows = map_.height();
+      fit.max_obstacle_cells = std::min(fit.max_obstacle_cells, map_.cells().size());
+      if (Status s = ellipses_.init(fit, arena); !s) return s;
+      if (Status s = ellipses_.fit(map_); !s) return Error::format(s.error().code(), "planner task: map ellipses: %s", s.error().c_str());
+      SgpConfig sgp = config_.sgp;
+      sgp.max_ellipses = std::max<std::size_t>(ellipses_.ellipses().size(), 1);
+      if (Status s = sgp_.init(sgp, arena); !s) return s;
+      if (Status s = sgp_.set_site(config_.curve, config_.curve_bounds, ellipses_.ellipses()); !s)
+        return Error::format(s.error().code(), "planner task: safe curve: %s", s.error().c_str());
+      capacity = sgp.max_waypoints;
+    }
+    planner.max_waypoints = std::max(planner.max_waypoints, capacity);
     if (Status s = planner_.init(planner, arena); !s) return s;
-    waypoints_ = allocate_array<Point2D>(arena, waypoints_in_.size());
-    std::copy(waypoints_in_.begin(), waypoints_in_.end(), waypoints_.begin());
+    waypoints_ = allocate_array<Point2D>(arena, capacity);
+    if (!config_.use_sgp) {
+      std::copy(waypoints_in_.begin(), waypoints_in_.end(), waypoints_.begin());
+      waypoint_count_ = waypoints_in_.size();
+    }
     cells_ = allocate_array<GridCell>(arena, costmap_.costmap().size());
     kept_cells_ = allocate_array<GridCell>(arena, 4 * PathMessage::kMaxPoints);
     costmap_.update({});
@@ -117,21 +136,35 @@ double PlannerTask::remaining_cost(const Pose2D& pose) noexcept {
   return along + best / grid.resolution_m();
 }
 
+void PlannerTask::plan_safe_path(const NavGoal& goal, const Pose2D& pose) noexcept {
+  const auto begin = std::chrono::steady_clock::now();
+  sgp_result_ = sgp_.plan({pose.x_m, pose.y_m}, {goal.x_m, goal.y_m});
+  sgp_time_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  ++sgp_runs_;
+  // A path that reached V is followed as far as it goes. One that stopped before (at a sink
+  // of the field in a corner, from inside an ellipse, outside the bounds) would lead the robot
+  // away from the goal, or nowhere: then A* plans alone.
+  const std::span<const Point2D> path = sgp_.waypoints();
+  waypoint_count_ = sgp_result_.on_curve ? std::min(path.size(), waypoints_.size()) : 0;
+  std::copy_n(path.begin(), waypoint_count_, waypoints_.begin());
+}
+
 void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns, bool new_goal) noexcept {
   // Waypoints behind the robot are dropped so a re-plan from mid-route is not pulled back.
-  std::size_t nearest = waypoints_.size();
+  const std::span<const Point2D> waypoints = safe_path();
+  std::size_t nearest = waypoints.size();
   double best = config_.waypoint_pass_m;
-  for (std::size_t i = next_waypoint_; i < waypoints_.size(); ++i) {
-    const double d = std::hypot(waypoints_[i].x_m - pose.x_m, waypoints_[i].y_m - pose.y_m);
+  for (std::size_t i = next_waypoint_; i < waypoints.size(); ++i) {
+    const double d = std::hypot(waypoints[i].x_m - pose.x_m, waypoints[i].y_m - pose.y_m);
     if (d <= best) {
       best = d;
       nearest = i;
     }
   }
-  if (nearest < waypoints_.size()) next_waypoint_ = nearest;
+  if (nearest < waypoints.size()) next_waypoint_ = nearest;
   const auto begin = std::chrono::steady_clock::now();
   const PlanResult r = planner_.plan_world(costmap_.costmap(), {pose.x_m, pose.y_m}, {goal.x_m, goal.y_m},
-                                           waypoints_.subspan(next_waypoint_), cells_);
+                                           waypoints.subspan(next_waypoint_), cells_);
   const auto end = std::chrono::steady_clock::now();
   last_plan_ns_ = now_ns;
   if (!new_goal) {
@@ -203,7 +236,10 @@ void PlannerTask::step(const tasks::StepContext& context) {
                    static_cast<double>(context.start_ns - last_plan_ns_) >= config_.replan_period_s * 1e9;
   // Between periodic re-plans, a plan that a new scan shows blocked is replaced at once.
   const bool blocked = !new_goal && !due && scan != nullptr && have_plan_ && !std::isfinite(remaining_cost(pose.value.pose));
-  if (new_goal) next_waypoint_ = 0;
+  if (new_goal) {
+    next_waypoint_ = 0;
+    if (config_.use_sgp) plan_safe_path(goal.value, pose.value.pose);
+  }
   if (new_goal || due || blocked) {
     goal_active_ = true;
     goal_id_ = goal.value.id;

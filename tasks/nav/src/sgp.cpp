@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "sen3bot/nav/arena.hpp"
@@ -17,6 +18,7 @@ const char* to_string(SgpStop stop) noexcept {
     case SgpStop::blocked: return "blocked";
     case SgpStop::start_inside: return "start_inside";
     case SgpStop::waypoint_cap: return "waypoint_cap";
+    case SgpStop::left_bounds: return "left_bounds";
   }
   return "unknown";
 }
@@ -100,6 +102,110 @@ Point2D SafeCurve::gradient(double x_m, double y_m) const noexcept {
   return g;
 }
 
+bool project_onto_curve(const SafeCurve& curve, Point2D from, Point2D& on) noexcept {
+  // Newton's steps on p along grad p: for a point near V, the foot of its normal.
+  Point2D x = from;
+  for (int k = 0; k < 100; ++k) {
+    const double p = curve.value(x.x_m, x.y_m);
+    if (std::abs(p) < 1e-9) {
+      on = x;
+      return std::isfinite(x.x_m) && std::isfinite(x.y_m);
+    }
+    const Point2D g = curve.gradient(x.x_m, x.y_m);
+    const double g2 = g.x_m * g.x_m + g.y_m * g.y_m;
+    if (!(g2 > 1e-12)) return false;
+    x.x_m -= p * g.x_m / g2;
+    x.y_m -= p * g.y_m / g2;
+  }
+  return false;
+}
+
+CurveBounds map_extent(const OccupancyMap& map) noexcept {
+  const double w = map.width() * map.resolution_m();
+  const double h = map.height() * map.resolution_m();
+  const double c = std::cos(map.origin_yaw_rad());
+  const double s = std::sin(map.origin_yaw_rad());
+  CurveBounds b{map.origin_x_m(), map.origin_y_m(), map.origin_x_m(), map.origin_y_m()};
+  for (const auto& [u, v] : {std::pair{w, 0.0}, std::pair{0.0, h}, std::pair{w, h}}) {
+    const double x = map.origin_x_m() + c * u - s * v;
+    const double y = map.origin_y_m() + s * u + c * v;
+    b = {std::min(b.x0_m, x), std::min(b.y0_m, y), std::max(b.x1_m, x), std::max(b.y1_m, y)};
+  }
+  return b;
+}
+
+bool CurveBounds::reaches(const Ellipse& e) const noexcept {
+  // The bounding box of dx'A dx <= 1 has half-widths sqrt((A^-1)_11) and sqrt((A^-1)_22).
+  const double det = e.a11 * e.a22 - e.a12 * e.a12;
+  if (!(det > 0.0)) return true;
+  const double hx = std::sqrt(e.a22 / det);
+  const double hy = std::sqrt(e.a11 / det);
+  return e.cx_m + hx >= x0_m && e.cx_m - hx <= x1_m && e.cy_m + hy >= y0_m && e.cy_m - hy <= y1_m;
+}
+
+Status check_curve(const SafeCurve& curve, const CurveBounds& bounds, std::span<const Ellipse> ellipses) {
+  // V somewhere inside the bounds: p takes both signs (or zero) on a grid over them.
+  {
+    constexpr int kGrid = 256;
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (int r = 0; r <= kGrid; ++r)
+      for (int c = 0; c <= kGrid; ++c) {
+        const double x = bounds.x0_m + (bounds.x1_m - bounds.x0_m) * c / kGrid;
+        const double y = bounds.y0_m + (bounds.y1_m - bounds.y0_m) * r / kGrid;
+        const double p = curve.value(x, y);
+        lo = std::min(lo, p);
+        hi = std::max(hi, p);
+      }
+    if (!(lo <= 0.0 && hi >= 0.0)) {
+      return Error::format(Errc::config, "the safe curve does not pass through its bounds [%g, %g] x [%g, %g] m",
+                           bounds.x0_m, bounds.x1_m, bounds.y0_m, bounds.y1_m);
+    }
+  }
+  // Each ellipse: p on its boundary and on rings inside it, in its own axes.
+  constexpr int kAngles = 256;
+  constexpr int kRings = 8;
+  for (std::size_t i = 0; i < ellipses.size(); ++i) {
+    const Ellipse& e = ellipses[i];
+    if (!bounds.reaches(e)) continue;
+    const double ca = std::cos(e.angle_rad);
+    const double sa = std::sin(e.angle_rad);
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    double least = lo;
+    Point2D nearest{e.cx_m, e.cy_m};
+    for (int ring = 0; ring <= kRings; ++ring) {
+      const double f = static_cast<double>(ring) / kRings;
+      const int angles = ring == 0 ? 1 : kAngles;
+      for (int k = 0; k < angles; ++k) {
+        const double t = 2.0 * std::numbers::pi * k / angles;
+        const double u = f * e.semi_major_m * std::cos(t);
+        const double v = f * e.semi_minor_m * std::sin(t);
+        const double x = e.cx_m + ca * u - sa * v;
+        const double y = e.cy_m + sa * u + ca * v;
+        if (!bounds.contains(x, y)) continue;
+        const double p = curve.value(x, y);
+        lo = std::min(lo, p);
+        hi = std::max(hi, p);
+        if (std::abs(p) < least) {
+          least = std::abs(p);
+          nearest = {x, y};
+        }
+      }
+    }
+    if (lo <= 0.0 && hi >= 0.0) {
+      Point2D at = nearest;
+      (void)project_onto_curve(curve, nearest, at);
+      return Error::format(Errc::config,
+                           "the safe curve crosses obstacle ellipse %zu (centre (%.2f, %.2f) m, semi-axes %.2f x %.2f m, "
+                           "%.0f deg) at (%.2f, %.2f) m",
+                           i, e.cx_m, e.cy_m, e.semi_major_m, e.semi_minor_m, e.angle_rad * 180.0 / std::numbers::pi,
+                           at.x_m, at.y_m);
+    }
+  }
+  return Status::success();
+}
+
 // --- The planner -------------------------------------------------------------------------------------
 
 Status SupervisoryPlanner::init(const SgpConfig& config, std::pmr::memory_resource& resource) {
@@ -118,12 +224,22 @@ Status SupervisoryPlanner::init(const SgpConfig& config, std::pmr::memory_resour
 }
 
 Status SupervisoryPlanner::set_obstacles(std::span<const Ellipse> ellipses) noexcept {
-  if (ellipses.size() > ellipses_.size()) {
-    return Error::format(Errc::capacity, "sgp: %zu ellipses, room for %zu", ellipses.size(), ellipses_.size());
+  ellipse_count_ = 0;
+  for (const Ellipse& e : ellipses) {
+    if (!bounds_.reaches(e)) continue;
+    if (ellipse_count_ == ellipses_.size()) {
+      ellipse_count_ = 0;
+      return Error::format(Errc::capacity, "sgp: more than %zu ellipses reach the curve's bounds", ellipses_.size());
+    }
+    ellipses_[ellipse_count_++] = e;
   }
-  std::copy(ellipses.begin(), ellipses.end(), ellipses_.begin());
-  ellipse_count_ = ellipses.size();
   return Status::success();
+}
+
+Status SupervisoryPlanner::set_site(const SafeCurve& curve, const CurveBounds& bounds, std::span<const Ellipse> ellipses) {
+  if (Status s = check_curve(curve, bounds, ellipses); !s) return s;
+  set_curve(curve, bounds);
+  return set_obstacles(ellipses);
 }
 
 bool SupervisoryPlanner::inside_any(double x_m, double y_m) const noexcept {
@@ -178,24 +294,6 @@ Point2D SupervisoryPlanner::field(double x_m, double y_m, int sign) const noexce
   return {fx, fy};
 }
 
-bool SupervisoryPlanner::project_onto_curve(Point2D from, Point2D& on) const noexcept {
-  // Newton's steps on p along grad p: for a point near V, the foot of its normal.
-  Point2D x = from;
-  for (int k = 0; k < 100; ++k) {
-    const double p = curve_.value(x.x_m, x.y_m);
-    if (std::abs(p) < 1e-9) {
-      on = x;
-      return std::isfinite(x.x_m) && std::isfinite(x.y_m);
-    }
-    const Point2D g = curve_.gradient(x.x_m, x.y_m);
-    const double g2 = g.x_m * g.x_m + g.y_m * g.y_m;
-    if (!(g2 > 1e-12)) return false;
-    x.x_m -= p * g.x_m / g2;
-    x.y_m -= p * g.y_m / g2;
-  }
-  return false;
-}
-
 SgpResult SupervisoryPlanner::integrate(Point2D start, Point2D goal, int sign, std::span<Point2D> out,
                                          std::size_t& count) noexcept {
   SgpResult r;
@@ -204,6 +302,10 @@ SgpResult SupervisoryPlanner::integrate(Point2D start, Point2D goal, int sign, s
   out[count++] = start;
   r.min_barrier = barrier(start.x_m, start.y_m);
   r.goal_distance_m = std::hypot(goal.x_m - start.x_m, goal.y_m - start.y_m);
+  if (!bounds_.contains(start.x_m, start.y_m)) {
+    r.stop = SgpStop::left_bounds;
+    return r;
+  }
   if (inside_any(start.x_m, start.y_m)) {
     r.stop = SgpStop::start_inside;
     return r;
@@ -211,7 +313,7 @@ SgpResult SupervisoryPlanner::integrate(Point2D start, Point2D goal, int sign, s
   // Where V passes closest to the goal (the foot of the goal's normal on V); without one (the
   // goal where grad p vanishes), where on V the distance to the goal stops falling.
   Point2D target{};
-  const bool has_target = project_onto_curve(goal, target);
+  const bool has_target = project_onto_curve(curve_, goal, target);
   const double reach = config_.on_curve_m + config_.step_m;
   // The unit field: the streamline by arc length.
   bool stalled = false;
@@ -228,8 +330,20 @@ SgpResult SupervisoryPlanner::integrate(Point2D start, Point2D goal, int sign, s
   Point2D x = start;
   double since_waypoint = 0.0;
   double previous_goal = r.goal_distance_m;
+  // A sink of the field (where the barrier and the pull onto V cancel) is not a zero the unit
+  // field can see: the steps jitter about it. Over every kStallSteps steps the path must get
+  // more than two steps away from where it was.
+  constexpr int kStallSteps = 50;
+  Point2D checkpoint = start;
   r.stop = SgpStop::step_cap;
   for (int step = 0; step < config_.max_steps; ++step) {
+    if (step > 0 && step % kStallSteps == 0) {
+      if (std::hypot(x.x_m - checkpoint.x_m, x.y_m - checkpoint.y_m) < 2.0 * h) {
+        r.stop = SgpStop::stalled;
+        break;
+      }
+      checkpoint = x;
+    }
     const Point2D k1 = unit(x.x_m, x.y_m);
     const Point2D k2 = unit(x.x_m + 0.5 * h * k1.x_m, x.y_m + 0.5 * h * k1.y_m);
     const Point2D k3 = unit(x.x_m + 0.5 * h * k2.x_m, x.y_m + 0.5 * h * k2.y_m);
@@ -240,13 +354,19 @@ SgpResult SupervisoryPlanner::integrate(Point2D start, Point2D goal, int sign, s
     }
     const Point2D next{x.x_m + h / 6.0 * (k1.x_m + 2.0 * k2.x_m + 2.0 * k3.x_m + k4.x_m),
                        x.y_m + h / 6.0 * (k1.y_m + 2.0 * k2.y_m + 2.0 * k3.y_m + k4.y_m)};
+    if (!bounds_.contains(next.x_m, next.y_m)) {
+      r.stop = SgpStop::left_bounds;
+      break;
+    }
     if (inside_any(next.x_m, next.y_m)) {
       r.stop = SgpStop::blocked;
       break;
     }
     const double moved = std::hypot(next.x_m - x.x_m, next.y_m - x.y_m);
     const double to_goal = std::hypot(goal.x_m - next.x_m, goal.y_m - next.y_m);
-    const bool on_curve = std::abs(curve_.value(next.x_m, next.y_m)) < config_.on_curve_m;
+    // |p| / |grad p|: the distance to V to first order, whatever the polynomial's scale.
+    const Point2D gp = curve_.gradient(next.x_m, next.y_m);
+    const bool on_curve = std::abs(curve_.value(next.x_m, next.y_m)) < config_.on_curve_m * std::hypot(gp.x_m, gp.y_m);
     if (on_curve && has_target && std::hypot(target.x_m - next.x_m, target.y_m - next.y_m) < reach) {
       x = next;
       r.steps = step + 1;

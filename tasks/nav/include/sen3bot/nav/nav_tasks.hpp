@@ -25,6 +25,7 @@
 #include "sen3bot/nav/odometry_history.hpp"
 #include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/safety.hpp"
+#include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -88,6 +89,14 @@ struct PlannerTaskConfig {
   double keep_cost_ratio = 0.85;
   double keep_off_plan_m = 0.6;
   SensorMount laser_mount;
+  // The supervisory planner: with it, each new goal's waypoints are its path from the robot's
+  // position to where the curve passes closest to the goal (the given waypoints are not used).
+  // The map's ellipses are fitted once, at init(), and the curve checked against them there.
+  bool use_sgp = false;
+  SgpConfig sgp;
+  SafeCurve curve;
+  CurveBounds curve_bounds;
+  MapEllipsesConfig ellipses;  // max_map_cells and max_map_rows become the map's
 };
 
 class PlannerTask final : public tasks::Task {
@@ -103,9 +112,19 @@ class PlannerTask final : public tasks::Task {
   [[nodiscard]] std::uint32_t plans() const noexcept { return plan_id_; }
   // Periodic re-plans that kept the current plan (hysteresis).
   [[nodiscard]] std::uint32_t plans_kept() const noexcept { return kept_; }
+  // The waypoints the global planner follows: the file's, or the supervisory planner's for the
+  // newest goal. Read them when the task is not running.
+  [[nodiscard]] std::span<const Point2D> safe_path() const noexcept { return waypoints_.first(waypoint_count_); }
+  // The supervisory planner (null without use_sgp), its runs and its last result.
+  [[nodiscard]] const SupervisoryPlanner* sgp() const noexcept { return config_.use_sgp ? &sgp_ : nullptr; }
+  [[nodiscard]] std::uint32_t sgp_runs() const noexcept { return sgp_runs_; }
+  [[nodiscard]] const SgpResult& sgp_result() const noexcept { return sgp_result_; }
+  [[nodiscard]] double sgp_time_ms() const noexcept { return sgp_time_ms_; }
 
  private:
   void plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns, bool new_goal) noexcept;
+  // The supervisory planner's waypoints from pose to the goal, into waypoints_.
+  void plan_safe_path(const NavGoal& goal, const Pose2D& pose) noexcept;
   // What following the published plan from the robot's position still costs on the current
   // costmap (planner units); infinity when it is blocked, or the robot is off it.
   [[nodiscard]] double remaining_cost(const Pose2D& pose) noexcept;
@@ -122,7 +141,13 @@ class PlannerTask final : public tasks::Task {
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   GlobalPlanner planner_;
+  MapEllipses ellipses_;
+  SupervisoryPlanner sgp_;
+  SgpResult sgp_result_;
+  std::uint32_t sgp_runs_ = 0;
+  double sgp_time_ms_ = 0.0;
   std::span<Point2D> waypoints_;
+  std::size_t waypoint_count_ = 0;
   std::span<GridCell> cells_;
   std::span<GridCell> kept_cells_;  // the published plan as a cell path, for remaining_cost()
   bool have_plan_ = false;          // message_ holds a usable plan for the active goal

@@ -21,7 +21,7 @@
 //   field by a positive function does not change its streamlines.
 // - Where to stop: the goal's foot on V (Newton's steps on p from the goal along grad p), where
 //   the curve passes closest to the goal; the global planner finishes the approach. A path
-//   ends when, on V (|p| < on_curve_m), it comes within on_curve_m + step_m of that point (or,
+//   ends when, on V (|p| / |grad p| < on_curve_m), it comes within on_curve_m + step_m of that point (or,
 //   when there is none, where on V its distance to the goal stops falling).
 // - zeta's sign: both are integrated; the one whose path ends nearer the goal wins, and of two
 //   ends within two steps of each other, the shorter path.
@@ -69,13 +69,40 @@ class SafeCurve {
   std::array<double, kTerms> c_{};
 };
 
+// The part of the site a safe curve serves, map frame. Only the obstacles whose ellipses reach
+// into it matter to the curve, the curve is checked against them only inside it, and a path
+// that would leave it stops (a line's V runs through a room's walls; its bounds end it short).
+struct CurveBounds {
+  double x0_m = -1e9;
+  double y0_m = -1e9;
+  double x1_m = 1e9;
+  double y1_m = 1e9;
+  [[nodiscard]] bool contains(double x_m, double y_m) const noexcept {
+    return x_m >= x0_m && x_m <= x1_m && y_m >= y0_m && y_m <= y1_m;
+  }
+  // The ellipse's bounding box overlaps these bounds.
+  [[nodiscard]] bool reaches(const Ellipse& e) const noexcept;
+};
+
+// Where V = {p = 0} passes within the bounds: an Error naming the first obstacle ellipse it
+// crosses or touches and the place on V, or naming the bounds when V misses them. Sampled: each
+// ellipse at 256 boundary points and 8 rings inside; the bounds on a 256 x 256 grid.
+[[nodiscard]] Status check_curve(const SafeCurve& curve, const CurveBounds& bounds, std::span<const Ellipse> ellipses);
+
+// The map's extent (the bounding box of its corners in the map frame): a curve's bounds when its
+// file gives none.
+[[nodiscard]] CurveBounds map_extent(const OccupancyMap& map) noexcept;
+
+// The foot of `from` on V by Newton's steps along grad p; false when they do not converge.
+[[nodiscard]] bool project_onto_curve(const SafeCurve& curve, Point2D from, Point2D& on) noexcept;
+
 struct SgpConfig {
   double step_m = 0.02;             // arc length per RK4 step
   int max_steps = 20000;            // per direction
   double waypoint_spacing_m = 0.25;
   double barrier_k = 1.0;           // k of eq. 1.4
   double zeta = 1.0;                // |zeta|: how strongly the field runs along V
-  double on_curve_m = 0.05;         // |p| below this is on V
+  double on_curve_m = 0.05;         // on V: |p| / |grad p| (the distance to first order) below this
   double min_field = 1e-9;          // a field weaker than this is a standstill (an equilibrium)
   std::size_t max_waypoints = 4096;
   std::size_t max_ellipses = 256;
@@ -84,10 +111,11 @@ struct SgpConfig {
 enum class SgpStop : std::uint8_t {
   nearest_to_goal,  // on V, where it passes closest to the goal
   step_cap,         // max_steps without that
-  stalled,          // the field vanished (an equilibrium of eq. 1.4)
+  stalled,          // at an equilibrium of eq. 1.4: the field vanished, or 50 steps went nowhere
   blocked,          // a step would have entered an ellipse (the barrier failed: a bug or a bad curve)
   start_inside,     // the start is inside an obstacle's ellipse
   waypoint_cap,     // more waypoints than max_waypoints
+  left_bounds,      // the start, or the next step, is outside the curve's bounds
 };
 [[nodiscard]] const char* to_string(SgpStop stop) noexcept;
 
@@ -104,9 +132,20 @@ struct SgpResult {
 class SupervisoryPlanner {
  public:
   Status init(const SgpConfig& config, std::pmr::memory_resource& resource);
-  // Copies the ellipses (at most max_ellipses) and the curve.
+  // The curve and its bounds first: set_obstacles() keeps the ellipses that reach the bounds.
+  void set_curve(const SafeCurve& curve, const CurveBounds& bounds = {}) noexcept {
+    curve_ = curve;
+    bounds_ = bounds;
+  }
+  // Copies the ellipses that reach the bounds (at most max_ellipses of them).
   Status set_obstacles(std::span<const Ellipse> ellipses) noexcept;
-  void set_curve(const SafeCurve& curve) noexcept { curve_ = curve; }
+  // A site: check_curve(), then set_curve() and set_obstacles(). Errors: the curve crosses an
+  // ellipse or misses its bounds, or more than max_ellipses reach the bounds (then no ellipse is held).
+  Status set_site(const SafeCurve& curve, const CurveBounds& bounds, std::span<const Ellipse> ellipses);
+  [[nodiscard]] std::span<const Ellipse> obstacles() const noexcept { return ellipses_.first(ellipse_count_); }
+  [[nodiscard]] const SafeCurve& curve() const noexcept { return curve_; }
+  [[nodiscard]] const CurveBounds& bounds() const noexcept { return bounds_; }
+  [[nodiscard]] const SgpConfig& config() const noexcept { return config_; }
 
   // b(x) and its gradient.
   [[nodiscard]] double barrier(double x_m, double y_m) const noexcept;
@@ -123,10 +162,10 @@ class SupervisoryPlanner {
  private:
   SgpResult integrate(Point2D start, Point2D goal, int sign, std::span<Point2D> out, std::size_t& count) noexcept;
   [[nodiscard]] bool inside_any(double x_m, double y_m) const noexcept;
-  [[nodiscard]] bool project_onto_curve(Point2D from, Point2D& on) const noexcept;
 
   SgpConfig config_;
   SafeCurve curve_;
+  CurveBounds bounds_;
   std::span<Ellipse> ellipses_;
   std::size_t ellipse_count_ = 0;
   std::span<Point2D> best_;

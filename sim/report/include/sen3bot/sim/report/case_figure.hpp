@@ -1,8 +1,9 @@
 #pragma once
 // One simulated case as a figure, from plain data: the map with axes in metres and a scale bar,
-// the safe path's waypoints, the global plans, the true and the estimated path, the robot's
+// the safe path's waypoints (and the supervisory planner's ellipses, curve and field), the global plans, the true and the estimated path, the robot's
 // footprint at a few instants, the boxes and people with their tracks, the contacts, start and
 // goals, and a legend; above it the case's name, description and result line.
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -64,6 +65,19 @@ struct Moment {
   static constexpr double kArrowS = 1.0;
 };
 
+// The supervisory planner's picture (sgp_layer.hpp fills it from a planner).
+struct EllipseMark {
+  msg::Point2D centre;
+  double semi_major_m = 0;
+  double semi_minor_m = 0;
+  double angle_rad = 0;
+};
+
+struct Arrow {
+  msg::Point2D from;
+  msg::Point2D to;
+};
+
 struct CaseFigure {
   std::string title;        // "case 2/3: obstacle-before-planning"
   std::string description;  // what the case is
@@ -71,6 +85,9 @@ struct CaseFigure {
   bool passed = false;      // the result line in green, else red
   const nav::OccupancyMap* map = nullptr;
   std::vector<msg::Point2D> waypoints;
+  std::vector<EllipseMark> ellipses;                 // the obstacles as the SGP sees them
+  std::vector<std::array<msg::Point2D, 2>> curve;    // the safe curve V, as short segments
+  std::vector<Arrow> field;                          // the SGP's field direction (a quiver plot)
   std::vector<std::vector<msg::Point2D>> plans;
   std::vector<msg::Point2D> driven;     // ground truth; a non-finite point breaks the line
   std::vector<msg::Point2D> estimated;  // the firmware's pose estimate
@@ -104,6 +121,9 @@ inline constexpr Rgb kFailed{180, 0, 50};
 inline constexpr Rgb kCost{60, 90, 230};     // the local costmap's cells, lighter for lower costs
 inline constexpr Rgb kTrack{0, 110, 90};     // a tracked mover and its velocity
 inline constexpr Rgb kBoxTrack{235, 170, 110};  // a moving box's true track
+inline constexpr Rgb kEllipse{200, 150, 0};     // an obstacle's ellipse (SGP)
+inline constexpr Rgb kCurve{170, 0, 110};       // the safe curve V
+inline constexpr Rgb kField{150, 150, 150};     // the SGP field's arrows
 }  // namespace colours
 
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
