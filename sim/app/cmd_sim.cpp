@@ -122,6 +122,12 @@ struct CaseResult {
   double wall_time_s = 0;
   bool kidnapped = false;
   std::vector<tasks::TaskStats> stats;
+  // The safe path: the supervisory planner's (its runs and last result) or a file's.
+  bool sgp = false;
+  std::uint32_t sgp_runs = 0;
+  nav::SgpResult sgp_result;
+  double sgp_time_ms = 0;
+  std::size_t safe_path_points = 0;
 };
 
 void write_json_string(std::FILE* f, std::string_view s) {
@@ -162,6 +168,13 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
       if (truth.relocalization_s >= 0) std::fprintf(f, " \"relocalization_s\": %.2f,", truth.relocalization_s);
       else std::fprintf(f, " \"relocalization_s\": null,");
     }
+    if (c.sgp)
+      std::fprintf(f,
+                   "\n     \"safe_path\": {\"source\": \"sgp\", \"runs\": %u, \"stop\": \"%s\", \"waypoints\": %zu, "
+                   "\"length_m\": %.3f, \"time_ms\": %.3f},",
+                   c.sgp_runs, nav::to_string(c.sgp_result.stop), c.safe_path_points, c.sgp_result.length_m, c.sgp_time_ms);
+    else
+      std::fprintf(f, "\n     \"safe_path\": {\"source\": \"file\", \"waypoints\": %zu},", c.safe_path_points);
     std::fprintf(f, "\n     \"tasks\": [");
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
@@ -249,6 +262,16 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   result.report = mission.report();
   result.truth = board.referee().report();
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
+  result.safe_path_points = fw.safe_path().size();
+  if (const nav::PlannerTask* planner = fw.planner(); planner != nullptr && planner->sgp() != nullptr) {
+    result.sgp = true;
+    result.sgp_runs = planner->sgp_runs();
+    result.sgp_result = planner->sgp_result();
+    result.sgp_time_ms = planner->sgp_time_ms();
+    std::fprintf(out, "  safe path: supervisory planner, %u run%s; the last %s after %.2f m, %zu waypoints, %.3f ms\n",
+                 result.sgp_runs, result.sgp_runs == 1 ? "" : "s", nav::to_string(result.sgp_result.stop),
+                 result.sgp_result.length_m, result.safe_path_points, result.sgp_time_ms);
+  }
   mission.print_report(out);
   board.referee().print(out);
   if (!report_dir.empty()) {

@@ -1,7 +1,8 @@
 // The thesis' three supervised-planning cases through the whole firmware: the real P2OS and
 // LMS200 drivers against their wire-exact emulators, localization, the global planner with
-// waypoint attraction, the DWA and the safety filter, in lockstep simulated time. Each case
-// must reach (2.5, 2) m from (4, 7) m without touching anything while moving.
+// waypoint attraction following the supervisory planner's waypoints, the DWA and the safety
+// filter, in lockstep simulated time. Each case must reach (2.5, 2) m from (4, 7) m without
+// touching anything while moving.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -71,6 +72,12 @@ TEST(ThesisCases, AllThreeReachTheGoalWithoutCollision) {
   text << file.rdbuf();
   const std::vector<CaseLine> cases = parse_cases(text.str());
   ASSERT_EQ(cases.size(), 3u);
+  // Each case's waypoints came from the supervisory planner, which reached the lab's safe curve
+  // where it passes closest to the goal.
+  std::size_t from_sgp = 0;
+  for (std::size_t at = 0; (at = text.str().find("\"safe_path\": {\"source\": \"sgp\", \"runs\": 1, \"stop\": \"nearest_to_goal\"", at)) != std::string::npos; ++at)
+    ++from_sgp;
+  EXPECT_EQ(from_sgp, 3u) << text.str();
   EXPECT_EQ(cases[0].name, "\"no-obstacle\"");
   EXPECT_EQ(cases[1].name, "\"obstacle-before-planning\"");
   EXPECT_EQ(cases[2].name, "\"obstacle-during-motion\"");

@@ -1,7 +1,8 @@
 // The steady-state rule, proved on the real task table running the simulated mission: after
 // init() and a warm-up, the tasks run at least 10 000 times in all, the slowest of them at
 // least 100 times, and the process allocates nothing. A task added to the table is covered
-// automatically, and the test fails if it does not run; the camera's row is the one the
+// automatically, and the test fails if it does not run (the supervisory planner, computing a
+// goal's waypoints, among them); the camera's row is the one the
 // simulated robot cannot run yet (it has no camera).
 #include <gtest/gtest.h>
 
@@ -28,6 +29,9 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   // off): the worker walking across is detected, tracked and painted meanwhile.
   config->navigation.dynamic_obstacles.enabled = true;
   config->navigation.dwa.mover_prediction = true;
+  // The supervisory planner computes each goal's waypoints (config/sim.yaml gives a file).
+  config->navigation.waypoints_path.clear();
+  config->navigation.safe_curve_path = SEN3BOT_SOURCE_DIR "/config/maps/lab_curve.yaml";
   hal::SimClock& clock = rig.clock();
 
   std::FILE* sink = std::fopen("/dev/null", "w");
@@ -40,6 +44,8 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
 
   // Warm-up: first-use work (stdio buffers, lazily sized state) happens here.
   ASSERT_TRUE(scheduler.run_lockstep(clock, hal::seconds(5)));
+  ASSERT_NE(fw.planner(), nullptr);
+  const std::uint32_t sgp_runs_before = fw.planner()->sgp_runs();
   std::vector<std::uint64_t> runs_before;
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) runs_before.push_back(scheduler.stats(i).runs);
 
@@ -68,6 +74,9 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   const MissionTask* mission = fw.mission();
   ASSERT_NE(mission, nullptr);
   EXPECT_GE(mission->report().goals_reached, 1u);
+  // A goal came inside the window, and the supervisory planner ran for it.
+  EXPECT_GT(fw.planner()->sgp_runs(), sgp_runs_before);
+  EXPECT_TRUE(fw.planner()->sgp_result().on_curve);
   fw.shutdown();
   std::fclose(sink);
 }
