@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory_resource>
+#include <numbers>
 #include <string>
 #include <string_view>
 
@@ -36,7 +37,8 @@ bool write_figure(const std::string& png, const std::string& map_path, const std
   f.title = line;
   f.description = "map " + file_name(map_path) + ", safe curve " + file_name(curve_path) +
                   "; arrows: the field's direction (eq. 1.4) with the sign of zeta taken";
-  std::snprintf(line, sizeof line, "%s after %.2f m, %d steps (zeta %s); %zu waypoints, least b %.3g, %.2f m short of the goal",
+  std::snprintf(line, sizeof line,
+                "%s after %.2f m, %d steps (zeta %s); %zu waypoints, least b %.3g, %.2f m short of the goal",
                 nav::to_string(r.stop), r.length_m, r.steps, r.direction > 0 ? "+" : "-", sgp.waypoints().size(),
                 r.min_barrier, r.goal_distance_m);
   f.result = line;
@@ -128,8 +130,10 @@ int sgp_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const nav::SgpResult r = sgp.plan(start, goal, direction);
   const double time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
 
-  std::fprintf(out, "{\"stop\": \"%s\", \"direction\": %d, \"length_m\": %.6f, \"iterations\": %d, \"time_ms\": %.3f, "
-                    "\"fit_time_ms\": %.3f, \"min_barrier\": %.6g, \"goal_distance_m\": %.6f, \"on_curve\": %s, \"waypoints\": [",
+  std::fprintf(out,
+               "{\"stop\": \"%s\", \"direction\": %d, \"length_m\": %.6f, \"iterations\": %d, \"time_ms\": %.3f, "
+               "\"fit_time_ms\": %.3f, \"min_barrier\": %.6g, \"goal_distance_m\": %.6f, \"on_curve\": %s, "
+               "\"waypoints\": [",
                nav::to_string(r.stop), r.direction, r.length_m, r.steps, time_ms, fit_ms, r.min_barrier, r.goal_distance_m,
                r.on_curve ? "true" : "false");
   const std::span<const nav::Point2D> w = sgp.waypoints();
@@ -139,7 +143,7 @@ int sgp_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   for (std::size_t i = 0; i < held.size(); ++i) {
     const nav::Ellipse& e = held[i];
     std::fprintf(out, "%s{\"centre\": [%.4f, %.4f], \"semi_axes\": [%.4f, %.4f], \"angle_deg\": %.3f, \"cells\": %u}",
-                 i ? ", " : "", e.cx_m, e.cy_m, e.semi_major_m, e.semi_minor_m, e.angle_rad * 180.0 / 3.141592653589793,
+                 i ? ", " : "", e.cx_m, e.cy_m, e.semi_major_m, e.semi_minor_m, e.angle_rad * 180.0 / std::numbers::pi,
                  e.cells);
   }
   std::fprintf(out, "]}\n");

@@ -15,10 +15,10 @@ using config::Reader;
 // Every number is a coordinate or a size on a site: kilometres are already a mistake.
 constexpr double kMaxMetres = 1e4;
 
-nav::Point2D read_point(const Reader& r, const std::string& key) {
-  const nav::Point2D p = r.child(key).point();
-  if (std::abs(p.x_m) > kMaxMetres || std::abs(p.y_m) > kMaxMetres)
-    r.fail(key, "a coordinate beyond 10 km", YAML::Node());
+// A point [x, y] of this node, within 10 km of the origin.
+nav::Point2D site_point(const Reader& r) {
+  const nav::Point2D p = r.point();
+  if (std::abs(p.x_m) > kMaxMetres || std::abs(p.y_m) > kMaxMetres) r.fail_here("a coordinate beyond 10 km");
   return p;
 }
 
@@ -30,20 +30,20 @@ SiteCurve read_curve(const Reader& r) {
     r.allow_only({"shape", "through", "bounds"});
     const std::vector<Reader> through = r.sequence("through");
     if (through.size() != 2) r.fail("through", "expected two points [[x, y], [x, y]]", YAML::Node());
-    const nav::Point2D a = through[0].point();
-    const nav::Point2D b = through[1].point();
+    const nav::Point2D a = site_point(through[0]);
+    const nav::Point2D b = site_point(through[1]);
     if (std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) < 1e-3) r.fail("through", "the two points coincide", YAML::Node());
     c.curve = nav::SafeCurve::line(a, b);
   } else if (c.shape == "circle") {
     r.allow_only({"shape", "centre", "radius_m", "bounds"});
-    c.curve = nav::SafeCurve::circle(read_point(r, "centre"), r.number("radius_m", 0.05, kMaxMetres));
+    c.curve = nav::SafeCurve::circle(site_point(r.child("centre")), r.number("radius_m", 0.05, kMaxMetres));
   } else if (c.shape == "ellipse") {
     r.allow_only({"shape", "centre", "semi_major_m", "semi_minor_m", "angle_deg", "bounds"});
     const double a = r.number("semi_major_m", 0.05, kMaxMetres);
     const double b = r.number("semi_minor_m", 0.05, kMaxMetres);
     if (b > a) r.fail("semi_minor_m", "is larger than semi_major_m", YAML::Node());
     const double angle = r.has("angle_deg") ? r.number("angle_deg", -360.0, 360.0) * std::numbers::pi / 180.0 : 0.0;
-    c.curve = nav::SafeCurve::ellipse(read_point(r, "centre"), a, b, angle);
+    c.curve = nav::SafeCurve::ellipse(site_point(r.child("centre")), a, b, angle);
   } else if (c.shape == "polynomial") {
     r.allow_only({"shape", "terms", "bounds"});
     const std::vector<Reader> terms = r.sequence("terms");
@@ -70,8 +70,8 @@ SiteCurve read_curve(const Reader& r) {
   if (r.has("bounds")) {
     const std::vector<Reader> corners = r.sequence("bounds");
     if (corners.size() != 2) r.fail("bounds", "expected two corners [[x0, y0], [x1, y1]]", YAML::Node());
-    const nav::Point2D lo = corners[0].point();
-    const nav::Point2D hi = corners[1].point();
+    const nav::Point2D lo = site_point(corners[0]);
+    const nav::Point2D hi = site_point(corners[1]);
     if (!(hi.x_m > lo.x_m && hi.y_m > lo.y_m))
       r.fail("bounds", "the second corner must be above and right of the first", YAML::Node());
     c.bounds = {lo.x_m, lo.y_m, hi.x_m, hi.y_m};

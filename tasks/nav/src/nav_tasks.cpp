@@ -79,7 +79,8 @@ Status PlannerTask::init(std::pmr::memory_resource& arena) {
       fit.max_map_rows = map_.height();
       fit.max_obstacle_cells = std::min(fit.max_obstacle_cells, map_.cells().size());
       if (Status s = ellipses_.init(fit, arena); !s) return s;
-      if (Status s = ellipses_.fit(map_); !s) return Error::format(s.error().code(), "planner task: map ellipses: %s", s.error().c_str());
+      if (Status s = ellipses_.fit(map_); !s)
+        return Error::format(s.error().code(), "planner task: map ellipses: %s", s.error().c_str());
       SgpConfig sgp = config_.sgp;
       sgp.max_ellipses = std::max<std::size_t>(ellipses_.ellipses().size(), 1);
       if (Status s = sgp_.init(sgp, arena); !s) return s;

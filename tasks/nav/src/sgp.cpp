@@ -249,36 +249,40 @@ bool SupervisoryPlanner::inside_any(double x_m, double y_m) const noexcept {
 }
 
 double SupervisoryPlanner::barrier(double x_m, double y_m) const noexcept {
-  double b = 1.0;
-  for (std::size_t i = 0; i < ellipse_count_; ++i) {
-    const double e = ellipses_[i].value(x_m, y_m);
-    if (e <= 0.0) return 0.0;
-    b *= e / (1.0 + e);
-  }
-  return b;
+  Point2D unused;
+  return barrier_with_gradient(x_m, y_m, unused);
 }
 
 Point2D SupervisoryPlanner::barrier_gradient(double x_m, double y_m) const noexcept {
-  // grad b = b * sum grad f_i / f_i, f_i = e_i / (1 + e_i): grad f_i / f_i = grad e_i / (e_i (1 + e_i)).
+  Point2D g;
+  (void)barrier_with_gradient(x_m, y_m, g);
+  return g;
+}
+
+double SupervisoryPlanner::barrier_with_gradient(double x_m, double y_m, Point2D& gradient) const noexcept {
+  // One pass for both: grad b = b * sum grad f_i / f_i, f_i = e_i / (1 + e_i), and
+  // grad f_i / f_i = grad e_i / (e_i (1 + e_i)).
   double b = 1.0;
   Point2D sum{0.0, 0.0};
+  gradient = {0.0, 0.0};
   for (std::size_t i = 0; i < ellipse_count_; ++i) {
     const Ellipse& el = ellipses_[i];
     const double e = el.value(x_m, y_m);
-    if (e <= 0.0) return {0.0, 0.0};
+    if (e <= 0.0) return 0.0;
     b *= e / (1.0 + e);
     const Point2D g = el.gradient(x_m, y_m);
     const double w = 1.0 / (e * (1.0 + e));
     sum.x_m += g.x_m * w;
     sum.y_m += g.y_m * w;
   }
-  return {b * sum.x_m, b * sum.y_m};
+  gradient = {b * sum.x_m, b * sum.y_m};
+  return b;
 }
 
 Point2D SupervisoryPlanner::field(double x_m, double y_m, int sign) const noexcept {
-  const double b = barrier(x_m, y_m);
+  Point2D gb;
+  const double b = barrier_with_gradient(x_m, y_m, gb);
   if (!(b > 0.0)) return {0.0, 0.0};
-  const Point2D gb = barrier_gradient(x_m, y_m);
   const double p = curve_.value(x_m, y_m);
   const Point2D gp = curve_.gradient(x_m, y_m);
   const double zeta = sign >= 0 ? config_.zeta : -config_.zeta;

@@ -162,6 +162,8 @@ class SupervisoryPlanner {
  private:
   SgpResult integrate(Point2D start, Point2D goal, int sign, std::span<Point2D> out, std::size_t& count) noexcept;
   [[nodiscard]] bool inside_any(double x_m, double y_m) const noexcept;
+  // b and grad b in one pass over the ellipses (both zero inside one).
+  double barrier_with_gradient(double x_m, double y_m, Point2D& gradient) const noexcept;
 
   SgpConfig config_;
   SafeCurve curve_;
