@@ -11,39 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "command_capture.hpp"
 #include "commands.hpp"
 
 namespace sen3bot::firmware {
 namespace {
 
-struct Outcome {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using Outcome = testing::CommandOutcome;
 
-std::string read_all(std::FILE* f) {
-  std::rewind(f);
-  std::string text;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) text.append(buffer, n);
-  return text;
-}
-
-Outcome plan(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::FILE* out = std::tmpfile();
-  std::FILE* err = std::tmpfile();
-  Outcome o;
-  o.code = plan_command(static_cast<int>(argv.size()), argv.data(), out, err);
-  o.out = read_all(out);
-  o.err = read_all(err);
-  std::fclose(out);
-  std::fclose(err);
-  return o;
-}
+Outcome plan(std::vector<std::string> args) { return testing::run_command(plan_command, std::move(args)); }
 
 double number_field(const std::string& json, const std::string& key) {
   const std::size_t at = json.find("\"" + key + "\": ");

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "command_capture.hpp"
 #include "commands.hpp"
 #include "safe_curve.hpp"
 #include "sen3bot/nav/map.hpp"
@@ -25,34 +26,9 @@ namespace {
 
 const std::string kMaps = std::string(SEN3BOT_SOURCE_DIR) + "/config/maps/";
 
-struct Outcome {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using Outcome = testing::CommandOutcome;
 
-std::string read_all(std::FILE* f) {
-  std::rewind(f);
-  std::string text;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) text.append(buffer, n);
-  return text;
-}
-
-Outcome sgp(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::FILE* out = std::tmpfile();
-  std::FILE* err = std::tmpfile();
-  Outcome o;
-  o.code = sgp_command(static_cast<int>(argv.size()), argv.data(), out, err);
-  o.out = read_all(out);
-  o.err = read_all(err);
-  std::fclose(out);
-  std::fclose(err);
-  return o;
-}
+Outcome sgp(std::vector<std::string> args) { return testing::run_command(sgp_command, std::move(args)); }
 
 std::string temp_file(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + name;

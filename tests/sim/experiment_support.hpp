@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "command_capture.hpp"
 #include "sim_commands.hpp"
 
 namespace sen3bot::sim::testing {
@@ -23,33 +24,11 @@ inline std::string read_file(const std::string& path) {
   return text.str();
 }
 
-inline std::string read_all(std::FILE* f) {
-  std::fflush(f);
-  std::rewind(f);
-  std::string text;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
-  return text;
-}
-
-struct CommandRun {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using sen3bot::testing::read_all;
+using CommandRun = sen3bot::testing::CommandOutcome;
 
 inline CommandRun run_experiment(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::FILE* out = std::tmpfile();
-  std::FILE* err = std::tmpfile();
-  CommandRun run;
-  run.code = experiment_command(static_cast<int>(argv.size()), argv.data(), out, err);
-  run.out = read_all(out);
-  run.err = read_all(err);
-  std::fclose(out);
-  std::fclose(err);
-  return run;
+  return sen3bot::testing::run_command(experiment_command, std::move(args));
 }
 
 inline std::string temp_dir() {
