@@ -13,7 +13,10 @@
 //   VelocityCommand   navigation.hpp  controller (requested)           safety
 //                                     safety (to the base)             bridge (to the P2OS driver)
 //   SafetyOutput      navigation.hpp  safety (command and reasons)     mission, telemetry
+//   PersonDetections  people.hpp      a person detector (boxes)        people fusion
+//   People            people.hpp      people fusion (tracks, cages)    planner, controller
 #include "sen3bot/msg/base.hpp"
 #include "sen3bot/msg/geometry.hpp"
 #include "sen3bot/msg/laser.hpp"
 #include "sen3bot/msg/navigation.hpp"
+#include "sen3bot/msg/people.hpp"

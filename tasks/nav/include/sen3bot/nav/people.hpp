@@ -1,0 +1,156 @@
+#pragma once
+// People on the map from the camera and the laser (system.md: the calibration and eq. 2.3-2.4;
+// navigation.md §5): every laser return is projected into the image, the returns inside a
+// person's box place that person on the map, and each person keeps a track with a virtual cage.
+//
+// The projection, c = K (Phi^-1 L - Delta), u = c_x / c_z, v = c_y / c_z. L is the return in
+// the thesis' convention: the camera's axes, at the laser (x right, y down, z forward). A
+// return at range r and bearing a (counter-clockwise from the laser's forward axis) is
+// L = (-r sin a, 0, r cos a). With the thesis' calibration (the camera pitched 10 degrees
+// down, the laser 0.21 m below it) a return 2 m straight ahead lands at (742.2, 146.7) px.
+//
+// Placing a person: of the returns inside the box (and in front of the camera), the ones on
+// the static map (within one cell of an occupied cell) are background and left out; of the
+// rest, those within depth_band_m of the nearest are the person's legs, and their mean is
+// the person's position. A box with too few such returns places nobody.
+#include <array>
+#include <cstdint>
+#include <memory_resource>
+#include <span>
+
+#include "sen3bot/hal/result.hpp"
+#include "sen3bot/msg/laser.hpp"
+#include "sen3bot/msg/people.hpp"
+#include "sen3bot/nav/dynamic_obstacles.hpp"
+#include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/map.hpp"
+
+namespace sen3bot::nav {
+
+struct CameraCalibration {
+  std::array<double, 9> k = {1304.6, 0.0, 727.7219, 0.0, 1306.4, 241.5278, 0.0, 0.0, 1.0};  // row-major
+  std::array<double, 9> phi = {1.0, 0.0, 0.0, 0.0, 0.9848, 0.1736, 0.0, -0.1736, 0.9848};  // camera -> laser
+  std::array<double, 3> delta = {-0.0215, -0.2065, 0.0304};                                   // metres
+  int width_px = 1280;
+  int height_px = 720;
+};
+
+class CameraProjection {
+ public:
+  // Errors: Phi singular, a focal length not positive, an empty image.
+  Status set(const CameraCalibration& calibration) noexcept;
+  // The pixel of a laser return (laser frame: forward, left); false when it lies behind the
+  // camera (depth under 5 cm) or outside the image.
+  bool project(double forward_m, double left_m, double& u_px, double& v_px) const noexcept;
+  [[nodiscard]] double focal_x_px() const noexcept { return fx_; }
+
+ private:
+  std::array<double, 9> m_{};  // K Phi^-1
+  std::array<double, 3> t_{};  // K Delta
+  double fx_ = 1.0;
+  int width_ = 0;
+  int height_ = 0;
+};
+
+struct FusionConfig {
+  double match_window_s = 0.15;  // a box and a scan at most this far apart in time
+  float min_confidence = 0.4f;
+  std::uint16_t person_class = 0;  // COCO's person
+  double depth_band_m = 0.35;      // returns this close behind the nearest one are the person
+  std::size_t min_points = 2;
+  std::int8_t occupied_threshold = 65;  // map cells at least this are background
+};
+
+enum class BoxVerdict : std::uint8_t {
+  located,
+  other_class,     // not a person
+  low_confidence,
+  out_of_window,   // frame and scan too far apart in time
+  no_returns,      // too few returns on the person (background only, or nothing in range)
+};
+inline constexpr std::size_t kBoxVerdicts = 5;
+[[nodiscard]] const char* to_string(BoxVerdict verdict) noexcept;
+
+// Where a box places a person (map frame).
+struct PersonFix {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double range_m = 0.0;  // from the laser
+  double width_m = 0.0;  // the box's horizontal extent at that range
+  std::uint16_t points = 0;
+  std::uint8_t box = 0;  // which box of the frame
+};
+
+class PeopleFusion {
+ public:
+  // map: the static map whose obstacles are background (kept by reference); max_beams: the
+  // longest scan.
+  Status init(const FusionConfig& config, const CameraCalibration& calibration, const OccupancyMap* map,
+              std::size_t max_beams, std::pmr::memory_resource& resource);
+  // One frame's boxes against one scan, taken from laser_pose (the laser's pose on the map at
+  // the scan). Writes at most out.size() fixes and returns how many; a verdict per box counts.
+  std::size_t fuse(const msg::ScanView& scan, const Pose2D& laser_pose, const msg::PersonDetections& frame,
+                   std::span<PersonFix> out) noexcept;
+  [[nodiscard]] std::uint64_t count(BoxVerdict verdict) const noexcept {
+    return counts_[static_cast<std::size_t>(verdict)];
+  }
+  [[nodiscard]] const CameraProjection& projection() const noexcept { return projection_; }
+
+ private:
+  [[nodiscard]] bool background(double x_m, double y_m) const noexcept;
+
+  FusionConfig config_;
+  CameraProjection projection_;
+  const OccupancyMap* map_ = nullptr;
+  std::span<float> u_;
+  std::span<float> v_;
+  std::array<std::uint64_t, kBoxVerdicts> counts_{};
+};
+
+struct PersonTrackerConfig {
+  std::size_t max_tracks = msg::People::kMax;
+  double gate_m = 0.8;             // a fix farther than this from every track starts a new one
+  double expire_s = 2.0;           // a track (and its cage) without a fix for this long ends
+  double dynamic_after_m = 1.0;    // moved farther than this from where first seen: dynamic
+  double safety_radius_m = 0.5;    // the cage: half the person's width plus this
+  double position_gain = 0.6;      // alpha-beta filter
+  double velocity_gain = 0.3;
+  double max_speed_m_s = 3.0;      // a velocity estimate is clamped to this
+};
+
+class PersonTracker {
+ public:
+  struct Track {
+    std::uint32_t id = 0;
+    Point2D at;
+    Point2D velocity;
+    Point2D first_seen;
+    double width_m = 0.0;
+    hal::Nanos last_seen_ns = 0;
+    std::uint16_t points = 0;
+    msg::PersonState state = msg::PersonState::static_person;
+  };
+
+  Status init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource);
+  // The fixes of one frame, taken at stamp_ns: tracks are predicted to it, matched to the fixes
+  // (Hungarian on distance, gated), corrected; unmatched fixes start tracks; stale tracks end.
+  void update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns) noexcept;
+  // Ends the tracks not seen for expire_s by now_ns.
+  void expire(hal::Nanos now_ns) noexcept;
+  // The tracks predicted to now_ns, with their cages.
+  void publish(hal::Nanos now_ns, msg::People& out) const noexcept;
+  [[nodiscard]] std::span<const Track> tracks() const noexcept { return tracks_.first(count_); }
+  [[nodiscard]] std::uint32_t started() const noexcept { return next_id_ - 1; }
+
+ private:
+  PersonTrackerConfig config_;
+  Hungarian hungarian_;
+  std::span<Track> tracks_;
+  std::size_t count_ = 0;
+  std::span<double> cost_;
+  std::span<int> assignment_;
+  std::span<std::uint8_t> fix_used_;
+  std::uint32_t next_id_ = 1;
+};
+
+}  // namespace sen3bot::nav

@@ -1,0 +1,284 @@
+#include "sen3bot/nav/people.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "sen3bot/nav/arena.hpp"
+
+namespace sen3bot::nav {
+
+const char* to_string(BoxVerdict verdict) noexcept {
+  switch (verdict) {
+    case BoxVerdict::located: return "located";
+    case BoxVerdict::other_class: return "other_class";
+    case BoxVerdict::low_confidence: return "low_confidence";
+    case BoxVerdict::out_of_window: return "out_of_window";
+    case BoxVerdict::no_returns: return "no_returns";
+  }
+  return "unknown";
+}
+
+// --- Projection ---------------------------------------------------------------------------------
+
+Status CameraProjection::set(const CameraCalibration& c) noexcept {
+  const std::array<double, 9>& p = c.phi;
+  // Phi^-1 by the adjugate: the calibration's Phi is a rotation only up to its rounding.
+  const double det = p[0] * (p[4] * p[8] - p[5] * p[7]) - p[1] * (p[3] * p[8] - p[5] * p[6]) +
+                     p[2] * (p[3] * p[7] - p[4] * p[6]);
+  if (!(std::abs(det) > 1e-9) || !(c.k[0] > 0.0) || !(c.k[4] > 0.0) || c.width_px <= 0 || c.height_px <= 0) {
+    return Error::format(Errc::config, "camera calibration: Phi must be invertible, K's focal lengths positive and the "
+                                       "image not empty");
+  }
+  const std::array<double, 9> inv = {
+      (p[4] * p[8] - p[5] * p[7]) / det, (p[2] * p[7] - p[1] * p[8]) / det, (p[1] * p[5] - p[2] * p[4]) / det,
+      (p[5] * p[6] - p[3] * p[8]) / det, (p[0] * p[8] - p[2] * p[6]) / det, (p[2] * p[3] - p[0] * p[5]) / det,
+      (p[3] * p[7] - p[4] * p[6]) / det, (p[1] * p[6] - p[0] * p[7]) / det, (p[0] * p[4] - p[1] * p[3]) / det};
+  for (int r = 0; r < 3; ++r) {
+    for (int col = 0; col < 3; ++col) {
+      double sum = 0.0;
+      for (int j = 0; j < 3; ++j) sum += c.k[static_cast<std::size_t>(3 * r + j)] * inv[static_cast<std::size_t>(3 * j + col)];
+      m_[static_cast<std::size_t>(3 * r + col)] = sum;
+    }
+    double sum = 0.0;
+    for (int j = 0; j < 3; ++j) sum += c.k[static_cast<std::size_t>(3 * r + j)] * c.delta[static_cast<std::size_t>(j)];
+    t_[static_cast<std::size_t>(r)] = sum;
+  }
+  fx_ = c.k[0];
+  width_ = c.width_px;
+  height_ = c.height_px;
+  return Status::success();
+}
+
+bool CameraProjection::project(double forward_m, double left_m, double& u_px, double& v_px) const noexcept {
+  // L = (-left, 0, forward): only K Phi^-1's first and last columns meet it.
+  const double lx = -left_m;
+  const double lz = forward_m;
+  const double cz = m_[6] * lx + m_[8] * lz - t_[2];
+  // The depth: K's last row is (0, 0, 1), so c_z is the point's z in the camera frame.
+  if (!(cz > 0.05)) return false;
+  u_px = (m_[0] * lx + m_[2] * lz - t_[0]) / cz;
+  v_px = (m_[3] * lx + m_[5] * lz - t_[1]) / cz;
+  return u_px >= 0.0 && v_px >= 0.0 && u_px < width_ && v_px < height_;
+}
+
+// --- Fusion ---------------------------------------------------------------------------------------
+
+Status PeopleFusion::init(const FusionConfig& config, const CameraCalibration& calibration, const OccupancyMap* map,
+                          std::size_t max_beams, std::pmr::memory_resource& resource) {
+  if (!(config.match_window_s >= 0.0) || !(config.depth_band_m > 0.0) || config.min_points < 1 || max_beams == 0) {
+    return Error::format(Errc::config, "people fusion: match_window_s >= 0, depth_band_m > 0, min_points >= 1 and "
+                                       "room for a scan");
+  }
+  if (Status s = projection_.set(calibration); !s) return s;
+  config_ = config;
+  map_ = map;
+  return guarded("people fusion", [&]() -> Status {
+    u_ = allocate_array<float>(resource, max_beams);
+    v_ = allocate_array<float>(resource, max_beams);
+    return Status::success();
+  });
+}
+
+bool PeopleFusion::background(double x_m, double y_m) const noexcept {
+  if (map_ == nullptr) return false;
+  int col = 0;
+  int row = 0;
+  if (!map_->world_to_cell(x_m, y_m, col, row)) return false;
+  for (int dr = -1; dr <= 1; ++dr)
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int c = col + dc;
+      const int r = row + dr;
+      if (c >= 0 && r >= 0 && c < map_->width() && r < map_->height() && map_->at(c, r) >= config_.occupied_threshold)
+        return true;
+    }
+  return false;
+}
+
+std::size_t PeopleFusion::fuse(const msg::ScanView& scan, const Pose2D& laser_pose, const msg::PersonDetections& frame,
+                               std::span<PersonFix> out) noexcept {
+  const std::size_t beams = std::min(scan.ranges_m.size(), u_.size());
+  // Every usable return's pixel, once per scan (NaN: none).
+  for (std::size_t i = 0; i < beams; ++i) {
+    u_[i] = v_[i] = std::numeric_limits<float>::quiet_NaN();
+    const float r = scan.ranges_m[i];
+    if (!(r > scan.range_min_m) || !(r < scan.range_max_m)) continue;
+    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+    double u = 0.0;
+    double v = 0.0;
+    if (projection_.project(r * std::cos(a), r * std::sin(a), u, v)) {
+      u_[i] = static_cast<float>(u);
+      v_[i] = static_cast<float>(v);
+    }
+  }
+  const double c = std::cos(laser_pose.theta_rad);
+  const double s = std::sin(laser_pose.theta_rad);
+  const bool in_window =
+      std::abs(static_cast<double>(frame.capture_ns - scan.stamp_ns)) <= config_.match_window_s * 1e9;
+  std::size_t written = 0;
+  const std::size_t boxes = std::min<std::size_t>(frame.count, msg::PersonDetections::kMax);
+  for (std::size_t b = 0; b < boxes; ++b) {
+    const msg::PersonBox& box = frame.boxes[b];
+    BoxVerdict verdict = BoxVerdict::located;
+    if (box.class_id != config_.person_class) verdict = BoxVerdict::other_class;
+    else if (!(box.confidence >= config_.min_confidence)) verdict = BoxVerdict::low_confidence;
+    else if (!in_window) verdict = BoxVerdict::out_of_window;
+    PersonFix fix;
+    if (verdict == BoxVerdict::located) {
+      // The nearest return in the box that is not the map's, then the mean of those within
+      // the depth band behind it.
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < beams; ++i) {
+        if (!(u_[i] >= box.u0 && u_[i] <= box.u1 && v_[i] >= box.v0 && v_[i] <= box.v1)) continue;
+        const double r = scan.ranges_m[i];
+        if (r >= nearest) continue;
+        const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+        const double lx = r * std::cos(a);
+        const double ly = r * std::sin(a);
+        if (background(laser_pose.x_m + c * lx - s * ly, laser_pose.y_m + s * lx + c * ly)) continue;
+        nearest = r;
+      }
+      double sx = 0.0;
+      double sy = 0.0;
+      std::size_t n = 0;
+      for (std::size_t i = 0; std::isfinite(nearest) && i < beams; ++i) {
+        if (!(u_[i] >= box.u0 && u_[i] <= box.u1 && v_[i] >= box.v0 && v_[i] <= box.v1)) continue;
+        const double r = scan.ranges_m[i];
+        if (r > nearest + config_.depth_band_m) continue;
+        const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+        const double x = laser_pose.x_m + c * r * std::cos(a) - s * r * std::sin(a);
+        const double y = laser_pose.y_m + s * r * std::cos(a) + c * r * std::sin(a);
+        if (background(x, y)) continue;
+        sx += x;
+        sy += y;
+        ++n;
+      }
+      if (n < config_.min_points) {
+        verdict = BoxVerdict::no_returns;
+      } else {
+        fix.x_m = sx / static_cast<double>(n);
+        fix.y_m = sy / static_cast<double>(n);
+        fix.range_m = std::hypot(fix.x_m - laser_pose.x_m, fix.y_m - laser_pose.y_m);
+        fix.width_m = (box.u1 - box.u0) * fix.range_m / projection_.focal_x_px();
+        fix.points = static_cast<std::uint16_t>(std::min<std::size_t>(n, 0xffff));
+        fix.box = static_cast<std::uint8_t>(b);
+      }
+    }
+    ++counts_[static_cast<std::size_t>(verdict)];
+    if (verdict == BoxVerdict::located && written < out.size()) out[written++] = fix;
+  }
+  return written;
+}
+
+// --- Tracking ------------------------------------------------------------------------------------
+
+Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource) {
+  if (config.max_tracks == 0 || config.max_tracks > msg::People::kMax || !(config.gate_m > 0.0) ||
+      !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) ||
+      !(config.position_gain > 0.0 && config.position_gain <= 1.0) || !(config.velocity_gain >= 0.0) ||
+      !(config.max_speed_m_s > 0.0)) {
+    return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s > 0, "
+                                       "0 < position_gain <= 1",
+                         msg::People::kMax);
+  }
+  config_ = config;
+  const std::size_t n = std::max(config.max_tracks, msg::PersonDetections::kMax);
+  if (Status s = hungarian_.init(n, resource); !s) return s;
+  return guarded("person tracker", [&]() -> Status {
+    tracks_ = allocate_array<Track>(resource, config.max_tracks);
+    cost_ = allocate_array<double>(resource, n * n);
+    assignment_ = allocate_array<int>(resource, n);
+    fix_used_ = allocate_array<std::uint8_t>(resource, n);
+    return Status::success();
+  });
+}
+
+void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns) noexcept {
+  const std::size_t fix_count = std::min(fixes.size(), fix_used_.size());
+  std::fill(fix_used_.begin(), fix_used_.end(), std::uint8_t{0});
+  std::fill(assignment_.begin(), assignment_.end(), Hungarian::kUnassigned);
+  // Predicted positions, matched to the fixes; an out-of-gate pair never wins over an in-gate one.
+  const auto predicted = [&](const Track& t) {
+    const double dt = std::max(0.0, static_cast<double>(stamp_ns - t.last_seen_ns) * 1e-9);
+    return Point2D{t.at.x_m + t.velocity.x_m * dt, t.at.y_m + t.velocity.y_m * dt};
+  };
+  if (count_ > 0 && fix_count > 0) {
+    const double far = 2.0 * config_.gate_m;
+    for (std::size_t t = 0; t < count_; ++t) {
+      const Point2D p = predicted(tracks_[t]);
+      for (std::size_t f = 0; f < fix_count; ++f)
+        cost_[t * fix_count + f] = std::min(std::hypot(fixes[f].x_m - p.x_m, fixes[f].y_m - p.y_m), far);
+    }
+    hungarian_.solve(cost_.first(count_ * fix_count), count_, fix_count, assignment_.first(count_));
+  }
+  for (std::size_t t = 0; t < count_; ++t) {
+    const int f = assignment_[t];
+    if (f == Hungarian::kUnassigned || cost_[t * fix_count + static_cast<std::size_t>(f)] > config_.gate_m) continue;
+    const PersonFix& fix = fixes[static_cast<std::size_t>(f)];
+    fix_used_[static_cast<std::size_t>(f)] = 1;
+    Track& track = tracks_[t];
+    const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
+    if (dt <= 0.0) continue;  // a second fix for the same instant adds nothing
+    // Alpha-beta: the residual against the prediction corrects position and velocity.
+    const Point2D p = predicted(track);
+    const double rx = fix.x_m - p.x_m;
+    const double ry = fix.y_m - p.y_m;
+    track.at = {p.x_m + config_.position_gain * rx, p.y_m + config_.position_gain * ry};
+    track.velocity.x_m += config_.velocity_gain * rx / dt;
+    track.velocity.y_m += config_.velocity_gain * ry / dt;
+    const double speed = std::hypot(track.velocity.x_m, track.velocity.y_m);
+    if (speed > config_.max_speed_m_s) {
+      track.velocity.x_m *= config_.max_speed_m_s / speed;
+      track.velocity.y_m *= config_.max_speed_m_s / speed;
+    }
+    track.width_m = fix.width_m;
+    track.points = fix.points;
+    track.last_seen_ns = stamp_ns;
+    // Dynamic once its centre has moved farther than the threshold from where it was first seen.
+    if (std::hypot(track.at.x_m - track.first_seen.x_m, track.at.y_m - track.first_seen.y_m) > config_.dynamic_after_m)
+      track.state = msg::PersonState::dynamic_person;
+  }
+  expire(stamp_ns);
+  for (std::size_t f = 0; f < fix_count && count_ < tracks_.size(); ++f) {
+    if (fix_used_[f] != 0) continue;
+    Track& track = tracks_[count_++];
+    track = Track{};
+    track.id = next_id_++;
+    track.at = track.first_seen = {fixes[f].x_m, fixes[f].y_m};
+    track.width_m = fixes[f].width_m;
+    track.points = fixes[f].points;
+    track.last_seen_ns = stamp_ns;
+  }
+}
+
+void PersonTracker::expire(hal::Nanos now_ns) noexcept {
+  std::size_t kept = 0;
+  for (std::size_t t = 0; t < count_; ++t) {
+    if (static_cast<double>(now_ns - tracks_[t].last_seen_ns) > config_.expire_s * 1e9) continue;
+    if (kept != t) tracks_[kept] = tracks_[t];
+    ++kept;
+  }
+  count_ = kept;
+}
+
+void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept {
+  out.count = 0;
+  out.stamp_ns = now_ns;
+  for (std::size_t t = 0; t < count_ && out.count < msg::People::kMax; ++t) {
+    const Track& track = tracks_[t];
+    const double dt = std::max(0.0, static_cast<double>(now_ns - track.last_seen_ns) * 1e-9);
+    msg::TrackedPerson& p = out.items[out.count++];
+    p.id = track.id;
+    p.x_m = track.at.x_m + track.velocity.x_m * dt;
+    p.y_m = track.at.y_m + track.velocity.y_m * dt;
+    p.vx_m_s = track.velocity.x_m;
+    p.vy_m_s = track.velocity.y_m;
+    p.width_m = track.width_m;
+    p.cage_radius_m = track.width_m / 2.0 + config_.safety_radius_m;
+    p.state = track.state;
+    p.last_seen_ns = track.last_seen_ns;
+    p.points = track.points;
+  }
+}
+
+}  // namespace sen3bot::nav

@@ -1,0 +1,268 @@
+// Camera-laser fusion: the thesis' projection, people placed from the returns in their boxes,
+// and the tracks with their cages.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/people.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(CameraProjection, TheThesisCalibrationGivesTheHandComputedPixels) {
+  CameraProjection camera;
+  ASSERT_TRUE(camera.set({}));
+  // c = K (Phi^-1 L - Delta) with L = (-left, 0, forward), worked out by hand (Phi^-1 by the
+  // adjugate: det Phi = 0.999968).
+  const struct {
+    double forward, left, u, v;
+  } cases[] = {{2.0, 0.0, 742.186, 146.737}, {1.0, 0.5, 73.666, 286.553}, {6.0, -1.0, 954.417, 55.936},
+               {3.0, 0.2, 648.083, 101.100}};
+  for (const auto& c : cases) {
+    double u = 0, v = 0;
+    ASSERT_TRUE(camera.project(c.forward, c.left, u, v)) << c.forward << ", " << c.left;
+    EXPECT_NEAR(u, c.u, 0.01) << c.forward << ", " << c.left;
+    EXPECT_NEAR(v, c.v, 0.01) << c.forward << ", " << c.left;
+  }
+}
+
+TEST(CameraProjection, BehindTheCameraOrOutsideTheImageNeverMatches) {
+  CameraProjection camera;
+  ASSERT_TRUE(camera.set({}));
+  double u = 0, v = 0;
+  EXPECT_FALSE(camera.project(-2.0, 0.0, u, v));  // behind
+  EXPECT_FALSE(camera.project(0.0, 1.0, u, v));   // beside the laser: depth 0
+  EXPECT_FALSE(camera.project(1.0, 2.0, u, v));   // far left of the image
+  EXPECT_FALSE(camera.project(1.0, -2.0, u, v));  // far right
+  EXPECT_FALSE(camera.project(0.3, 0.0, u, v));   // below the image's bottom edge
+  CameraCalibration singular;
+  singular.phi = {1, 0, 0, 0, 0, 0, 0, 0, 1};
+  EXPECT_FALSE(camera.set(singular));
+}
+
+// A 361-beam, 180-degree scan: a wall at wall_m everywhere, and legs at leg_m across the
+// bearings in legs (radians).
+std::vector<float> scan_ranges(double wall_m, double leg_m, std::vector<std::pair<double, double>> legs) {
+  std::vector<float> r(361);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+    r[i] = static_cast<float>(wall_m / std::max(std::cos(a), 0.05));  // a straight wall ahead
+    for (const auto& [lo, hi] : legs)
+      if (a >= lo && a <= hi) r[i] = static_cast<float>(leg_m);
+  }
+  return r;
+}
+
+msg::ScanView view_of(const std::vector<float>& r, hal::Nanos stamp) {
+  return {r, static_cast<float>(-kPi / 2), static_cast<float>(kPi / 360.0), 0.05f, 30.0f, stamp};
+}
+
+// The box a detector would draw around a person standing at (forward, left), 0.5 m wide.
+msg::PersonBox box_around(const CameraProjection& camera, double forward, double left) {
+  double ul = 0, vl = 0, ur = 0, vr = 0;
+  EXPECT_TRUE(camera.project(forward, left + 0.25, ul, vl));
+  EXPECT_TRUE(camera.project(forward, left - 0.25, ur, vr));
+  // Tall enough for every return near that range in the laser's plane.
+  return {static_cast<float>(ul), 0.0f, static_cast<float>(ur), 719.0f, 0.9f, 0};
+}
+
+struct Fusion {
+  explicit Fusion(const OccupancyMap* map = nullptr, FusionConfig config = {}) {
+    EXPECT_TRUE(fusion.init(config, {}, map, 401, arena));
+  }
+  mem::BudgetArena arena{"fusion", 64 * 1024};
+  PeopleFusion fusion;
+};
+
+TEST(PeopleFusion, ABoxOnLegsGivesTheLegsPosition) {
+  Fusion f;
+  // Legs 2.5 m ahead, 0.3 m to the left (two legs: two narrow bearing ranges), wall at 6 m.
+  const double bearing = std::atan2(0.3, 2.5);
+  const std::vector<float> r =
+      scan_ranges(6.0, std::hypot(2.5, 0.3), {{bearing - 0.05, bearing - 0.02}, {bearing + 0.02, bearing + 0.05}});
+  msg::PersonDetections frame;
+  frame.boxes[0] = box_around(f.fusion.projection(), 2.5, 0.3);
+  frame.count = 1;
+  frame.capture_ns = 1'000'000'000;
+  PersonFix fixes[4];
+  // The laser at (1, 2) on the map, facing +y: forward is +y, left is -x.
+  const std::size_t n = f.fusion.fuse(view_of(r, 1'020'000'000), {1.0, 2.0, kPi / 2}, frame, fixes);
+  ASSERT_EQ(n, 1u);
+  EXPECT_NEAR(fixes[0].x_m, 1.0 - 0.3, 0.03);
+  EXPECT_NEAR(fixes[0].y_m, 2.0 + 2.5, 0.03);
+  EXPECT_GE(fixes[0].points, 6);
+  EXPECT_NEAR(fixes[0].width_m, 0.5, 0.05);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::located), 1u);
+}
+
+TEST(PeopleFusion, ABoxWithOnlyTheMapsBackgroundGivesNobody) {
+  // The map: a wall 4 m ahead of the laser at (0, 5) facing +x.
+  OccupancyMap map(200, 200, 0.05, 0.0, 0.0);
+  for (int row = 0; row < 200; ++row)
+    for (int col = 80; col < 82; ++col) map.set(col, row, 100);
+  Fusion f(&map);
+  const std::vector<float> empty = scan_ranges(4.0, 0.0, {});
+  msg::PersonDetections frame;
+  frame.boxes[0] = box_around(f.fusion.projection(), 3.0, 0.0);
+  frame.count = 1;
+  PersonFix fixes[2];
+  EXPECT_EQ(f.fusion.fuse(view_of(empty, 0), {0.0, 5.0, 0.0}, frame, fixes), 0u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::no_returns), 1u);
+  // Someone in front of that wall is found, the wall behind them left out.
+  const std::vector<float> legs = scan_ranges(4.0, 3.0, {{-0.04, 0.04}});
+  ASSERT_EQ(f.fusion.fuse(view_of(legs, 0), {0.0, 5.0, 0.0}, frame, fixes), 1u);
+  EXPECT_NEAR(fixes[0].x_m, 3.0, 0.02);
+  EXPECT_NEAR(fixes[0].y_m, 5.0, 0.03);
+}
+
+TEST(PeopleFusion, EachRejectedBoxIsCountedWithItsReason) {
+  FusionConfig config;
+  config.match_window_s = 0.15;
+  Fusion f(nullptr, config);
+  const std::vector<float> r = scan_ranges(6.0, 2.0, {{-0.04, 0.04}});
+  msg::PersonDetections frame;
+  frame.boxes[0] = box_around(f.fusion.projection(), 2.0, 0.0);
+  frame.boxes[1] = frame.boxes[0];
+  frame.boxes[1].class_id = 56;  // a chair
+  frame.boxes[2] = frame.boxes[0];
+  frame.boxes[2].confidence = 0.1f;
+  frame.count = 3;
+  frame.capture_ns = 5'000'000'000;
+  PersonFix fixes[4];
+  // The scan 0.149 s after the frame: in the window.
+  EXPECT_EQ(f.fusion.fuse(view_of(r, 5'149'000'000), {}, frame, fixes), 1u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::located), 1u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::other_class), 1u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::low_confidence), 1u);
+  // 0.151 s after, or before: outside it.
+  EXPECT_EQ(f.fusion.fuse(view_of(r, 5'151'000'000), {}, frame, fixes), 0u);
+  EXPECT_EQ(f.fusion.fuse(view_of(r, 4'849'000'000), {}, frame, fixes), 0u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::out_of_window), 2u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::other_class), 3u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::located), 1u);
+  // Nothing but beams out of range in the box: nobody.
+  const std::vector<float> none(361, 50.0f);
+  EXPECT_EQ(f.fusion.fuse(view_of(none, 5'000'000'000), {}, frame, fixes), 0u);
+  EXPECT_EQ(f.fusion.count(BoxVerdict::no_returns), 1u);
+}
+
+TEST(PeopleFusion, FusingAllocatesNothing) {
+  Fusion f;
+  const std::vector<float> r = scan_ranges(6.0, 2.0, {{-0.04, 0.04}});
+  msg::PersonDetections frame;
+  for (int i = 0; i < 8; ++i)
+    frame.boxes[static_cast<std::size_t>(i)] = box_around(f.fusion.projection(), 2.0, -0.5 + 0.125 * i);
+  frame.count = 8;
+  PersonFix fixes[8];
+  mem::testing::AllocationScope scope;
+  (void)f.fusion.fuse(view_of(r, 0), {}, frame, fixes);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+// --- Tracking ---
+
+struct Tracker {
+  explicit Tracker(PersonTrackerConfig config = {}) { EXPECT_TRUE(tracker.init(config, arena)); }
+  mem::BudgetArena arena{"people", 64 * 1024};
+  PersonTracker tracker;
+};
+
+PersonFix fix_at(double x, double y, double width = 0.5) {
+  PersonFix f;
+  f.x_m = x;
+  f.y_m = y;
+  f.width_m = width;
+  f.points = 10;
+  return f;
+}
+
+TEST(PersonTracker, StaticUntilMovedFartherThanTheThresholdFromWhereFirstSeen) {
+  PersonTrackerConfig config;
+  config.position_gain = 1.0;  // the fix is the position: the threshold is exact
+  config.velocity_gain = 0.0;
+  config.dynamic_after_m = 1.0;
+  Tracker t(config);
+  hal::Nanos now = 0;
+  for (const double x : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+    const PersonFix f = fix_at(2.0 + x, 3.0);
+    t.tracker.update(std::span(&f, 1), now += 100'000'000);
+  }
+  ASSERT_EQ(t.tracker.tracks().size(), 1u);
+  EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::static_person);  // exactly 1 m: not more
+  const PersonFix beyond = fix_at(3.0 + 1e-6, 3.0);
+  t.tracker.update(std::span(&beyond, 1), now += 100'000'000);
+  EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::dynamic_person);
+  // It stays dynamic: the person has shown that they move.
+  const PersonFix back = fix_at(2.5, 3.0);
+  t.tracker.update(std::span(&back, 1), now += 100'000'000);
+  EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::dynamic_person);
+  EXPECT_EQ(t.tracker.tracks()[0].id, 1u);
+}
+
+TEST(PersonTracker, TwoPeopleKeepTheirIdsAndCagesExpireWithoutDetections) {
+  PersonTrackerConfig config;
+  config.expire_s = 1.0;
+  config.safety_radius_m = 0.4;
+  Tracker t(config);
+  hal::Nanos now = 0;
+  // Walking towards each other along parallel lines 1.2 m apart, 1 m/s each, 10 Hz.
+  for (int k = 0; k < 30; ++k) {
+    const PersonFix fixes[2] = {fix_at(0.1 * k, 0.0, 0.6), fix_at(3.0 - 0.1 * k, 1.2, 0.4)};
+    t.tracker.update(fixes, now += 100'000'000);
+  }
+  ASSERT_EQ(t.tracker.tracks().size(), 2u);
+  EXPECT_EQ(t.tracker.started(), 2u);
+  msg::People people;
+  t.tracker.publish(now, people);
+  ASSERT_EQ(people.count, 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const msg::TrackedPerson& p = people.items[i];
+    if (p.id == 1) {
+      EXPECT_NEAR(p.x_m, 2.9, 0.05);
+      EXPECT_NEAR(p.y_m, 0.0, 0.05);
+      EXPECT_NEAR(p.vx_m_s, 1.0, 0.1);
+      EXPECT_NEAR(p.cage_radius_m, 0.3 + 0.4, 1e-9);
+    } else {
+      EXPECT_EQ(p.id, 2u);
+      EXPECT_NEAR(p.x_m, 0.1, 0.05);
+      EXPECT_NEAR(p.vx_m_s, -1.0, 0.1);
+      EXPECT_NEAR(p.cage_radius_m, 0.2 + 0.4, 1e-9);
+    }
+    EXPECT_EQ(p.state, msg::PersonState::dynamic_person);
+  }
+  // Seen no more: the cages last expire_s, then end.
+  t.tracker.expire(now + 900'000'000);
+  EXPECT_EQ(t.tracker.tracks().size(), 2u);
+  mem::testing::AllocationScope scope;
+  t.tracker.expire(now + 1'100'000'000);
+  t.tracker.publish(now + 1'100'000'000, people);
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(t.tracker.tracks().size(), 0u);
+  EXPECT_EQ(people.count, 0);
+}
+
+TEST(PersonTracker, AFixOutsideTheGateStartsANewTrackAndBadConfigurationsAreRefused) {
+  Tracker t;
+  const PersonFix a = fix_at(0.0, 0.0);
+  const PersonFix b = fix_at(2.0, 0.0);
+  t.tracker.update(std::span(&a, 1), 100'000'000);
+  t.tracker.update(std::span(&b, 1), 200'000'000);
+  EXPECT_EQ(t.tracker.tracks().size(), 2u);
+  mem::BudgetArena arena("bad", 4096);
+  PersonTracker bad;
+  PersonTrackerConfig config;
+  config.max_tracks = 40;
+  EXPECT_FALSE(bad.init(config, arena));
+  config = {};
+  config.position_gain = 0.0;
+  EXPECT_FALSE(bad.init(config, arena));
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
