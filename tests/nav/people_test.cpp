@@ -264,5 +264,52 @@ TEST(PersonTracker, AFixOutsideTheGateStartsANewTrackAndBadConfigurationsAreRefu
   EXPECT_FALSE(bad.init(config, arena));
 }
 
+// --- The cages ---
+
+TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
+  msg::People people;
+  PeopleLayerConfig config;
+  config.expire_s = 1.0;
+  PeopleLayer layer(people, config);
+  InflationLayer inflation;
+  LayeredCostmap costmap;
+  ASSERT_TRUE(costmap.add_layer(layer));
+  ASSERT_TRUE(costmap.add_layer(inflation));
+  mem::BudgetArena arena("costmap", 1 << 20);
+  CostmapConfig grid;
+  grid.rolling = false;
+  grid.width_m = 6.0;
+  grid.height_m = 6.0;
+  ASSERT_TRUE(costmap.init(grid, arena));
+  // One person at (3, 3), 0.4 m wide, cage radius 0.2 + 0.5 m, walking +x at 1 m/s.
+  people.count = 1;
+  people.stamp_ns = 1'000'000'000;
+  people.items[0] = {1, 3.0, 3.0, 1.0, 0.0, 0.4, 0.7, msg::PersonState::dynamic_person, 1'000'000'000, 12};
+  costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 1'000'000'000});
+  const Costmap2D& c = costmap.costmap();
+  const auto cost_at = [&](double x, double y) {
+    int col = 0, row = 0;
+    EXPECT_TRUE(c.world_to_cell(x, y, col, row));
+    return c.at(col, row);
+  };
+  EXPECT_EQ(layer.cages(), 1u);
+  EXPECT_EQ(cost_at(3.0, 3.0), kLethalCost);
+  EXPECT_EQ(cost_at(3.0 + 0.65, 3.0), kLethalCost);
+  EXPECT_EQ(cost_at(3.0, 3.0 - 0.65), kLethalCost);
+  EXPECT_LT(cost_at(3.0 + 0.75, 3.0), kLethalCost);    // outside the disc...
+  EXPECT_GT(cost_at(3.0 + 0.75, 3.0), kFreeCost);      // ...inflated around it
+  EXPECT_EQ(cost_at(1.0, 1.0), kFreeCost);
+  // Half a second later without a new fix: painted where the velocity takes the person.
+  costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 1'500'000'000});
+  EXPECT_EQ(cost_at(3.5 + 0.65, 3.0), kLethalCost);
+  EXPECT_LT(cost_at(3.5 - 0.75, 3.0), kLethalCost);
+  // Not seen for longer than expire_s: no cage.
+  mem::testing::AllocationScope scope;
+  costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 2'100'000'000});
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(layer.cages(), 0u);
+  EXPECT_EQ(cost_at(4.1, 3.0), kFreeCost);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

@@ -281,4 +281,50 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
   }
 }
 
+// --- The cages ----------------------------------------------------------------------------------
+
+Status PeopleLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
+  (void)master;
+  (void)resource;
+  if (!(config_.expire_s > 0.0) || !(config_.max_radius_m > 0.0))
+    return Error::format(Errc::config, "people layer: expire_s and max_radius_m must be positive");
+  return Status::success();
+}
+
+void PeopleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcept {
+  cages_ = 0;
+  const GridGeometry& grid = master.geometry();
+  const double res = grid.resolution_m();
+  const std::size_t count = std::min<std::size_t>(people_.count, msg::People::kMax);
+  for (std::size_t i = 0; i < count; ++i) {
+    const msg::TrackedPerson& p = people_.items[i];
+    if (static_cast<double>(inputs.now_ns - p.last_seen_ns) > config_.expire_s * 1e9) continue;
+    const double dt = config_.predict ? std::max(0.0, static_cast<double>(inputs.now_ns - people_.stamp_ns) * 1e-9) : 0.0;
+    const double x = p.x_m + p.vx_m_s * dt;
+    const double y = p.y_m + p.vy_m_s * dt;
+    const double r = std::min(p.cage_radius_m, config_.max_radius_m);
+    if (!(r > 0.0) || !std::isfinite(x) || !std::isfinite(y)) continue;
+    // The disc's cells: centres within r of the centre, in the grid's own (possibly rotated) frame.
+    double gx = 0.0;
+    double gy = 0.0;
+    grid.world_to_grid(x, y, gx, gy);
+    const double rc = r / res;
+    if (gx + rc < 0.0 || gy + rc < 0.0 || gx - rc > master.width() || gy - rc > master.height()) continue;
+    const int c0 = static_cast<int>(std::floor(gx - rc));
+    const int c1 = static_cast<int>(std::ceil(gx + rc));
+    const int r0 = static_cast<int>(std::floor(gy - rc));
+    const int r1 = static_cast<int>(std::ceil(gy + rc));
+    bool painted = false;
+    for (int row = std::max(r0, 0); row <= std::min(r1, master.height() - 1); ++row)
+      for (int col = std::max(c0, 0); col <= std::min(c1, master.width() - 1); ++col) {
+        const double dx = col + 0.5 - gx;
+        const double dy = row + 0.5 - gy;
+        if (dx * dx + dy * dy > rc * rc) continue;
+        master.set(col, row, kLethalCost);
+        painted = true;
+      }
+    cages_ += painted ? 1 : 0;
+  }
+}
+
 }  // namespace sen3bot::nav

@@ -21,6 +21,7 @@
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/msg/laser.hpp"
 #include "sen3bot/msg/people.hpp"
+#include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
@@ -151,6 +152,31 @@ class PersonTracker {
   std::span<int> assignment_;
   std::span<std::uint8_t> fix_used_;
   std::uint32_t next_id_ = 1;
+};
+
+struct PeopleLayerConfig {
+  double expire_s = 2.0;      // a person not seen for this long has no cage
+  double max_radius_m = 2.0;  // a cage is never larger (a wrong width must not close the map)
+  bool predict = true;        // paint each person where their velocity takes them by the update
+};
+
+// The virtual cages: a lethal disc of each tracked person's cage radius, painted before the
+// inflation layer so that the normal inflation surrounds it. It reads the People it is given
+// (the fusion's, copied in by the task before each update) and keeps nothing between updates.
+class PeopleLayer final : public CostmapLayer {
+ public:
+  explicit PeopleLayer(const msg::People& people, PeopleLayerConfig config = {}) noexcept
+      : people_(people), config_(config) {}
+  [[nodiscard]] const char* name() const noexcept override { return "people"; }
+  Status init(const Costmap2D& master, std::pmr::memory_resource& resource) override;
+  void update(Costmap2D& master, const CostmapInputs& inputs) noexcept override;
+  // Cages painted by the last update.
+  [[nodiscard]] std::size_t cages() const noexcept { return cages_; }
+
+ private:
+  const msg::People& people_;
+  PeopleLayerConfig config_;
+  std::size_t cages_ = 0;
 };
 
 }  // namespace sen3bot::nav
