@@ -171,7 +171,7 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s", "dynamic_obstacles",
-                "mover_prediction", "local_costmap", "safe_curve", "sgp"});
+                "mover_prediction", "local_costmap", "safe_curve", "sgp", "people"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -181,6 +181,20 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
       r.fail("safe_curve", "waypoints and safe_curve are alternatives: a fixed path, or the supervisory planner's",
              YAML::Node());
     n.safe_curve_path = relative_to(r.file(), r.text("safe_curve"));
+  }
+  if (r.has("people")) {
+    // Camera-laser fusion and the cages (docs/people.md).
+    const Reader p = r.child("people");
+    p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
+                  "min_confidence"});
+    n.people_enabled = true;
+    n.people_detector = p.text("detector");
+    if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
+    if (p.has("dynamic_after_m")) n.person_tracker.dynamic_after_m = p.number("dynamic_after_m", 0.0, 20.0);
+    if (p.has("expire_s")) n.person_tracker.expire_s = n.cages.expire_s = p.number("expire_s", 0.1, 60.0);
+    if (p.has("match_window_s")) n.fusion.match_window_s = p.number("match_window_s", 0.0, 2.0);
+    if (p.has("max_age_s")) n.detection_max_age_s = p.number("max_age_s", 0.05, 10.0);
+    if (p.has("min_confidence")) n.fusion.min_confidence = static_cast<float>(p.number("min_confidence", 0.0, 1.0));
   }
   if (r.has("sgp")) {
     // The supervisory planner's integration (sgp.hpp); used with safe_curve.

@@ -15,6 +15,7 @@
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/people.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
@@ -56,6 +57,14 @@ struct NavigationSection {
   // planner then computes each goal's waypoints from where the robot is.
   std::string safe_curve_path;
   nav::SgpConfig sgp;
+  // People (docs/people.md): boxes from a person detector on `people_detector` ("sim", or
+  // "udp://ADDRESS:PORT"), fused with the laser, tracked, and caged on both costmaps.
+  bool people_enabled = false;
+  std::string people_detector;
+  nav::FusionConfig fusion;
+  nav::PersonTrackerConfig person_tracker;
+  nav::PeopleLayerConfig cages;
+  double detection_max_age_s = 0.5;
   nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m

@@ -27,6 +27,8 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "controller") return controller_task_.get();
   if (name == "safety") return safety_task_.get();
   if (name == "mission") return mission_task_.get();
+  if (name == "detector") return detector_task_.get();
+  if (name == "people") return people_task_.get();
   return nullptr;
 }
 
@@ -59,7 +61,28 @@ Status Firmware::create_navigation() {
     planner.curve = curve->curve;
     planner.curve_bounds = curve->has_bounds ? curve->bounds : nav::map_extent(map_);
   }
-  planner_task_ = std::make_unique<nav::PlannerTask>(planner, map_, waypoints_, nav_goal_, nav_pose_, nav_scan_, nav_path_);
+  // People: the detector's channel, the fusion, and the cages on both costmaps.
+  const tasks::Topic<msg::People>* people = nullptr;
+  if (n.people_enabled) {
+    DetectorTaskConfig detector;
+    detector.address = n.people_detector;
+    detector.gate.max_age_s = n.detection_max_age_s;
+    const nav::CameraCalibration camera;
+    detector.gate.width_px = static_cast<std::uint16_t>(camera.width_px);
+    detector.gate.height_px = static_cast<std::uint16_t>(camera.height_px);
+    detector_task_ = std::make_unique<DetectorTask>(detector, board_, nav_detections_);
+    nav::PeopleTaskConfig fusion;
+    fusion.fusion = n.fusion;
+    fusion.tracker = n.person_tracker;
+    fusion.camera = camera;
+    fusion.laser_mount = mount;
+    people_task_ = std::make_unique<nav::PeopleTask>(fusion, map_, nav_scan_, nav_pose_, nav_detections_, nav_people_);
+    people = &nav_people_;
+    planner.use_people = true;
+    planner.people_layer = n.cages;
+  }
+  planner_task_ =
+      std::make_unique<nav::PlannerTask>(planner, map_, waypoints_, nav_goal_, nav_pose_, nav_scan_, nav_path_, people);
 
   nav::ControllerTaskConfig controller;
   controller.laser_mount = mount;
@@ -68,8 +91,10 @@ Status Firmware::create_navigation() {
   controller.local_costmap.width_m = n.local_costmap_size_m;
   controller.local_costmap.height_m = n.local_costmap_size_m;
   controller.obstacle = n.local_obstacles;
+  controller.use_people = n.people_enabled;
+  controller.people_layer = n.cages;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
-                                                           nav_request_, nav_controller_, nav_movers_);
+                                                           nav_request_, nav_controller_, nav_movers_, people);
 
   nav::SafetyTaskConfig safety;
   safety.safety = n.safety;
@@ -124,7 +149,8 @@ Status Firmware::init() {
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),
                            name == "base" || name == "laser" || name == "camera" ? "needs its device under devices"
-                                                             : "needs a navigation section");
+                           : name == "detector" || name == "people"             ? "needs navigation.people"
+                                                                                : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {
     if (Status s = scheduler_.add(*row, *task_named(row->name)); !s) return s;

@@ -20,6 +20,7 @@
 #include "sen3bot/nav/waypoints.hpp"
 #include "base_task.hpp"
 #include "camera_task.hpp"
+#include "detector_task.hpp"
 #include "laser_task.hpp"
 #include "mission.hpp"
 
@@ -63,6 +64,10 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<msg::ControllerStatus>& controller_status() const { return nav_controller_; }
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
   [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
+  [[nodiscard]] const tasks::Topic<msg::People>& people() const { return nav_people_; }
+  // Null without navigation.people.
+  [[nodiscard]] const DetectorTask* detector() const { return detector_task_.get(); }
+  [[nodiscard]] const nav::PeopleTask* people_task() const { return people_task_.get(); }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
   // The waypoints the global planner follows: the file's, or the supervisory planner's path
   // for the newest goal. The planner task, for its supervisory planner. Null or empty without
@@ -96,6 +101,8 @@ class Firmware {
   tasks::Topic<msg::ControllerStatus> nav_controller_;
   tasks::Topic<msg::SafetyOutput> nav_safety_;
   tasks::Topic<msg::MovingObstacles> nav_movers_;
+  tasks::Topic<msg::PersonDetections> nav_detections_;
+  tasks::Topic<msg::People> nav_people_;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
@@ -110,6 +117,8 @@ class Firmware {
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;
   std::unique_ptr<nav::SafetyTask> safety_task_;
+  std::unique_ptr<DetectorTask> detector_task_;
+  std::unique_ptr<nav::PeopleTask> people_task_;
   std::unique_ptr<MissionTask> mission_task_;
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;

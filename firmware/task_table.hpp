@@ -18,9 +18,10 @@ namespace sen3bot::firmware {
 // and a camera can fall silent: neither may hold up anything else). Within
 // a thread, due rows run highest priority first, so each thread's rows are ordered by the data
 // flow: on "io" a scan is read, checked by the safety filter and answered by the base in the
-// same cycle; on "control" localization feeds the controller. A row runs when its task is
-// configured: the devices under `devices`, localization, planners, safety and the mission
-// under `navigation`; the rest always. Budgets are for the Pi 3; the camera's allows one
+// same cycle, and a person detector's datagrams are taken in; on "control" localization feeds
+// the people's fusion and the controller. A row runs when its task is configured: the
+// devices under `devices`, localization, planners, safety and the mission under `navigation`,
+// the detector and the people under `navigation.people`; the rest always. Budgets are for the Pi 3; the camera's allows one
 // 15 fps stream decoded at up to 1280 x 720; the controller's a worst DWA cycle among movers
 // (docs/navigation.md, benchmarks).
 inline constexpr std::array kTaskTable = {
@@ -28,8 +29,10 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"laser",        5'000,     500,       74,       "io"},
     tasks::TaskSpec{"safety",       10'000,    1'000,     73,       "io"},
     tasks::TaskSpec{"base",         10'000,    500,       72,       "io"},
+    tasks::TaskSpec{"detector",     20'000,    300,       71,       "io"},
     tasks::TaskSpec{"localization", 50'000,    15'000,    66,       "control"},
-    tasks::TaskSpec{"controller",   100'000,   20'000,    65,       "control"},
+    tasks::TaskSpec{"people",       100'000,   2'000,     65,       "control"},
+    tasks::TaskSpec{"controller",   100'000,   20'000,    64,       "control"},
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},

@@ -11,6 +11,7 @@
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/hal/fd.hpp"
 #include "sen3bot/hal/serial.hpp"
+#include "sen3bot/hal/udp.hpp"
 
 namespace sen3bot::hal {
 
@@ -93,6 +94,56 @@ Result<Link> PosixBoard::open_link(std::string_view link, const LinkRequest& req
     opened.baud = request.baud;
   }
   return opened;
+}
+
+Result<std::unique_ptr<DatagramPort>> Board::open_datagram(std::string_view name, std::string_view address) {
+  return Error::format(Errc::not_supported, "%.*s: this board has no datagram channel '%.*s'", static_cast<int>(name.size()),
+                       name.data(), static_cast<int>(address.size()), address.data());
+}
+
+namespace {
+
+// A bound UDP socket as a DatagramPort.
+class UdpDatagramPort final : public DatagramPort {
+ public:
+  explicit UdpDatagramPort(std::unique_ptr<UdpSocket> socket) : socket_(std::move(socket)) {}
+  Result<std::optional<std::size_t>> receive(std::span<std::uint8_t> out) override {
+    Result<std::optional<UdpReceived>> r = socket_->recv_from(out);
+    if (!r) return r.error();
+    if (!r->has_value()) return std::optional<std::size_t>{};
+    if ((*r)->truncated) return Error(Errc::protocol, "a datagram larger than the receive buffer was dropped");
+    return std::optional<std::size_t>{(*r)->size};
+  }
+
+ private:
+  std::unique_ptr<UdpSocket> socket_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<DatagramPort>> PosixBoard::open_datagram(std::string_view name, std::string_view address) {
+  const auto fail = [&](const char* problem) {
+    return Error::format(Errc::config, "%.*s: '%.*s': %s", static_cast<int>(name.size()), name.data(),
+                         static_cast<int>(address.size()), address.data(), problem);
+  };
+  constexpr std::string_view kScheme = "udp://";
+  if (!address.starts_with(kScheme)) return fail("expected udp://ADDRESS:PORT");
+  const std::string_view rest = address.substr(kScheme.size());
+  const std::size_t colon = rest.rfind(':');
+  if (colon == std::string_view::npos) return fail("expected udp://ADDRESS:PORT");
+  unsigned port = 0;
+  const std::string_view digits = rest.substr(colon + 1);
+  if (digits.empty() || digits.size() > 5) return fail("the port must be 1..65535");
+  for (const char c : digits) {
+    if (c < '0' || c > '9') return fail("the port must be 1..65535");
+    port = port * 10 + static_cast<unsigned>(c - '0');
+  }
+  if (port == 0 || port > 65535) return fail("the port must be 1..65535");
+  const std::string_view host = rest.substr(0, colon);
+  Result<std::unique_ptr<UdpSocket>> socket = UdpSocket::bind(host == "0.0.0.0" ? "" : host, static_cast<std::uint16_t>(port));
+  if (!socket)
+    return Error::format(socket.error().code(), "%.*s: %s", static_cast<int>(name.size()), name.data(), socket.error().c_str());
+  return std::unique_ptr<DatagramPort>(std::make_unique<UdpDatagramPort>(std::move(*socket)));
 }
 
 DigitalInput* PosixBoard::input(std::string_view name) noexcept { return name == "estop" ? estop_.get() : nullptr; }

@@ -32,6 +32,13 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   // The supervisory planner computes each goal's waypoints (config/sim.yaml gives a file).
   config->navigation.waypoints_path.clear();
   config->navigation.safe_curve_path = SEN3BOT_SOURCE_DIR "/config/maps/lab_curve.yaml";
+  // People: the simulated detector's frames through the gate, the fusion and the cages.
+  rig.world.detector.enabled = true;
+  rig.make_board();
+  config->navigation.people_enabled = true;
+  config->navigation.people_detector = "sim";
+  config->tasks["detector"].arena_bytes = 4 * 1024;
+  config->tasks["people"].arena_bytes = 64 * 1024;
   hal::SimClock& clock = rig.clock();
 
   std::FILE* sink = std::fopen("/dev/null", "w");
@@ -77,6 +84,10 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   // A goal came inside the window, and the supervisory planner ran for it.
   EXPECT_GT(fw.planner()->sgp_runs(), sgp_runs_before);
   EXPECT_TRUE(fw.planner()->sgp_result().on_curve);
+  // The worker was seen, placed and caged meanwhile.
+  ASSERT_NE(fw.people_task(), nullptr);
+  EXPECT_GT(fw.people_task()->frames_fused(), 0u);
+  EXPECT_GT(fw.people_task()->fusion().count(nav::BoxVerdict::located), 0u);
   fw.shutdown();
   std::fclose(sink);
 }

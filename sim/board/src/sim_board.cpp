@@ -46,6 +46,13 @@ Result<std::unique_ptr<SimBoard>> SimBoard::create(const SimulationConfig& confi
 SimBoard::SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep)
     : simulation_(std::move(simulation)), lockstep_(lockstep) {
   if (lockstep_) sim_clock_.set_listener(this);
+  const SimulationConfig& c = simulation_->config();
+  detector_ = std::make_unique<SimDetector>(c.detector, c.seed);
+  people_ = std::make_unique<bool[]>(c.movers.size());
+  for (std::size_t i = 0; i < c.movers.size(); ++i) {
+    people_[i] = c.movers[i].person;
+    mover_sizes_m_.push_back(c.movers[i].size_m);
+  }
 }
 
 SimBoard::~SimBoard() {
@@ -81,6 +88,34 @@ Result<hal::Link> SimBoard::open_link(std::string_view link, const hal::LinkRequ
 void SimBoard::step(hal::Nanos now_ns) noexcept {
   simulation_->step(now_ns);
   referee_.observe(simulation_->truth());
+  const SimulationConfig& c = simulation_->config();
+  if (c.detector.enabled) {
+    // The camera sits with the laser (the calibration relates the two): seen from the laser's true pose.
+    const nav::Pose2D laser = msg::compose(simulation_->truth().pose, {c.laser_mount.x_m, c.laser_mount.y_m, c.laser_mount.theta_rad});
+    const std::int64_t unix_ns = lockstep_ ? hal::SimClock::kEpochUnixNs + now_ns : posix_clock_.unix_now_ns();
+    detector_->step(now_ns, unix_ns, simulation_->world(), std::span<const bool>(people_.get(), c.movers.size()),
+                    mover_sizes_m_, laser);
+  }
+}
+
+namespace {
+// The board's detector as the firmware's port (the board keeps it).
+class DetectorPort final : public hal::DatagramPort {
+ public:
+  explicit DetectorPort(SimDetector& detector) : detector_(detector) {}
+  Result<std::optional<std::size_t>> receive(std::span<std::uint8_t> out) override { return detector_.receive(out); }
+
+ private:
+  SimDetector& detector_;
+};
+}  // namespace
+
+Result<std::unique_ptr<hal::DatagramPort>> SimBoard::open_datagram(std::string_view name, std::string_view address) {
+  if (address != "sim") return host_.open_datagram(name, address);
+  if (name != "detector") return hal::Board::open_datagram(name, address);
+  if (!simulation_->config().detector.enabled)
+    return Error(Errc::config, "detector: the simulated robot has no person detector (sim.detector)");
+  return std::unique_ptr<hal::DatagramPort>(std::make_unique<DetectorPort>(*detector_));
 }
 
 void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {

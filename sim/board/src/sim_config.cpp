@@ -32,7 +32,8 @@ world::MoverScript read_mover(const Reader& r, bool person) {
 }
 
 void read_sim(const Reader& r, SimulationConfig& w) {
-  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "laser_max_range_m", "people", "boxes", "laser_status"});
+  r.allow_only({"map", "start_pose", "seed", "range_noise_m", "laser_max_range_m", "people", "boxes", "laser_status",
+                "detector"});
   w.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));
   if (r.has("seed")) w.seed = static_cast<std::uint64_t>(r.integer("seed", 0, INT64_MAX));
@@ -43,6 +44,21 @@ void read_sim(const Reader& r, SimulationConfig& w) {
   if (r.has("boxes"))
     for (const Reader& m : r.sequence("boxes")) w.movers.push_back(read_mover(m, false));
   if (r.has("laser_status")) w.laser.status = static_cast<std::uint8_t>(r.integer("laser_status", 0, 255));
+  if (r.has("detector")) {
+    // The simulated remote person detector (sim_detector.hpp) on the "detector" channel.
+    const Reader d = r.child("detector");
+    d.allow_only({"enabled", "rate_hz", "latency_s", "noise_px", "miss_rate", "false_positive_rate", "max_range_m",
+                  "laser_height_m"});
+    SimDetectorConfig& c = w.detector;
+    c.enabled = d.has("enabled") ? d.boolean("enabled") : true;
+    if (d.has("rate_hz")) c.rate_hz = d.number("rate_hz", 0.5, 60.0);
+    if (d.has("latency_s")) c.latency_s = d.number("latency_s", 0.0, 2.0);
+    if (d.has("noise_px")) c.noise_px = d.number("noise_px", 0.0, 100.0);
+    if (d.has("miss_rate")) c.miss_rate = d.number("miss_rate", 0.0, 1.0);
+    if (d.has("false_positive_rate")) c.false_positive_rate = d.number("false_positive_rate", 0.0, 1.0);
+    if (d.has("max_range_m")) c.max_range_m = d.number("max_range_m", 0.5, 30.0);
+    if (d.has("laser_height_m")) c.laser_height_m = d.number("laser_height_m", 0.0, 2.0);
+  }
   w.base.noise_seed = static_cast<std::uint32_t>(w.seed);
 }
 

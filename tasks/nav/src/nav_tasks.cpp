@@ -59,6 +59,9 @@ Status PlannerTask::init(std::pmr::memory_resource& arena) {
     if (config_.use_scan) {
       if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
     }
+    if (config_.use_people && people_ != nullptr) {
+      if (Status s = costmap_.add_layer(people_layer_); !s) return s;
+    }
     if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
     if (Status s = costmap_.init_over_map(map_, arena); !s) return s;
     GlobalPlannerConfig planner = config_.planner;
@@ -217,7 +220,13 @@ void PlannerTask::step(const tasks::StepContext& context) {
     projected_.assign(scan_sample_.value.view(), config_.laser_mount);
     scan = &projected_;
   }
-  if (have_pose && scan != nullptr) costmap_.update({pose.value.pose, robot_pose_at(pose.value, *scan), scan});
+  if (have_pose && scan != nullptr) {
+    if (people_ != nullptr) {
+      tasks::Sample<msg::People> people;
+      if (people_->read(people)) people_copy_ = people.value;
+    }
+    costmap_.update({pose.value.pose, robot_pose_at(pose.value, *scan), scan, context.start_ns});
+  }
   tasks::Sample<NavGoal> goal;
   if (!goal_.read(goal)) return;
   if (!goal.value.active) {
@@ -256,6 +265,9 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
     if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
     if (config_.dynamic_obstacles.enabled) {
       if (Status s = costmap_.add_layer(dynamic_layer_); !s) return s;
+    }
+    if (config_.use_people && people_ != nullptr) {
+      if (Status s = costmap_.add_layer(people_layer_); !s) return s;
     }
     if (Status s = costmap_.add_layer(inflation_layer_); !s) return s;
     CostmapConfig cfg = config_.local_costmap;
@@ -299,6 +311,10 @@ void ControllerTask::step(const tasks::StepContext& context) {
       scan = &projected_;
     }
     const Pose2D at_scan = scan != nullptr ? robot_pose_at(pose.value, *scan) : pose.value.pose;
+    if (people_ != nullptr) {
+      tasks::Sample<msg::People> people;
+      if (people_->read(people)) people_copy_ = people.value;
+    }
     costmap_.update({pose.value.pose, at_scan, scan, context.start_ns});
     if (config_.dynamic_obstacles.enabled) dynamic_layer_.movers(context.start_ns, movers_message_);
     const DwaCommand c =
@@ -364,6 +380,81 @@ void SafetyTask::step(const tasks::StepContext& context) {
   command.stamp_ns = context.start_ns;
   command_.publish(command, context.start_ns);
   status_.publish(out, context.start_ns);
+}
+
+
+// --- PeopleTask ------------------------------------------------------------------------------------
+
+Status PeopleTask::init(std::pmr::memory_resource& arena) {
+  if (!(config_.frame_wait_s >= 0.0)) return Error(Errc::config, "people task: frame_wait_s must be at least 0");
+  if (Status s = fusion_.init(config_.fusion, config_.camera, &map_, ScanMessage::kMaxBeams, arena); !s) return s;
+  if (Status s = tracker_.init(config_.tracker, arena); !s) return s;
+  return guarded("people task", [&]() -> Status {
+    scans_ = allocate_array<PosedScan>(arena, kScans);
+    frames_ = allocate_array<msg::PersonDetections>(arena, kFrames);
+    return Status::success();
+  });
+}
+
+void PeopleTask::fuse(const msg::PersonDetections& frame, const PosedScan& scan) noexcept {
+  const Pose2D laser = msg::compose(scan.pose, config_.laser_mount);
+  const std::size_t n = fusion_.fuse(scan.scan.view(), laser, frame, fixes_);
+  tracker_.update(std::span(fixes_).first(n), frame.capture_ns);
+  ++frames_fused_;
+}
+
+void PeopleTask::step(const tasks::StepContext& context) {
+  // A new scan joins the ring; the localization's pose for a scan comes with its estimate.
+  if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
+    scan_seq_ = scan_sample_.sequence;
+    PosedScan& slot = scans_[scan_next_++ % kScans];
+    slot.scan = scan_sample_.value;
+    slot.posed = false;
+  }
+  tasks::Sample<PoseEstimate> pose;
+  if (pose_.read(pose) && pose.value.valid && pose.value.scan_stamp_ns != 0) {
+    for (PosedScan& s : scans_)
+      if (!s.posed && s.scan.count > 0 && s.scan.stamp_ns == pose.value.scan_stamp_ns) {
+        s.pose = pose.value.scan_pose;
+        s.posed = true;
+      }
+  }
+  if (detections_.read(frame_sample_) && frame_sample_.sequence != frame_seq_) {
+    frame_seq_ = frame_sample_.sequence;
+    if (frame_count_ == kFrames) {
+      // The oldest waiting frame gives way (it would be out of its window by now).
+      std::move(frames_.begin() + 1, frames_.end(), frames_.begin());
+      --frame_count_;
+    }
+    frames_[frame_count_++] = frame_sample_.value;
+  }
+  // Each waiting frame: fused with a posed scan inside the match window, or after frame_wait_s
+  // with the nearest posed scan (the fusion then counts it out of the window).
+  std::size_t kept = 0;
+  for (std::size_t f = 0; f < frame_count_; ++f) {
+    const msg::PersonDetections& frame = frames_[f];
+    const PosedScan* nearest = nullptr;
+    double best = std::numeric_limits<double>::infinity();
+    for (const PosedScan& s : scans_) {
+      if (!s.posed) continue;
+      const double dt = std::abs(static_cast<double>(s.scan.stamp_ns - frame.capture_ns)) * 1e-9;
+      if (dt < best) {
+        best = dt;
+        nearest = &s;
+      }
+    }
+    const bool waited = static_cast<double>(context.start_ns - frame.capture_ns) * 1e-9 > config_.frame_wait_s;
+    if (nearest != nullptr && (best <= config_.fusion.match_window_s || waited)) {
+      fuse(frame, *nearest);
+      continue;
+    }
+    if (waited) continue;  // no posed scan at all: dropped
+    frames_[kept++] = frame;
+  }
+  frame_count_ = kept;
+  tracker_.expire(context.start_ns);
+  tracker_.publish(context.start_ns, message_);
+  people_.publish(message_, context.start_ns);
 }
 
 }  // namespace sen3bot::nav

@@ -50,16 +50,23 @@ Status CameraProjection::set(const CameraCalibration& c) noexcept {
   return Status::success();
 }
 
-bool CameraProjection::project(double forward_m, double left_m, double& u_px, double& v_px) const noexcept {
-  // L = (-left, 0, forward): only K Phi^-1's first and last columns meet it.
+bool CameraProjection::project_point(double forward_m, double left_m, double up_m, double& u_px,
+                                     double& v_px) const noexcept {
+  // L = (-left, -up, forward) in the camera's axes at the laser (y down).
   const double lx = -left_m;
+  const double ly = -up_m;
   const double lz = forward_m;
-  const double cz = m_[6] * lx + m_[8] * lz - t_[2];
-  // The depth: K's last row is (0, 0, 1), so c_z is the point's z in the camera frame.
+  // K's last row is (0, 0, 1): c_z is the point's depth in the camera frame.
+  const double cz = m_[6] * lx + m_[7] * ly + m_[8] * lz - t_[2];
   if (!(cz > 0.05)) return false;
-  u_px = (m_[0] * lx + m_[2] * lz - t_[0]) / cz;
-  v_px = (m_[3] * lx + m_[5] * lz - t_[1]) / cz;
-  return u_px >= 0.0 && v_px >= 0.0 && u_px < width_ && v_px < height_;
+  u_px = (m_[0] * lx + m_[1] * ly + m_[2] * lz - t_[0]) / cz;
+  v_px = (m_[3] * lx + m_[4] * ly + m_[5] * lz - t_[1]) / cz;
+  return true;
+}
+
+bool CameraProjection::project(double forward_m, double left_m, double& u_px, double& v_px) const noexcept {
+  return project_point(forward_m, left_m, 0.0, u_px, v_px) && u_px >= 0.0 && v_px >= 0.0 && u_px < width_ &&
+         v_px < height_;
 }
 
 // --- Fusion ---------------------------------------------------------------------------------------

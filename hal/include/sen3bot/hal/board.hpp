@@ -5,6 +5,8 @@
 // (sim/board) answers the same requests with device emulators driven by a ground-truth world.
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -27,6 +29,16 @@ struct Link {
   std::unique_ptr<ByteStream> stream;
   BaudControl* baud_control = nullptr;
   std::uint32_t baud = 0;  // the rate it was opened at, 0 when not a serial line
+};
+
+// The receiving end of a datagram channel (a remote person detector's boxes): a UDP port on
+// the robot, the simulated detector's queue on the simulated board.
+class DatagramPort {
+ public:
+  virtual ~DatagramPort() = default;
+  // The next waiting datagram into out: its size, or nullopt when none waits. A datagram larger
+  // than out is dropped and reported as an error. Never blocks, never allocates.
+  virtual Result<std::optional<std::size_t>> receive(std::span<std::uint8_t> out) = 0;
 };
 
 // Discrete I/O: an e-stop chain input, a warning light output.
@@ -56,6 +68,10 @@ class Board {
   // after a failure is another call: the old stream is dropped by its owner. Allocates; call at
   // start-up and on reconnects only.
   virtual Result<Link> open_link(std::string_view link, const LinkRequest& request) = 0;
+  // Opens the datagram channel `name` ("detector") at `address`: "udp://ADDRESS:PORT" on the
+  // robot (ADDRESS "0.0.0.0" for every interface), or a name the board knows ("sim").
+  // Allocates; call at start-up.
+  virtual Result<std::unique_ptr<DatagramPort>> open_datagram(std::string_view name, std::string_view address);
   // Named discrete I/O ("estop", "light"), or null when this board has no such line.
   [[nodiscard]] virtual DigitalInput* input(std::string_view name) noexcept {
     (void)name;
@@ -88,6 +104,7 @@ class PosixBoard final : public Board {
   [[nodiscard]] std::string_view name() const override { return "posix"; }
   [[nodiscard]] Clock& clock() override { return clock_; }
   Result<Link> open_link(std::string_view link, const LinkRequest& request) override;
+  Result<std::unique_ptr<DatagramPort>> open_datagram(std::string_view name, std::string_view address) override;
   [[nodiscard]] DigitalInput* input(std::string_view name) noexcept override;
   [[nodiscard]] DigitalOutput* output(std::string_view name) noexcept override;
 

@@ -33,6 +33,8 @@ class Clock {
   virtual void sleep_until(Nanos deadline_ns) = 0;
   // True for a clock that only moves when told to (lockstep simulation).
   [[nodiscard]] virtual bool simulated() const { return false; }
+  // The wall clock (Unix ns) at this moment: what timestamps from other computers are in.
+  [[nodiscard]] virtual std::int64_t unix_now_ns() const = 0;
 };
 
 // CLOCK_MONOTONIC, sleeping with clock_nanosleep(TIMER_ABSTIME) so that periodic loops
@@ -40,6 +42,7 @@ class Clock {
 class PosixClock final : public Clock {
  public:
   [[nodiscard]] Nanos now() const override;
+  [[nodiscard]] std::int64_t unix_now_ns() const override;  // CLOCK_REALTIME
   void sleep_until(Nanos deadline_ns) override;
 };
 
@@ -50,6 +53,9 @@ class SimClock final : public Clock {
   explicit SimClock(Nanos start_ns = 0) : now_ns_(start_ns) {}
 
   [[nodiscard]] Nanos now() const override { return now_ns_.load(std::memory_order_acquire); }
+  // Simulated time counts from a fixed wall-clock instant, so runs are reproducible.
+  static constexpr std::int64_t kEpochUnixNs = 1'767'225'600'000'000'000;  // 2026-01-01 00:00 UTC
+  [[nodiscard]] std::int64_t unix_now_ns() const override { return kEpochUnixNs + now(); }
   void sleep_until(Nanos deadline_ns) override { advance_to(deadline_ns); }
   [[nodiscard]] bool simulated() const override { return true; }
 

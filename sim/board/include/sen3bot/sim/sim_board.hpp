@@ -11,6 +11,7 @@
 #include <span>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/sim/referee.hpp"
@@ -55,6 +56,8 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   [[nodiscard]] hal::Clock& clock() override;
   [[nodiscard]] hal::SimClock* lockstep_clock() noexcept override { return lockstep_ ? &sim_clock_ : nullptr; }
   Result<hal::Link> open_link(std::string_view link, const hal::LinkRequest& request) override;
+  // "detector" at "sim": the simulated person detector; any other address opens on the host.
+  Result<std::unique_ptr<hal::DatagramPort>> open_datagram(std::string_view name, std::string_view address) override;
   [[nodiscard]] hal::DigitalInput* input(std::string_view name) noexcept override {
     return name == "estop" ? &estop_ : nullptr;
   }
@@ -66,6 +69,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
 
   [[nodiscard]] Simulation& simulation() noexcept { return *simulation_; }
   [[nodiscard]] Referee& referee() noexcept { return referee_; }
+  [[nodiscard]] SimDetector& detector() noexcept { return *detector_; }
   [[nodiscard]] SimLine& estop() noexcept { return estop_; }
   [[nodiscard]] SimLine& light() noexcept { return light_; }
   // Lockstep links only; set before the links are opened. Null: no tap.
@@ -86,6 +90,9 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimLine estop_;
   SimLine light_;
   WireTap* tap_ = nullptr;
+  std::unique_ptr<SimDetector> detector_;
+  std::unique_ptr<bool[]> people_;  // per mover: a person (the detector sees people only)
+  std::vector<double> mover_sizes_m_;
   hal::Nanos next_step_ns_ = 0;
   std::thread thread_;
   std::atomic<bool> running_{false};

@@ -18,6 +18,7 @@
 #include "sen3bot/sim/lms200/emulator.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/sim/p2os/emulator.hpp"
+#include "sen3bot/sim/sim_detector.hpp"
 #include "sen3bot/world/world.hpp"
 
 namespace sen3bot::sim {
@@ -44,6 +45,7 @@ struct SimulationConfig {
   p2os::EmulatorConfig base;
   lms200::EmulatorOptions laser;
   std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
+  SimDetectorConfig detector;          // the remote person detector, off unless configured
 };
 
 // What really happened, published every simulation step.

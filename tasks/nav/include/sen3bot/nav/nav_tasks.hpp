@@ -12,6 +12,7 @@
 //        base driver
 //
 // The OccupancyMap given to LocalizationTask, PlannerTask and ControllerTask must outlive them.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <span>
@@ -23,6 +24,7 @@
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
 #include "sen3bot/nav/odometry_history.hpp"
+#include "sen3bot/nav/people.hpp"
 #include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/nav/sgp.hpp"
@@ -97,15 +99,20 @@ struct PlannerTaskConfig {
   SafeCurve curve;
   CurveBounds curve_bounds;
   MapEllipsesConfig ellipses;  // max_map_cells and max_map_rows become the map's
+  // The people's cages (people.hpp), with a People topic to read them from.
+  bool use_people = false;
+  PeopleLayerConfig people_layer;
 };
 
 class PlannerTask final : public tasks::Task {
  public:
   PlannerTask(const PlannerTaskConfig& config, const OccupancyMap& map, std::span<const Point2D> waypoints,
               const tasks::Topic<NavGoal>& goal, const tasks::Topic<PoseEstimate>& pose,
-              const tasks::Topic<ScanMessage>& scan, tasks::Topic<PathMessage>& path) noexcept
+              const tasks::Topic<ScanMessage>& scan, tasks::Topic<PathMessage>& path,
+              const tasks::Topic<msg::People>* people = nullptr) noexcept
       : config_(config), map_(map), waypoints_in_(waypoints), goal_(goal), pose_(pose), scan_(scan), path_(path),
-        static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle), inflation_layer_(config.inflation) {}
+        people_(people), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+        people_layer_(people_copy_, config.people_layer), inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
@@ -136,8 +143,11 @@ class PlannerTask final : public tasks::Task {
   const tasks::Topic<PoseEstimate>& pose_;
   const tasks::Topic<ScanMessage>& scan_;
   tasks::Topic<PathMessage>& path_;
+  const tasks::Topic<msg::People>* people_;
+  msg::People people_copy_;  // the layer paints from this, copied before each update
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
+  PeopleLayer people_layer_;
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   GlobalPlanner planner_;
@@ -174,6 +184,8 @@ struct ControllerTaskConfig {
   DwaConfig dwa;
   SensorMount laser_mount;
   double pose_timeout_s = 1.0;  // no fresh pose estimate: command zero
+  bool use_people = false;      // the people's cages, from a People topic
+  PeopleLayerConfig people_layer;
 };
 
 class ControllerTask final : public tasks::Task {
@@ -181,10 +193,12 @@ class ControllerTask final : public tasks::Task {
   ControllerTask(const ControllerTaskConfig& config, const OccupancyMap& map, const tasks::Topic<PoseEstimate>& pose,
                  const tasks::Topic<Odometry>& odom, const tasks::Topic<ScanMessage>& scan,
                  const tasks::Topic<PathMessage>& path, tasks::Topic<VelocityCommand>& command,
-                 tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers) noexcept
+                 tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers,
+                 const tasks::Topic<msg::People>* people = nullptr) noexcept
       : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
-        movers_(movers), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
-        dynamic_layer_(config.dynamic_obstacles, &map, &obstacle_layer_), inflation_layer_(config.inflation) {}
+        movers_(movers), people_(people), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+        dynamic_layer_(config.dynamic_obstacles, &map, &obstacle_layer_), people_layer_(people_copy_, config.people_layer),
+        inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
@@ -204,9 +218,12 @@ class ControllerTask final : public tasks::Task {
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<ControllerStatus>& status_;
   tasks::Topic<msg::MovingObstacles>& movers_;
+  const tasks::Topic<msg::People>* people_;
+  msg::People people_copy_;  // the layer paints from this, copied before each update
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
   DynamicObstacleLayer dynamic_layer_;
+  PeopleLayer people_layer_;
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   DwaPlanner dwa_;
@@ -216,6 +233,64 @@ class ControllerTask final : public tasks::Task {
   tasks::Sample<ScanMessage> scan_sample_;
   ProjectedScan projected_;
   tasks::Sample<PathMessage> path_sample_;
+};
+
+// --- People -----------------------------------------------------------------------------------
+
+struct PeopleTaskConfig {
+  FusionConfig fusion;
+  PersonTrackerConfig tracker;
+  CameraCalibration camera;
+  SensorMount laser_mount;
+  // A frame waits this long for its scan (a scan arrives after the frame it matches at slow
+  // baud rates); then it is fused with the nearest one it has, or counted out of the window.
+  double frame_wait_s = 0.5;
+};
+
+// Camera-laser fusion on the bus: each detector frame is fused with the scan nearest it in
+// time, placed from the pose the localization gave that scan; the tracks, predicted to the
+// cycle, are published as People (the cages' source). Scans and frames wait in fixed rings.
+class PeopleTask final : public tasks::Task {
+ public:
+  PeopleTask(const PeopleTaskConfig& config, const OccupancyMap& map, const tasks::Topic<ScanMessage>& scan,
+             const tasks::Topic<PoseEstimate>& pose, const tasks::Topic<msg::PersonDetections>& detections,
+             tasks::Topic<msg::People>& people) noexcept
+      : config_(config), map_(map), scan_(scan), pose_(pose), detections_(detections), people_(people) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+  [[nodiscard]] const PeopleFusion& fusion() const noexcept { return fusion_; }
+  [[nodiscard]] const PersonTracker& tracker() const noexcept { return tracker_; }
+  [[nodiscard]] std::uint64_t frames_fused() const noexcept { return frames_fused_; }
+
+ private:
+  static constexpr std::size_t kScans = 4;
+  static constexpr std::size_t kFrames = 4;
+  struct PosedScan {
+    ScanMessage scan;
+    Pose2D pose;  // the robot's, at the scan
+    bool posed = false;
+  };
+  void fuse(const msg::PersonDetections& frame, const PosedScan& scan) noexcept;
+
+  PeopleTaskConfig config_;
+  const OccupancyMap& map_;
+  const tasks::Topic<ScanMessage>& scan_;
+  const tasks::Topic<PoseEstimate>& pose_;
+  const tasks::Topic<msg::PersonDetections>& detections_;
+  tasks::Topic<msg::People>& people_;
+  PeopleFusion fusion_;
+  PersonTracker tracker_;
+  std::span<PosedScan> scans_;             // ring, newest at scans_[(scan_next_ - 1) % kScans]
+  std::size_t scan_next_ = 0;
+  std::span<msg::PersonDetections> frames_;  // waiting for their scan, oldest first
+  std::size_t frame_count_ = 0;
+  tasks::Sample<ScanMessage> scan_sample_;
+  tasks::Sample<msg::PersonDetections> frame_sample_;
+  std::uint64_t scan_seq_ = 0;
+  std::uint64_t frame_seq_ = 0;
+  std::array<PersonFix, msg::PersonDetections::kMax> fixes_{};
+  msg::People message_;
+  std::uint64_t frames_fused_ = 0;
 };
 
 // --- Safety -----------------------------------------------------------------------------------

@@ -43,6 +43,11 @@ class CameraProjection {
   // The pixel of a laser return (laser frame: forward, left); false when it lies behind the
   // camera (depth under 5 cm) or outside the image.
   bool project(double forward_m, double left_m, double& u_px, double& v_px) const noexcept;
+  // A point up_m above the laser's plane, its pixel wherever it falls (off the image too);
+  // false only behind the camera.
+  bool project_point(double forward_m, double left_m, double up_m, double& u_px, double& v_px) const noexcept;
+  [[nodiscard]] int width_px() const noexcept { return width_; }
+  [[nodiscard]] int height_px() const noexcept { return height_; }
   [[nodiscard]] double focal_x_px() const noexcept { return fx_; }
 
  private:
