@@ -1,6 +1,7 @@
 // The detection datagram: the codec round trip and every refusal counted by its reason.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -92,6 +93,8 @@ TEST(DetectorDatagram, MalformedDatagramsAreRefusedAndCounted) {
   cases.push_back({bytes_of(other_camera), Reject::wrong_image});
   cases.push_back({bytes_of(frame(1, kUnix - 600'000'000)), Reject::stale});   // 0.6 s old
   cases.push_back({bytes_of(frame(1, kUnix + 60'000'000)), Reject::future});   // 60 ms ahead
+  cases.push_back({bytes_of(frame(1, INT64_MIN)), Reject::stale});   // times at the ends of the range
+  cases.push_back({bytes_of(frame(1, INT64_MAX)), Reject::future});
   for (const Case& c : cases) {
     DetectionGate gate;
     msg::PersonDetections out;

@@ -156,7 +156,8 @@ bool DetectionGate::accept(std::span<const std::uint8_t> bytes, hal::Nanos now_n
   Reject why = Reject::too_short;
   if (!decode(bytes, d, why)) return refuse(why);
   if (d.width_px != config_.width_px || d.height_px != config_.height_px) return refuse(Reject::wrong_image);
-  const double age_s = static_cast<double>(now_unix_ns - d.capture_unix_ns) * 1e-9;
+  // In doubles: a hostile capture time must not overflow the subtraction.
+  const double age_s = (static_cast<double>(now_unix_ns) - static_cast<double>(d.capture_unix_ns)) * 1e-9;
   if (age_s > config_.max_age_s) return refuse(Reject::stale);
   if (-age_s > config_.max_future_s) return refuse(Reject::future);
   Source* source = nullptr;
