@@ -220,13 +220,12 @@ void PlannerTask::step(const tasks::StepContext& context) {
     projected_.assign(scan_sample_.value.view(), config_.laser_mount);
     scan = &projected_;
   }
-  if (have_pose && scan != nullptr) {
-    if (people_ != nullptr) {
-      tasks::Sample<msg::People> people;
-      if (people_->read(people)) people_copy_ = people.value;
-    }
-    costmap_.update({pose.value.pose, robot_pose_at(pose.value, *scan), scan, context.start_ns});
+  if (people_ != nullptr) {
+    tasks::Sample<msg::People> people;
+    if (people_->read(people)) people_copy_ = people.value;
   }
+  if (have_pose && scan != nullptr)
+    costmap_.update({pose.value.pose, robot_pose_at(pose.value, *scan), scan, context.start_ns});
   tasks::Sample<NavGoal> goal;
   if (!goal_.read(goal)) return;
   if (!goal.value.active) {
@@ -249,11 +248,20 @@ void PlannerTask::step(const tasks::StepContext& context) {
   if (new_goal) {
     next_waypoint_ = 0;
     if (config_.use_sgp) plan_safe_path(goal.value, pose.value.pose);
+    osgp_.reset();
   }
-  if (new_goal || due || blocked) {
+  // Online SGP: a person pushed the robot off its safe path; the new one starts where it is.
+  const bool replan_safe_path = !new_goal && osgp() != nullptr &&
+                                osgp_.update(pose.value.pose, safe_path(), people_copy_, context.start_ns) ==
+                                    OsgpOutcome::triggered;
+  if (replan_safe_path) {
+    next_waypoint_ = 0;
+    plan_safe_path(goal.value, pose.value.pose);
+  }
+  if (new_goal || due || blocked || replan_safe_path) {
     goal_active_ = true;
     goal_id_ = goal.value.id;
-    plan(goal.value, pose.value.pose, context.start_ns, new_goal);
+    plan(goal.value, pose.value.pose, context.start_ns, new_goal || replan_safe_path);
   }
 }
 

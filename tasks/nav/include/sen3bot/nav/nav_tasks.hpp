@@ -24,6 +24,7 @@
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
 #include "sen3bot/nav/odometry_history.hpp"
+#include "sen3bot/nav/osgp.hpp"
 #include "sen3bot/nav/people.hpp"
 #include "sen3bot/nav/projected_scan.hpp"
 #include "sen3bot/nav/safety.hpp"
@@ -102,6 +103,10 @@ struct PlannerTaskConfig {
   // The people's cages (people.hpp), with a People topic to read them from.
   bool use_people = false;
   PeopleLayerConfig people_layer;
+  // Online SGP (osgp.hpp): with the SGP and people, a person near while the robot is off the
+  // safe path re-runs the SGP from the robot's position.
+  bool use_osgp = true;
+  OsgpConfig osgp;
 };
 
 class PlannerTask final : public tasks::Task {
@@ -127,6 +132,10 @@ class PlannerTask final : public tasks::Task {
   [[nodiscard]] std::uint32_t sgp_runs() const noexcept { return sgp_runs_; }
   [[nodiscard]] const SgpResult& sgp_result() const noexcept { return sgp_result_; }
   [[nodiscard]] double sgp_time_ms() const noexcept { return sgp_time_ms_; }
+  // The online SGP's trigger and its counts (null without the SGP and people).
+  [[nodiscard]] const OsgpTrigger* osgp() const noexcept {
+    return config_.use_sgp && config_.use_osgp && people_ != nullptr ? &osgp_ : nullptr;
+  }
 
  private:
   void plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_ns, bool new_goal) noexcept;
@@ -154,6 +163,7 @@ class PlannerTask final : public tasks::Task {
   MapEllipses ellipses_;
   SupervisoryPlanner sgp_;
   SgpResult sgp_result_;
+  OsgpTrigger osgp_{config_.osgp};
   std::uint32_t sgp_runs_ = 0;
   double sgp_time_ms_ = 0.0;
   std::span<Point2D> waypoints_;
