@@ -186,7 +186,8 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     // Camera-laser fusion and the cages (docs/people.md).
     const Reader p = r.child("people");
     p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
-                  "min_confidence"});
+                  "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
+                  "robot_clearance_m", "online_sgp"});
     n.people_enabled = true;
     n.people_detector = p.text("detector");
     if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
@@ -195,6 +196,23 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("match_window_s")) n.fusion.match_window_s = p.number("match_window_s", 0.0, 2.0);
     if (p.has("max_age_s")) n.detection_max_age_s = p.number("max_age_s", 0.05, 10.0);
     if (p.has("min_confidence")) n.fusion.min_confidence = static_cast<float>(p.number("min_confidence", 0.0, 1.0));
+    if (p.has("confirm_boxes"))
+      n.person_tracker.confirm_hits = static_cast<std::uint32_t>(p.integer("confirm_boxes", 1, 100));
+    if (p.has("laser_follow_s")) n.person_tracker.laser_follow_s = p.number("laser_follow_s", 0.0, 60.0);
+    if (p.has("follow_gate_m")) n.person_tracker.follow_gate_m = p.number("follow_gate_m", 0.05, 2.0);
+    if (p.has("max_body_radius_m")) n.fusion.max_body_radius_m = p.number("max_body_radius_m", 0.0, 1.0);
+    if (p.has("robot_clearance_m")) n.cages.robot_clearance_m = p.number("robot_clearance_m", 0.0, 2.0);
+    if (p.has("online_sgp")) {
+      // Re-running the supervisory planner when a person pushed the robot off its safe path.
+      const Reader o = p.child("online_sgp");
+      o.allow_only({"enabled", "trigger_distance_m", "deviation_m", "delay_s", "cooldown_s", "person_timeout_s"});
+      if (o.has("enabled")) n.osgp_enabled = o.boolean("enabled");
+      if (o.has("trigger_distance_m")) n.osgp.trigger_distance_m = o.number("trigger_distance_m", 0.1, 20.0);
+      if (o.has("deviation_m")) n.osgp.deviation_m = o.number("deviation_m", 0.05, 10.0);
+      if (o.has("delay_s")) n.osgp.delay_s = o.number("delay_s", 0.0, 60.0);
+      if (o.has("cooldown_s")) n.osgp.cooldown_s = o.number("cooldown_s", 0.0, 600.0);
+      if (o.has("person_timeout_s")) n.osgp.person_timeout_s = o.number("person_timeout_s", 0.0, 60.0);
+    }
   }
   if (r.has("sgp")) {
     // The supervisory planner's integration (sgp.hpp); used with safe_curve.

@@ -15,6 +15,7 @@
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
+#include "sen3bot/nav/osgp.hpp"
 #include "sen3bot/nav/people.hpp"
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/nav/sgp.hpp"
@@ -65,6 +66,8 @@ struct NavigationSection {
   nav::PersonTrackerConfig person_tracker;
   nav::PeopleLayerConfig cages;
   double detection_max_age_s = 0.5;
+  bool osgp_enabled = true;  // with the safe curve and people: the online SGP (osgp.hpp)
+  nav::OsgpConfig osgp;
   nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m

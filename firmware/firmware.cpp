@@ -80,6 +80,8 @@ Status Firmware::create_navigation() {
     people = &nav_people_;
     planner.use_people = true;
     planner.people_layer = n.cages;
+    planner.use_osgp = n.osgp_enabled;
+    planner.osgp = n.osgp;
   }
   planner_task_ =
       std::make_unique<nav::PlannerTask>(planner, map_, waypoints_, nav_goal_, nav_pose_, nav_scan_, nav_path_, people);

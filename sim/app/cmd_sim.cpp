@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -56,6 +57,9 @@ struct Scenario {
   const char* safe_curve;
   const char* waypoints;
   std::vector<Case> cases;
+  // People on: the simulated detector, the fusion, the cages and the online SGP; the report
+  // adds replans_triggered, min_person_distance_m and cage_entries per case.
+  bool people = false;
 };
 
 world::MoverScript box_at(double x_m, double y_m, double appear_s) {
@@ -65,6 +69,14 @@ world::MoverScript box_at(double x_m, double y_m, double appear_s) {
   box.shape = world::MoverShape::square;
   box.appear_time_s = appear_s;
   return box;
+}
+
+world::MoverScript person_standing(double x_m, double y_m) {
+  world::MoverScript person;
+  person.path = {{x_m, y_m}};
+  person.size_m = 0.45;
+  person.person = true;
+  return person;
 }
 
 world::MoverScript person_walking(std::vector<msg::Point2D> path, double speed_m_s, double start_s) {
@@ -109,8 +121,27 @@ std::vector<Scenario> scenarios() {
          "at t = 19 s, leaving (4, 7) m in the upper storage area, carried to (5, 3.5) m in the lower work area, facing east",
          {},
          {19.0, {5.0, 3.5, 0.0}}}}},
+      {"osgp",
+       "the source's online-SGP cases: (4, 7) m to (2.5, 2) m on the lab's safe curve, with people found by the camera "
+       "and the laser and kept in cages",
+       thesis_start,
+       {{2.5, 2.0}},
+       "maps/lab_curve.yaml",
+       "",
+       {{"person-on-path", "a person standing by the right-hand rack, 0.45 m beside the safe path: re-plan, pass at a distance",
+         {person_standing(4.3, 5.7)}},
+        {"person-far", "a person standing 1.3 m beyond the goal, off the route: caged, no re-plan",
+         {person_standing(3.3, 1.0)}},
+        {"box-on-path", "a 40 cm box where the person of case 1 stands: the local planner goes round it, no re-plan",
+         {box_at(4.3, 5.7, 0.0)}}},
+       true},
   };
 }
+
+// The people's cage radius the report judges by: half a person's width and the default safety
+// radius, plus the robot's half width (its footprint must stay out).
+constexpr double kCageSafetyM = 0.5;
+constexpr double kRobotHalfWidthM = 0.19;
 
 struct CaseResult {
   std::string name;
@@ -128,6 +159,11 @@ struct CaseResult {
   nav::SgpResult sgp_result;
   double sgp_time_ms = 0;
   std::size_t safe_path_points = 0;
+  // With people on.
+  bool people = false;
+  std::uint64_t replans_triggered = 0;
+  std::uint64_t cage_entries = 0;
+  std::uint64_t boxes_located = 0;
 };
 
 void write_json_string(std::FILE* f, std::string_view s) {
@@ -175,6 +211,12 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                    c.sgp_runs, nav::to_string(c.sgp_result.stop), c.safe_path_points, c.sgp_result.length_m, c.sgp_time_ms);
     else
       std::fprintf(f, "\n     \"safe_path\": {\"source\": \"file\", \"waypoints\": %zu},", c.safe_path_points);
+    if (c.people)
+      std::fprintf(f,
+                   "\n     \"replans_triggered\": %llu, \"min_person_distance_m\": %.3f, \"cage_entries\": %llu, "
+                   "\"person_boxes_located\": %llu,",
+                   static_cast<unsigned long long>(c.replans_triggered), truth.min_person_distance_m,
+                   static_cast<unsigned long long>(c.cage_entries), static_cast<unsigned long long>(c.boxes_located));
     std::fprintf(f, "\n     \"tasks\": [");
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
@@ -263,6 +305,31 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   result.truth = board.referee().report();
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
   result.safe_path_points = fw.safe_path().size();
+  if (const nav::PeopleTask* people = fw.people_task(); people != nullptr) {
+    result.people = true;
+    result.boxes_located = people->fusion().count(nav::BoxVerdict::located);
+    if (const nav::OsgpTrigger* osgp = fw.planner()->osgp(); osgp != nullptr)
+      result.replans_triggered = osgp->count(nav::OsgpOutcome::triggered);
+    // Cage entries: the true poses (every 0.25 s) against the true people, replayed.
+    world::World& w = board.simulation().world();
+    const SimulationConfig& sim = board.simulation().config();
+    std::vector<bool> inside(sim.movers.size(), false);
+    for (const TimedPose& p : board.referee().poses()) {
+      w.set_time(p.t_s);
+      for (std::size_t i = 0; i < sim.movers.size() && i < w.mover_count(); ++i) {
+        if (!sim.movers[i].person || !w.mover_visible(i)) continue;
+        const msg::Point2D at = w.mover_position(i);
+        const bool in = std::hypot(at.x_m - p.pose.x_m, at.y_m - p.pose.y_m) <
+                        sim.movers[i].size_m / 2 + kCageSafetyM + kRobotHalfWidthM;
+        if (in && !inside[i]) ++result.cage_entries;
+        inside[i] = in;
+      }
+    }
+    std::fprintf(out, "  people: %llu boxes placed, %llu online re-plans, %llu cage entries\n",
+                 static_cast<unsigned long long>(result.boxes_located),
+                 static_cast<unsigned long long>(result.replans_triggered),
+                 static_cast<unsigned long long>(result.cage_entries));
+  }
   if (const nav::PlannerTask* planner = fw.planner(); planner != nullptr && planner->sgp() != nullptr) {
     result.sgp = true;
     result.sgp_runs = planner->sgp_runs();
@@ -380,6 +447,13 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     for (std::size_t g = 0; g < scenario->goals.size(); ++g) config.navigation.mission.goals[g] = scenario->goals[g];
     const std::size_t slash = config_path.find_last_of('/');
     const std::string folder = slash == std::string::npos ? "" : config_path.substr(0, slash + 1);
+    if (scenario->people) {
+      config.navigation.people_enabled = true;
+      config.navigation.people_detector = "sim";
+      config.tasks["detector"].arena_bytes = 4 * 1024;
+      config.tasks["people"].arena_bytes = 64 * 1024;
+      world.detector.enabled = true;
+    }
     if (scenario->safe_curve[0] != '\0') {
       config.navigation.safe_curve_path = folder + scenario->safe_curve;
       config.navigation.waypoints_path.clear();
@@ -394,7 +468,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     result.description = std::string(scenario->name) + ": " + c.description;
     result.kidnapped = c.kidnap.time_s >= 0;
     if (run_case(config, world, realtime, c.name, report_dir, result, out, err) != 0) return 1;
-    if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0) rc = 3;
+    if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0 || result.cage_entries != 0)
+      rc = 3;
   }
 
   std::fprintf(out, "\nsummary of %s:\n", scenario->name);

@@ -240,6 +240,45 @@ TEST(Config, TheSafeCurveAndTheSupervisoryPlanner) {
   EXPECT_NE(m.find("navigation.sgp.zeta_sign: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, PeopleTheirCagesAndTheOnlineSgp) {
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  people:\n"
+          "    detector: udp://0.0.0.0:5600\n"
+          "    safety_radius_m: 0.6\n"
+          "    expire_s: 3\n"
+          "    confirm_boxes: 2\n"
+          "    laser_follow_s: 5\n"
+          "    follow_gate_m: 0.3\n"
+          "    max_body_radius_m: 0.2\n"
+          "    robot_clearance_m: 0.3\n"
+          "    online_sgp: { trigger_distance_m: 1.5, deviation_m: 0.3, delay_s: 0.5, cooldown_s: 4, person_timeout_s: 6 }\n",
+      "/robot/robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const NavigationSection& n = r->navigation;
+  EXPECT_TRUE(n.people_enabled);
+  EXPECT_EQ(n.people_detector, "udp://0.0.0.0:5600");
+  EXPECT_DOUBLE_EQ(n.person_tracker.safety_radius_m, 0.6);
+  EXPECT_DOUBLE_EQ(n.person_tracker.expire_s, 3.0);
+  EXPECT_DOUBLE_EQ(n.cages.expire_s, 3.0);
+  EXPECT_EQ(n.person_tracker.confirm_hits, 2u);
+  EXPECT_DOUBLE_EQ(n.person_tracker.laser_follow_s, 5.0);
+  EXPECT_DOUBLE_EQ(n.person_tracker.follow_gate_m, 0.3);
+  EXPECT_DOUBLE_EQ(n.fusion.max_body_radius_m, 0.2);
+  EXPECT_DOUBLE_EQ(n.cages.robot_clearance_m, 0.3);
+  EXPECT_TRUE(n.osgp_enabled);
+  EXPECT_DOUBLE_EQ(n.osgp.trigger_distance_m, 1.5);
+  EXPECT_DOUBLE_EQ(n.osgp.deviation_m, 0.3);
+  EXPECT_DOUBLE_EQ(n.osgp.delay_s, 0.5);
+  EXPECT_DOUBLE_EQ(n.osgp.cooldown_s, 4.0);
+  EXPECT_DOUBLE_EQ(n.osgp.person_timeout_s, 6.0);
+
+  std::string m = message_of(std::string(kNavigation) + "  people: { detector: sim, confirm_boxes: 0 }\n");
+  EXPECT_NE(m.find("navigation.people.confirm_boxes: value 0 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  people: { detector: sim, online_sgp: { enabled: false, delay: 1 } }\n");
+  EXPECT_NE(m.find("navigation.people.online_sgp.delay: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, AMissingFileSaysSo) {
   Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
   ASSERT_FALSE(r);

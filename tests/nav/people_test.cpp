@@ -94,8 +94,12 @@ TEST(PeopleFusion, ABoxOnLegsGivesTheLegsPosition) {
   // The laser at (1, 2) on the map, facing +y: forward is +y, left is -x.
   const std::size_t n = f.fusion.fuse(view_of(r, 1'020'000'000), {1.0, 2.0, kPi / 2}, frame, fixes);
   ASSERT_EQ(n, 1u);
-  EXPECT_NEAR(fixes[0].x_m, 1.0 - 0.3, 0.03);
-  EXPECT_NEAR(fixes[0].y_m, 2.0 + 2.5, 0.03);
+  // Between the legs and 0.05-0.15 m behind their fronts, along the ray: where the body is.
+  const double along = ((fixes[0].x_m - 1.0) * -0.3 + (fixes[0].y_m - 2.0) * 2.5) / std::hypot(2.5, 0.3);
+  const double across = ((fixes[0].x_m - 1.0) * 2.5 - (fixes[0].y_m - 2.0) * -0.3) / std::hypot(2.5, 0.3);
+  EXPECT_NEAR(across, 0.0, 0.02);
+  EXPECT_GT(along - std::hypot(2.5, 0.3), 0.05);
+  EXPECT_LT(along - std::hypot(2.5, 0.3), 0.15);
   EXPECT_GE(fixes[0].points, 6);
   EXPECT_NEAR(fixes[0].width_m, 0.5, 0.05);
   EXPECT_EQ(f.fusion.count(BoxVerdict::located), 1u);
@@ -117,8 +121,38 @@ TEST(PeopleFusion, ABoxWithOnlyTheMapsBackgroundGivesNobody) {
   // Someone in front of that wall is found, the wall behind them left out.
   const std::vector<float> legs = scan_ranges(4.0, 3.0, {{-0.04, 0.04}});
   ASSERT_EQ(f.fusion.fuse(view_of(legs, 0), {0.0, 5.0, 0.0}, frame, fixes), 1u);
-  EXPECT_NEAR(fixes[0].x_m, 3.0, 0.02);
+  EXPECT_GT(fixes[0].x_m, 3.05);  // behind the returns, not on them
+  EXPECT_LT(fixes[0].x_m, 3.15);
   EXPECT_NEAR(fixes[0].y_m, 5.0, 0.03);
+}
+
+// A round body (the simulated person: a disc) is placed at its centre, not on its near side,
+// from 1.2 to 6 m and across the image, within 5 cm (half the fusion's target error).
+TEST(PeopleFusion, ARoundBodyIsPlacedAtItsCentre) {
+  Fusion f;
+  for (const double radius : {0.15, 0.225}) {
+    for (const double forward : {1.2, 2.5, 4.0, 6.0}) {
+      for (const double across : {-0.15, 0.0, 0.25}) {  // within the camera's view
+        const double left = across * forward;
+        std::vector<float> r(361);
+        const double d = std::hypot(forward, left);
+        for (std::size_t i = 0; i < r.size(); ++i) {
+          const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+          // Ray (cos a, sin a) against the circle at (forward, left).
+          const double b = forward * std::cos(a) + left * std::sin(a);
+          const double disc = b * b - (d * d - radius * radius);
+          r[i] = disc >= 0.0 ? static_cast<float>(b - std::sqrt(disc)) : 29.0f;
+        }
+        msg::PersonDetections frame;
+        frame.boxes[0] = box_around(f.fusion.projection(), forward, left);
+        frame.count = 1;
+        PersonFix fixes[2];
+        ASSERT_EQ(f.fusion.fuse(view_of(r, 0), {0.0, 0.0, 0.0}, frame, fixes), 1u) << forward << ", " << left;
+        EXPECT_NEAR(fixes[0].x_m, forward, 0.05) << radius << " at " << forward << ", " << left;
+        EXPECT_NEAR(fixes[0].y_m, left, 0.05) << radius << " at " << forward << ", " << left;
+      }
+    }
+  }
 }
 
 TEST(PeopleFusion, EachRejectedBoxIsCountedWithItsReason) {
@@ -266,6 +300,92 @@ TEST(PersonTracker, AFixOutsideTheGateStartsANewTrackAndBadConfigurationsAreRefu
 
 // --- The cages ---
 
+// A stray box (a false detection) is not a person: a track is published from its third box on.
+TEST(PersonTracker, ATrackIsPublishedOnlyOnceConfirmed) {
+  PersonTrackerConfig config;
+  config.confirm_hits = 3;
+  Tracker t(config);
+  msg::People people;
+  hal::Nanos now = 0;
+  for (int k = 1; k <= 3; ++k) {
+    const PersonFix f = fix_at(2.0, 3.0);
+    t.tracker.update(std::span(&f, 1), now += 100'000'000);
+    t.tracker.publish(now, people);
+    EXPECT_EQ(people.count, k < 3 ? 0u : 1u) << k;
+  }
+  // A single box elsewhere starts a track that is never published.
+  const PersonFix stray = fix_at(6.0, 1.0);
+  t.tracker.update(std::span(&stray, 1), now += 100'000'000);
+  t.tracker.publish(now, people);
+  EXPECT_EQ(t.tracker.tracks().size(), 2u);
+  ASSERT_EQ(people.count, 1u);
+  EXPECT_NEAR(people.items[0].x_m, 2.0, 1e-9);
+}
+
+// A confirmed person who leaves the camera's view is followed by the laser (position and
+// velocity, not width) for laser_follow_s after the last box, and the track lives on while the
+// laser finds them; an unconfirmed track is never followed.
+TEST(PersonTracker, TheLaserFollowsAPersonOutOfViewForAWhile) {
+  PersonTrackerConfig config;
+  config.laser_follow_s = 2.0;
+  config.expire_s = 1.0;
+  Tracker t(config);
+  hal::Nanos now = 0;
+  for (int k = 0; k < 3; ++k) {
+    const PersonFix f = fix_at(2.0 + 0.1 * k, 3.0, 0.4);
+    t.tracker.update(std::span(&f, 1), now += 100'000'000);
+  }
+  const PersonFix stray = fix_at(6.0, 1.0);
+  t.tracker.update(std::span(&stray, 1), now);
+  Point2D predicted[4];
+  std::uint8_t which[4];
+  // Walking on at 1 m/s, seen only by the laser.
+  double x = 2.2;
+  for (int k = 0; k < 15; ++k) {
+    now += 100'000'000;
+    x += 0.1;
+    const std::size_t n = t.tracker.followable(now, predicted, which);
+    ASSERT_EQ(n, 1u) << k;  // the stray one is not followed
+    EXPECT_NEAR(predicted[0].x_m, x, 0.1);
+    t.tracker.follow(which[0], fix_at(x, 3.0, 9.0), now);
+  }
+  ASSERT_GE(t.tracker.tracks().size(), 1u);
+  const PersonTracker::Track& track = t.tracker.tracks()[0];
+  EXPECT_NEAR(track.at.x_m, x, 0.05);
+  EXPECT_NEAR(track.velocity.x_m, 1.0, 0.15);
+  EXPECT_NEAR(track.width_m, 0.4, 1e-9);  // the laser's fix has no width
+  // 2 s after the last box: no longer followed, and it expires expire_s after the last fix.
+  now += 600'000'000;
+  EXPECT_EQ(t.tracker.followable(now, predicted, which), 0u);
+  t.tracker.expire(now + 1'100'000'000);
+  EXPECT_EQ(t.tracker.tracks().size(), 0u);
+}
+
+TEST(PeopleFusion, TheLaserAloneFindsTheBodyNearEachPrediction) {
+  OccupancyMap map(200, 200, 0.05, 0.0, 0.0);
+  for (int row = 0; row < 200; ++row)
+    for (int col = 80; col < 82; ++col) map.set(col, row, 100);  // a wall at x = 4 m
+  Fusion f(&map);
+  // A round body of radius 0.2 at (2.5, 5.5) seen from (0, 5) facing +x, the wall behind it.
+  std::vector<float> r(361);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+    const double b = 2.5 * std::cos(a) + 0.5 * std::sin(a);
+    const double disc = b * b - (2.5 * 2.5 + 0.5 * 0.5 - 0.04);
+    r[i] = disc >= 0.0 ? static_cast<float>(b - std::sqrt(disc)) : static_cast<float>(4.0 / std::max(std::cos(a), 0.05));
+  }
+  const Point2D predicted[3] = {{2.35, 5.6}, {3.9, 5.0}, {1.0, 3.0}};  // near the body, on the wall, nothing
+  PersonFix fixes[3];
+  EXPECT_EQ(f.fusion.follow(view_of(r, 0), {0.0, 5.0, 0.0}, predicted, 0.45, fixes), 1u);
+  EXPECT_NEAR(fixes[0].x_m, 2.5, 0.05);
+  EXPECT_NEAR(fixes[0].y_m, 5.5, 0.05);
+  EXPECT_EQ(fixes[1].points, 0);  // the map's wall is background
+  EXPECT_EQ(fixes[2].points, 0);
+  mem::testing::AllocationScope scope;
+  (void)f.fusion.follow(view_of(r, 0), {0.0, 5.0, 0.0}, predicted, 0.45, fixes);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
 TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
   msg::People people;
   PeopleLayerConfig config;
@@ -309,6 +429,44 @@ TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_EQ(layer.cages(), 0u);
   EXPECT_EQ(cost_at(4.1, 3.0), kFreeCost);
+}
+
+// A person 0.6 m from the robot (closer than cage plus robot): the cage shrinks to stop
+// robot_clearance_m from the robot's centre, so the robot is not left inside a lethal region
+// and can move away; the side away from the robot keeps the full cage.
+TEST(PeopleLayer, ACageNeverSwallowsTheRobot) {
+  msg::People people;
+  PeopleLayer layer(people, {});
+  InflationLayer inflation;
+  LayeredCostmap costmap;
+  ASSERT_TRUE(costmap.add_layer(layer));
+  ASSERT_TRUE(costmap.add_layer(inflation));
+  mem::BudgetArena arena("costmap", 1 << 20);
+  CostmapConfig grid;
+  grid.rolling = false;
+  grid.width_m = 6.0;
+  grid.height_m = 6.0;
+  ASSERT_TRUE(costmap.init(grid, arena));
+  people.count = 1;
+  people.stamp_ns = 1'000'000'000;
+  people.items[0] = {1, 3.0, 3.0, 0.0, 0.0, 0.4, 0.7, msg::PersonState::static_person, 1'000'000'000, 12};
+  const Pose2D robot{2.4, 3.0, 0.0};
+  costmap.update({robot, robot, nullptr, 1'000'000'000});
+  const Costmap2D& c = costmap.costmap();
+  const auto cost_at = [&](double x, double y) {
+    int col = 0, row = 0;
+    EXPECT_TRUE(c.world_to_cell(x, y, col, row));
+    return c.at(col, row);
+  };
+  EXPECT_EQ(layer.cages(), 1u);
+  EXPECT_EQ(cost_at(3.0, 3.0), kLethalCost);
+  EXPECT_EQ(cost_at(3.3, 3.0), kLethalCost);         // 0.35 - 0.05 m: 0.6 - 0.25 is the radius now
+  EXPECT_LT(cost_at(2.4, 3.0), kInscribedCost);      // the robot's centre can move
+  EXPECT_LT(cost_at(2.2, 3.0), cost_at(2.4, 3.0));   // and away is cheaper
+  // The robot backs off to 1.5 m: the full 0.7 m cage again.
+  const Pose2D away{1.5, 3.0, 0.0};
+  costmap.update({away, away, nullptr, 1'000'000'000});
+  EXPECT_EQ(cost_at(3.0 - 0.65, 3.0), kLethalCost);
 }
 
 }  // namespace

@@ -252,7 +252,8 @@ void PlannerTask::step(const tasks::StepContext& context) {
   }
   // Online SGP: a person pushed the robot off its safe path; the new one starts where it is.
   const bool replan_safe_path = !new_goal && osgp() != nullptr &&
-                                osgp_.update(pose.value.pose, safe_path(), people_copy_, context.start_ns) ==
+                                osgp_.update(pose.value.pose, safe_path(), {goal.value.x_m, goal.value.y_m}, people_copy_,
+                                             context.start_ns) ==
                                     OsgpOutcome::triggered;
   if (replan_safe_path) {
     next_waypoint_ = 0;
@@ -411,6 +412,19 @@ void PeopleTask::fuse(const msg::PersonDetections& frame, const PosedScan& scan)
   ++frames_fused_;
 }
 
+void PeopleTask::follow(PosedScan& scan) noexcept {
+  scan.followed = true;
+  const std::size_t n = tracker_.followable(scan.scan.stamp_ns, predicted_, followed_tracks_);
+  if (n == 0) return;
+  const Pose2D laser = msg::compose(scan.pose, config_.laser_mount);
+  fusion_.follow(scan.scan.view(), laser, std::span(predicted_).first(n), config_.tracker.follow_gate_m, follow_fixes_);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (follow_fixes_[i].points == 0) continue;
+    tracker_.follow(followed_tracks_[i], follow_fixes_[i], scan.scan.stamp_ns);
+    ++laser_fixes_;
+  }
+}
+
 void PeopleTask::step(const tasks::StepContext& context) {
   // A new scan joins the ring; the localization's pose for a scan comes with its estimate.
   if (scan_.read(scan_sample_) && scan_sample_.sequence != scan_seq_) {
@@ -418,6 +432,7 @@ void PeopleTask::step(const tasks::StepContext& context) {
     PosedScan& slot = scans_[scan_next_++ % kScans];
     slot.scan = scan_sample_.value;
     slot.posed = false;
+    slot.followed = false;
   }
   tasks::Sample<PoseEstimate> pose;
   if (pose_.read(pose) && pose.value.valid && pose.value.scan_stamp_ns != 0) {
@@ -460,6 +475,11 @@ void PeopleTask::step(const tasks::StepContext& context) {
     frames_[kept++] = frame;
   }
   frame_count_ = kept;
+  // Then the laser alone, through each posed scan once, oldest first.
+  for (std::size_t k = 0; k < kScans; ++k) {
+    PosedScan& s = scans_[(scan_next_ + k) % kScans];
+    if (s.posed && !s.followed) follow(s);
+  }
   tracker_.expire(context.start_ns);
   tracker_.publish(context.start_ns, message_);
   people_.publish(message_, context.start_ns);

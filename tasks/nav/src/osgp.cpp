@@ -32,16 +32,24 @@ double distance_to_path(Point2D p, std::span<const Point2D> path) noexcept {
   return best;
 }
 
-OsgpOutcome OsgpTrigger::update(const Pose2D& robot, std::span<const Point2D> safe_path, const msg::People& people,
-                                hal::Nanos now_ns) noexcept {
+OsgpOutcome OsgpTrigger::update(const Pose2D& robot, std::span<const Point2D> safe_path, Point2D goal,
+                                const msg::People& people, hal::Nanos now_ns) noexcept {
   OsgpOutcome outcome = OsgpOutcome::on_path;
-  const bool deviated = !safe_path.empty() && distance_to_path({robot.x_m, robot.y_m}, safe_path) > config_.deviation_m;
-  bool person_near = false;
+  bool deviated = false;
+  if (!safe_path.empty()) {
+    const Point2D at{robot.x_m, robot.y_m};
+    const Point2D approach[2] = {safe_path.back(), goal};
+    deviated = std::min(distance_to_path(at, safe_path), distance_to_path(at, approach)) > config_.deviation_m;
+  }
+  // The last time someone was seen near is remembered here: a person being passed leaves the
+  // camera's view, and their track expires, before the deviation shows.
   for (std::size_t i = 0; i < std::min<std::size_t>(people.count, msg::People::kMax); ++i) {
     const msg::TrackedPerson& p = people.items[i];
-    if (static_cast<double>(now_ns - p.last_seen_ns) > config_.person_timeout_s * 1e9) continue;
-    person_near = person_near || std::hypot(p.x_m - robot.x_m, p.y_m - robot.y_m) <= config_.trigger_distance_m;
+    if (std::hypot(p.x_m - robot.x_m, p.y_m - robot.y_m) <= config_.trigger_distance_m)
+      last_near_ns_ = std::max(last_near_ns_, p.last_seen_ns);
   }
+  const bool person_near =
+      last_near_ns_ >= 0 && static_cast<double>(now_ns - last_near_ns_) <= config_.person_timeout_s * 1e9;
   if (!deviated) {
     armed_ns_ = -1;
   } else if (!person_near) {

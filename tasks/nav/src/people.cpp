@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "sen3bot/nav/arena.hpp"
 
@@ -73,9 +74,10 @@ bool CameraProjection::project(double forward_m, double left_m, double& u_px, do
 
 Status PeopleFusion::init(const FusionConfig& config, const CameraCalibration& calibration, const OccupancyMap* map,
                           std::size_t max_beams, std::pmr::memory_resource& resource) {
-  if (!(config.match_window_s >= 0.0) || !(config.depth_band_m > 0.0) || config.min_points < 1 || max_beams == 0) {
-    return Error::format(Errc::config, "people fusion: match_window_s >= 0, depth_band_m > 0, min_points >= 1 and "
-                                       "room for a scan");
+  if (!(config.match_window_s >= 0.0) || !(config.depth_band_m > 0.0) || config.min_points < 1 || max_beams == 0 ||
+      !(config.max_body_radius_m >= 0.0)) {
+    return Error::format(Errc::config, "people fusion: match_window_s >= 0, depth_band_m > 0, min_points >= 1, "
+                                       "max_body_radius_m >= 0 and room for a scan");
   }
   if (Status s = projection_.set(calibration); !s) return s;
   config_ = config;
@@ -83,6 +85,8 @@ Status PeopleFusion::init(const FusionConfig& config, const CameraCalibration& c
   return guarded("people fusion", [&]() -> Status {
     u_ = allocate_array<float>(resource, max_beams);
     v_ = allocate_array<float>(resource, max_beams);
+    x_ = allocate_array<double>(resource, max_beams);
+    y_ = allocate_array<double>(resource, max_beams);
     return Status::success();
   });
 }
@@ -118,8 +122,7 @@ std::size_t PeopleFusion::fuse(const msg::ScanView& scan, const Pose2D& laser_po
       v_[i] = static_cast<float>(v);
     }
   }
-  const double c = std::cos(laser_pose.theta_rad);
-  const double s = std::sin(laser_pose.theta_rad);
+  locate(scan, laser_pose, beams);
   const bool in_window =
       std::abs(static_cast<double>(frame.capture_ns - scan.stamp_ns)) <= config_.match_window_s * 1e9;
   std::size_t written = 0;
@@ -132,42 +135,13 @@ std::size_t PeopleFusion::fuse(const msg::ScanView& scan, const Pose2D& laser_po
     else if (!in_window) verdict = BoxVerdict::out_of_window;
     PersonFix fix;
     if (verdict == BoxVerdict::located) {
-      // The nearest return in the box that is not the map's, then the mean of those within
-      // the depth band behind it.
-      double nearest = std::numeric_limits<double>::infinity();
-      for (std::size_t i = 0; i < beams; ++i) {
-        if (!(u_[i] >= box.u0 && u_[i] <= box.u1 && v_[i] >= box.v0 && v_[i] <= box.v1)) continue;
-        const double r = scan.ranges_m[i];
-        if (r >= nearest) continue;
-        const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-        const double lx = r * std::cos(a);
-        const double ly = r * std::sin(a);
-        if (background(laser_pose.x_m + c * lx - s * ly, laser_pose.y_m + s * lx + c * ly)) continue;
-        nearest = r;
-      }
-      double sx = 0.0;
-      double sy = 0.0;
-      std::size_t n = 0;
-      for (std::size_t i = 0; std::isfinite(nearest) && i < beams; ++i) {
-        if (!(u_[i] >= box.u0 && u_[i] <= box.u1 && v_[i] >= box.v0 && v_[i] <= box.v1)) continue;
-        const double r = scan.ranges_m[i];
-        if (r > nearest + config_.depth_band_m) continue;
-        const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
-        const double x = laser_pose.x_m + c * r * std::cos(a) - s * r * std::sin(a);
-        const double y = laser_pose.y_m + s * r * std::cos(a) + c * r * std::sin(a);
-        if (background(x, y)) continue;
-        sx += x;
-        sy += y;
-        ++n;
-      }
-      if (n < config_.min_points) {
+      const auto in_box = [&](std::size_t i) {
+        return u_[i] >= box.u0 && u_[i] <= box.u1 && v_[i] >= box.v0 && v_[i] <= box.v1;
+      };
+      if (!place(scan, laser_pose, beams, in_box, fix)) {
         verdict = BoxVerdict::no_returns;
       } else {
-        fix.x_m = sx / static_cast<double>(n);
-        fix.y_m = sy / static_cast<double>(n);
-        fix.range_m = std::hypot(fix.x_m - laser_pose.x_m, fix.y_m - laser_pose.y_m);
         fix.width_m = (box.u1 - box.u0) * fix.range_m / projection_.focal_x_px();
-        fix.points = static_cast<std::uint16_t>(std::min<std::size_t>(n, 0xffff));
         fix.box = static_cast<std::uint8_t>(b);
       }
     }
@@ -177,15 +151,86 @@ std::size_t PeopleFusion::fuse(const msg::ScanView& scan, const Pose2D& laser_po
   return written;
 }
 
+void PeopleFusion::locate(const msg::ScanView& scan, const Pose2D& laser_pose, std::size_t beams) noexcept {
+  const double c = std::cos(laser_pose.theta_rad);
+  const double s = std::sin(laser_pose.theta_rad);
+  for (std::size_t i = 0; i < beams; ++i) {
+    x_[i] = y_[i] = std::numeric_limits<double>::quiet_NaN();
+    const double r = scan.ranges_m[i];
+    if (!(r > scan.range_min_m) || !(r < scan.range_max_m)) continue;
+    const double a = scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+    const double x = laser_pose.x_m + c * r * std::cos(a) - s * r * std::sin(a);
+    const double y = laser_pose.y_m + s * r * std::cos(a) + c * r * std::sin(a);
+    if (background(x, y)) continue;
+    x_[i] = x;
+    y_[i] = y;
+  }
+}
+
+template <typename Region>
+bool PeopleFusion::place(const msg::ScanView& scan, const Pose2D& laser_pose, std::size_t beams, const Region& region,
+                         PersonFix& fix) const noexcept {
+  // The nearest located return in the region, then those within the depth band behind it.
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < beams; ++i)
+    if (scan.ranges_m[i] < nearest && !std::isnan(x_[i]) && region(i)) nearest = scan.ranges_m[i];
+  if (!std::isfinite(nearest)) return false;
+  double sx = 0.0;
+  double sy = 0.0;
+  std::size_t lo = beams;
+  std::size_t hi = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < beams; ++i) {
+    if (!(scan.ranges_m[i] <= nearest + config_.depth_band_m) || std::isnan(x_[i]) || !region(i)) continue;
+    sx += x_[i];
+    sy += y_[i];
+    lo = std::min(lo, i);
+    hi = std::max(hi, i);
+    ++n;
+  }
+  if (n < config_.min_points) return false;
+  // The returns lie on the body's near side. For a round body of radius w (the returns' half
+  // width, each edge beam counting half a step) their mean is w (1 - pi/4) behind the nearest
+  // point, so the centre is pi/4 w behind the mean, along the ray.
+  const double mx = sx / static_cast<double>(n);
+  const double my = sy / static_cast<double>(n);
+  const double mean_range = std::hypot(mx - laser_pose.x_m, my - laser_pose.y_m);
+  const double half_angle = std::min(0.5 * static_cast<double>(hi - lo + 1) * std::abs(scan.increment_rad), 1.0);
+  const double w = std::min(mean_range * std::sin(half_angle), config_.max_body_radius_m);
+  const double back = mean_range > 1e-6 ? std::numbers::pi / 4.0 * w / mean_range : 0.0;
+  fix.x_m = mx + (mx - laser_pose.x_m) * back;
+  fix.y_m = my + (my - laser_pose.y_m) * back;
+  fix.range_m = mean_range * (1.0 + back);
+  fix.points = static_cast<std::uint16_t>(std::min<std::size_t>(n, 0xffff));
+  return true;
+}
+
+std::size_t PeopleFusion::follow(const msg::ScanView& scan, const Pose2D& laser_pose, std::span<const Point2D> predicted,
+                                 double gate_m, std::span<PersonFix> out) noexcept {
+  const std::size_t beams = std::min(scan.ranges_m.size(), x_.size());
+  locate(scan, laser_pose, beams);
+  std::size_t found = 0;
+  for (std::size_t t = 0; t < std::min(predicted.size(), out.size()); ++t) {
+    const Point2D p = predicted[t];
+    const auto near = [&](std::size_t i) { return std::hypot(x_[i] - p.x_m, y_[i] - p.y_m) <= gate_m; };
+    out[t] = PersonFix{};
+    if (place(scan, laser_pose, beams, near, out[t])) ++found;
+    else out[t].points = 0;
+  }
+  return found;
+}
+
 // --- Tracking ------------------------------------------------------------------------------------
 
 Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource) {
   if (config.max_tracks == 0 || config.max_tracks > msg::People::kMax || !(config.gate_m > 0.0) ||
       !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) ||
       !(config.position_gain > 0.0 && config.position_gain <= 1.0) || !(config.velocity_gain >= 0.0) ||
-      !(config.max_speed_m_s > 0.0)) {
-    return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s > 0, "
-                                       "0 < position_gain <= 1",
+      !(config.max_speed_m_s > 0.0) || config.confirm_hits < 1 || !(config.laser_follow_s >= 0.0) ||
+      !(config.follow_gate_m > 0.0)) {
+    return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s, "
+                                       "follow_gate_m > 0, 0 < position_gain <= 1, confirm_hits >= 1, "
+                                       "laser_follow_s >= 0",
                          msg::People::kMax);
   }
   config_ = config;
@@ -224,26 +269,12 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
     const PersonFix& fix = fixes[static_cast<std::size_t>(f)];
     fix_used_[static_cast<std::size_t>(f)] = 1;
     Track& track = tracks_[t];
-    const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
-    if (dt <= 0.0) continue;  // a second fix for the same instant adds nothing
-    // Alpha-beta: the residual against the prediction corrects position and velocity.
-    const Point2D p = predicted(track);
-    const double rx = fix.x_m - p.x_m;
-    const double ry = fix.y_m - p.y_m;
-    track.at = {p.x_m + config_.position_gain * rx, p.y_m + config_.position_gain * ry};
-    track.velocity.x_m += config_.velocity_gain * rx / dt;
-    track.velocity.y_m += config_.velocity_gain * ry / dt;
-    const double speed = std::hypot(track.velocity.x_m, track.velocity.y_m);
-    if (speed > config_.max_speed_m_s) {
-      track.velocity.x_m *= config_.max_speed_m_s / speed;
-      track.velocity.y_m *= config_.max_speed_m_s / speed;
-    }
+    // A frame older than the laser's last fix (the camera's latency) confirms, but does not
+    // move the track back.
+    if (stamp_ns > track.last_seen_ns) correct(track, fix, stamp_ns);
     track.width_m = fix.width_m;
-    track.points = fix.points;
-    track.last_seen_ns = stamp_ns;
-    // Dynamic once its centre has moved farther than the threshold from where it was first seen.
-    if (std::hypot(track.at.x_m - track.first_seen.x_m, track.at.y_m - track.first_seen.y_m) > config_.dynamic_after_m)
-      track.state = msg::PersonState::dynamic_person;
+    track.camera_seen_ns = std::max(track.camera_seen_ns, stamp_ns);
+    ++track.hits;
   }
   expire(stamp_ns);
   for (std::size_t f = 0; f < fix_count && count_ < tracks_.size(); ++f) {
@@ -254,8 +285,50 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
     track.at = track.first_seen = {fixes[f].x_m, fixes[f].y_m};
     track.width_m = fixes[f].width_m;
     track.points = fixes[f].points;
-    track.last_seen_ns = stamp_ns;
+    track.last_seen_ns = track.camera_seen_ns = stamp_ns;
+    track.hits = 1;
   }
+}
+
+void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept {
+  // Alpha-beta: the residual against the prediction corrects position and velocity.
+  const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
+  const Point2D p{track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
+  const double rx = fix.x_m - p.x_m;
+  const double ry = fix.y_m - p.y_m;
+  track.at = {p.x_m + config_.position_gain * rx, p.y_m + config_.position_gain * ry};
+  track.velocity.x_m += config_.velocity_gain * rx / dt;
+  track.velocity.y_m += config_.velocity_gain * ry / dt;
+  const double speed = std::hypot(track.velocity.x_m, track.velocity.y_m);
+  if (speed > config_.max_speed_m_s) {
+    track.velocity.x_m *= config_.max_speed_m_s / speed;
+    track.velocity.y_m *= config_.max_speed_m_s / speed;
+  }
+  track.points = fix.points;
+  track.last_seen_ns = stamp_ns;
+  // Dynamic once its centre has moved farther than the threshold from where it was first seen.
+  if (std::hypot(track.at.x_m - track.first_seen.x_m, track.at.y_m - track.first_seen.y_m) > config_.dynamic_after_m)
+    track.state = msg::PersonState::dynamic_person;
+}
+
+std::size_t PersonTracker::followable(hal::Nanos stamp_ns, std::span<Point2D> out,
+                                      std::span<std::uint8_t> which) const noexcept {
+  std::size_t n = 0;
+  for (std::size_t t = 0; t < count_ && n < std::min(out.size(), which.size()); ++t) {
+    const Track& track = tracks_[t];
+    if (track.hits < config_.confirm_hits || stamp_ns <= track.last_seen_ns ||
+        static_cast<double>(stamp_ns - track.camera_seen_ns) > config_.laser_follow_s * 1e9)
+      continue;
+    const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
+    out[n] = {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
+    which[n++] = static_cast<std::uint8_t>(t);
+  }
+  return n;
+}
+
+void PersonTracker::follow(std::size_t index, const PersonFix& fix, hal::Nanos stamp_ns) noexcept {
+  if (index >= count_ || stamp_ns <= tracks_[index].last_seen_ns) return;
+  correct(tracks_[index], fix, stamp_ns);
 }
 
 void PersonTracker::expire(hal::Nanos now_ns) noexcept {
@@ -273,6 +346,7 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
   out.stamp_ns = now_ns;
   for (std::size_t t = 0; t < count_ && out.count < msg::People::kMax; ++t) {
     const Track& track = tracks_[t];
+    if (track.hits < config_.confirm_hits) continue;
     const double dt = std::max(0.0, static_cast<double>(now_ns - track.last_seen_ns) * 1e-9);
     msg::TrackedPerson& p = out.items[out.count++];
     p.id = track.id;
@@ -293,8 +367,9 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
 Status PeopleLayer::init(const Costmap2D& master, std::pmr::memory_resource& resource) {
   (void)master;
   (void)resource;
-  if (!(config_.expire_s > 0.0) || !(config_.max_radius_m > 0.0))
-    return Error::format(Errc::config, "people layer: expire_s and max_radius_m must be positive");
+  if (!(config_.expire_s > 0.0) || !(config_.max_radius_m > 0.0) || !(config_.robot_clearance_m >= 0.0))
+    return Error::format(Errc::config,
+                         "people layer: expire_s and max_radius_m must be positive, robot_clearance_m at least 0");
   return Status::success();
 }
 
@@ -309,7 +384,8 @@ void PeopleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcep
     const double dt = config_.predict ? std::max(0.0, static_cast<double>(inputs.now_ns - people_.stamp_ns) * 1e-9) : 0.0;
     const double x = p.x_m + p.vx_m_s * dt;
     const double y = p.y_m + p.vy_m_s * dt;
-    const double r = std::min(p.cage_radius_m, config_.max_radius_m);
+    const double to_robot = std::hypot(x - inputs.robot_pose.x_m, y - inputs.robot_pose.y_m);
+    const double r = std::min({p.cage_radius_m, config_.max_radius_m, to_robot - config_.robot_clearance_m});
     if (!(r > 0.0) || !std::isfinite(x) || !std::isfinite(y)) continue;
     // The disc's cells: centres within r of the centre, in the grid's own (possibly rotated) frame.
     double gx = 0.0;

@@ -271,6 +271,7 @@ class PeopleTask final : public tasks::Task {
   [[nodiscard]] const PeopleFusion& fusion() const noexcept { return fusion_; }
   [[nodiscard]] const PersonTracker& tracker() const noexcept { return tracker_; }
   [[nodiscard]] std::uint64_t frames_fused() const noexcept { return frames_fused_; }
+  [[nodiscard]] std::uint64_t laser_fixes() const noexcept { return laser_fixes_; }
 
  private:
   static constexpr std::size_t kScans = 4;
@@ -279,8 +280,10 @@ class PeopleTask final : public tasks::Task {
     ScanMessage scan;
     Pose2D pose;  // the robot's, at the scan
     bool posed = false;
+    bool followed = false;  // the laser has followed the people out of view through it
   };
   void fuse(const msg::PersonDetections& frame, const PosedScan& scan) noexcept;
+  void follow(PosedScan& scan) noexcept;
 
   PeopleTaskConfig config_;
   const OccupancyMap& map_;
@@ -301,6 +304,10 @@ class PeopleTask final : public tasks::Task {
   std::array<PersonFix, msg::PersonDetections::kMax> fixes_{};
   msg::People message_;
   std::uint64_t frames_fused_ = 0;
+  std::uint64_t laser_fixes_ = 0;
+  std::array<Point2D, msg::People::kMax> predicted_{};
+  std::array<std::uint8_t, msg::People::kMax> followed_tracks_{};
+  std::array<PersonFix, msg::People::kMax> follow_fixes_{};
 };
 
 // --- Safety -----------------------------------------------------------------------------------

@@ -1,10 +1,10 @@
 #pragma once
 // Online SGP (navigation.md §5, the source's §2.2.1): the event that re-runs the supervisory
 // planner from where the robot is. It fires when a tracked person is within trigger_distance_m
-// of the robot while the robot is farther than deviation_m from the safe path (the local
-// planner took it round the person), and it has been so for delay_s (the robot is passing the
-// person by then). A deviation with nobody near (a box in the way) never fires; after firing it
-// waits cooldown_s. Each cycle's outcome is counted by its reason. Pure: no I/O, no allocation.
+// of the robot while the robot is farther than deviation_m from the safe path and its approach to
+// the goal (the local planner took it round the person), and it has been so for delay_s (the
+// robot is passing the person by then). A deviation with nobody near (a box in the way) never
+// fires; after firing it waits cooldown_s. Each cycle's outcome is counted by its reason. Pure: no I/O, no allocation.
 #include <array>
 #include <cstdint>
 #include <span>
@@ -20,7 +20,9 @@ struct OsgpConfig {
   double deviation_m = 0.4;
   double delay_s = 1.0;
   double cooldown_s = 5.0;
-  double person_timeout_s = 1.0;  // a person not seen for this long does not count
+  // A person seen near within this long counts (one being passed is soon out of the camera's
+  // view, and their track expires, before the deviation shows).
+  double person_timeout_s = 4.0;
 };
 
 enum class OsgpOutcome : std::uint8_t {
@@ -39,7 +41,9 @@ inline constexpr std::size_t kOsgpOutcomes = 5;
 class OsgpTrigger {
  public:
   explicit OsgpTrigger(const OsgpConfig& config = {}) noexcept : config_(config) {}
-  OsgpOutcome update(const Pose2D& robot, std::span<const Point2D> safe_path, const msg::People& people,
+  // The deviation is from the safe path continued to the goal (the global planner's approach
+  // from the path's end).
+  OsgpOutcome update(const Pose2D& robot, std::span<const Point2D> safe_path, Point2D goal, const msg::People& people,
                      hal::Nanos now_ns) noexcept;
   // A new goal (and its new safe path): the wait starts again, the cooldown is kept.
   void reset() noexcept { armed_ns_ = -1; }
@@ -51,6 +55,7 @@ class OsgpTrigger {
   OsgpConfig config_;
   hal::Nanos armed_ns_ = -1;         // when a person near and a deviation first held together
   hal::Nanos last_trigger_ns_ = -1;
+  hal::Nanos last_near_ns_ = -1;     // when a person was last seen within trigger_distance_m
   std::array<std::uint64_t, kOsgpOutcomes> counts_{};
 };
 

@@ -11,8 +11,9 @@
 //
 // Placing a person: of the returns inside the box (and in front of the camera), the ones on
 // the static map (within one cell of an occupied cell) are background and left out; of the
-// rest, those within depth_band_m of the nearest are the person's legs, and their mean is
-// the person's position. A box with too few such returns places nobody.
+// rest, those within depth_band_m of the nearest are the person's near side. Their mean,
+// moved back along the ray as a round body as wide as those returns would be (pi/4 of the
+// half width), is the person's position. A box with too few such returns places nobody.
 #include <array>
 #include <cstdint>
 #include <memory_resource>
@@ -64,6 +65,7 @@ struct FusionConfig {
   std::uint16_t person_class = 0;  // COCO's person
   double depth_band_m = 0.35;      // returns this close behind the nearest one are the person
   std::size_t min_points = 2;
+  double max_body_radius_m = 0.3;  // the centre is at most pi/4 of this behind the returns' mean
   std::int8_t occupied_threshold = 65;  // map cells at least this are background
 };
 
@@ -97,6 +99,11 @@ class PeopleFusion {
   // the scan). Writes at most out.size() fixes and returns how many; a verdict per box counts.
   std::size_t fuse(const msg::ScanView& scan, const Pose2D& laser_pose, const msg::PersonDetections& frame,
                    std::span<PersonFix> out) noexcept;
+  // Laser only, for people out of the camera's view: for each predicted position, the returns
+  // within gate_m of it (background left out) placed as a box's are. out[t].points == 0: none
+  // there. Returns how many were found.
+  std::size_t follow(const msg::ScanView& scan, const Pose2D& laser_pose, std::span<const Point2D> predicted,
+                     double gate_m, std::span<PersonFix> out) noexcept;
   [[nodiscard]] std::uint64_t count(BoxVerdict verdict) const noexcept {
     return counts_[static_cast<std::size_t>(verdict)];
   }
@@ -104,12 +111,19 @@ class PeopleFusion {
 
  private:
   [[nodiscard]] bool background(double x_m, double y_m) const noexcept;
+  // Each return's map position (NaN: out of range or on the map's background).
+  void locate(const msg::ScanView& scan, const Pose2D& laser_pose, std::size_t beams) noexcept;
+  template <typename Region>
+  bool place(const msg::ScanView& scan, const Pose2D& laser_pose, std::size_t beams, const Region& region,
+             PersonFix& fix) const noexcept;
 
   FusionConfig config_;
   CameraProjection projection_;
   const OccupancyMap* map_ = nullptr;
   std::span<float> u_;
   std::span<float> v_;
+  std::span<double> x_;
+  std::span<double> y_;
   std::array<std::uint64_t, kBoxVerdicts> counts_{};
 };
 
@@ -122,6 +136,11 @@ struct PersonTrackerConfig {
   double position_gain = 0.6;      // alpha-beta filter
   double velocity_gain = 0.3;
   double max_speed_m_s = 3.0;      // a velocity estimate is clamped to this
+  std::uint32_t confirm_hits = 3;  // camera fixes before a track is published (a stray box is not)
+  // Out of the camera's view, a confirmed person is followed by the laser alone (the returns
+  // within follow_gate_m of the prediction) for up to laser_follow_s after the last box.
+  double laser_follow_s = 8.0;
+  double follow_gate_m = 0.45;
 };
 
 class PersonTracker {
@@ -132,7 +151,9 @@ class PersonTracker {
     Point2D velocity;
     Point2D first_seen;
     double width_m = 0.0;
-    hal::Nanos last_seen_ns = 0;
+    hal::Nanos last_seen_ns = 0;    // the last fix, camera or laser
+    hal::Nanos camera_seen_ns = 0;  // the last box
+    std::uint32_t hits = 0;         // boxes matched
     std::uint16_t points = 0;
     msg::PersonState state = msg::PersonState::static_person;
   };
@@ -141,6 +162,11 @@ class PersonTracker {
   // The fixes of one frame, taken at stamp_ns: tracks are predicted to it, matched to the fixes
   // (Hungarian on distance, gated), corrected; unmatched fixes start tracks; stale tracks end.
   void update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns) noexcept;
+  // The confirmed tracks that the laser may follow at stamp_ns: their predicted positions
+  // (in track order, at most out.size()); returns how many, with their indices in which.
+  std::size_t followable(hal::Nanos stamp_ns, std::span<Point2D> out, std::span<std::uint8_t> which) const noexcept;
+  // A laser-only fix of tracks()[index] at stamp_ns: position and velocity, not width or hits.
+  void follow(std::size_t index, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
   // Ends the tracks not seen for expire_s by now_ns.
   void expire(hal::Nanos now_ns) noexcept;
   // The tracks predicted to now_ns, with their cages.
@@ -157,12 +183,19 @@ class PersonTracker {
   std::span<int> assignment_;
   std::span<std::uint8_t> fix_used_;
   std::uint32_t next_id_ = 1;
+
+  void correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
 };
 
 struct PeopleLayerConfig {
   double expire_s = 2.0;      // a person not seen for this long has no cage
   double max_radius_m = 2.0;  // a cage is never larger (a wrong width must not close the map)
   bool predict = true;        // paint each person where their velocity takes them by the update
+  // A cage stops this far from the robot's centre (the inscribed radius and a little more):
+  // a person who walks up to the robot, or whom it came upon unseen, must not leave it inside
+  // a lethal region with no move allowed; the inflation around the shrunken cage still pushes
+  // it away. Closer than that the safety filter's stop zone is what protects them.
+  double robot_clearance_m = 0.25;
 };
 
 // The virtual cages: a lethal disc of each tracked person's cage radius, painted before the
