@@ -3,11 +3,13 @@
 // JSON summary with per-task statistics.
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <span>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -110,6 +112,17 @@ std::vector<Scenario> scenarios() {
        "",
        {{"worker", "a person walking across the robot's way, back and forth",
          {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
+      {"people-crossing",
+       "the main mission among people: (2.5, 2) m to (4, 7) m and back on the lab's safe curve, three workers "
+       "crossing its way at 0.6, 1.0 and 1.4 m/s, found by the camera and the laser and caged (each seed starts "
+       "them at other points of their walks)",
+       {2.5, 2.0, std::numbers::pi / 2},
+       {{4.0, 7.0}, {2.5, 2.0}},
+       "maps/lab_curve.yaml",
+       "",
+       {{"three-workers", "across the upper area, across the lower area, and along the door's row",
+         {person_walking({{5.0, 5.5}, {1.0, 5.5}}, 0.6, 0.0), person_walking({{1.8, 3.0}, {4.4, 3.0}}, 1.0, 0.0)}}},
+       true},
       {"kidnapped",
        "(2.5, 2) m to (4, 7) m and back; on the way back the robot is carried into the lower work area, its odometry "
        "not told",
@@ -143,6 +156,27 @@ std::vector<Scenario> scenarios() {
 constexpr double kCageSafetyM = 0.5;
 constexpr double kRobotHalfWidthM = 0.19;
 
+// The referee's person position errors, 1-6 m from the robot.
+struct PersonErrors {
+  std::size_t samples = 0;
+  double median_m = 0;
+  double p95_m = 0;
+  std::uint64_t false_people = 0;
+};
+
+PersonErrors summarize(std::span<const float> errors, std::uint64_t false_people) {
+  PersonErrors e;
+  e.samples = errors.size();
+  e.false_people = false_people;
+  if (errors.empty()) return e;
+  std::vector<float> sorted(errors.begin(), errors.end());
+  std::sort(sorted.begin(), sorted.end());
+  const auto at = [&](double q) { return static_cast<double>(sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5)]); };
+  e.median_m = at(0.5);
+  e.p95_m = at(0.95);
+  return e;
+}
+
 struct CaseResult {
   std::string name;
   std::string title;  // the figure's: "case 2/3: NAME"
@@ -162,8 +196,13 @@ struct CaseResult {
   // With people on.
   bool people = false;
   std::uint64_t replans_triggered = 0;
-  std::uint64_t cage_entries = 0;
+  std::uint64_t cage_entries = 0;            // the robot moved into a person's cage
+  std::uint64_t cage_entries_by_person = 0;  // a person walked up to the robot
   std::uint64_t boxes_located = 0;
+  PersonErrors person_errors;
+  std::vector<report::CageMark> cages;
+  std::vector<msg::Point2D> planned;    // the last goal's safe path, before any re-plan
+  std::vector<msg::Point2D> replanned;  // the last online re-plan's safe path
 };
 
 void write_json_string(std::FILE* f, std::string_view s) {
@@ -214,9 +253,13 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
     if (c.people)
       std::fprintf(f,
                    "\n     \"replans_triggered\": %llu, \"min_person_distance_m\": %.3f, \"cage_entries\": %llu, "
-                   "\"person_boxes_located\": %llu,",
+                   "\"cage_entries_by_person\": %llu, \"person_boxes_located\": %llu,\n     \"person_error\": {\"samples\": %zu, \"median_m\": %.3f, "
+                   "\"p95_m\": %.3f, \"false_people\": %llu},",
                    static_cast<unsigned long long>(c.replans_triggered), truth.min_person_distance_m,
-                   static_cast<unsigned long long>(c.cage_entries), static_cast<unsigned long long>(c.boxes_located));
+                   static_cast<unsigned long long>(c.cage_entries),
+                   static_cast<unsigned long long>(c.cage_entries_by_person), static_cast<unsigned long long>(c.boxes_located),
+                   c.person_errors.samples, c.person_errors.median_m, c.person_errors.p95_m,
+                   static_cast<unsigned long long>(c.person_errors.false_people));
     std::fprintf(f, "\n     \"tasks\": [");
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
@@ -252,6 +295,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   if (quiet == nullptr) quiet = out;
   Firmware fw(config, board, quiet);
   board.referee().watch_estimate(&fw.pose_estimate());
+  board.referee().watch_people(&fw.people());
   auto fail = [&](const Error& e) {
     std::fprintf(err, "sen3bot-sim sim: %s: %s\n", label.c_str(), e.c_str());
     fw.shutdown();
@@ -267,6 +311,32 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   const auto wall_start = std::chrono::steady_clock::now();
   double sim_s = 0;
   double next_progress_s = 0;
+  // For the figure: the published cages every second, and the safe path after each online
+  // re-plan.
+  double next_cage_s = 0;
+  std::uint64_t replans_seen = 0;
+  std::uint32_t sgp_runs_seen = 0;
+  auto sample_people = [&] {
+    if (fw.people_task() == nullptr) return;
+    if (sim_s >= next_cage_s) {
+      next_cage_s = sim_s + 1.0;
+      tasks::Sample<msg::People> people;
+      if (fw.people().read(people))
+        for (std::size_t i = 0; i < std::min<std::size_t>(people.value.count, msg::People::kMax); ++i) {
+          const msg::TrackedPerson& p = people.value.items[i];
+          result.cages.push_back({{p.x_m, p.y_m}, p.cage_radius_m, sim_s});
+        }
+    }
+    const nav::OsgpTrigger* osgp = fw.planner() != nullptr ? fw.planner()->osgp() : nullptr;
+    if (osgp == nullptr) return;
+    if (osgp->count(nav::OsgpOutcome::triggered) != replans_seen) {
+      replans_seen = osgp->count(nav::OsgpOutcome::triggered);
+      result.replanned.assign(fw.safe_path().begin(), fw.safe_path().end());
+    } else if (fw.planner()->sgp_runs() != sgp_runs_seen) {
+      result.planned.assign(fw.safe_path().begin(), fw.safe_path().end());  // a new goal's
+    }
+    sgp_runs_seen = fw.planner()->sgp_runs();
+  };
   auto progress = [&] {
     // The estimate: in real time the world steps on the board's own thread.
     tasks::Sample<msg::PoseEstimate> pose;
@@ -281,6 +351,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     while (!mission.finished() && sim_s < limit_s) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       sim_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      sample_people();
       if (sim_s >= next_progress_s) {
         progress();
         next_progress_s += 5.0;
@@ -291,6 +362,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     while (!mission.finished() && sim_s < limit_s) {
       if (Status s = scheduler.run_lockstep(clock, hal::millis(500)); !s) return fail(s.error());
       sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+      sample_people();
       if (sim_s >= next_progress_s) {
         progress();
         next_progress_s += 5.0;
@@ -313,22 +385,35 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     // Cage entries: the true poses (every 0.25 s) against the true people, replayed.
     world::World& w = board.simulation().world();
     const SimulationConfig& sim = board.simulation().config();
+    // An entry is the robot's when its own motion since the last pose closed the distance (as
+    // a contact counts only while the robot moves); a walker stepping up to it is the walker's.
     std::vector<bool> inside(sim.movers.size(), false);
-    for (const TimedPose& p : board.referee().poses()) {
+    const std::span<const TimedPose> poses = board.referee().poses();
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const TimedPose& p = poses[k];
       w.set_time(p.t_s);
       for (std::size_t i = 0; i < sim.movers.size() && i < w.mover_count(); ++i) {
         if (!sim.movers[i].person || !w.mover_visible(i)) continue;
         const msg::Point2D at = w.mover_position(i);
-        const bool in = std::hypot(at.x_m - p.pose.x_m, at.y_m - p.pose.y_m) <
-                        sim.movers[i].size_m / 2 + kCageSafetyM + kRobotHalfWidthM;
-        if (in && !inside[i]) ++result.cage_entries;
+        const double d = std::hypot(at.x_m - p.pose.x_m, at.y_m - p.pose.y_m);
+        const bool in = d < sim.movers[i].size_m / 2 + kCageSafetyM + kRobotHalfWidthM;
+        if (in && !inside[i]) {
+          const msg::Pose2D& before = k > 0 ? poses[k - 1].pose : p.pose;
+          const bool robot_closed = std::hypot(at.x_m - before.x_m, at.y_m - before.y_m) - d > 0.01;
+          ++(robot_closed ? result.cage_entries : result.cage_entries_by_person);
+        }
         inside[i] = in;
       }
     }
-    std::fprintf(out, "  people: %llu boxes placed, %llu online re-plans, %llu cage entries\n",
+    result.person_errors = summarize(board.referee().person_errors(), board.referee().report().false_people);
+    std::fprintf(out, "  people: %llu boxes placed, %llu online re-plans, %llu cage entries (and %llu by a person)\n",
                  static_cast<unsigned long long>(result.boxes_located),
                  static_cast<unsigned long long>(result.replans_triggered),
-                 static_cast<unsigned long long>(result.cage_entries));
+                 static_cast<unsigned long long>(result.cage_entries),
+                 static_cast<unsigned long long>(result.cage_entries_by_person));
+    std::fprintf(out, "  people against the truth (1-6 m): %zu samples, error median %.3f m, p95 %.3f m; %llu false\n",
+                 result.person_errors.samples, result.person_errors.median_m, result.person_errors.p95_m,
+                 static_cast<unsigned long long>(result.person_errors.false_people));
   }
   if (const nav::PlannerTask* planner = fw.planner(); planner != nullptr && planner->sgp() != nullptr) {
     result.sgp = true;
@@ -343,7 +428,11 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   board.referee().print(out);
   if (!report_dir.empty()) {
     const std::string png = report_dir + "/" + result.name + ".png";
-    if (!draw_case_figure(case_figure(result.title, result.description, config, fw, board)).write_png(png))
+    report::CaseFigure figure = case_figure(result.title, result.description, config, fw, board);
+    figure.cages = result.cages;
+    figure.replanned = result.replanned;
+    if (!result.planned.empty()) figure.waypoints = result.planned;
+    if (!draw_case_figure(figure).write_png(png))
       std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
   }
   if (quiet != out) std::fclose(quiet);
@@ -434,6 +523,18 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       world.seed = seed;
       world.base.noise_seed = static_cast<std::uint32_t>(seed);
     }
+    // Among walking people each seed starts them elsewhere on their walks (a low-discrepancy
+    // sequence, so nearby seeds differ).
+    const std::uint64_t phase_seed = have_seed ? seed : base_world.seed;
+    for (std::size_t m = 0; scenario->people && m < world.movers.size(); ++m) {
+      world::MoverScript& mover = world.movers[m];
+      if (mover.path.size() < 2 || !(mover.speed_m_s > 0)) continue;
+      double length = 0;
+      for (std::size_t k = 1; k < mover.path.size(); ++k)
+        length += std::hypot(mover.path[k].x_m - mover.path[k - 1].x_m, mover.path[k].y_m - mover.path[k - 1].y_m);
+      const double u = std::fmod(static_cast<double>(phase_seed) * 0.6180339887 + static_cast<double>(m) * 0.4142135624, 1.0);
+      mover.phase_m = u * 2.0 * length;  // a ping-pong cycle is there and back
+    }
     // Carrying the robot off tests recovery: on at AMCL's usual rates if the configuration
     // leaves it off (it is off by default; docs/navigation.md says why).
     if (c.kidnap.time_s >= 0 && !(config.navigation.mcl.recovery_alpha_slow > 0 && config.navigation.mcl.recovery_alpha_fast > 0)) {
@@ -453,6 +554,11 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       config.tasks["detector"].arena_bytes = 4 * 1024;
       config.tasks["people"].arena_bytes = 64 * 1024;
       world.detector.enabled = true;
+      // Walking people are also moving obstacles to the laser: the layer predicts their way.
+      const bool walkers = std::any_of(c.movers.begin(), c.movers.end(), [](const world::MoverScript& m) {
+        return m.person && m.path.size() > 1 && m.speed_m_s > 0;
+      });
+      if (walkers) config.navigation.dynamic_obstacles.enabled = true;
     }
     if (scenario->safe_curve[0] != '\0') {
       config.navigation.safe_curve_path = folder + scenario->safe_curve;

@@ -329,6 +329,7 @@ TEST(PersonTracker, TheLaserFollowsAPersonOutOfViewForAWhile) {
   PersonTrackerConfig config;
   config.laser_follow_s = 2.0;
   config.expire_s = 1.0;
+  config.dynamic_after_m = 0.15;  // walking from the start
   Tracker t(config);
   hal::Nanos now = 0;
   for (int k = 0; k < 3; ++k) {
@@ -359,6 +360,43 @@ TEST(PersonTracker, TheLaserFollowsAPersonOutOfViewForAWhile) {
   EXPECT_EQ(t.tracker.followable(now, predicted, which), 0u);
   t.tracker.expire(now + 1'100'000'000);
   EXPECT_EQ(t.tracker.tracks().size(), 0u);
+}
+
+// Unseen, a standing person's cage stays where they stood, whatever their fixes' noise says
+// about velocity; a walking one is carried on for coast_s, then held.
+TEST(PersonTracker, StandingPeopleAreHeldAndWalkersCoastOnlyAWhile) {
+  PersonTrackerConfig config;
+  config.dynamic_after_m = 1.0;
+  config.coast_s = 1.0;
+  config.expire_s = 5.0;
+  Tracker t(config);
+  hal::Nanos now = 0;
+  // Standing at (2, 3) with 3 cm of jitter, then a last fix 5 cm off.
+  for (const double dx : {0.0, 0.03, -0.03, 0.02, 0.05}) {
+    const PersonFix f = fix_at(2.0 + dx, 3.0);
+    t.tracker.update(std::span(&f, 1), now += 100'000'000);
+  }
+  ASSERT_NE(t.tracker.tracks()[0].velocity.x_m, 0.0);  // the jitter's velocity
+  msg::People people;
+  t.tracker.publish(now + 3'000'000'000, people);
+  ASSERT_EQ(people.count, 1u);
+  EXPECT_EQ(people.items[0].state, msg::PersonState::static_person);
+  EXPECT_NEAR(people.items[0].x_m, t.tracker.tracks()[0].at.x_m, 1e-12);
+  EXPECT_EQ(people.items[0].vx_m_s, 0.0);
+  // Walking at 1 m/s along +y from (6, 0): dynamic after 1 m, then unseen.
+  Tracker w(config);
+  now = 0;
+  for (int k = 0; k <= 15; ++k) {
+    const PersonFix f = fix_at(6.0, 0.1 * k);
+    w.tracker.update(std::span(&f, 1), now += 100'000'000);
+  }
+  const double last_y = w.tracker.tracks()[0].at.y_m;
+  w.tracker.publish(now + 500'000'000, people);
+  EXPECT_EQ(people.items[0].state, msg::PersonState::dynamic_person);
+  EXPECT_NEAR(people.items[0].y_m, last_y + 0.5, 0.08);
+  EXPECT_NEAR(people.items[0].vy_m_s, 1.0, 0.15);
+  w.tracker.publish(now + 3'000'000'000, people);
+  EXPECT_NEAR(people.items[0].y_m, last_y + 1.0, 0.15);  // held after coast_s
 }
 
 TEST(PeopleFusion, TheLaserAloneFindsTheBodyNearEachPrediction) {

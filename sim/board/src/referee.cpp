@@ -41,6 +41,7 @@ void Referee::observe(const GroundTruth& truth) noexcept {
   // Each estimate once, against the truth of the first step after it was published (at most
   // one world step, 5 ms, later): comparing an older estimate with a newer truth would count the
   // motion in between as error.
+  judge_people(truth);
   tasks::Sample<msg::PoseEstimate> estimate;
   if (estimate_ != nullptr && estimate_->published() != estimate_sequence_ && estimate_->read(estimate)) {
     estimate_sequence_ = estimate.sequence;
@@ -61,6 +62,35 @@ void Referee::observe(const GroundTruth& truth) noexcept {
         report_.relocalization_s = static_cast<double>(truth.stamp_ns - truth.kidnapped_ns) * 1e-9;
       }
     }
+  }
+}
+
+void Referee::judge_people(const GroundTruth& truth) noexcept {
+  tasks::Sample<msg::People> people;
+  if (people_ == nullptr || people_->published() == people_sequence_ || !people_->read(people)) return;
+  people_sequence_ = people.sequence;
+  const msg::Pose2D& robot = truth.pose;
+  for (std::size_t i = 0; i < std::min<std::size_t>(people.value.count, msg::People::kMax); ++i) {
+    const msg::TrackedPerson& p = people.value.items[i];
+    // Judged while observed: a person out of both sensors' view is carried on by a guess.
+    if (static_cast<double>(people.value.stamp_ns - p.last_seen_ns) > kPersonFreshS * 1e9) continue;
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t nearest = 0;
+    for (std::size_t k = 0; k < truth.people_count; ++k) {
+      const double d = std::hypot(p.x_m - truth.people[k].x_m, p.y_m - truth.people[k].y_m);
+      if (d < best) {
+        best = d;
+        nearest = k;
+      }
+    }
+    if (!(best <= kPersonMatchM)) {
+      ++report_.false_people;
+      continue;
+    }
+    const double range = std::hypot(truth.people[nearest].x_m - robot.x_m, truth.people[nearest].y_m - robot.y_m);
+    if (range < kPersonRangeMinM || range > kPersonRangeMaxM) continue;
+    ++report_.people_judged;
+    if (person_error_count_ < kMaxPersonErrors) person_errors_[person_error_count_++] = static_cast<float>(best);
   }
 }
 

@@ -149,10 +149,12 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
     next_clearance_ns_ = now_ns + kClearancePeriodNs;
   }
   double nearest = kClearanceLimitM;
+  truth_.people_count = 0;
   for (std::size_t i = 0; i < world_->mover_count(); ++i) {
     if (!world_->mover_visible(i) || !config_.movers[i].person) continue;
     const nav::Point2D p = world_->mover_position(i);
     nearest = std::min(nearest, std::hypot(p.x_m - pose.x_m, p.y_m - pose.y_m));
+    if (truth_.people_count < GroundTruth::kMaxPeople) truth_.people[truth_.people_count++] = p;
   }
   truth_.nearest_person_m = nearest;
   const bool contact = world_->collides(pose, config_.footprint);

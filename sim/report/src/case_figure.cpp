@@ -227,6 +227,13 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
                          c.disc({p.x - 6, p.y}, 3.5, kWaypoint);
                          c.disc({p.x + 6, p.y}, 3.5, kWaypoint);
                        }});
+  if (!f.replanned.empty())
+    entries.push_back({"online re-plan waypoints", [](Canvas& c, Px p) {
+                         c.ring({p.x - 6, p.y}, 4.0, kReplanned, 2);
+                         c.ring({p.x + 6, p.y}, 4.0, kReplanned, 2);
+                       }});
+  if (!f.cages.empty())
+    entries.push_back({"person's cage (as published)", [](Canvas& c, Px p) { c.ring(p, 8.0, kCage, 1); }});
   if (!f.plans.empty())
     entries.push_back({"global plan (first per goal)", [](Canvas& c, Px p) {
                          c.line({p.x - 12, p.y}, {p.x + 12, p.y}, kPlan, 2);
@@ -358,6 +365,8 @@ Canvas draw_case_figure(const CaseFigure& f) {
     canvas.line(view(segment[0].x_m, segment[0].y_m), view(segment[1].x_m, segment[1].y_m), kCurve, 2);
   for (const std::vector<msg::Point2D>& plan : f.plans) canvas.polyline(to_pixels(view, plan), kPlan, 2);
   for (const msg::Point2D& w : f.waypoints) canvas.disc(view(w.x_m, w.y_m), 3.5, kWaypoint);
+  for (const msg::Point2D& w : f.replanned) canvas.ring(view(w.x_m, w.y_m), 4.0, kReplanned, 2);
+  for (const CageMark& cage : f.cages) canvas.ring(view(cage.at.x_m, cage.at.y_m), cage.radius_m * view.px_per_m, kCage, 1);
   for (const MoverTrack& m : f.movers) {
     if (m.path.empty()) continue;
     const double half_px = m.size_m / 2 * view.px_per_m;

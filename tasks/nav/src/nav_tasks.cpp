@@ -408,7 +408,8 @@ Status PeopleTask::init(std::pmr::memory_resource& arena) {
 void PeopleTask::fuse(const msg::PersonDetections& frame, const PosedScan& scan) noexcept {
   const Pose2D laser = msg::compose(scan.pose, config_.laser_mount);
   const std::size_t n = fusion_.fuse(scan.scan.view(), laser, frame, fixes_);
-  tracker_.update(std::span(fixes_).first(n), frame.capture_ns);
+  // The positions are the laser's: they hold at the scan's time, not the frame's.
+  tracker_.update(std::span(fixes_).first(n), scan.scan.stamp_ns);
   ++frames_fused_;
 }
 

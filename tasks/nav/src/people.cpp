@@ -75,13 +75,15 @@ bool CameraProjection::project(double forward_m, double left_m, double& u_px, do
 Status PeopleFusion::init(const FusionConfig& config, const CameraCalibration& calibration, const OccupancyMap* map,
                           std::size_t max_beams, std::pmr::memory_resource& resource) {
   if (!(config.match_window_s >= 0.0) || !(config.depth_band_m > 0.0) || config.min_points < 1 || max_beams == 0 ||
-      !(config.max_body_radius_m >= 0.0)) {
+      !(config.max_body_radius_m >= 0.0) || !(config.background_m >= 0.0 && config.background_m <= 1.0)) {
     return Error::format(Errc::config, "people fusion: match_window_s >= 0, depth_band_m > 0, min_points >= 1, "
-                                       "max_body_radius_m >= 0 and room for a scan");
+                                       "max_body_radius_m >= 0, 0 <= background_m <= 1 and room for a scan");
   }
   if (Status s = projection_.set(calibration); !s) return s;
   config_ = config;
   map_ = map;
+  background_cells_ =
+      map != nullptr ? std::max(1, static_cast<int>(std::ceil(config.background_m / map->resolution_m() - 1e-9))) : 1;
   return guarded("people fusion", [&]() -> Status {
     u_ = allocate_array<float>(resource, max_beams);
     v_ = allocate_array<float>(resource, max_beams);
@@ -96,8 +98,10 @@ bool PeopleFusion::background(double x_m, double y_m) const noexcept {
   int col = 0;
   int row = 0;
   if (!map_->world_to_cell(x_m, y_m, col, row)) return false;
-  for (int dr = -1; dr <= 1; ++dr)
-    for (int dc = -1; dc <= 1; ++dc) {
+  const int reach = background_cells_;
+  for (int dr = -reach; dr <= reach; ++dr)
+    for (int dc = -reach; dc <= reach; ++dc) {
+      if (dr * dr + dc * dc > reach * reach) continue;
       const int c = col + dc;
       const int r = row + dr;
       if (c >= 0 && r >= 0 && c < map_->width() && r < map_->height() && map_->at(c, r) >= config_.occupied_threshold)
@@ -227,10 +231,10 @@ Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_r
       !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) ||
       !(config.position_gain > 0.0 && config.position_gain <= 1.0) || !(config.velocity_gain >= 0.0) ||
       !(config.max_speed_m_s > 0.0) || config.confirm_hits < 1 || !(config.laser_follow_s >= 0.0) ||
-      !(config.follow_gate_m > 0.0)) {
+      !(config.follow_gate_m > 0.0) || !(config.coast_s >= 0.0)) {
     return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s, "
                                        "follow_gate_m > 0, 0 < position_gain <= 1, confirm_hits >= 1, "
-                                       "laser_follow_s >= 0",
+                                       "laser_follow_s, coast_s >= 0",
                          msg::People::kMax);
   }
   config_ = config;
@@ -250,10 +254,7 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
   std::fill(fix_used_.begin(), fix_used_.end(), std::uint8_t{0});
   std::fill(assignment_.begin(), assignment_.end(), Hungarian::kUnassigned);
   // Predicted positions, matched to the fixes; an out-of-gate pair never wins over an in-gate one.
-  const auto predicted = [&](const Track& t) {
-    const double dt = std::max(0.0, static_cast<double>(stamp_ns - t.last_seen_ns) * 1e-9);
-    return Point2D{t.at.x_m + t.velocity.x_m * dt, t.at.y_m + t.velocity.y_m * dt};
-  };
+  const auto predicted = [&](const Track& t) { return predict(t, stamp_ns); };
   if (count_ > 0 && fix_count > 0) {
     const double far = 2.0 * config_.gate_m;
     for (std::size_t t = 0; t < count_; ++t) {
@@ -290,8 +291,20 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
   }
 }
 
+bool PersonTracker::walking(const Track& track) const noexcept {
+  return track.state == msg::PersonState::dynamic_person ||
+         std::hypot(track.velocity.x_m, track.velocity.y_m) >= config_.walking_speed_m_s;
+}
+
+Point2D PersonTracker::predict(const Track& track, hal::Nanos stamp_ns) const noexcept {
+  if (!walking(track)) return track.at;
+  const double dt = std::clamp(static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9, 0.0, config_.coast_s);
+  return {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
+}
+
 void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept {
-  // Alpha-beta: the residual against the prediction corrects position and velocity.
+  // Alpha-beta: the residual against the prediction corrects position and velocity (the
+  // velocity is kept for a standing person too: it is what shows them starting to walk).
   const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
   const Point2D p{track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
   const double rx = fix.x_m - p.x_m;
@@ -319,8 +332,7 @@ std::size_t PersonTracker::followable(hal::Nanos stamp_ns, std::span<Point2D> ou
     if (track.hits < config_.confirm_hits || stamp_ns <= track.last_seen_ns ||
         static_cast<double>(stamp_ns - track.camera_seen_ns) > config_.laser_follow_s * 1e9)
       continue;
-    const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
-    out[n] = {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
+    out[n] = predict(track, stamp_ns);
     which[n++] = static_cast<std::uint8_t>(t);
   }
   return n;
@@ -347,13 +359,15 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
   for (std::size_t t = 0; t < count_ && out.count < msg::People::kMax; ++t) {
     const Track& track = tracks_[t];
     if (track.hits < config_.confirm_hits) continue;
-    const double dt = std::max(0.0, static_cast<double>(now_ns - track.last_seen_ns) * 1e-9);
     msg::TrackedPerson& p = out.items[out.count++];
     p.id = track.id;
-    p.x_m = track.at.x_m + track.velocity.x_m * dt;
-    p.y_m = track.at.y_m + track.velocity.y_m * dt;
-    p.vx_m_s = track.velocity.x_m;
-    p.vy_m_s = track.velocity.y_m;
+    const Point2D at = predict(track, now_ns);
+    p.x_m = at.x_m;
+    p.y_m = at.y_m;
+    // A standing person's cage stays where they stand (their velocity is the fixes' noise).
+    const bool moving = walking(track);
+    p.vx_m_s = moving ? track.velocity.x_m : 0.0;
+    p.vy_m_s = moving ? track.velocity.y_m : 0.0;
     p.width_m = track.width_m;
     p.cage_radius_m = track.width_m / 2.0 + config_.safety_radius_m;
     p.state = track.state;

@@ -10,6 +10,7 @@
 #include <span>
 
 #include "sen3bot/msg/messages.hpp"
+#include "sen3bot/msg/people.hpp"
 #include "sen3bot/sim/simulation.hpp"
 #include "sen3bot/tasks/topic.hpp"
 
@@ -25,6 +26,12 @@ struct RefereeReport {
   // From a kidnapping to the first estimate after which every estimate is within
   // kRelocalizedM and kRelocalizedRad of the truth; < 0 without a kidnapping or while not back.
   double relocalization_s = -1;
+  // The firmware's people (watch_people) against the true ones: each published person placed
+  // within kPersonFreshS (by a box or the laser) whose nearest true person is
+  // kPersonRangeMinM..kPersonRangeMaxM from the robot adds its error to person_errors(); one
+  // farther than kPersonMatchM from every true person is a false one.
+  std::uint64_t people_judged = 0;
+  std::uint64_t false_people = 0;
 };
 
 // A true pose at a world time (the simulation clock's seconds).
@@ -43,8 +50,16 @@ class Referee {
   static constexpr double kRelocalizedM = 0.3;
   static constexpr double kRelocalizedRad = 10.0 * 3.14159265358979323846 / 180.0;
 
+  static constexpr std::size_t kMaxPersonErrors = 16384;
+  static constexpr double kPersonRangeMinM = 1.0;
+  static constexpr double kPersonRangeMaxM = 6.0;
+  static constexpr double kPersonMatchM = 1.0;
+  static constexpr double kPersonFreshS = 0.3;  // a person last placed longer ago is not judged
+
   // The firmware's pose estimate, compared with the truth at every step; null: not judged.
   void watch_estimate(const tasks::Topic<msg::PoseEstimate>* estimate) noexcept { estimate_ = estimate; }
+  // The firmware's people, each message against the true people of the step after it.
+  void watch_people(const tasks::Topic<msg::People>* people) noexcept { people_ = people; }
   // Every world step; never allocates.
   void observe(const GroundTruth& truth) noexcept;
 
@@ -59,10 +74,16 @@ class Referee {
   [[nodiscard]] std::span<const msg::Point2D> estimate_track() const noexcept {
     return {estimate_track_.data(), estimate_track_count_};
   }
+  // Each judged person's position error (m), the first kMaxPersonErrors of them.
+  [[nodiscard]] std::span<const float> person_errors() const noexcept {
+    return {person_errors_.data(), person_error_count_};
+  }
   // The true pose where each contact began, the first kMaxContacts of them.
   [[nodiscard]] std::span<const TimedPose> contact_poses() const noexcept { return {contacts_.data(), contact_count_}; }
 
  private:
+  void judge_people(const GroundTruth& truth) noexcept;
+
   const tasks::Topic<msg::PoseEstimate>* estimate_ = nullptr;
   std::uint64_t estimate_sequence_ = 0;
   RefereeReport report_;
@@ -77,6 +98,10 @@ class Referee {
   std::array<TimedPose, kMaxContacts> contacts_{};
   std::size_t contact_count_ = 0;
   hal::Nanos close_since_ns_ = -1;  // after a kidnapping: since when every estimate was close
+  const tasks::Topic<msg::People>* people_ = nullptr;
+  std::uint64_t people_sequence_ = 0;
+  std::array<float, kMaxPersonErrors> person_errors_{};
+  std::size_t person_error_count_ = 0;
 };
 
 }  // namespace sen3bot::sim

@@ -6,6 +6,7 @@
 // The firmware does not know it is simulated: SimBoard (sim_board.hpp) hands its drivers the
 // emulators' ends as links: in-memory pipes (lockstep: one thread, deterministic for a seed) or
 // real pseudo-terminals whose slave paths are opened as serial ports (real time).
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -59,6 +60,10 @@ struct GroundTruth {
   std::uint64_t moving_contacts = 0;  // of those, while the robot itself was moving
   bool in_contact = false;
   hal::Nanos kidnapped_ns = -1;     // when the robot was carried away (-1: not yet)
+  // The visible people's true centres (the first kMaxPeople of them), for the referee.
+  static constexpr std::size_t kMaxPeople = 16;
+  std::array<nav::Point2D, kMaxPeople> people{};
+  std::size_t people_count = 0;
 };
 static_assert(std::is_trivially_copyable_v<GroundTruth>);
 

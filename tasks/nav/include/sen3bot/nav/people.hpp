@@ -10,7 +10,7 @@
 // down, the laser 0.21 m below it) a return 2 m straight ahead lands at (742.2, 146.7) px.
 //
 // Placing a person: of the returns inside the box (and in front of the camera), the ones on
-// the static map (within one cell of an occupied cell) are background and left out; of the
+// the static map (within background_m of an occupied cell) are background and left out; of the
 // rest, those within depth_band_m of the nearest are the person's near side. Their mean,
 // moved back along the ray as a round body as wide as those returns would be (pi/4 of the
 // half width), is the person's position. A box with too few such returns places nobody.
@@ -67,6 +67,7 @@ struct FusionConfig {
   std::size_t min_points = 2;
   double max_body_radius_m = 0.3;  // the centre is at most pi/4 of this behind the returns' mean
   std::int8_t occupied_threshold = 65;  // map cells at least this are background
+  double background_m = 0.15;  // returns this close to them too (the map's and the pose's error)
 };
 
 enum class BoxVerdict : std::uint8_t {
@@ -124,6 +125,7 @@ class PeopleFusion {
   std::span<float> v_;
   std::span<double> x_;
   std::span<double> y_;
+  int background_cells_ = 1;
   std::array<std::uint64_t, kBoxVerdicts> counts_{};
 };
 
@@ -141,6 +143,11 @@ struct PersonTrackerConfig {
   // within follow_gate_m of the prediction) for up to laser_follow_s after the last box.
   double laser_follow_s = 8.0;
   double follow_gate_m = 0.45;
+  // A walking person (dynamic, or faster than walking_speed_m_s) is carried on by their
+  // velocity to the time asked, for at most coast_s past the last fix; a standing one is held
+  // where last seen (their velocity is the fixes' noise).
+  double coast_s = 1.0;
+  double walking_speed_m_s = 0.3;
 };
 
 class PersonTracker {
@@ -185,6 +192,8 @@ class PersonTracker {
   std::uint32_t next_id_ = 1;
 
   void correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
+  [[nodiscard]] Point2D predict(const Track& track, hal::Nanos stamp_ns) const noexcept;
+  [[nodiscard]] bool walking(const Track& track) const noexcept;
 };
 
 struct PeopleLayerConfig {

@@ -78,6 +78,13 @@ struct Arrow {
   msg::Point2D to;
 };
 
+// A person's virtual cage as the firmware published it, at a time.
+struct CageMark {
+  msg::Point2D at;
+  double radius_m = 0;
+  double t_s = 0;
+};
+
 struct CaseFigure {
   std::string title;        // "case 2/3: obstacle-before-planning"
   std::string description;  // what the case is
@@ -85,6 +92,8 @@ struct CaseFigure {
   bool passed = false;      // the result line in green, else red
   const nav::OccupancyMap* map = nullptr;
   std::vector<msg::Point2D> waypoints;
+  std::vector<msg::Point2D> replanned;  // the safe path of the last online re-plan
+  std::vector<CageMark> cages;          // people's cages, a sample every second or so
   std::vector<EllipseMark> ellipses;                 // the obstacles as the SGP sees them
   std::vector<std::array<msg::Point2D, 2>> curve;    // the safe curve V, as short segments
   std::vector<Arrow> field;                          // the SGP's field direction (a quiver plot)
@@ -124,6 +133,8 @@ inline constexpr Rgb kBoxTrack{235, 170, 110};  // a moving box's true track
 inline constexpr Rgb kEllipse{200, 150, 0};     // an obstacle's ellipse (SGP)
 inline constexpr Rgb kCurve{170, 0, 110};       // the safe curve V
 inline constexpr Rgb kField{150, 150, 150};     // the SGP field's arrows
+inline constexpr Rgb kCage{230, 60, 60};         // a person's virtual cage (published)
+inline constexpr Rgb kReplanned{0, 190, 230};    // waypoints of an online re-plan
 }  // namespace colours
 
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
