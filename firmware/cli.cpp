@@ -44,6 +44,11 @@ constexpr const char* kUsage =
     "        length_m, iterations, time_ms, min_barrier, ellipses. --png draws the map,\n"
     "        ellipses, curve, field and waypoints. Exit status 1 when the path stops\n"
     "        short of that place (the reason in stop).\n"
+    "  detect --image FILE [--scale S] [--threshold T] [--repeat N] [--png FILE]\n"
+    "        The on-board people detector (OpenCV's HOG people coefficients) on an\n"
+    "        image, the frame shrunk by --scale (0.5) first: JSON with the boxes in\n"
+    "        the image's pixels and their confidence, and the median time of --repeat\n"
+    "        runs. --png draws the boxes. (Where OpenCV's objdetect is built in.)\n"
     "  capture dump FILE\n"
     "        Print a wire capture (.s3bcap) as a timestamped hex listing.\n"
     "  decode p2os CAPTURE\n"
@@ -122,6 +127,9 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"run", "", run_command},
       {"plan", "", plan_command},
       {"sgp", "", sgp_command},
+#ifdef SEN3BOT_HAS_HOG
+      {"detect", "", detect_command},
+#endif
       {"capture", "", capture_command},
       {"decode", "p2os", decode_p2os_command},
       {"decode", "lms200", decode_lms200_command},

@@ -187,7 +187,7 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     const Reader p = r.child("people");
     p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
                   "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
-                  "robot_clearance_m", "online_sgp"});
+                  "robot_clearance_m", "online_sgp", "onboard"});
     n.people_enabled = true;
     n.people_detector = p.text("detector");
     if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
@@ -202,6 +202,15 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("follow_gate_m")) n.person_tracker.follow_gate_m = p.number("follow_gate_m", 0.05, 2.0);
     if (p.has("max_body_radius_m")) n.fusion.max_body_radius_m = p.number("max_body_radius_m", 0.0, 1.0);
     if (p.has("robot_clearance_m")) n.cages.robot_clearance_m = p.number("robot_clearance_m", 0.0, 2.0);
+    if (p.has("onboard")) {
+      // The on-board detector's search (detector: onboard).
+      const Reader o = p.child("onboard");
+      o.allow_only({"rate_hz", "scale", "threshold", "min_height_px"});
+      if (o.has("rate_hz")) n.onboard_rate_hz = o.number("rate_hz", 0.05, 30.0);
+      if (o.has("scale")) n.onboard_hog.scale = o.number("scale", 0.1, 2.0);
+      if (o.has("threshold")) n.onboard_hog.hit_threshold = o.number("threshold", -5.0, 10.0);
+      if (o.has("min_height_px")) n.onboard_hog.min_height_px = o.number("min_height_px", 0.0, 4096.0);
+    }
     if (p.has("online_sgp")) {
       // Re-running the supervisory planner when a person pushed the robot off its safe path.
       const Reader o = p.child("online_sgp");

@@ -15,6 +15,7 @@
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
+#include "sen3bot/detector/hog.hpp"
 #include "sen3bot/nav/osgp.hpp"
 #include "sen3bot/nav/people.hpp"
 #include "sen3bot/nav/safety.hpp"
@@ -66,6 +67,9 @@ struct NavigationSection {
   nav::PersonTrackerConfig person_tracker;
   nav::PeopleLayerConfig cages;
   double detection_max_age_s = 0.5;
+  // detector: onboard: OpenCV's HOG on the camera's frames (vision_task.hpp).
+  detector::HogConfig onboard_hog;
+  double onboard_rate_hz = 2.0;
   bool osgp_enabled = true;  // with the safe curve and people: the online SGP (osgp.hpp)
   nav::OsgpConfig osgp;
   nav::MclConfig mcl;          // initial_pose, initial_std_xy_m, min/max_particles from the file

@@ -29,6 +29,9 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "mission") return mission_task_.get();
   if (name == "detector") return detector_task_.get();
   if (name == "people") return people_task_.get();
+#ifdef SEN3BOT_HAS_HOG
+  if (name == "vision") return vision_task_.get();
+#endif
   return nullptr;
 }
 
@@ -64,13 +67,32 @@ Status Firmware::create_navigation() {
   // People: the detector's channel, the fusion, and the cages on both costmaps.
   const tasks::Topic<msg::People>* people = nullptr;
   if (n.people_enabled) {
-    DetectorTaskConfig detector;
-    detector.address = n.people_detector;
-    detector.gate.max_age_s = n.detection_max_age_s;
     const nav::CameraCalibration camera;
-    detector.gate.width_px = static_cast<std::uint16_t>(camera.width_px);
-    detector.gate.height_px = static_cast<std::uint16_t>(camera.height_px);
-    detector_task_ = std::make_unique<DetectorTask>(detector, board_, nav_detections_);
+    if (n.people_detector == "onboard") {
+      // The boxes come from the camera's own frames (vision_task.hpp).
+#ifdef SEN3BOT_HAS_HOG
+      if (!config_.devices.has_camera)
+        return Error::format(Errc::config, "%s: navigation.people.detector: onboard needs devices.camera", file);
+      VisionTaskConfig vision;
+      vision.hog = n.onboard_hog;
+      vision.rate_hz = n.onboard_rate_hz;
+      vision.calibration_width_px = static_cast<std::uint32_t>(camera.width_px);
+      vision.calibration_height_px = static_cast<std::uint32_t>(camera.height_px);
+      vision_task_ = std::make_unique<VisionTask>(vision, camera_frames(), nav_detections_);
+#else
+      return Error::format(Errc::config,
+                           "%s: navigation.people.detector: onboard: this build has no on-board detector (it needs "
+                           "OpenCV's objdetect module, libopencv-objdetect-dev)",
+                           file);
+#endif
+    } else {
+      DetectorTaskConfig detector;
+      detector.address = n.people_detector;
+      detector.gate.max_age_s = n.detection_max_age_s;
+      detector.gate.width_px = static_cast<std::uint16_t>(camera.width_px);
+      detector.gate.height_px = static_cast<std::uint16_t>(camera.height_px);
+      detector_task_ = std::make_unique<DetectorTask>(detector, board_, nav_detections_);
+    }
     nav::PeopleTaskConfig fusion;
     fusion.fusion = n.fusion;
     fusion.tracker = n.person_tracker;
@@ -152,6 +174,7 @@ Status Firmware::init() {
                            name.c_str(),
                            name == "base" || name == "laser" || name == "camera" ? "needs its device under devices"
                            : name == "detector" || name == "people"             ? "needs navigation.people"
+                           : name == "vision" ? "needs navigation.people.detector: onboard"
                                                                                 : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {

@@ -21,6 +21,9 @@
 #include "base_task.hpp"
 #include "camera_task.hpp"
 #include "detector_task.hpp"
+#ifdef SEN3BOT_HAS_HOG
+#include "vision_task.hpp"
+#endif
 #include "laser_task.hpp"
 #include "mission.hpp"
 
@@ -118,6 +121,9 @@ class Firmware {
   std::unique_ptr<nav::ControllerTask> controller_task_;
   std::unique_ptr<nav::SafetyTask> safety_task_;
   std::unique_ptr<DetectorTask> detector_task_;
+#ifdef SEN3BOT_HAS_HOG
+  std::unique_ptr<VisionTask> vision_task_;
+#endif
   std::unique_ptr<nav::PeopleTask> people_task_;
   std::unique_ptr<MissionTask> mission_task_;
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order

@@ -38,6 +38,8 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
     tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
+    // After the camera: its init() reads the camera's frame pool.
+    tasks::TaskSpec{"vision",       500'000,   300'000,   0,        "vision"},
 };
 static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 

@@ -30,6 +30,8 @@ NATIVE_PACKAGES=(
   libopencv-core-dev
   libopencv-imgproc-dev
   libopencv-imgcodecs-dev
+  libopencv-objdetect-dev    # the on-board people detector (HOG)
+  opencv-doc                 # its tests: the people in OpenCV's sample images (Apache-2.0)
   rt-tests                   # cyclictest, compared against by the jitter benchmark
   clang                      # the bounded libFuzzer run of the test command (SEN3BOT_LIBFUZZER=ON)
   libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14

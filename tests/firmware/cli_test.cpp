@@ -121,7 +121,7 @@ TEST(Cli, LockstepRunPrintsStatusAndStatistics) {
   EXPECT_NE(o.out.find("lockstep simulated clock"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("memory budgets"), std::string::npos);
   // Every row but the camera's, the detector's and the people's (config/sim.yaml has none).
-  EXPECT_NE(o.out.find("status  " + std::to_string(kTaskTable.size() - 3) + " tasks"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("status  " + std::to_string(kTaskTable.size() - 4) + " tasks"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("simulated 12.000 s"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("task statistics"), std::string::npos);
   // health at 10 Hz for 12 s.

@@ -273,6 +273,17 @@ TEST(Config, PeopleTheirCagesAndTheOnlineSgp) {
   EXPECT_DOUBLE_EQ(n.osgp.cooldown_s, 4.0);
   EXPECT_DOUBLE_EQ(n.osgp.person_timeout_s, 6.0);
 
+  r = parse_config(std::string(kNavigation) +
+                       "  people: { detector: onboard, onboard: { rate_hz: 1, scale: 0.75, threshold: 0.5, "
+                       "min_height_px: 80 } }\n",
+                   "/robot/robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_EQ(r->navigation.people_detector, "onboard");
+  EXPECT_DOUBLE_EQ(r->navigation.onboard_rate_hz, 1.0);
+  EXPECT_DOUBLE_EQ(r->navigation.onboard_hog.scale, 0.75);
+  EXPECT_DOUBLE_EQ(r->navigation.onboard_hog.hit_threshold, 0.5);
+  EXPECT_DOUBLE_EQ(r->navigation.onboard_hog.min_height_px, 80.0);
+
   std::string m = message_of(std::string(kNavigation) + "  people: { detector: sim, confirm_boxes: 0 }\n");
   EXPECT_NE(m.find("navigation.people.confirm_boxes: value 0 is outside"), std::string::npos) << m;
   m = message_of(std::string(kNavigation) + "  people: { detector: sim, online_sgp: { enabled: false, delay: 1 } }\n");

@@ -24,8 +24,8 @@ TEST(TaskTable, RowsAreValidAndNamesUnique) {
 }
 
 // config/sim.yaml's robot has every device but a camera, and no person detector (the
-// detector's and the people's rows).
-constexpr std::size_t kSimulatedRows = kTaskTable.size() - 3;
+// detector's, the people's and the on-board detector's rows).
+constexpr std::size_t kSimulatedRows = kTaskTable.size() - 4;
 
 TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
   FirmwareConfig config = sim_config();
@@ -101,6 +101,37 @@ TEST(Firmware, ACameraBudgetWithoutACameraIsAConfigurationError) {
   EXPECT_NE(std::string(s.error().message()).find("tasks.camera: this task is not enabled by the configuration (needs its device under devices)"),
             std::string::npos)
       << s.error().c_str();
+}
+
+// The on-board detector reads the camera's frames: without a camera it cannot be chosen, and a
+// vision budget without it is named.
+TEST(Firmware, TheOnBoardDetectorNeedsTheCamera) {
+  FirmwareConfig config = sim_config();
+  config.navigation.people_enabled = true;
+  config.navigation.people_detector = "onboard";
+  config.tasks["people"].arena_bytes = 64 * 1024;
+  testing::SimRig rig = testing::load_sim_rig();
+  Firmware fw(config, *rig.board, stdout);
+  const Status s = fw.init();
+  ASSERT_FALSE(s);
+#ifdef SEN3BOT_HAS_HOG
+  EXPECT_NE(std::string(s.error().message()).find("navigation.people.detector: onboard needs devices.camera"),
+            std::string::npos)
+      << s.error().c_str();
+#else
+  EXPECT_NE(std::string(s.error().message()).find("this build has no on-board detector"), std::string::npos)
+      << s.error().c_str();
+#endif
+  FirmwareConfig remote = sim_config();
+  remote.tasks["vision"].arena_bytes = 1024;
+  testing::SimRig rig2 = testing::load_sim_rig();
+  Firmware fw2(remote, *rig2.board, stdout);
+  const Status s2 = fw2.init();
+  ASSERT_FALSE(s2);
+  EXPECT_NE(std::string(s2.error().message()).find("tasks.vision: this task is not enabled by the configuration (needs "
+                                                   "navigation.people.detector: onboard)"),
+            std::string::npos)
+      << s2.error().c_str();
 }
 
 TEST(Firmware, ATaskWithoutABudgetOrAnUnknownTaskIsAConfigurationError) {

@@ -75,9 +75,11 @@ bool CameraProjection::project(double forward_m, double left_m, double& u_px, do
 Status PeopleFusion::init(const FusionConfig& config, const CameraCalibration& calibration, const OccupancyMap* map,
                           std::size_t max_beams, std::pmr::memory_resource& resource) {
   if (!(config.match_window_s >= 0.0) || !(config.depth_band_m > 0.0) || config.min_points < 1 || max_beams == 0 ||
-      !(config.max_body_radius_m >= 0.0) || !(config.background_m >= 0.0 && config.background_m <= 1.0)) {
+      !(config.max_body_radius_m >= 0.0) || !(config.background_m >= 0.0 && config.background_m <= 1.0) ||
+      !(config.segment_jump_m >= 0.0)) {
     return Error::format(Errc::config, "people fusion: match_window_s >= 0, depth_band_m > 0, min_points >= 1, "
-                                       "max_body_radius_m >= 0, 0 <= background_m <= 1 and room for a scan");
+                                       "max_body_radius_m >= 0, segment_jump_m >= 0, 0 <= background_m <= 1 and "
+                                       "room for a scan");
   }
   if (Status s = projection_.set(calibration); !s) return s;
   config_ = config;
@@ -174,18 +176,34 @@ void PeopleFusion::locate(const msg::ScanView& scan, const Pose2D& laser_pose, s
 template <typename Region>
 bool PeopleFusion::place(const msg::ScanView& scan, const Pose2D& laser_pose, std::size_t beams, const Region& region,
                          PersonFix& fix) const noexcept {
-  // The nearest located return in the region, then those within the depth band behind it.
+  // The nearest located return in the region, then those within the depth band behind it,
+  // and the unbroken run of returns around the nearest (the body where a box taken at another
+  // moment than the scan, or drawn tight, cuts it).
   double nearest = std::numeric_limits<double>::infinity();
+  std::size_t at = beams;
   for (std::size_t i = 0; i < beams; ++i)
-    if (scan.ranges_m[i] < nearest && !std::isnan(x_[i]) && region(i)) nearest = scan.ranges_m[i];
+    if (scan.ranges_m[i] < nearest && !std::isnan(x_[i]) && region(i)) {
+      nearest = scan.ranges_m[i];
+      at = i;
+    }
   if (!std::isfinite(nearest)) return false;
+  const double far = nearest + config_.depth_band_m;
+  const auto joins = [&](std::size_t i, std::size_t j) {
+    return !std::isnan(x_[j]) && scan.ranges_m[j] <= far &&
+           std::abs(scan.ranges_m[j] - scan.ranges_m[i]) <= config_.segment_jump_m;
+  };
+  std::size_t run_lo = at;
+  std::size_t run_hi = at;
+  while (run_lo > 0 && joins(run_lo, run_lo - 1)) --run_lo;
+  while (run_hi + 1 < beams && joins(run_hi, run_hi + 1)) ++run_hi;
   double sx = 0.0;
   double sy = 0.0;
   std::size_t lo = beams;
   std::size_t hi = 0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < beams; ++i) {
-    if (!(scan.ranges_m[i] <= nearest + config_.depth_band_m) || std::isnan(x_[i]) || !region(i)) continue;
+    const bool in_run = i >= run_lo && i <= run_hi;
+    if (!in_run && (!(scan.ranges_m[i] <= far) || std::isnan(x_[i]) || !region(i))) continue;
     sx += x_[i];
     sy += y_[i];
     lo = std::min(lo, i);

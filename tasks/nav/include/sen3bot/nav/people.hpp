@@ -11,7 +11,8 @@
 //
 // Placing a person: of the returns inside the box (and in front of the camera), the ones on
 // the static map (within background_m of an occupied cell) are background and left out; of the
-// rest, those within depth_band_m of the nearest are the person's near side. Their mean,
+// rest, those within depth_band_m of the nearest, with the unbroken run of returns around the
+// nearest (in case the box cuts the body), are the person's near side. Their mean,
 // moved back along the ray as a round body as wide as those returns would be (pi/4 of the
 // half width), is the person's position. A box with too few such returns places nobody.
 #include <array>
@@ -65,6 +66,7 @@ struct FusionConfig {
   std::uint16_t person_class = 0;  // COCO's person
   double depth_band_m = 0.35;      // returns this close behind the nearest one are the person
   std::size_t min_points = 2;
+  double segment_jump_m = 0.08;     // neighbouring returns closer in range than this are one body
   double max_body_radius_m = 0.3;  // the centre is at most pi/4 of this behind the returns' mean
   std::int8_t occupied_threshold = 65;  // map cells at least this are background
   double background_m = 0.15;  // returns this close to them too (the map's and the pose's error)
