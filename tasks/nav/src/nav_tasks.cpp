@@ -94,6 +94,7 @@ Status PlannerTask::init(std::pmr::memory_resource& arena) {
     planner.max_waypoints = std::max(planner.max_waypoints, capacity);
     if (Status s = planner_.init(planner, arena); !s) return s;
     waypoints_ = allocate_array<Point2D>(arena, capacity);
+    open_waypoints_ = allocate_array<Point2D>(arena, capacity);
     if (!config_.use_sgp) {
       std::copy(waypoints_in_.begin(), waypoints_in_.end(), waypoints_.begin());
       waypoint_count_ = waypoints_in_.size();
@@ -166,9 +167,19 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
     }
   }
   if (nearest < waypoints.size()) next_waypoint_ = nearest;
+  // Waypoints a person's cage (or any obstacle) now covers are left out: the safe path is
+  // the map's, and steering through them would take the robot into the cage's edge.
+  std::size_t open = 0;
+  const Costmap2D& grid = costmap_.costmap();
+  for (const Point2D& w : waypoints.subspan(next_waypoint_)) {
+    int col = 0;
+    int row = 0;
+    if (grid.world_to_cell(w.x_m, w.y_m, col, row) && grid.at(col, row) >= kInscribedCost) continue;
+    open_waypoints_[open++] = w;
+  }
   const auto begin = std::chrono::steady_clock::now();
-  const PlanResult r = planner_.plan_world(costmap_.costmap(), {pose.x_m, pose.y_m}, {goal.x_m, goal.y_m},
-                                           waypoints.subspan(next_waypoint_), cells_);
+  const PlanResult r = planner_.plan_world(grid, {pose.x_m, pose.y_m}, {goal.x_m, goal.y_m},
+                                           open_waypoints_.first(open), cells_);
   const auto end = std::chrono::steady_clock::now();
   last_plan_ns_ = now_ns;
   if (!new_goal) {
@@ -192,7 +203,6 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
   if (r.ok()) {
     // Long paths are thinned evenly to fit the message; the last cell is always kept.
     const std::size_t stride = (r.cells + PathMessage::kMaxPoints - 1) / PathMessage::kMaxPoints;
-    const Costmap2D& grid = costmap_.costmap();
     for (std::size_t i = 0; i < r.cells; i += stride) {
       double x = 0.0;
       double y = 0.0;

@@ -168,6 +168,7 @@ class PlannerTask final : public tasks::Task {
   double sgp_time_ms_ = 0.0;
   std::span<Point2D> waypoints_;
   std::size_t waypoint_count_ = 0;
+  std::span<Point2D> open_waypoints_;  // the ones to plan through: not under a cage or obstacle
   std::span<GridCell> cells_;
   std::span<GridCell> kept_cells_;  // the published plan as a cell path, for remaining_cost()
   bool have_plan_ = false;          // message_ holds a usable plan for the active goal
