@@ -424,32 +424,41 @@ TEST(PeopleFusion, TheLaserAloneFindsTheBodyNearEachPrediction) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+// The people layer under an inflation layer on a fixed 6 x 6 m grid.
+struct CageGrid {
+  explicit CageGrid(const msg::People& people, PeopleLayerConfig config = {}) : layer(people, config) {
+    EXPECT_TRUE(costmap.add_layer(layer));
+    EXPECT_TRUE(costmap.add_layer(inflation));
+    CostmapConfig grid;
+    grid.rolling = false;
+    grid.width_m = 6.0;
+    grid.height_m = 6.0;
+    EXPECT_TRUE(costmap.init(grid, arena));
+  }
+  std::uint8_t cost_at(double x, double y) const {
+    int col = 0, row = 0;
+    EXPECT_TRUE(costmap.costmap().world_to_cell(x, y, col, row));
+    return costmap.costmap().at(col, row);
+  }
+  PeopleLayer layer;
+  InflationLayer inflation;
+  LayeredCostmap costmap;
+  mem::BudgetArena arena{"costmap", 1 << 20};
+};
+
 TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
   msg::People people;
   PeopleLayerConfig config;
   config.expire_s = 1.0;
-  PeopleLayer layer(people, config);
-  InflationLayer inflation;
-  LayeredCostmap costmap;
-  ASSERT_TRUE(costmap.add_layer(layer));
-  ASSERT_TRUE(costmap.add_layer(inflation));
-  mem::BudgetArena arena("costmap", 1 << 20);
-  CostmapConfig grid;
-  grid.rolling = false;
-  grid.width_m = 6.0;
-  grid.height_m = 6.0;
-  ASSERT_TRUE(costmap.init(grid, arena));
+  CageGrid g(people, config);
+  PeopleLayer& layer = g.layer;
+  LayeredCostmap& costmap = g.costmap;
+  const auto cost_at = [&](double x, double y) { return g.cost_at(x, y); };
   // One person at (3, 3), 0.4 m wide, cage radius 0.2 + 0.5 m, walking +x at 1 m/s.
   people.count = 1;
   people.stamp_ns = 1'000'000'000;
   people.items[0] = {1, 3.0, 3.0, 1.0, 0.0, 0.4, 0.7, msg::PersonState::dynamic_person, 1'000'000'000, 12};
   costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 1'000'000'000});
-  const Costmap2D& c = costmap.costmap();
-  const auto cost_at = [&](double x, double y) {
-    int col = 0, row = 0;
-    EXPECT_TRUE(c.world_to_cell(x, y, col, row));
-    return c.at(col, row);
-  };
   EXPECT_EQ(layer.cages(), 1u);
   EXPECT_EQ(cost_at(3.0, 3.0), kLethalCost);
   EXPECT_EQ(cost_at(3.0 + 0.65, 3.0), kLethalCost);
@@ -471,31 +480,18 @@ TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
 
 // A person 0.6 m from the robot (closer than cage plus robot): the cage shrinks to stop
 // robot_clearance_m from the robot's centre, so the robot is not left inside a lethal region
-// and can move away; the side away from the robot keeps the full cage.
+// and can move away; backed off, the full cage is there again.
 TEST(PeopleLayer, ACageNeverSwallowsTheRobot) {
   msg::People people;
-  PeopleLayer layer(people, {});
-  InflationLayer inflation;
-  LayeredCostmap costmap;
-  ASSERT_TRUE(costmap.add_layer(layer));
-  ASSERT_TRUE(costmap.add_layer(inflation));
-  mem::BudgetArena arena("costmap", 1 << 20);
-  CostmapConfig grid;
-  grid.rolling = false;
-  grid.width_m = 6.0;
-  grid.height_m = 6.0;
-  ASSERT_TRUE(costmap.init(grid, arena));
+  CageGrid g(people);
+  const PeopleLayer& layer = g.layer;
+  LayeredCostmap& costmap = g.costmap;
+  const auto cost_at = [&](double x, double y) { return g.cost_at(x, y); };
   people.count = 1;
   people.stamp_ns = 1'000'000'000;
   people.items[0] = {1, 3.0, 3.0, 0.0, 0.0, 0.4, 0.7, msg::PersonState::static_person, 1'000'000'000, 12};
   const Pose2D robot{2.4, 3.0, 0.0};
   costmap.update({robot, robot, nullptr, 1'000'000'000});
-  const Costmap2D& c = costmap.costmap();
-  const auto cost_at = [&](double x, double y) {
-    int col = 0, row = 0;
-    EXPECT_TRUE(c.world_to_cell(x, y, col, row));
-    return c.at(col, row);
-  };
   EXPECT_EQ(layer.cages(), 1u);
   EXPECT_EQ(cost_at(3.0, 3.0), kLethalCost);
   EXPECT_EQ(cost_at(3.3, 3.0), kLethalCost);         // 0.35 - 0.05 m: 0.6 - 0.25 is the radius now
