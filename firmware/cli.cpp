@@ -44,6 +44,14 @@ constexpr const char* kUsage =
     "        length_m, iterations, time_ms, min_barrier, ellipses. --png draws the map,\n"
     "        ellipses, curve, field and waypoints. Exit status 1 when the path stops\n"
     "        short of that place (the reason in stop).\n"
+    "  fuse --capture SCANS.s3bcap --boxes BOXES.jsonl [--map MAP.yaml]\n"
+    "       [--pose X,Y,THETA_DEG] [--window S] [--offset S]\n"
+    "        The camera-laser fusion offline: each frame of the box file (the\n"
+    "        detector replay's JSON lines) fused with the capture's LMS200 scan\n"
+    "        nearest in time (--offset moves the boxes onto the capture's clock),\n"
+    "        from the laser pose given (default 0,0,0: the laser's own frame), the\n"
+    "        map's obstacles left out as background. JSON lines: the people placed\n"
+    "        and each box's verdict.\n"
     "  detect --image FILE [--scale S] [--threshold T] [--repeat N] [--png FILE]\n"
     "        The on-board people detector (OpenCV's HOG people coefficients) on an\n"
     "        image, the frame shrunk by --scale (0.5) first: JSON with the boxes in\n"
@@ -127,6 +135,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"run", "", run_command},
       {"plan", "", plan_command},
       {"sgp", "", sgp_command},
+      {"fuse", "", fuse_command},
 #ifdef SEN3BOT_HAS_HOG
       {"detect", "", detect_command},
 #endif

@@ -22,6 +22,9 @@ int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot sgp --map MAP.yaml --curve CURVE.yaml --start X,Y --goal X,Y [--direction 1|-1] [--png FILE]
 int sgp_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot fuse --capture SCANS.s3bcap --boxes BOXES.jsonl [--map MAP.yaml] [--pose X,Y,THETA_DEG] [--window S]
+//              [--offset S]
+int fuse_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot detect --image FILE [--scale S] [--threshold T] [--repeat N] [--png FILE]
 int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 

@@ -188,9 +188,13 @@ bool PeopleFusion::place(const msg::ScanView& scan, const Pose2D& laser_pose, st
     }
   if (!std::isfinite(nearest)) return false;
   const double far = nearest + config_.depth_band_m;
+  // A run stops where a body would end (a person against an unmapped cart or wall is not
+  // taken for the whole of it).
+  const double reach = 2.0 * config_.max_body_radius_m;
   const auto joins = [&](std::size_t i, std::size_t j) {
     return !std::isnan(x_[j]) && scan.ranges_m[j] <= far &&
-           std::abs(scan.ranges_m[j] - scan.ranges_m[i]) <= config_.segment_jump_m;
+           std::abs(scan.ranges_m[j] - scan.ranges_m[i]) <= config_.segment_jump_m &&
+           std::hypot(x_[j] - x_[at], y_[j] - y_[at]) <= reach;
   };
   std::size_t run_lo = at;
   std::size_t run_hi = at;
