@@ -50,7 +50,7 @@ struct Decoder {
 
   void reply(double t_s, FrameView f) {
     put(out, "{\"t_s\":%.6f,\"dir\":\"rx\",\"code\":\"0x%02x\",\"status\":\"0x%02x\"", t_s, f.code(),
-                 f.reply_status());
+             f.reply_status());
     switch (f.code()) {
       case kReplyModeChange:
         if (auto r = decode_mode_change(f)) put(out, ",\"result\":%u", r->result);
@@ -58,8 +58,8 @@ struct Decoder {
       case kReplyStatus:
         if (auto r = decode_status(f))
           put(out, ",\"version\":\"%s\",\"mode\":\"0x%02x\",\"angle_deg\":%u,\"resolution_cdeg\":%u,\"baud\":%u",
-                       r->software_version.data(), r->operating_mode, r->variant.angle_deg,
-                       r->variant.resolution_cdeg, r->baud);
+              r->software_version.data(), r->operating_mode, r->variant.angle_deg,
+              r->variant.resolution_cdeg, r->baud);
         break;
       case kReplyType:
         if (auto r = decode_type(f)) put(out, ",\"type\":\"%s\"", r->type.data());
@@ -67,14 +67,14 @@ struct Decoder {
       case kReplyVariant:
         if (auto r = decode_variant(f))
           put(out, ",\"accepted\":%s,\"angle_deg\":%u,\"resolution_cdeg\":%u", r->accepted ? "true" : "false",
-                       r->variant.angle_deg, r->variant.resolution_cdeg);
+              r->variant.angle_deg, r->variant.resolution_cdeg);
         break;
       case kReplyReadConfig:
       case kReplyWriteConfig: {
         auto r = f.code() == kReplyReadConfig ? decode_read_config(f) : decode_write_config(f);
         if (r) {
           put(out, ",\"accepted\":%s,\"config_bytes\":%u,\"units\":%u,\"measuring_mode\":\"0x%02x\"",
-                       r->accepted ? "true" : "false", r->block.size, r->block.units(), r->block.measuring_mode());
+              r->accepted ? "true" : "false", r->block.size, r->block.units(), r->block.measuring_mode());
           if (valid_measuring_mode(r->block.measuring_mode()) && r->block.size > config_offset::kUnits)
             mode = static_cast<MeasuringMode>(r->block.measuring_mode());
         }
@@ -99,7 +99,7 @@ struct Decoder {
     const double unit = metres_per_unit(s->units);
     if (visit != nullptr) visit_scan(t_s, f, *s, unit);
     put(out, ",\"count\":%u,\"units\":\"%s\",\"partial\":%s,\"offset_qdeg\":%u,\"measuring_mode\":\"0x%02x\"",
-                 s->count, to_string(s->units).data(), s->partial ? "true" : "false", s->partial_offset_qdeg,
+             s->count, to_string(s->units).data(), s->partial ? "true" : "false", s->partial_offset_qdeg,
                  static_cast<unsigned>(mode));
     if (s->code == kReplyMeanScan) put(out, ",\"mean_samples\":%u", s->mean_samples);
     if (s->code == kReplySubrangeScan) put(out, ",\"first\":%u,\"last\":%u", s->first_index, s->last_index);
