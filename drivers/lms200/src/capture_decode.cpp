@@ -100,7 +100,7 @@ struct Decoder {
     if (visit != nullptr) visit_scan(t_s, f, *s, unit);
     put(out, ",\"count\":%u,\"units\":\"%s\",\"partial\":%s,\"offset_qdeg\":%u,\"measuring_mode\":\"0x%02x\"",
              s->count, to_string(s->units).data(), s->partial ? "true" : "false", s->partial_offset_qdeg,
-                 static_cast<unsigned>(mode));
+             static_cast<unsigned>(mode));
     if (s->code == kReplyMeanScan) put(out, ",\"mean_samples\":%u", s->mean_samples);
     if (s->code == kReplySubrangeScan) put(out, ",\"first\":%u,\"last\":%u", s->first_index, s->last_index);
     if (s->has_indices) put(out, ",\"scan_index\":%u,\"telegram_index\":%u", s->scan_index, s->telegram_index);
