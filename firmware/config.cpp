@@ -170,8 +170,8 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
-                "goal_tolerance_m", "stop_distance_m", "goals", "start_delay_s", "goal_timeout_s", "dynamic_obstacles",
-                "mover_prediction", "local_costmap", "safe_curve", "sgp", "people"});
+                "goal_tolerance_m", "stop_distance_m", "approach", "goals", "start_delay_s", "goal_timeout_s",
+                "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -261,6 +261,13 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("max_w_rad_s")) n.dwa.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
   if (r.has("goal_tolerance_m")) n.dwa.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
   if (r.has("stop_distance_m")) n.safety.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
+  if (r.has("approach")) {
+    // The safety filter's check against tracked movers coming from the side (safety.hpp).
+    const Reader p = r.child("approach");
+    p.allow_only({"horizon_s", "margin_m"});
+    if (p.has("horizon_s")) n.safety.approach_horizon_s = p.number("horizon_s", 0.0, 5.0);
+    if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
+  }
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
   if (r.has("local_costmap")) {
     // A larger window with longer marking sees movers earlier (costing memory and time).

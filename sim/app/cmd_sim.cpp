@@ -62,6 +62,10 @@ struct Scenario {
   // People on: the simulated detector, the fusion, the cages and the online SGP; the report
   // adds replans_triggered, min_person_distance_m and cage_entries per case.
   bool people = false;
+  // The thesis' supervised-planning test ran without a moving-obstacle layer; at 5 scans/s the
+  // layer tracks a still box's faces, coming into view one after another, as a slow mover for
+  // a few seconds and the robot waits behind it (docs/navigation.md).
+  bool without_movers_layer = false;
 };
 
 world::MoverScript box_at(double x_m, double y_m, double appear_s) {
@@ -103,7 +107,9 @@ std::vector<Scenario> scenarios() {
        {{"no-obstacle", "nothing unexpected on the way", {}},
         {"obstacle-before-planning", "a 40 cm box on the safe path, there from the start", {box_at(3.3, 5.37, 0.0)}},
         {"obstacle-during-motion", "a 40 cm box that appears on the safe path while the robot drives",
-         {box_at(2.81, 3.25, 8.2)}}}},
+         {box_at(2.81, 3.25, 8.2)}}},
+       false,
+       true},
       {"person-crossing",
        "the main mission: (2.5, 2) m to (4, 7) m and back while a worker crosses the upper area",
        {2.5, 2.0, std::numbers::pi / 2},
@@ -113,14 +119,14 @@ std::vector<Scenario> scenarios() {
        {{"worker", "a person walking across the robot's way, back and forth",
          {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
       {"people-crossing",
-       "the main mission among people: (2.5, 2) m to (4, 7) m and back on the lab's safe curve, three workers "
-       "crossing its way at 0.6, 1.0 and 1.4 m/s, found by the camera and the laser and caged (each seed starts "
+       "the main mission among people: (2.5, 2) m to (4, 7) m and back on the lab's safe curve, two workers "
+       "crossing its way at 0.6 and 1.0 m/s, found by the camera and the laser and caged (each seed starts "
        "them at other points of their walks)",
        {2.5, 2.0, std::numbers::pi / 2},
        {{4.0, 7.0}, {2.5, 2.0}},
        "maps/lab_curve.yaml",
        "",
-       {{"three-workers", "across the upper area, across the lower area, and along the door's row",
+       {{"two-workers", "one across the upper area, one across the lower area",
          {person_walking({{5.0, 5.5}, {1.0, 5.5}}, 0.6, 0.0), person_walking({{1.8, 3.0}, {4.4, 3.0}}, 1.0, 0.0)}}},
        true},
       {"kidnapped",
@@ -560,6 +566,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       });
       if (walkers) config.navigation.dynamic_obstacles.enabled = true;
     }
+    if (scenario->without_movers_layer) config.navigation.dynamic_obstacles.enabled = false;
     if (scenario->safe_curve[0] != '\0') {
       config.navigation.safe_curve_path = folder + scenario->safe_curve;
       config.navigation.waypoints_path.clear();

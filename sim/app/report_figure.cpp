@@ -30,7 +30,7 @@ std::string result_line(const MissionReport& r, std::size_t goal_count, const Re
   if (truth.contacts == 0)
     std::snprintf(contacts, sizeof contacts, "0 contacts");
   else
-    std::snprintf(contacts, sizeof contacts, "%llu contact%s (%llu while moving)",
+    std::snprintf(contacts, sizeof contacts, "%llu contact%s (%llu by the robot)",
                   static_cast<unsigned long long>(truth.contacts), truth.contacts == 1 ? "" : "s",
                   static_cast<unsigned long long>(truth.moving_contacts));
   const unsigned replans = r.plans > 0 ? r.plans - 1 : 0;

@@ -137,7 +137,7 @@ TEST(Cli, TheMainJobCompletesTheSimulatedMission) {
   Outcome o = run_sim({"run", "--config", kSim});
   ASSERT_EQ(o.code, 0) << o.out << o.err;
   EXPECT_NE(o.out.find("mission complete: 2 of 2 goals reached"), std::string::npos) << o.out;
-  EXPECT_NE(o.out.find("(0 while the robot moved)"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("(0 of the robot's doing)"), std::string::npos) << o.out;
   EXPECT_EQ(o.out.find("simulated 120.000 s"), std::string::npos) << o.out;
 }
 

@@ -319,5 +319,66 @@ TEST(Safety, AMoverGoneAcrossBeforeTheRobotGetsThereNeitherStopsNorSlows) {
   EXPECT_EQ(near.command.v_m_s, 0.0);
 }
 
+// A person (radius 0.25 m) at (x, y) in the body frame walking at (vx, vy), the laser clear;
+// the robot, at 0.3 m/s, asks for (v, w).
+SafetyOutput approaching(double x, double y, double vx, double vy, double v, double w) {
+  const SafetyFilter f;
+  Scene s;
+  s.in.pose = {0.0, 0.0, 0.0};
+  s.in.requested = {v, w, s.in.now_ns};
+  s.in.measured_v_m_s = 0.3;
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  movers.items[0] = {7, x, y, vx, vy, 0.25, 0.0, 0.0};
+  s.in.movers = &movers;
+  return f.filter(s.in);
+}
+
+TEST(Safety, StopsForAWalkerComingFromTheSideThatBrakingAvoids) {
+  // Crossing 0.5 m ahead of the axle from the right at 1 m/s: going on at 0.3 m/s puts the
+  // nose into its way; braking now keeps it out.
+  const SafetyOutput on = approaching(0.6, -1.0, 0.0, 1.0, 0.3, 0.0);
+  EXPECT_TRUE(on.reasons & kSafetyMoverApproach);
+  EXPECT_EQ(on.command.v_m_s, 0.0);
+  EXPECT_EQ(on.command.w_rad_s, 0.0);
+  // Turning towards it is refused as well; the same walker 3 m to the side is not a matter.
+  EXPECT_TRUE(approaching(0.6, -1.0, 0.0, 1.0, 0.2, -0.5).reasons & kSafetyMoverApproach);
+  const SafetyOutput far = approaching(0.6, -4.0, 0.0, 1.0, 0.3, 0.0);
+  EXPECT_EQ(far.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(far.command.v_m_s, 0.3);
+  // A walker that passes well ahead before the robot gets there does not stop it.
+  EXPECT_EQ(approaching(1.6, -0.6, 0.0, 1.0, 0.3, 0.0).reasons, kSafetyNone);
+  // A track slower than 0.3 m/s (a still box whose faces come into view) is the corridor's.
+  EXPECT_EQ(approaching(0.5, 0.35, 0.0, -0.1, 0.3, 0.0).reasons, kSafetyNone);
+  EXPECT_TRUE(approaching(0.5, 0.35, 0.0, -0.5, 0.3, 0.0).reasons & kSafetyMoverApproach);
+}
+
+TEST(Safety, MovingAwayFromAWalkerThatCatchesUpStaysAllowed) {
+  // Behind the robot and faster than it: braking would only meet it sooner.
+  const SafetyOutput away = approaching(-0.8, 0.0, 0.8, 0.0, 0.3, 0.0);
+  EXPECT_EQ(away.reasons & kSafetyMoverApproach, 0u);
+  EXPECT_DOUBLE_EQ(away.command.v_m_s, 0.3);
+  // Backing away from one walking up to the front is allowed too (capped as any reverse).
+  const SafetyOutput back = approaching(1.0, 0.0, -0.6, 0.0, -0.1, 0.0);
+  EXPECT_EQ(back.reasons & kSafetyMoverApproach, 0u);
+  EXPECT_DOUBLE_EQ(back.command.v_m_s, -0.1);
+}
+
+TEST(Safety, TheApproachCheckCanBeTurnedOff) {
+  SafetyConfig c;
+  c.approach_horizon_s = 0.0;
+  const SafetyFilter f(c);
+  Scene s;
+  s.in.requested = {0.3, 0.0, s.in.now_ns};
+  s.in.measured_v_m_s = 0.3;
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  movers.items[0] = {7, 0.6, -1.0, 0.0, 1.0, 0.25, 0.0, 0.0};
+  s.in.movers = &movers;
+  EXPECT_EQ(f.filter(s.in).reasons, kSafetyNone);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

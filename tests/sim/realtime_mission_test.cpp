@@ -1,7 +1,8 @@
 // The main mission in real time while a CPU hog keeps every core busy, as a build beside the
 // robot would: the firmware's threads on the monotonic clock, the drivers on real ptys, the
 // simulated world on its own thread. Run several times, it must be as safe as the lockstep
-// run: both goals, no contact while the robot moves, and not many more recoveries.
+// run: both goals, no contact of the robot's doing (moving towards what it touched; the worker
+// may walk into a robot that has stopped for them), and not many more recoveries.
 #include <gtest/gtest.h>
 
 #include <atomic>

@@ -30,7 +30,7 @@ TEST(ResultLine, ContactsAndAFailedGoal) {
   truth.moving_contacts = 1;
   truth.min_clearance_m = 0;
   EXPECT_EQ(result_line(r, 1, truth),
-            "goal not reached (failed), 3 contacts (1 while moving), 0 recoveries, 1 replan, min clearance 0.00 m");
+            "goal not reached (failed), 3 contacts (1 by the robot), 0 recoveries, 1 replan, min clearance 0.00 m");
 }
 
 TEST(ResultLine, SeveralGoalsAddTheirTimes) {
@@ -45,7 +45,7 @@ TEST(ResultLine, SeveralGoalsAddTheirTimes) {
   truth.contacts = 1;
   truth.min_clearance_m = 0.004;
   EXPECT_EQ(result_line(r, 2, truth),
-            "2 of 2 goals reached in 31.0 s, 1 contact (0 while moving), 7 recoveries, 11 replans, min clearance 0.00 m");
+            "2 of 2 goals reached in 31.0 s, 1 contact (0 by the robot), 7 recoveries, 11 replans, min clearance 0.00 m");
 }
 
 }  // namespace

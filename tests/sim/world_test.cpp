@@ -149,5 +149,33 @@ TEST(World, FootprintCollisions) {
   EXPECT_NEAR(w.clearance_m({1.8, 2.0, 0.0}, pioneer, 2.0), 2.6 - 0.2 - (1.8 + 0.2275), 1e-9);
 }
 
+TEST(World, AContactIsTheRobotsWhenItsMotionClosesOnWhatItTouches) {
+  World w(room());
+  const auto pioneer = nav::Footprint::pioneer();
+  MoverScript person;
+  person.path = {{2.6, 2.0}};
+  person.size_m = 0.4;
+  w.add_mover(person);
+  const Pose2D touching{2.2, 2.0, 0.0};  // the person ahead, overlapping the nose
+  EXPECT_EQ(w.touching_mover(touching, pioneer), 0);
+  EXPECT_FALSE(w.touches_map(touching, pioneer));
+  EXPECT_TRUE(w.robot_closing(touching, pioneer, 0.3, 0.02));    // driving into them
+  EXPECT_FALSE(w.robot_closing(touching, pioneer, 0.01, 0.02));  // standing
+  EXPECT_FALSE(w.robot_closing(touching, pioneer, -0.1, 0.02));  // backing away
+  // Facing away, driving on: they caught up with the robot's back.
+  EXPECT_FALSE(w.robot_closing({3.0, 2.0, 0.0}, pioneer, 0.3, 0.02));
+  // Beside the robot's flank: driving past at right angles closes on nothing; turned 0.5 rad
+  // towards them it does, 0.5 rad away it does not.
+  const Pose2D flank{2.25, 2.0, M_PI / 2.0};
+  EXPECT_EQ(w.touching_mover(flank, pioneer), 0);
+  EXPECT_FALSE(w.robot_closing(flank, pioneer, 0.3, 0.02));
+  EXPECT_TRUE(w.robot_closing({2.25, 2.0, M_PI / 2.0 - 0.5}, pioneer, 0.3, 0.02));
+  EXPECT_FALSE(w.robot_closing({2.25, 2.0, M_PI / 2.0 + 0.5}, pioneer, 0.3, 0.02));
+  // The wall at any speed above the threshold, either way.
+  EXPECT_TRUE(w.touches_map({0.25, 2.0, 0.0}, pioneer));
+  EXPECT_TRUE(w.robot_closing({0.25, 2.0, 0.0}, pioneer, 0.05, 0.02));
+  EXPECT_TRUE(w.robot_closing({0.25, 2.0, 0.0}, pioneer, -0.05, 0.02));
+}
+
 }  // namespace
 }  // namespace sen3bot::world

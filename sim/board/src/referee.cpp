@@ -97,7 +97,7 @@ void Referee::judge_people(const GroundTruth& truth) noexcept {
 void Referee::print(std::FILE* out) const {
   const RefereeReport& t = report_;
   std::fprintf(out,
-               "  ground truth: %llu contacts (%llu while the robot moved), min clearance %.2f m, closest person "
+               "  ground truth: %llu contacts (%llu of the robot's doing), min clearance %.2f m, closest person "
                "%.2f m, true path %.2f m, localization error max %.2f m\n",
                static_cast<unsigned long long>(t.contacts), static_cast<unsigned long long>(t.moving_contacts),
                t.min_clearance_m, t.min_person_distance_m, t.true_path_length_m, t.localization_error_max_m);

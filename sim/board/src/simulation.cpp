@@ -160,8 +160,9 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   const bool contact = world_->collides(pose, config_.footprint);
   if (contact && !truth_.in_contact) {
     ++truth_.contacts;
-    // A person walking into a robot that has stopped is not the robot's doing.
-    if (std::abs(truth_.speed_m_s) > kMovingSpeedM_s) ++truth_.moving_contacts;
+    // A person walking into a robot that has stopped, or that moves away from them, is not
+    // the robot's doing.
+    if (world_->robot_closing(pose, config_.footprint, truth_.speed_m_s, kMovingSpeedM_s)) ++truth_.moving_contacts;
   }
   truth_.in_contact = contact;
 }

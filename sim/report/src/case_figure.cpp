@@ -281,7 +281,7 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
                          c.ring({p.x + 7, p.y}, 6, kPerson, 2);
                        }});
   if (!f.contacts.empty())
-    entries.push_back({"contact at t (s), bold: moving", [](Canvas& c, Px p) { draw_cross(c, p, 5, kContact, 3); }});
+    entries.push_back({"contact at t (s), bold: by the robot", [](Canvas& c, Px p) { draw_cross(c, p, 5, kContact, 3); }});
   entries.push_back({"start", [](Canvas& c, Px p) {
                        c.ring(p, 7, kStart, 3);
                      }});

@@ -277,6 +277,10 @@ void World::noisy_scan(const Pose2D& sensor, double angle_min_rad, double increm
 }
 
 bool World::collides(const Pose2D& pose, const Footprint& footprint) const noexcept {
+  return touches_map(pose, footprint) || touching_mover(pose, footprint) >= 0;
+}
+
+bool World::touches_map(const Pose2D& pose, const Footprint& footprint) const noexcept {
   const double res = map_.resolution_m();
   const double reach = footprint.circumscribed_radius_m();
   const bool is_circle = footprint.vertex_count == 0;
@@ -311,23 +315,43 @@ bool World::collides(const Pose2D& pose, const Footprint& footprint) const noexc
       if (hit) return true;
     }
   }
-  // Movers, in the map frame.
-  const Polygon poly = place(footprint, pose);
-  for (const Mover& m : movers_) {
+  return false;
+}
+
+bool World::robot_closing(const Pose2D& pose, const Footprint& footprint, double v_m_s,
+                          double min_speed_m_s) const noexcept {
+  if (std::abs(v_m_s) <= min_speed_m_s) return false;
+  const int mover = touching_mover(pose, footprint);
+  if (mover < 0 || touches_map(pose, footprint)) return true;
+  const Point2D at = movers_[static_cast<std::size_t>(mover)].position;
+  const double dx = at.x_m - pose.x_m;
+  const double dy = at.y_m - pose.y_m;
+  const double d = std::hypot(dx, dy);
+  if (!(d > 0.0)) return true;
+  return v_m_s * (std::cos(pose.theta_rad) * dx + std::sin(pose.theta_rad) * dy) / d > min_speed_m_s;
+}
+
+int World::touching_mover(const Pose2D& pose, const Footprint& footprint) const noexcept {
+  const double reach = footprint.circumscribed_radius_m();
+  const bool is_circle = footprint.vertex_count == 0;
+  const Polygon poly = place(footprint, pose);  // map frame
+  for (std::size_t i = 0; i < movers_.size(); ++i) {
+    const Mover& m = movers_[i];
     if (!m.visible) continue;
     const double half = m.script.size_m / 2.0;
     const Point2D p = m.position;
+    bool hit = false;
     if (m.script.shape == MoverShape::circle) {
       const double d = is_circle ? std::hypot(p.x_m - pose.x_m, p.y_m - pose.y_m) - reach : polygon_distance(poly, p);
-      if (d < half) return true;
+      hit = d < half;
     } else {
-      const bool hit = is_circle ? box_point_distance(p.x_m - half, p.y_m - half, p.x_m + half, p.y_m + half,
-                                                      {pose.x_m, pose.y_m}) < reach
-                                 : overlaps_box(poly, p.x_m - half, p.y_m - half, p.x_m + half, p.y_m + half);
-      if (hit) return true;
+      hit = is_circle ? box_point_distance(p.x_m - half, p.y_m - half, p.x_m + half, p.y_m + half,
+                                           {pose.x_m, pose.y_m}) < reach
+                      : overlaps_box(poly, p.x_m - half, p.y_m - half, p.x_m + half, p.y_m + half);
     }
+    if (hit) return static_cast<int>(i);
   }
-  return false;
+  return -1;
 }
 
 double World::clearance_m(const Pose2D& pose, const Footprint& footprint, double limit_m) const noexcept {

@@ -33,7 +33,61 @@ BodyMover in_body(const SafetyInputs& in, const msg::MovingObstacle& m) noexcept
   const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
   return {c * dx + s * dy, -s * dx + c * dy, c * m.vx_m_s + s * m.vy_m_s, -s * m.vx_m_s + c * m.vy_m_s};
 }
+// Distance from q (body frame) to the footprint, 0 inside it.
+double footprint_distance(const Footprint& fp, double qx, double qy) noexcept {
+  if (fp.vertex_count == 0) return std::max(0.0, std::hypot(qx, qy) - fp.circle_radius_m);
+  bool inside = false;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0, j = fp.vertex_count - 1; i < fp.vertex_count; j = i++) {
+    const Point2D a = fp.vertices[j];
+    const Point2D b = fp.vertices[i];
+    if ((b.y_m > qy) != (a.y_m > qy) && qx < (a.x_m - b.x_m) * (qy - b.y_m) / (a.y_m - b.y_m) + b.x_m) inside = !inside;
+    const double ex = b.x_m - a.x_m;
+    const double ey = b.y_m - a.y_m;
+    const double len2 = ex * ex + ey * ey;
+    const double u = len2 > 0.0 ? std::clamp(((qx - a.x_m) * ex + (qy - a.y_m) * ey) / len2, 0.0, 1.0) : 0.0;
+    nearest = std::min(nearest, std::hypot(qx - a.x_m - u * ex, qy - a.y_m - u * ey));
+  }
+  return inside ? 0.0 : nearest;
+}
+
+// The gap between the body, at pose (x, y, heading) in the body frame of now, and a mover's
+// disc at (mx, my).
+double gap_at(const Footprint& fp, double x, double y, double heading, double mx, double my, double radius) noexcept {
+  const double c = std::cos(heading);
+  const double s = std::sin(heading);
+  const double dx = mx - x;
+  const double dy = my - y;
+  return footprint_distance(fp, c * dx + s * dy, -s * dx + c * dy) - radius;
+}
 }  // namespace
+
+bool SafetyFilter::approach_refused(const SafetyInputs& in, double v, double w) const noexcept {
+  if (in.movers == nullptr || !(config_.approach_horizon_s > 0.0) || (v == 0.0 && w == 0.0)) return false;
+  const double v0 = in.measured_v_m_s;
+  const double brake_s = std::abs(v0) / config_.decel_m_s2;
+  for (std::size_t i = 0; i < in.movers->count; ++i) {
+    const msg::MovingObstacle& m = in.movers->items[i];
+    if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
+    const BodyMover b = in_body(in, m);
+    double moving = std::numeric_limits<double>::infinity();
+    double braking = std::numeric_limits<double>::infinity();
+    for (double t = 0.0; t <= config_.approach_horizon_s + 1e-9; t += kApproachStepS) {
+      const double mx = b.x_m + b.vx_m_s * t;
+      const double my = b.y_m + b.vy_m_s * t;
+      const double heading = w * t;
+      const bool straight = std::abs(w) < 1e-9;
+      const double px = straight ? v * t : v / w * std::sin(heading);
+      const double py = straight ? 0.0 : v / w * (1.0 - std::cos(heading));
+      moving = std::min(moving, gap_at(config_.footprint, px, py, heading, mx, my, m.radius_m));
+      const double tb = std::min(t, brake_s);
+      const double travelled = v0 * tb - std::copysign(0.5 * config_.decel_m_s2 * tb * tb, v0);
+      braking = std::min(braking, gap_at(config_.footprint, travelled, 0.0, 0.0, mx, my, m.radius_m));
+    }
+    if (moving < config_.approach_margin_m && moving < braking - kApproachSlackM) return true;
+  }
+  return false;
+}
 
 double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
   if (in.movers == nullptr) return 0.0;
@@ -164,6 +218,11 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   if (w != 0.0 && inside_turn_circle && std::abs(v) < 1e-9) {
     w = 0.0;
     out.reasons |= kSafetyObstacle;
+  }
+  if (approach_refused(in, v, w)) {
+    v = 0.0;
+    w = 0.0;
+    out.reasons |= kSafetyMoverApproach;
   }
   out.command.v_m_s = v;
   out.command.w_rad_s = w;

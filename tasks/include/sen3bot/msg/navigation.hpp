@@ -156,6 +156,7 @@ enum SafetyReason : std::uint32_t {
   kSafetyObstacle = 1u << 5,       // stopped for a point in the stop zone
   kSafetySlowed = 1u << 6,         // scaled down in the slow zone
   kSafetyReverseCapped = 1u << 7,
+  kSafetyMoverApproach = 1u << 8,  // stopped: moving on would meet a tracked mover that braking avoids
 };
 
 struct SafetyOutput {

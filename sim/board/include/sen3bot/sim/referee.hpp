@@ -18,7 +18,7 @@ namespace sen3bot::sim {
 
 struct RefereeReport {
   std::uint64_t contacts = 0;         // times the footprint started to overlap something
-  std::uint64_t moving_contacts = 0;  // of those, while the robot moved: collisions
+  std::uint64_t moving_contacts = 0;  // of those, the robot moving towards what it touched: collisions
   double min_clearance_m = 1e9;
   double min_person_distance_m = 1e9;
   double true_path_length_m = 0;

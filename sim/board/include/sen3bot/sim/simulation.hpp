@@ -57,7 +57,7 @@ struct GroundTruth {
   double clearance_m = 0;           // footprint to the nearest obstacle or mover (capped, 20 Hz)
   double nearest_person_m = 0;      // robot centre to the nearest visible person (capped)
   std::uint64_t contacts = 0;       // times the footprint started to overlap something
-  std::uint64_t moving_contacts = 0;  // of those, while the robot itself was moving
+  std::uint64_t moving_contacts = 0;  // of those, the robot moving towards what it touched
   bool in_contact = false;
   hal::Nanos kidnapped_ns = -1;     // when the robot was carried away (-1: not yet)
   // The visible people's true centres (the first kMaxPeople of them), for the referee.

@@ -75,6 +75,15 @@ class World {
 
   // True when the footprint at `pose` overlaps a solid map cell, a visible mover or leaves the map.
   [[nodiscard]] bool collides(const Pose2D& pose, const Footprint& footprint) const noexcept;
+  // The map alone: a solid cell or outside it.
+  [[nodiscard]] bool touches_map(const Pose2D& pose, const Footprint& footprint) const noexcept;
+  // The first visible mover the footprint at `pose` overlaps, or -1.
+  [[nodiscard]] int touching_mover(const Pose2D& pose, const Footprint& footprint) const noexcept;
+  // For a contact at `pose`, whether the robot's own motion (forward speed v_m_s) was closing
+  // on what it touches: the map at more than min_speed_m_s, a mover when the robot moves
+  // towards the mover's centre at more than min_speed_m_s along that line.
+  [[nodiscard]] bool robot_closing(const Pose2D& pose, const Footprint& footprint, double v_m_s,
+                                   double min_speed_m_s) const noexcept;
   // Distance from the footprint at `pose` to the nearest visible mover or solid cell centre,
   // searched up to limit_m (returns limit_m when nothing is nearer).
   [[nodiscard]] double clearance_m(const Pose2D& pose, const Footprint& footprint, double limit_m) const noexcept;

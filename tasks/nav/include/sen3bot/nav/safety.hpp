@@ -25,6 +25,11 @@
 //    have left the corridor, by crossing_margin_m, before the robot at its speed reaches the
 //    point. Braking for a box that is gone when the robot gets there would stop the robot
 //    short, in the way of whatever comes next.
+//  * Approaching movers: a tracked mover coming from the side never enters the corridor ahead
+//    before it meets the body. The command is held for approach_horizon_s (the robot on its
+//    arc, each mover at its velocity); when that brings the body within approach_margin_m of
+//    a mover and braking now would keep the two farther apart, the robot stops. Moving away
+//    from a mover that walks up to the robot stays allowed.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
 #include <array>
@@ -59,6 +64,11 @@ struct SafetyConfig {
   double mover_point_slack_m = 0.1;
   double min_crossing_speed_m_s = 0.1;
   double crossing_margin_m = 0.1;
+  double approach_horizon_s = 1.0;  // 0: no approach check
+  double approach_margin_m = 0.1;
+  // Slower tracks are left to the corridor: a still box whose faces come into view one after
+  // another is tracked at up to about 0.1 m/s; people walk at 0.5-1.5 m/s.
+  double approach_min_speed_m_s = 0.3;
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;          // SafetyTask projects scans with it
 };
@@ -85,9 +95,14 @@ class SafetyFilter {
   // The speed at which the nearest mover ahead, inside the corridor the body sweeps, comes
   // towards the robot (0 when none does).
   [[nodiscard]] double closing_speed(const SafetyInputs& in) const noexcept;
+  // Whether holding (v, w) brings the body within approach_margin_m of a tracked mover in the
+  // horizon, closer than braking now would.
+  [[nodiscard]] bool approach_refused(const SafetyInputs& in, double v, double w) const noexcept;
 
  private:
   static constexpr double kSweepStepM = 0.02;
+  static constexpr double kApproachStepS = 0.05;
+  static constexpr double kApproachSlackM = 0.02;  // "closer than braking" by at least this
 
   struct Crosser {
     double x_m = 0.0, y_m = 0.0;  // body frame, at the scan's time (where its points are)
