@@ -5,7 +5,7 @@
 #
 # The sysroot is a plain directory of unpacked Debian arm64 (or armhf) packages: the libraries
 # the firmware and its tests link against (yaml-cpp, GoogleTest/GoogleMock, Google Benchmark,
-# Eigen, OpenCV core/imgproc/imgcodecs) and their whole dependency closure, including libc6 and
+# Eigen, OpenCV core/imgproc/imgcodecs/objdetect) and their whole dependency closure, including libc6 and
 # its dynamic loader so qemu-user can run the test binaries (qemu -L <sysroot>).
 #
 # Why a separate directory and not `dpkg --add-architecture arm64; apt install foo:arm64`:
@@ -41,10 +41,15 @@ SYSROOT_PACKAGES=(
   libbenchmark-dev
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev
+  libopencv-objdetect406       # the on-board people detector (HOG); its -dev package below
   libssl-dev                   # camera: libcrypto (Digest auth)
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
   libpugixml-dev libcurl4-openssl-dev          # camera: ONVIF
 )
+# Unpacked without their dependencies: libopencv-objdetect-dev (the header and the .so link)
+# depends on libopencv-highgui-dev, which would bring Qt 5, Mesa and GTK (~150 packages) for
+# headers the detector never includes.
+SYSROOT_NO_DEPS_PACKAGES=(libopencv-objdetect-dev)
 # libopencv-imgcodecs-dev links libgdal32: +~100 packages, +~50 MiB download, +~200 MB unpacked.
 SYSROOT_IMGCODECS_PACKAGES=(libopencv-imgcodecs-dev)
 # Marked as already installed in the private status file, so apt does not pull them in. They
@@ -149,7 +154,8 @@ if [[ -d "${sysroot}" && -n "$(ls -A "${sysroot}")" && ! -f "${sysroot}/.sen3bot
 fi
 
 stamp_file="${sysroot}/.sen3bot-sysroot.stamp"
-stamp="$( { echo "${deb_arch}"; printf '%s\n' "${packages[@]}" "${SYSROOT_ASSUME_INSTALLED[@]}"; \
+stamp="$( { echo "${deb_arch}"; printf '%s\n' "${packages[@]}" "${SYSROOT_ASSUME_INSTALLED[@]}" \
+              "${SYSROOT_NO_DEPS_PACKAGES[@]}"; \
             echo "${sources}"; \
             cat "${BASH_SOURCE[0]}"; } | sha256sum | cut -d' ' -f1)"
 if [[ "${force}" == 0 && -f "${stamp_file}" && "$(cat "${stamp_file}")" == "${stamp}" ]]; then
@@ -242,6 +248,15 @@ log "${#debs[@]} packages; to download: $((download_bytes / 1024 / 1024)) MiB"
 
 dl_start_s=${SECONDS}
 apt_private install --download-only -y "${packages[@]}" >/dev/null
+# `apt-get download` fetches one .deb, no dependencies, into the current directory.
+for name in "${SYSROOT_NO_DEPS_PACKAGES[@]}"; do
+  (cd "${apt_dir}/archives" && apt_private download "${name}" >/dev/null)
+  mapfile -t found < <(cd "${apt_dir}/archives" && ls -t "${name}"_*_"${deb_arch}".deb 2>/dev/null)
+  if [[ "${#found[@]}" == 0 ]]; then
+    log "apt-get download ${name} left no .deb in ${apt_dir}/archives"; exit 1
+  fi
+  debs+=("${found[0]}")
+done
 log "download took $((SECONDS - dl_start_s)) s"
 
 # Unpack into a fresh directory so packages dropped from the list do not linger.
