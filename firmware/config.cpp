@@ -264,9 +264,10 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("approach")) {
     // The safety filter's check against tracked movers coming from the side (safety.hpp).
     const Reader p = r.child("approach");
-    p.allow_only({"horizon_s", "margin_m"});
+    p.allow_only({"horizon_s", "margin_m", "min_speed_m_s"});
     if (p.has("horizon_s")) n.safety.approach_horizon_s = p.number("horizon_s", 0.0, 5.0);
     if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
+    if (p.has("min_speed_m_s")) n.safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
   }
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
   if (r.has("local_costmap")) {

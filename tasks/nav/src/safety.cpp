@@ -66,7 +66,7 @@ bool SafetyFilter::approach_refused(const SafetyInputs& in, double v, double w) 
   if (in.movers == nullptr || !(config_.approach_horizon_s > 0.0) || (v == 0.0 && w == 0.0)) return false;
   const double v0 = in.measured_v_m_s;
   const double brake_s = std::abs(v0) / config_.decel_m_s2;
-  for (std::size_t i = 0; i < in.movers->count; ++i) {
+  for (std::size_t i = 0; i < std::min<std::size_t>(in.movers->count, msg::MovingObstacles::kMax); ++i) {
     const msg::MovingObstacle& m = in.movers->items[i];
     if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
     const BodyMover b = in_body(in, m);
