@@ -187,7 +187,7 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     const Reader p = r.child("people");
     p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
                   "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
-                  "robot_clearance_m", "online_sgp", "onboard"});
+                  "robot_clearance_m", "online_sgp", "onboard", "keep_out"});
     n.people_enabled = true;
     n.people_detector = p.text("detector");
     if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
@@ -202,6 +202,14 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("follow_gate_m")) n.person_tracker.follow_gate_m = p.number("follow_gate_m", 0.05, 2.0);
     if (p.has("max_body_radius_m")) n.fusion.max_body_radius_m = p.number("max_body_radius_m", 0.0, 1.0);
     if (p.has("robot_clearance_m")) n.cages.robot_clearance_m = p.number("robot_clearance_m", 0.0, 2.0);
+    // The safety filter's cage check.
+    if (p.has("keep_out")) {
+      const Reader o = p.child("keep_out");
+      o.allow_only({"enabled", "margin_m", "movers"});
+      if (o.has("enabled") && !o.boolean("enabled")) n.safety.cage_margin_m = -1.0;
+      if (o.has("margin_m")) n.safety.cage_margin_m = o.number("margin_m", 0.0, 2.0);
+      if (o.has("movers")) n.cage_movers = o.boolean("movers");
+    }
     if (p.has("onboard")) {
       // The on-board detector's search (detector: onboard).
       const Reader o = p.child("onboard");

@@ -62,6 +62,9 @@ struct NavigationSection {
   // People (docs/people.md): boxes from a person detector on `people_detector` ("sim", or
   // "udp://ADDRESS:PORT"), fused with the laser, tracked, and caged on both costmaps.
   bool people_enabled = false;
+  // With people on, the safety filter cages a mover at walking speed as a person until the
+  // camera sees it (people.keep_out.movers).
+  bool cage_movers = true;
   std::string people_detector;
   nav::FusionConfig fusion;
   nav::PersonTrackerConfig person_tracker;

@@ -123,6 +123,7 @@ Status Firmware::create_navigation() {
   nav::SafetyTaskConfig safety;
   safety.safety = n.safety;
   safety.safety.laser_mount = mount;
+  safety.safety.mover_cage_m = n.people_enabled && n.cage_movers ? n.person_tracker.safety_radius_m : -1.0;
   if (config_.devices.has_laser)
     safety.safety.scan_period_s =
         hal::to_seconds(lms200::scan_interval_ns(config_.devices.laser.variant, config_.devices.laser.baud));
@@ -134,7 +135,7 @@ Status Firmware::create_navigation() {
                                  ? config_.devices.base.trans_decel_mm_s2 / 1000.0
                                  : kPowerUpDecelM_s2;
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
-                                                   nav_pose_, nav_movers_, nav_command_, nav_safety_);
+                                                   nav_pose_, nav_movers_, nav_command_, nav_safety_, people);
 
   mission_task_ = std::make_unique<MissionTask>(
       n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});

@@ -227,6 +227,24 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
   EXPECT_NE(m.find("navigation.approach.margin: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, TheSafetyFiltersCageCheck) {
+  Result<FirmwareConfig> defaults = parse_config(std::string(kNavigation) + "  people: { detector: sim }\n", "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_DOUBLE_EQ(defaults->navigation.safety.cage_margin_m, 0.2);
+  EXPECT_TRUE(defaults->navigation.cage_movers);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) + "  people: { detector: sim, keep_out: { margin_m: 0.3, movers: false } }\n", "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_DOUBLE_EQ(r->navigation.safety.cage_margin_m, 0.3);
+  EXPECT_FALSE(r->navigation.cage_movers);
+  Result<FirmwareConfig> off =
+      parse_config(std::string(kNavigation) + "  people: { detector: sim, keep_out: { enabled: false } }\n", "robot.yaml");
+  ASSERT_TRUE(off) << off.error().c_str();
+  EXPECT_LT(off->navigation.safety.cage_margin_m, 0.0);
+  const std::string m = message_of(std::string(kNavigation) + "  people: { detector: sim, keep_out: { horizon_s: 1 } }\n");
+  EXPECT_NE(m.find("navigation.people.keep_out.horizon_s: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, TheSafeCurveAndTheSupervisoryPlanner) {
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) +

@@ -155,6 +155,44 @@ TEST(PeopleFusion, ARoundBodyIsPlacedAtItsCentre) {
   }
 }
 
+// A body partly hidden behind something nearer (a post, another person) is marked partial:
+// the mean of its returns is off towards the part in view, its range is not.
+TEST(PeopleFusion, ABodyCutBySomethingNearerIsPartial) {
+  Fusion f;
+  const auto body = [](double post_from, double post_to) {
+    // A disc of radius 0.225 at 3 m straight ahead; a post 1.5 m ahead across the bearings given.
+    std::vector<float> r(361);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+      const double b = 3.0 * std::cos(a);
+      const double disc = b * b - (9.0 - 0.225 * 0.225);
+      r[i] = disc >= 0.0 ? static_cast<float>(b - std::sqrt(disc)) : 29.0f;
+      if (a >= post_from && a <= post_to) r[i] = 1.5f;
+    }
+    return r;
+  };
+  msg::PersonDetections frame;
+  frame.boxes[0] = box_around(f.fusion.projection(), 3.0, 0.0);
+  frame.count = 1;
+  PersonFix fixes[2];
+  const std::vector<float> clear = body(1.0, 1.1);  // the post far off to the side
+  ASSERT_EQ(f.fusion.fuse(view_of(clear, 0), {0.0, 0.0, 0.0}, frame, fixes), 1u);
+  EXPECT_FALSE(fixes[0].partial);
+  EXPECT_NEAR(fixes[0].ray_x, 1.0, 1e-3);
+  EXPECT_NEAR(fixes[0].ray_y, 0.0, 1e-3);
+  // The post hides the body's left half and the detector boxes the right half it sees: the
+  // fix is off to the right, and says so.
+  const std::vector<float> hidden = body(0.03, 0.3);
+  double u0 = 0, u1 = 0, v = 0;
+  ASSERT_TRUE(f.fusion.projection().project(3.0, -0.01, u0, v));
+  ASSERT_TRUE(f.fusion.projection().project(3.0, -0.3, u1, v));
+  frame.boxes[0] = {static_cast<float>(u0), 0.0f, static_cast<float>(u1), 719.0f, 0.9f, 0};
+  ASSERT_EQ(f.fusion.fuse(view_of(hidden, 0), {0.0, 0.0, 0.0}, frame, fixes), 1u);
+  EXPECT_TRUE(fixes[0].partial);
+  EXPECT_LT(fixes[0].y_m, -0.03);
+  EXPECT_NEAR(std::hypot(fixes[0].x_m, fixes[0].y_m), 3.0, 0.08);
+}
+
 TEST(PeopleFusion, EachRejectedBoxIsCountedWithItsReason) {
   FusionConfig config;
   config.match_window_s = 0.15;
@@ -218,17 +256,16 @@ PersonFix fix_at(double x, double y, double width = 0.5) {
 
 TEST(PersonTracker, StaticUntilMovedFartherThanTheThresholdFromWhereFirstSeen) {
   PersonTrackerConfig config;
-  config.position_gain = 1.0;  // the fix is the position: the threshold is exact
-  config.velocity_gain = 0.0;
+  config.fix_sigma_m = 1e-5;  // the fix is the position: the threshold is exact
   config.dynamic_after_m = 1.0;
   Tracker t(config);
   hal::Nanos now = 0;
-  for (const double x : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+  for (const double x : {0.0, 0.25, 0.5, 0.75, 1.0 - 1e-6}) {
     const PersonFix f = fix_at(2.0 + x, 3.0);
     t.tracker.update(std::span(&f, 1), now += 100'000'000);
   }
   ASSERT_EQ(t.tracker.tracks().size(), 1u);
-  EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::static_person);  // exactly 1 m: not more
+  EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::static_person);  // just short of 1 m
   const PersonFix beyond = fix_at(3.0 + 1e-6, 3.0);
   t.tracker.update(std::span(&beyond, 1), now += 100'000'000);
   EXPECT_EQ(t.tracker.tracks()[0].state, msg::PersonState::dynamic_person);
@@ -281,6 +318,45 @@ TEST(PersonTracker, TwoPeopleKeepTheirIdsAndCagesExpireWithoutDetections) {
   EXPECT_EQ(people.count, 0);
 }
 
+// The Kalman filter: a walker seen from a standing start has their pace within a second; a
+// fix whose body was cut moves the track along the ray, hardly across it.
+TEST(PersonTracker, AWalkersVelocityIsFoundInASecondAndAPartialFixMovesOnlyTheRange) {
+  Tracker t;
+  hal::Nanos now = 0;
+  for (int k = 0; k <= 5; ++k) {  // 1 m/s along +x at 5 fixes a second
+    const PersonFix f = fix_at(2.0 + 0.2 * k, 3.0);
+    t.tracker.update(std::span(&f, 1), now += 200'000'000);
+  }
+  ASSERT_EQ(t.tracker.tracks().size(), 1u);
+  EXPECT_NEAR(t.tracker.tracks()[0].velocity.x_m, 1.0, 0.1);
+  EXPECT_NEAR(t.tracker.tracks()[0].at.x_m, 3.0, 0.03);
+  // Standing still from then on, seen from (3, 0) so the ray is +y: a fix 0.3 m to the side
+  // (across the ray) and 0.1 m farther (along it), cut short by something nearer.
+  Tracker still;
+  for (int k = 0; k < 10; ++k) {
+    const PersonFix f = fix_at(3.0, 3.0);
+    still.tracker.update(std::span(&f, 1), now += 200'000'000);
+  }
+  PersonFix cut = fix_at(3.3, 3.1);
+  cut.ray_x = 0.0;
+  cut.ray_y = 1.0;
+  cut.partial = true;
+  still.tracker.update(std::span(&cut, 1), now += 200'000'000);
+  const PersonTracker::Track& moved = still.tracker.tracks()[0];
+  // The same fix, whole, moves it across as far as along.
+  Tracker whole;
+  for (int k = 0; k < 10; ++k) {
+    const PersonFix f = fix_at(3.0, 3.0);
+    whole.tracker.update(std::span(&f, 1), now += 200'000'000);
+  }
+  cut.partial = false;
+  whole.tracker.update(std::span(&cut, 1), now += 200'000'000);
+  const PersonTracker::Track& full = whole.tracker.tracks()[0];
+  EXPECT_NEAR(moved.at.y_m - 3.0, full.at.y_m - 3.0, 0.01);  // the range: taken alike
+  EXPECT_GT(full.at.x_m - 3.0, 0.15);
+  EXPECT_LT(moved.at.x_m - 3.0, 0.5 * (full.at.x_m - 3.0));  // across: much less
+}
+
 TEST(PersonTracker, AFixOutsideTheGateStartsANewTrackAndBadConfigurationsAreRefused) {
   Tracker t;
   const PersonFix a = fix_at(0.0, 0.0);
@@ -294,7 +370,10 @@ TEST(PersonTracker, AFixOutsideTheGateStartsANewTrackAndBadConfigurationsAreRefu
   config.max_tracks = 40;
   EXPECT_FALSE(bad.init(config, arena));
   config = {};
-  config.position_gain = 0.0;
+  config.fix_sigma_m = 0.0;
+  EXPECT_FALSE(bad.init(config, arena));
+  config = {};
+  config.accel_sigma_m_s2 = -1.0;
   EXPECT_FALSE(bad.init(config, arena));
 }
 

@@ -380,5 +380,89 @@ TEST(Safety, TheApproachCheckCanBeTurnedOff) {
   EXPECT_EQ(f.filter(s.in).reasons, kSafetyNone);
 }
 
+
+// --- Virtual cages ---
+
+// A person at (x, y) in the robot's frame (the robot at the origin facing +x) with a 0.725 m
+// cage (a 0.45 m wide person and the 0.5 m safety radius): 0.925 m with the default margin.
+SafetyOutput near_person(double x, double y, double vx, double vy, double v, double w, double measured_v,
+                         const SafetyConfig& config = {}) {
+  const SafetyFilter f(config);
+  Scene s;
+  s.in.requested = {v, w, s.in.now_ns};
+  s.in.measured_v_m_s = measured_v;
+  msg::People people;
+  people.stamp_ns = s.in.now_ns;
+  people.count = 1;
+  people.items[0].id = 3;
+  people.items[0].x_m = x;
+  people.items[0].y_m = y;
+  people.items[0].vx_m_s = vx;
+  people.items[0].vy_m_s = vy;
+  people.items[0].width_m = 0.45;
+  people.items[0].cage_radius_m = 0.725;
+  s.in.people = &people;
+  return f.filter(s.in);
+}
+
+TEST(Safety, TheRobotKeepsTheDistanceItNeedsToStopOutsideACage) {
+  // At 0.4 m/s the command takes 0.1 s to reach the wheels and braking at 0.6 m/s^2 then
+  // covers 0.133 m: 0.173 m in all. The nose is 0.2275 m ahead of the centre, the keep-out
+  // 0.925 m around the person: 1.1525 m between the nose and the person's centre.
+  const SafetyOutput room = near_person(1.1525 + 0.25, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
+  EXPECT_EQ(room.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(room.command.v_m_s, 0.4);
+  // 0.15 m to spare: going on would end 2 cm inside, braking now stops 2 cm short.
+  const SafetyOutput tight = near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
+  EXPECT_TRUE(tight.reasons & kSafetyCage);
+  EXPECT_EQ(tight.command.v_m_s, 0.0);
+  EXPECT_EQ(tight.command.w_rad_s, 0.0);
+  // Slowing down there is allowed (it stops sooner than braking from 0.4 m/s would), and so
+  // is backing away or passing a person well to the side.
+  EXPECT_EQ(near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.05, 0.0, 0.4).reasons & kSafetyCage, 0u);
+  EXPECT_EQ(near_person(1.0, 0.0, 0.0, 0.0, -0.1, 0.0, 0.0).reasons & kSafetyCage, 0u);
+  EXPECT_EQ(near_person(1.0, 1.6, 0.0, 0.0, 0.4, 0.0, 0.4).reasons, kSafetyNone);
+  // Turned off, a cage is the planners' alone.
+  SafetyConfig off;
+  off.cage_margin_m = -1.0;
+  EXPECT_EQ(near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4, off).reasons, kSafetyNone);
+}
+
+TEST(Safety, AWalkersCageOnItsWayStopsTheRobotWhenBrakingKeepsFartherOut) {
+  // Crossing from the right at 1 m/s, 1.3 m to the side: within a second its cage covers
+  // the robot's way ahead; stopping now leaves more room.
+  const SafetyOutput on = near_person(0.8, -1.3, 0.0, 1.0, 0.3, 0.0, 0.3);
+  EXPECT_TRUE(on.reasons & kSafetyCage);
+  EXPECT_EQ(on.command.v_m_s, 0.0);
+  // Walking away from the robot's way, the same person is no matter.
+  EXPECT_EQ(near_person(0.8, -1.3, 0.0, -1.0, 0.3, 0.0, 0.3).reasons, kSafetyNone);
+  // A robot asked to stand is never refused anything: a walker stepping up to it is theirs.
+  EXPECT_EQ(near_person(0.5, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0).reasons, kSafetyNone);
+}
+
+TEST(Safety, AMoverAtWalkingSpeedIsCagedAsAPersonWhenTheFirmwareTracksPeople) {
+  // Coming head-on at 0.5 m/s, 1.5 m ahead, 0.25 m radius: the approach check (0.1 m margin
+  // around the body) lets the robot on; caged as a person (0.5 m more) it stops.
+  SafetyConfig c;
+  c.mover_cage_m = 0.5;
+  Scene s;
+  s.in.requested = {0.3, 0.0, s.in.now_ns};
+  s.in.measured_v_m_s = 0.3;
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 1;
+  movers.items[0] = {7, 1.5, 0.0, -0.5, 0.0, 0.25, 0.0, 0.0};
+  s.in.movers = &movers;
+  const SafetyOutput caged = SafetyFilter(c).filter(s.in);
+  EXPECT_EQ(caged.reasons & kSafetyMoverApproach, 0u);
+  EXPECT_TRUE(caged.reasons & kSafetyCage);
+  EXPECT_EQ(caged.command.v_m_s, 0.0);
+  // Without people tracking (the default) a mover has no cage.
+  EXPECT_EQ(SafetyFilter().filter(s.in).reasons & kSafetyCage, 0u);
+  // Nor has a slow one (a still box's faces coming into view).
+  movers.items[0].vx_m_s = -0.1;
+  EXPECT_EQ(SafetyFilter(c).filter(s.in).reasons & kSafetyCage, 0u);
+}
+
 }  // namespace
 }  // namespace sen3bot::nav

@@ -97,6 +97,33 @@ TEST(World, PhaseStartsAMoverPartWayRoundItsCycle) {
   EXPECT_NEAR(w.mover_position(round).y_m, 1.25, 1e-9);
 }
 
+TEST(World, AWalkerSlowsToTurnBackAndSetsOffAgain) {
+  World w(room());
+  MoverScript person;
+  person.path = {{1.0, 1.0}, {3.0, 1.0}};  // 2 m at 1 m/s, speeding up and slowing at 1 m/s^2
+  person.speed_m_s = 1.0;
+  person.accel_m_s2 = 1.0;
+  person.person = true;
+  const auto id = w.add_mover(person);
+  // Each leg: 1 s up to speed (0.5 m), 1 s at speed, 1 s down (0.5 m): 3 s.
+  const auto x_at = [&](double t) {
+    w.set_time(t);
+    return w.mover_position(id).x_m;
+  };
+  EXPECT_NEAR(x_at(0.5), 1.125, 1e-9);   // half a second in: 0.5 a t^2
+  EXPECT_NEAR(x_at(1.5), 2.0, 1e-9);     // at full speed, mid-way
+  EXPECT_NEAR(x_at(2.5), 2.875, 1e-9);   // slowing
+  EXPECT_NEAR(x_at(3.0), 3.0, 1e-9);     // stopped at the end
+  EXPECT_NEAR(x_at(3.5), 2.875, 1e-9);   // and back the same way
+  EXPECT_NEAR(x_at(6.0), 1.0, 1e-9);
+  // Too short a leg to reach full speed: up half way, down the other half.
+  MoverScript short_walk = person;
+  short_walk.path = {{1.0, 2.0}, {1.5, 2.0}};
+  const auto id2 = w.add_mover(short_walk);
+  w.set_time(std::sqrt(0.5));  // the middle, reached after sqrt(leg / a)
+  EXPECT_NEAR(w.mover_position(id2).x_m, 1.25, 1e-9);
+}
+
 TEST(World, ScanSeesMoversOnlyOnceVisible) {
   World w(room());
   MoverScript box;

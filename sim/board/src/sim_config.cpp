@@ -11,7 +11,7 @@ using firmware::config::read_pose;
 using firmware::config::relative_to;
 
 world::MoverScript read_mover(const Reader& r, bool person) {
-  r.allow_only({"path", "speed_m_s", "size_m", "loop", "start_s", "appear_s", "shape"});
+  r.allow_only({"path", "speed_m_s", "accel_m_s2", "size_m", "loop", "start_s", "appear_s", "shape"});
   world::MoverScript m;
   m.person = person;
   m.shape = person ? world::MoverShape::circle : world::MoverShape::square;
@@ -20,6 +20,7 @@ world::MoverScript read_mover(const Reader& r, bool person) {
   if (r.has("speed_m_s")) m.speed_m_s = r.number("speed_m_s", 0.0, 5.0);
   if (r.has("size_m")) m.size_m = r.number("size_m", 0.05, 5.0);
   if (r.has("loop")) m.loop = r.boolean("loop");
+  if (r.has("accel_m_s2")) m.accel_m_s2 = r.number("accel_m_s2", 0.0, 20.0);
   if (r.has("start_s")) m.start_time_s = r.number("start_s", 0.0, 1e7);
   if (r.has("appear_s")) m.appear_time_s = r.number("appear_s", 0.0, 1e7);
   if (r.has("shape")) {

@@ -164,10 +164,35 @@ Point2D World::position_at(const Mover& mover, double time_s) noexcept {
   const auto& path = mover.script.path;
   const double total = mover.cumulative_m.back();
   if (path.size() < 2 || mover.script.speed_m_s <= 0.0 || total <= 0.0) return path.front();
-  const double walked =
-      std::max(0.0, time_s - mover.script.start_time_s) * mover.script.speed_m_s + std::max(0.0, mover.script.phase_m);
+  const double v = mover.script.speed_m_s;
+  const double walked = std::max(0.0, time_s - mover.script.start_time_s) * v + std::max(0.0, mover.script.phase_m);
+  const double accel = mover.script.accel_m_s2;
   double s = 0.0;
-  if (mover.script.loop) {
+  if (!mover.script.loop && accel > 0.0) {
+    // Each leg: speed up at a, walk, slow down at a (a triangle when the leg is too short to
+    // reach full speed). The phase counts as time at full speed.
+    double ramp_s = v / accel;
+    double top = v;
+    if (top * ramp_s > total) {
+      ramp_s = std::sqrt(total / accel);
+      top = accel * ramp_s;
+    }
+    const double ramp_m = 0.5 * top * ramp_s;
+    const double leg_s = 2.0 * ramp_s + (total - 2.0 * ramp_m) / top;
+    double tau = std::fmod(walked / v, 2.0 * leg_s);
+    const bool back = tau > leg_s;
+    if (back) tau -= leg_s;
+    if (tau < ramp_s) {
+      s = 0.5 * accel * tau * tau;
+    } else if (tau > leg_s - ramp_s) {
+      const double left = leg_s - tau;
+      s = total - 0.5 * accel * left * left;
+    } else {
+      s = ramp_m + top * (tau - ramp_s);
+    }
+    s = std::clamp(s, 0.0, total);
+    if (back) s = total - s;
+  } else if (mover.script.loop) {
     s = std::fmod(walked, total);
   } else {
     s = std::fmod(walked, 2.0 * total);

@@ -390,6 +390,10 @@ void SafetyTask::step(const tasks::StepContext& context) {
       static_cast<double>(context.start_ns - movers_sample_.stamp_ns) <= config_.movers_timeout_s * 1e9) {
     in.movers = &movers_sample_.value;
   }
+  if (people_ != nullptr && people_->read(people_sample_) &&
+      static_cast<double>(context.start_ns - people_sample_.stamp_ns) <= config_.people_timeout_s * 1e9) {
+    in.people = &people_sample_.value;
+  }
   const SafetyOutput out = filter_.filter(in);
   if ((in.requested.v_m_s != 0.0 || in.requested.w_rad_s != 0.0) && out.command.v_m_s == 0.0 &&
       out.command.w_rad_s == 0.0) {

@@ -200,6 +200,13 @@ bool PeopleFusion::place(const msg::ScanView& scan, const Pose2D& laser_pose, st
   std::size_t run_hi = at;
   while (run_lo > 0 && joins(run_lo, run_lo - 1)) --run_lo;
   while (run_hi + 1 < beams && joins(run_hi, run_hi + 1)) ++run_hi;
+  // Cut short: the scan ends there, or the next return is nearer by more than a step (it hides
+  // the rest of the body).
+  const auto hidden_past = [&](std::size_t edge, std::size_t next) {
+    return scan.ranges_m[next] < scan.ranges_m[edge] - config_.segment_jump_m;
+  };
+  const bool partial = run_lo == 0 || run_hi + 1 >= beams || hidden_past(run_lo, run_lo - 1) ||
+                       hidden_past(run_hi, run_hi + 1);
   double sx = 0.0;
   double sy = 0.0;
   std::size_t lo = beams;
@@ -227,6 +234,9 @@ bool PeopleFusion::place(const msg::ScanView& scan, const Pose2D& laser_pose, st
   fix.x_m = mx + (mx - laser_pose.x_m) * back;
   fix.y_m = my + (my - laser_pose.y_m) * back;
   fix.range_m = mean_range * (1.0 + back);
+  fix.ray_x = mean_range > 1e-6 ? (mx - laser_pose.x_m) / mean_range : 0.0;
+  fix.ray_y = mean_range > 1e-6 ? (my - laser_pose.y_m) / mean_range : 0.0;
+  fix.partial = partial;
   fix.points = static_cast<std::uint16_t>(std::min<std::size_t>(n, 0xffff));
   return true;
 }
@@ -248,14 +258,49 @@ std::size_t PeopleFusion::follow(const msg::ScanView& scan, const Pose2D& laser_
 
 // --- Tracking ------------------------------------------------------------------------------------
 
+namespace {
+using Matrix4 = std::array<double, 16>;
+
+Matrix4 start_covariance(const PersonTrackerConfig& c) noexcept {
+  Matrix4 p{};
+  p[0] = p[5] = c.fix_sigma_m * c.fix_sigma_m;
+  p[10] = p[15] = c.start_speed_sigma_m_s * c.start_speed_sigma_m_s;
+  return p;
+}
+
+// P <- F P F' + Q for x += v dt, with white acceleration of density q.
+void predict_covariance(Matrix4& p, double dt, double q) noexcept {
+  Matrix4 fp = p;  // F P: rows 0, 1 gain dt times rows 2, 3
+  for (int c = 0; c < 4; ++c) {
+    fp[0 * 4 + c] += dt * p[2 * 4 + c];
+    fp[1 * 4 + c] += dt * p[3 * 4 + c];
+  }
+  p = fp;  // (F P) F': columns 0, 1 gain dt times columns 2, 3
+  for (int r = 0; r < 4; ++r) {
+    p[r * 4 + 0] += dt * fp[r * 4 + 2];
+    p[r * 4 + 1] += dt * fp[r * 4 + 3];
+  }
+  const double q_pp = q * dt * dt * dt / 3.0;
+  const double q_pv = q * dt * dt / 2.0;
+  const double q_vv = q * dt;
+  for (int a = 0; a < 2; ++a) {
+    p[a * 4 + a] += q_pp;
+    p[a * 4 + a + 2] += q_pv;
+    p[(a + 2) * 4 + a] += q_pv;
+    p[(a + 2) * 4 + a + 2] += q_vv;
+  }
+}
+}  // namespace
+
 Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource) {
   if (config.max_tracks == 0 || config.max_tracks > msg::People::kMax || !(config.gate_m > 0.0) ||
-      !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) ||
-      !(config.position_gain > 0.0 && config.position_gain <= 1.0) || !(config.velocity_gain >= 0.0) ||
+      !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) || !(config.min_width_m >= 0.0) ||
+      !(config.fix_sigma_m > 0.0) || !(config.partial_sigma_m > 0.0) || !(config.accel_sigma_m_s2 > 0.0) ||
+      !(config.start_speed_sigma_m_s > 0.0) ||
       !(config.max_speed_m_s > 0.0) || config.confirm_hits < 1 || !(config.laser_follow_s >= 0.0) ||
       !(config.follow_gate_m > 0.0) || !(config.coast_s >= 0.0)) {
     return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s, "
-                                       "follow_gate_m > 0, 0 < position_gain <= 1, confirm_hits >= 1, "
+                                       "follow_gate_m, fix_sigma_m, partial_sigma_m, accel_sigma_m_s2, start_speed_sigma_m_s > 0, confirm_hits >= 1, "
                                        "laser_follow_s, coast_s >= 0",
                          msg::People::kMax);
   }
@@ -306,6 +351,7 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
     track = Track{};
     track.id = next_id_++;
     track.at = track.first_seen = {fixes[f].x_m, fixes[f].y_m};
+    track.covariance = start_covariance(config_);
     track.width_m = fixes[f].width_m;
     track.points = fixes[f].points;
     track.last_seen_ns = track.camera_seen_ns = stamp_ns;
@@ -324,16 +370,55 @@ Point2D PersonTracker::predict(const Track& track, hal::Nanos stamp_ns) const no
   return {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
 }
 
+
 void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept {
-  // Alpha-beta: the residual against the prediction corrects position and velocity (the
-  // velocity is kept for a standing person too: it is what shows them starting to walk).
-  const double dt = static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9;
-  const Point2D p{track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt};
-  const double rx = fix.x_m - p.x_m;
-  const double ry = fix.y_m - p.y_m;
-  track.at = {p.x_m + config_.position_gain * rx, p.y_m + config_.position_gain * ry};
-  track.velocity.x_m += config_.velocity_gain * rx / dt;
-  track.velocity.y_m += config_.velocity_gain * ry / dt;
+  // Kalman: predict the state to the fix, then weigh the fix by its error, anisotropic when the
+  // body is cut (the velocity is kept for a standing person too: it shows them setting off).
+  const double dt = std::max(0.0, static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9);
+  double state[4] = {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt,
+                     track.velocity.x_m, track.velocity.y_m};
+  Matrix4& p = track.covariance;
+  predict_covariance(p, dt, config_.accel_sigma_m_s2 * config_.accel_sigma_m_s2);
+  // The fix's covariance: fix_sigma along the ray, and across it unless partial.
+  const double along2 = config_.fix_sigma_m * config_.fix_sigma_m;
+  const double across = fix.partial ? std::max(config_.partial_sigma_m, config_.fix_sigma_m) : config_.fix_sigma_m;
+  const double across2 = across * across;
+  const double ray_norm = std::hypot(fix.ray_x, fix.ray_y);
+  const double ux = ray_norm > 1e-9 ? fix.ray_x / ray_norm : 1.0;
+  const double uy = ray_norm > 1e-9 ? fix.ray_y / ray_norm : 0.0;
+  const double r00 = along2 * ux * ux + across2 * uy * uy;
+  const double r01 = (along2 - across2) * ux * uy;
+  const double r11 = along2 * uy * uy + across2 * ux * ux;
+  // S = H P H' + R and its inverse; K = P H' S^-1.
+  const double s00 = p[0] + r00;
+  const double s01 = p[1] + r01;
+  const double s11 = p[5] + r11;
+  const double det = s00 * s11 - s01 * s01;
+  if (!(det > 0.0) || !std::isfinite(det)) {
+    track.covariance = start_covariance(config_);
+    track.at = {fix.x_m, fix.y_m};
+    track.velocity = {};
+  } else {
+    const double i00 = s11 / det;
+    const double i01 = -s01 / det;
+    const double i11 = s00 / det;
+    double k[4][2];
+    for (int r = 0; r < 4; ++r) {
+      k[r][0] = p[r * 4 + 0] * i00 + p[r * 4 + 1] * i01;
+      k[r][1] = p[r * 4 + 0] * i01 + p[r * 4 + 1] * i11;
+    }
+    const double rx = fix.x_m - state[0];
+    const double ry = fix.y_m - state[1];
+    for (int r = 0; r < 4; ++r) state[r] += k[r][0] * rx + k[r][1] * ry;
+    Matrix4 updated = p;  // (I - K H) P
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) updated[r * 4 + c] -= k[r][0] * p[0 * 4 + c] + k[r][1] * p[1 * 4 + c];
+    for (int r = 0; r < 4; ++r)  // kept symmetric against rounding
+      for (int c = r + 1; c < 4; ++c) updated[r * 4 + c] = updated[c * 4 + r] = 0.5 * (updated[r * 4 + c] + updated[c * 4 + r]);
+    p = updated;
+    track.at = {state[0], state[1]};
+    track.velocity = {state[2], state[3]};
+  }
   const double speed = std::hypot(track.velocity.x_m, track.velocity.y_m);
   if (speed > config_.max_speed_m_s) {
     track.velocity.x_m *= config_.max_speed_m_s / speed;
@@ -391,7 +476,7 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
     p.vx_m_s = moving ? track.velocity.x_m : 0.0;
     p.vy_m_s = moving ? track.velocity.y_m : 0.0;
     p.width_m = track.width_m;
-    p.cage_radius_m = track.width_m / 2.0 + config_.safety_radius_m;
+    p.cage_radius_m = std::max(track.width_m, config_.min_width_m) / 2.0 + config_.safety_radius_m;
     p.state = track.state;
     p.last_seen_ns = track.last_seen_ns;
     p.points = track.points;

@@ -62,29 +62,76 @@ double gap_at(const Footprint& fp, double x, double y, double heading, double mx
 }
 }  // namespace
 
-bool SafetyFilter::approach_refused(const SafetyInputs& in, double v, double w) const noexcept {
-  if (in.movers == nullptr || !(config_.approach_horizon_s > 0.0) || (v == 0.0 && w == 0.0)) return false;
+SafetyFilter::Gaps SafetyFilter::gaps(const SafetyInputs& in, double v, double w, double x, double y, double vx,
+                                      double vy, double radius, double horizon_s, bool then_stop) const noexcept {
   const double v0 = in.measured_v_m_s;
   const double brake_s = std::abs(v0) / config_.decel_m_s2;
+  // then_stop: the command reaches the wheels after reaction_s and the robot then brakes along
+  // its arc (tau: the time the command has been held, at full speed, by then).
+  const double stop_s = std::abs(v) / config_.decel_m_s2;
+  if (then_stop) horizon_s = config_.reaction_s + stop_s;
+  Gaps g{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  for (double t = 0.0; t <= horizon_s + 1e-9; t += kApproachStepS) {
+    const double mx = x + vx * t;
+    const double my = y + vy * t;
+    double tau = t;
+    if (then_stop && t > config_.reaction_s) {
+      const double after = std::min(t - config_.reaction_s, stop_s);
+      tau = config_.reaction_s + after - (stop_s > 0.0 ? 0.5 * after * after / stop_s : 0.0);
+    }
+    const double heading = w * tau;
+    const bool straight = std::abs(w) < 1e-9;
+    const double px = straight ? v * tau : v / w * std::sin(heading);
+    const double py = straight ? 0.0 : v / w * (1.0 - std::cos(heading));
+    g.moving_m = std::min(g.moving_m, gap_at(config_.footprint, px, py, heading, mx, my, radius));
+    const double tb = std::min(t, brake_s);
+    const double travelled = v0 * tb - std::copysign(0.5 * config_.decel_m_s2 * tb * tb, v0);
+    g.braking_m = std::min(g.braking_m, gap_at(config_.footprint, travelled, 0.0, 0.0, mx, my, radius));
+  }
+  return g;
+}
+
+bool SafetyFilter::approach_refused(const SafetyInputs& in, double v, double w) const noexcept {
+  if (in.movers == nullptr || !(config_.approach_horizon_s > 0.0) || (v == 0.0 && w == 0.0)) return false;
   for (std::size_t i = 0; i < std::min<std::size_t>(in.movers->count, msg::MovingObstacles::kMax); ++i) {
     const msg::MovingObstacle& m = in.movers->items[i];
     if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
     const BodyMover b = in_body(in, m);
-    double moving = std::numeric_limits<double>::infinity();
-    double braking = std::numeric_limits<double>::infinity();
-    for (double t = 0.0; t <= config_.approach_horizon_s + 1e-9; t += kApproachStepS) {
-      const double mx = b.x_m + b.vx_m_s * t;
-      const double my = b.y_m + b.vy_m_s * t;
-      const double heading = w * t;
-      const bool straight = std::abs(w) < 1e-9;
-      const double px = straight ? v * t : v / w * std::sin(heading);
-      const double py = straight ? 0.0 : v / w * (1.0 - std::cos(heading));
-      moving = std::min(moving, gap_at(config_.footprint, px, py, heading, mx, my, m.radius_m));
-      const double tb = std::min(t, brake_s);
-      const double travelled = v0 * tb - std::copysign(0.5 * config_.decel_m_s2 * tb * tb, v0);
-      braking = std::min(braking, gap_at(config_.footprint, travelled, 0.0, 0.0, mx, my, m.radius_m));
-    }
-    if (moving < config_.approach_margin_m && moving < braking - kApproachSlackM) return true;
+    const Gaps g = gaps(in, v, w, b.x_m, b.y_m, b.vx_m_s, b.vy_m_s, m.radius_m, config_.approach_horizon_s);
+    if (g.moving_m < config_.approach_margin_m && g.moving_m < g.braking_m - kApproachSlackM) return true;
+  }
+  return false;
+}
+
+bool SafetyFilter::cage_refused(const SafetyInputs& in, double v, double w) const noexcept {
+  if (config_.cage_margin_m < 0.0 || (v == 0.0 && w == 0.0)) return false;
+  // The robot must still be able to stop outside the cage of the person held where they are
+  // now; and holding the command must not take the body into a walker's cage on their way.
+  const auto closes = [&](double x, double y, double vx, double vy, double radius) {
+    const Gaps held = gaps(in, v, w, x, y, 0.0, 0.0, radius, 0.0, true);
+    if (held.moving_m < 0.0 && held.moving_m < held.braking_m - kCageSlackM) return true;
+    if (std::hypot(vx, vy) < config_.approach_min_speed_m_s) return false;
+    const Gaps walking = gaps(in, v, w, x, y, vx, vy, radius, config_.cage_horizon_s);
+    return walking.moving_m < 0.0 && walking.moving_m < walking.braking_m - kCageSlackM;
+  };
+  const double c = std::cos(in.pose.theta_rad);
+  const double s = std::sin(in.pose.theta_rad);
+  const double age_s = in.people != nullptr ? std::max(0.0, static_cast<double>(in.now_ns - in.people->stamp_ns) * 1e-9) : 0.0;
+  for (std::size_t i = 0; in.people != nullptr && i < std::min<std::size_t>(in.people->count, msg::People::kMax); ++i) {
+    const msg::TrackedPerson& p = in.people->items[i];
+    const double dx = p.x_m + p.vx_m_s * age_s - in.pose.x_m;
+    const double dy = p.y_m + p.vy_m_s * age_s - in.pose.y_m;
+    // The cage as a disc about the person's centre: a gap below zero is inside it.
+    if (closes(c * dx + s * dy, -s * dx + c * dy, c * p.vx_m_s + s * p.vy_m_s, -s * p.vx_m_s + c * p.vy_m_s,
+               p.cage_radius_m + config_.cage_margin_m))
+      return true;
+  }
+  if (in.movers == nullptr || config_.mover_cage_m < 0.0) return false;
+  for (std::size_t i = 0; i < std::min<std::size_t>(in.movers->count, msg::MovingObstacles::kMax); ++i) {
+    const msg::MovingObstacle& m = in.movers->items[i];
+    if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
+    const BodyMover b = in_body(in, m);
+    if (closes(b.x_m, b.y_m, b.vx_m_s, b.vy_m_s, m.radius_m + config_.mover_cage_m + config_.cage_margin_m)) return true;
   }
   return false;
 }
@@ -223,6 +270,11 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
     v = 0.0;
     w = 0.0;
     out.reasons |= kSafetyMoverApproach;
+  }
+  if (cage_refused(in, v, w)) {
+    v = 0.0;
+    w = 0.0;
+    out.reasons |= kSafetyCage;
   }
   out.command.v_m_s = v;
   out.command.w_rad_s = w;

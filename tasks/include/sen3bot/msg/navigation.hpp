@@ -157,6 +157,7 @@ enum SafetyReason : std::uint32_t {
   kSafetySlowed = 1u << 6,         // scaled down in the slow zone
   kSafetyReverseCapped = 1u << 7,
   kSafetyMoverApproach = 1u << 8,  // stopped: moving on would meet a tracked mover that braking avoids
+  kSafetyCage = 1u << 9,           // stopped: moving on would take the body into a person's cage
 };
 
 struct SafetyOutput {

@@ -37,6 +37,9 @@ struct MoverScript {
   double phase_m = 0.0;        // distance already walked along the cycle at start_time_s (>= 0)
   double appear_time_s = 0.0;  // invisible (not hit by rays, no collisions) before this
   double vanish_time_s = 1e300;  // and again from this time on (walked out of the scene)
+  // A walk there and back (not a loop) slows to a stop at each end and sets off again at this
+  // acceleration; 0 turns back at full speed. People turn in about a second, not in no time.
+  double accel_m_s2 = 0.0;
   bool person = false;
 };
 

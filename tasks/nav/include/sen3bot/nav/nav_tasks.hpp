@@ -317,6 +317,7 @@ struct SafetyTaskConfig {
   SafetyConfig safety;
   double command_timeout_s = 0.5;  // a requested command older than this counts as zero
   double movers_timeout_s = 0.5;   // tracked movers older than this are not used
+  double people_timeout_s = 0.5;   // and tracked people
   bool require_base_flags = true;  // with no BaseFlags ever published, stop
 };
 
@@ -326,9 +327,9 @@ class SafetyTask final : public tasks::Task {
              const tasks::Topic<ScanMessage>& scan, const tasks::Topic<Odometry>& odom,
              const tasks::Topic<BaseFlags>& base, const tasks::Topic<PoseEstimate>& pose,
              const tasks::Topic<msg::MovingObstacles>& movers, tasks::Topic<VelocityCommand>& command,
-             tasks::Topic<SafetyOutput>& status) noexcept
+             tasks::Topic<SafetyOutput>& status, const tasks::Topic<msg::People>* people = nullptr) noexcept
       : config_(config), filter_(config.safety), requested_(requested), scan_(scan), odom_(odom), base_(base), pose_(pose),
-        movers_(movers), command_(command), status_(status) {}
+        movers_(movers), people_(people), command_(command), status_(status) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
@@ -342,10 +343,12 @@ class SafetyTask final : public tasks::Task {
   const tasks::Topic<BaseFlags>& base_;
   const tasks::Topic<PoseEstimate>& pose_;
   const tasks::Topic<msg::MovingObstacles>& movers_;
+  const tasks::Topic<msg::People>* people_;  // null: no people layer
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<SafetyOutput>& status_;
   tasks::Sample<ScanMessage> scan_sample_;
   tasks::Sample<msg::MovingObstacles> movers_sample_;
+  tasks::Sample<msg::People> people_sample_;
   std::uint64_t scan_seq_ = 0;
   ProjectedScan projected_;  // projected once per scan, checked every step
   std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero

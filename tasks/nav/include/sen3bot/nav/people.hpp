@@ -88,6 +88,13 @@ struct PersonFix {
   double y_m = 0.0;
   double range_m = 0.0;  // from the laser
   double width_m = 0.0;  // the box's horizontal extent at that range
+  // The unit ray from the laser to the fix: a partial body's range is measured, its place across
+  // the ray is not.
+  double ray_x = 0.0;
+  double ray_y = 0.0;
+  // The body's returns are cut short by something nearer in front of it or by the edge of the
+  // scan: their mean is off towards the part in view.
+  bool partial = false;
   std::uint16_t points = 0;
   std::uint8_t box = 0;  // which box of the frame
 };
@@ -137,8 +144,16 @@ struct PersonTrackerConfig {
   double expire_s = 2.0;           // a track (and its cage) without a fix for this long ends
   double dynamic_after_m = 1.0;    // moved farther than this from where first seen: dynamic
   double safety_radius_m = 0.5;    // the cage: half the person's width plus this
-  double position_gain = 0.6;      // alpha-beta filter
-  double velocity_gain = 0.3;
+  // A box cut by the image's edge, or a person seen side-on, is narrower than a person: the
+  // cage counts at least this width.
+  double min_width_m = 0.4;
+  // A constant-velocity Kalman filter per person: a fix's error (along the ray; across it too
+  // unless the body is cut), how far a partial fix may be off across the ray, walkers'
+  // changes of pace and the speed of someone not seen before.
+  double fix_sigma_m = 0.05;
+  double partial_sigma_m = 0.3;
+  double accel_sigma_m_s2 = 2.0;
+  double start_speed_sigma_m_s = 1.0;
   double max_speed_m_s = 3.0;      // a velocity estimate is clamped to this
   std::uint32_t confirm_hits = 3;  // camera fixes before a track is published (a stray box is not)
   // Out of the camera's view, a confirmed person is followed by the laser alone (the returns
@@ -158,6 +173,7 @@ class PersonTracker {
     std::uint32_t id = 0;
     Point2D at;
     Point2D velocity;
+    std::array<double, 16> covariance{};  // x, y, vx, vy, row-major
     Point2D first_seen;
     double width_m = 0.0;
     hal::Nanos last_seen_ns = 0;    // the last fix, camera or laser

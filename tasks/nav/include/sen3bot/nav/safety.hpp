@@ -30,6 +30,16 @@
 //    arc, each mover at its velocity); when that brings the body within approach_margin_m of
 //    a mover and braking now would keep the two farther apart, the robot stops. Moving away
 //    from a mover that walks up to the robot stays allowed.
+//  * Virtual cages: a command is refused when the robot could no longer stop outside a
+//    tracked person's cage radius plus cage_margin_m (the margin is for the error of the
+//    person's placement): held for reaction_s and then braked along its arc, the body comes
+//    within that distance of the person held where they are, closer than braking now would
+//    bring it. A walker (at approach_min_speed_m_s or more) on their velocity is checked as
+//    the approach check does, over cage_horizon_s. Turning or backing away stays allowed; a person who walks up to a standing
+//    robot is theirs to avoid. A tracked mover at walking speed (approach_min_speed_m_s) is
+//    caged the same way, its radius plus mover_cage_m: the camera sees 60 degrees of the
+//    laser's 180, and a walker coming from the side is on the laser long before the camera
+//    can tell what it is.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
 #include <array>
@@ -37,6 +47,7 @@
 
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/msg/navigation.hpp"
+#include "sen3bot/msg/people.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/projected_scan.hpp"
 
@@ -69,6 +80,9 @@ struct SafetyConfig {
   // Slower tracks are left to the corridor: a still box whose faces come into view one after
   // another is tracked at up to about 0.1 m/s; people walk at 0.5-1.5 m/s.
   double approach_min_speed_m_s = 0.3;
+  double cage_margin_m = 0.2;   // < 0: no cage check
+  double cage_horizon_s = 1.0;
+  double mover_cage_m = -1.0;   // < 0: movers are not caged (people tracking sets it)
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;          // SafetyTask projects scans with it
 };
@@ -84,6 +98,8 @@ struct SafetyInputs {
   hal::Nanos now_ns = 0;
   // Tracked movers (map frame, predicted to movers->stamp_ns) and the robot's pose; null: none.
   const msg::MovingObstacles* movers = nullptr;
+  // Tracked people (map frame, predicted to people->stamp_ns) with their cages; null: none.
+  const msg::People* people = nullptr;
   Pose2D pose;
 };
 
@@ -98,11 +114,24 @@ class SafetyFilter {
   // Whether holding (v, w) brings the body within approach_margin_m of a tracked mover in the
   // horizon, closer than braking now would.
   [[nodiscard]] bool approach_refused(const SafetyInputs& in, double v, double w) const noexcept;
+  // Whether (v, w) takes the body closer to a tracked person while within their cage radius
+  // plus cage_margin_m in the horizon, closer than braking now would.
+  [[nodiscard]] bool cage_refused(const SafetyInputs& in, double v, double w) const noexcept;
 
  private:
   static constexpr double kSweepStepM = 0.02;
   static constexpr double kApproachStepS = 0.05;
   static constexpr double kApproachSlackM = 0.02;  // "closer than braking" by at least this
+  static constexpr double kCageSlackM = 0.005;
+
+  // The least gap, over horizon_s, between a disc moving from (x, y) at (vx, vy) (body frame
+  // of now) and the body holding (v, w), and the body braking from its measured speed.
+  struct Gaps {
+    double moving_m = 0.0;
+    double braking_m = 0.0;
+  };
+  [[nodiscard]] Gaps gaps(const SafetyInputs& in, double v, double w, double x, double y, double vx, double vy,
+                          double radius, double horizon_s, bool then_stop = false) const noexcept;
 
   struct Crosser {
     double x_m = 0.0, y_m = 0.0;  // body frame, at the scan's time (where its points are)
