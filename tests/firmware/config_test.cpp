@@ -230,7 +230,7 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
 TEST(Config, TheSafetyFiltersCageCheck) {
   Result<FirmwareConfig> defaults = parse_config(std::string(kNavigation) + "  people: { detector: sim }\n", "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
-  EXPECT_DOUBLE_EQ(defaults->navigation.safety.cage_margin_m, 0.2);
+  EXPECT_DOUBLE_EQ(defaults->navigation.safety.cage_margin_m, 0.1);
   EXPECT_TRUE(defaults->navigation.cage_movers);
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) + "  people: { detector: sim, keep_out: { margin_m: 0.3, movers: false } }\n", "robot.yaml");

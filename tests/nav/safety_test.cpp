@@ -384,7 +384,7 @@ TEST(Safety, TheApproachCheckCanBeTurnedOff) {
 // --- Virtual cages ---
 
 // A person at (x, y) in the robot's frame (the robot at the origin facing +x) with a 0.725 m
-// cage (a 0.45 m wide person and the 0.5 m safety radius): 0.925 m with the default margin.
+// cage (a 0.45 m wide person and the 0.5 m safety radius): 0.825 m with the default margin.
 SafetyOutput near_person(double x, double y, double vx, double vy, double v, double w, double measured_v,
                          const SafetyConfig& config = {}) {
   const SafetyFilter f(config);
@@ -408,24 +408,28 @@ SafetyOutput near_person(double x, double y, double vx, double vy, double v, dou
 TEST(Safety, TheRobotKeepsTheDistanceItNeedsToStopOutsideACage) {
   // At 0.4 m/s the command takes 0.1 s to reach the wheels and braking at 0.6 m/s^2 then
   // covers 0.133 m: 0.173 m in all. The nose is 0.2275 m ahead of the centre, the keep-out
-  // 0.925 m around the person: 1.1525 m between the nose and the person's centre.
-  const SafetyOutput room = near_person(1.1525 + 0.25, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
+  // 0.825 m around the person: 1.0525 m between the nose and the person's centre.
+  const SafetyOutput room = near_person(1.0525 + 0.25, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
   EXPECT_EQ(room.reasons, kSafetyNone);
   EXPECT_DOUBLE_EQ(room.command.v_m_s, 0.4);
   // 0.15 m to spare: going on would end 2 cm inside, braking now stops 2 cm short.
-  const SafetyOutput tight = near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
+  const SafetyOutput tight = near_person(1.0525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4);
   EXPECT_TRUE(tight.reasons & kSafetyCage);
   EXPECT_EQ(tight.command.v_m_s, 0.0);
   EXPECT_EQ(tight.command.w_rad_s, 0.0);
   // Slowing down there is allowed (it stops sooner than braking from 0.4 m/s would), and so
   // is backing away or passing a person well to the side.
-  EXPECT_EQ(near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.05, 0.0, 0.4).reasons & kSafetyCage, 0u);
+  EXPECT_EQ(near_person(1.0525 + 0.15, 0.0, 0.0, 0.0, 0.05, 0.0, 0.4).reasons & kSafetyCage, 0u);
   EXPECT_EQ(near_person(1.0, 0.0, 0.0, 0.0, -0.1, 0.0, 0.0).reasons & kSafetyCage, 0u);
   EXPECT_EQ(near_person(1.0, 1.6, 0.0, 0.0, 0.4, 0.0, 0.4).reasons, kSafetyNone);
+  // Inside the keep-out already (the person stepped closer, or was placed closer), creeping
+  // on is refused however slow; backing off is not.
+  EXPECT_TRUE(near_person(1.0525 - 0.05, 0.0, 0.0, 0.0, 0.02, 0.0, 0.0).reasons & kSafetyCage);
+  EXPECT_EQ(near_person(1.0525 - 0.05, 0.0, 0.0, 0.0, -0.05, 0.0, 0.0).reasons & kSafetyCage, 0u);
   // Turned off, a cage is the planners' alone.
   SafetyConfig off;
   off.cage_margin_m = -1.0;
-  EXPECT_EQ(near_person(1.1525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4, off).reasons, kSafetyNone);
+  EXPECT_EQ(near_person(1.0525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4, off).reasons, kSafetyNone);
 }
 
 TEST(Safety, AWalkersCageOnItsWayStopsTheRobotWhenBrakingKeepsFartherOut) {

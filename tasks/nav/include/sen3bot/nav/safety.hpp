@@ -80,7 +80,7 @@ struct SafetyConfig {
   // Slower tracks are left to the corridor: a still box whose faces come into view one after
   // another is tracked at up to about 0.1 m/s; people walk at 0.5-1.5 m/s.
   double approach_min_speed_m_s = 0.3;
-  double cage_margin_m = 0.2;   // < 0: no cage check
+  double cage_margin_m = 0.1;   // < 0: no cage check
   double cage_horizon_s = 1.0;
   double mover_cage_m = -1.0;   // < 0: movers are not caged (people tracking sets it)
   Footprint footprint = Footprint::pioneer();
@@ -122,7 +122,7 @@ class SafetyFilter {
   static constexpr double kSweepStepM = 0.02;
   static constexpr double kApproachStepS = 0.05;
   static constexpr double kApproachSlackM = 0.02;  // "closer than braking" by at least this
-  static constexpr double kCageSlackM = 0.005;
+  static constexpr double kCageSlackM = 1e-4;  // rounding only: creeping in by millimetres is creeping in
 
   // The least gap, over horizon_s, between a disc moving from (x, y) at (vx, vy) (body frame
   // of now) and the body holding (v, w), and the body braking from its measured speed.
