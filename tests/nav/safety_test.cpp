@@ -321,8 +321,8 @@ TEST(Safety, AMoverGoneAcrossBeforeTheRobotGetsThereNeitherStopsNorSlows) {
 
 // A person (radius 0.25 m) at (x, y) in the body frame walking at (vx, vy), the laser clear;
 // the robot, at 0.3 m/s, asks for (v, w).
-SafetyOutput approaching(double x, double y, double vx, double vy, double v, double w) {
-  const SafetyFilter f;
+SafetyOutput approaching(double x, double y, double vx, double vy, double v, double w, const SafetyConfig& config = {}) {
+  const SafetyFilter f(config);
   Scene s;
   s.in.pose = {0.0, 0.0, 0.0};
   s.in.requested = {v, w, s.in.now_ns};
@@ -368,16 +368,7 @@ TEST(Safety, MovingAwayFromAWalkerThatCatchesUpStaysAllowed) {
 TEST(Safety, TheApproachCheckCanBeTurnedOff) {
   SafetyConfig c;
   c.approach_horizon_s = 0.0;
-  const SafetyFilter f(c);
-  Scene s;
-  s.in.requested = {0.3, 0.0, s.in.now_ns};
-  s.in.measured_v_m_s = 0.3;
-  msg::MovingObstacles movers;
-  movers.stamp_ns = s.in.now_ns;
-  movers.count = 1;
-  movers.items[0] = {7, 0.6, -1.0, 0.0, 1.0, 0.25, 0.0, 0.0};
-  s.in.movers = &movers;
-  EXPECT_EQ(f.filter(s.in).reasons, kSafetyNone);
+  EXPECT_EQ(approaching(0.6, -1.0, 0.0, 1.0, 0.3, 0.0, c).reasons, kSafetyNone);
 }
 
 
@@ -449,23 +440,14 @@ TEST(Safety, AMoverAtWalkingSpeedIsCagedAsAPersonWhenTheFirmwareTracksPeople) {
   // around the body) lets the robot on; caged as a person (0.5 m more) it stops.
   SafetyConfig c;
   c.mover_cage_m = 0.5;
-  Scene s;
-  s.in.requested = {0.3, 0.0, s.in.now_ns};
-  s.in.measured_v_m_s = 0.3;
-  msg::MovingObstacles movers;
-  movers.stamp_ns = s.in.now_ns;
-  movers.count = 1;
-  movers.items[0] = {7, 1.5, 0.0, -0.5, 0.0, 0.25, 0.0, 0.0};
-  s.in.movers = &movers;
-  const SafetyOutput caged = SafetyFilter(c).filter(s.in);
+  const SafetyOutput caged = approaching(1.5, 0.0, -0.5, 0.0, 0.3, 0.0, c);
   EXPECT_EQ(caged.reasons & kSafetyMoverApproach, 0u);
   EXPECT_TRUE(caged.reasons & kSafetyCage);
   EXPECT_EQ(caged.command.v_m_s, 0.0);
   // Without people tracking (the default) a mover has no cage.
-  EXPECT_EQ(SafetyFilter().filter(s.in).reasons & kSafetyCage, 0u);
+  EXPECT_EQ(approaching(1.5, 0.0, -0.5, 0.0, 0.3, 0.0).reasons & kSafetyCage, 0u);
   // Nor has a slow one (a still box's faces coming into view).
-  movers.items[0].vx_m_s = -0.1;
-  EXPECT_EQ(SafetyFilter(c).filter(s.in).reasons & kSafetyCage, 0u);
+  EXPECT_EQ(approaching(1.5, 0.0, -0.1, 0.0, 0.3, 0.0, c).reasons & kSafetyCage, 0u);
 }
 
 }  // namespace

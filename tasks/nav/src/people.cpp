@@ -294,14 +294,15 @@ void predict_covariance(Matrix4& p, double dt, double q) noexcept {
 
 Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource) {
   if (config.max_tracks == 0 || config.max_tracks > msg::People::kMax || !(config.gate_m > 0.0) ||
-      !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) || !(config.min_width_m >= 0.0) ||
-      !(config.fix_sigma_m > 0.0) || !(config.partial_sigma_m > 0.0) || !(config.accel_sigma_m_s2 > 0.0) ||
-      !(config.start_speed_sigma_m_s > 0.0) ||
-      !(config.max_speed_m_s > 0.0) || config.confirm_hits < 1 || !(config.laser_follow_s >= 0.0) ||
-      !(config.follow_gate_m > 0.0) || !(config.coast_s >= 0.0)) {
+      !(config.expire_s > 0.0) || !(config.dynamic_after_m >= 0.0) || !(config.safety_radius_m >= 0.0) ||
+      !(config.min_width_m >= 0.0) || !(config.fix_sigma_m > 0.0) || !(config.partial_sigma_m > 0.0) ||
+      !(config.accel_sigma_m_s2 > 0.0) || !(config.start_speed_sigma_m_s > 0.0) || !(config.max_speed_m_s > 0.0) ||
+      config.confirm_hits < 1 || !(config.laser_follow_s >= 0.0) || !(config.follow_gate_m > 0.0) ||
+      !(config.coast_s >= 0.0)) {
     return Error::format(Errc::config, "person tracker: 1 <= max_tracks <= %zu, gate_m, expire_s, max_speed_m_s, "
-                                       "follow_gate_m, fix_sigma_m, partial_sigma_m, accel_sigma_m_s2, start_speed_sigma_m_s > 0, confirm_hits >= 1, "
-                                       "laser_follow_s, coast_s >= 0",
+                                       "follow_gate_m, fix_sigma_m, partial_sigma_m, accel_sigma_m_s2, "
+                                       "start_speed_sigma_m_s > 0, confirm_hits >= 1, "
+                                       "laser_follow_s, coast_s, dynamic_after_m, safety_radius_m, min_width_m >= 0",
                          msg::People::kMax);
   }
   config_ = config;
@@ -414,7 +415,8 @@ void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) updated[r * 4 + c] -= k[r][0] * p[0 * 4 + c] + k[r][1] * p[1 * 4 + c];
     for (int r = 0; r < 4; ++r)  // kept symmetric against rounding
-      for (int c = r + 1; c < 4; ++c) updated[r * 4 + c] = updated[c * 4 + r] = 0.5 * (updated[r * 4 + c] + updated[c * 4 + r]);
+      for (int c = r + 1; c < 4; ++c)
+        updated[r * 4 + c] = updated[c * 4 + r] = 0.5 * (updated[r * 4 + c] + updated[c * 4 + r]);
     p = updated;
     track.at = {state[0], state[1]};
     track.velocity = {state[2], state[3]};

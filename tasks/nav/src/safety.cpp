@@ -116,8 +116,10 @@ bool SafetyFilter::cage_refused(const SafetyInputs& in, double v, double w) cons
   };
   const double c = std::cos(in.pose.theta_rad);
   const double s = std::sin(in.pose.theta_rad);
-  const double age_s = in.people != nullptr ? std::max(0.0, static_cast<double>(in.now_ns - in.people->stamp_ns) * 1e-9) : 0.0;
-  for (std::size_t i = 0; in.people != nullptr && i < std::min<std::size_t>(in.people->count, msg::People::kMax); ++i) {
+  const std::size_t people = in.people != nullptr ? std::min<std::size_t>(in.people->count, msg::People::kMax) : 0;
+  const double age_s =
+      in.people != nullptr ? std::max(0.0, static_cast<double>(in.now_ns - in.people->stamp_ns) * 1e-9) : 0.0;
+  for (std::size_t i = 0; i < people; ++i) {
     const msg::TrackedPerson& p = in.people->items[i];
     const double dx = p.x_m + p.vx_m_s * age_s - in.pose.x_m;
     const double dy = p.y_m + p.vy_m_s * age_s - in.pose.y_m;
@@ -131,7 +133,8 @@ bool SafetyFilter::cage_refused(const SafetyInputs& in, double v, double w) cons
     const msg::MovingObstacle& m = in.movers->items[i];
     if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
     const BodyMover b = in_body(in, m);
-    if (closes(b.x_m, b.y_m, b.vx_m_s, b.vy_m_s, m.radius_m + config_.mover_cage_m + config_.cage_margin_m)) return true;
+    const double radius = m.radius_m + config_.mover_cage_m + config_.cage_margin_m;
+    if (closes(b.x_m, b.y_m, b.vx_m_s, b.vy_m_s, radius)) return true;
   }
   return false;
 }

@@ -35,11 +35,11 @@
 //    person's placement): held for reaction_s and then braked along its arc, the body comes
 //    within that distance of the person held where they are, closer than braking now would
 //    bring it. A walker (at approach_min_speed_m_s or more) on their velocity is checked as
-//    the approach check does, over cage_horizon_s. Turning or backing away stays allowed; a person who walks up to a standing
-//    robot is theirs to avoid. A tracked mover at walking speed (approach_min_speed_m_s) is
-//    caged the same way, its radius plus mover_cage_m: the camera sees 60 degrees of the
-//    laser's 180, and a walker coming from the side is on the laser long before the camera
-//    can tell what it is.
+//    the approach check does, over cage_horizon_s. Backing away stays allowed; a person who
+//    walks up to a standing robot is theirs to avoid. With people tracked, a mover at walking
+//    speed is caged the same way, its radius plus mover_cage_m: the camera sees 52 degrees
+//    of the laser's 180, and a walker coming from the side is on the laser long before the
+//    camera can tell what it is.
 // The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
 // max_reverse_m_s (the back-off recovery's speed).
 #include <array>
@@ -114,8 +114,8 @@ class SafetyFilter {
   // Whether holding (v, w) brings the body within approach_margin_m of a tracked mover in the
   // horizon, closer than braking now would.
   [[nodiscard]] bool approach_refused(const SafetyInputs& in, double v, double w) const noexcept;
-  // Whether (v, w) takes the body closer to a tracked person while within their cage radius
-  // plus cage_margin_m in the horizon, closer than braking now would.
+  // Whether (v, w) would leave the robot unable to stop outside a tracked person's cage plus
+  // cage_margin_m, or take it into a walker's, when braking now would keep it farther out.
   [[nodiscard]] bool cage_refused(const SafetyInputs& in, double v, double w) const noexcept;
 
  private:
@@ -125,7 +125,8 @@ class SafetyFilter {
   static constexpr double kCageSlackM = 1e-4;  // rounding only: creeping in by millimetres is creeping in
 
   // The least gap, over horizon_s, between a disc moving from (x, y) at (vx, vy) (body frame
-  // of now) and the body holding (v, w), and the body braking from its measured speed.
+  // of now) and the body holding (v, w) (then_stop: held for reaction_s and then braked, the
+  // horizon that long), and the body braking now from its measured speed.
   struct Gaps {
     double moving_m = 0.0;
     double braking_m = 0.0;
