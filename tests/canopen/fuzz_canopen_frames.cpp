@@ -1,9 +1,13 @@
 // Fuzz target: any CAN frame through every CANopen decoder gives a value or an error that
-// says why, never a crash; what decodes encodes back to the same frame.
+// says why, never a crash; what decodes encodes back to the same frame. The same frame then
+// goes to the master of an I/O node and to the node's emulator, between their polls.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
 #include "sen3bot/canopen/codec.hpp"
+#include "sen3bot/canopen/io_node.hpp"
+#include "sen3bot/canopen/io_node_emulator.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace sen3bot::canopen;
@@ -36,5 +40,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (emcy && f.dlc == 8 && !(emergency(c.node, *emcy).value() == f)) __builtin_trap();
   (void)describe_emergency(emcy ? emcy->code : 0);
   (void)describe_abort(sdo ? sdo->value : 0);
+
+  IoNodeMaster master(IoNodeConfig{});
+  IoNodeEmulator node(IoNodeEmulatorConfig{});
+  node.power_up(0);
+  std::array<CanFrame, 4> out{};
+  for (sen3bot::hal::Nanos t = 10'000'000; t <= 200'000'000; t += 10'000'000) {
+    for (std::size_t i = 0, k = master.poll(t, out); i < k; ++i) node.on_frame(out[i], t);
+    for (std::size_t i = 0, k = node.poll(t, out); i < k; ++i) master.on_frame(out[i], t);
+    master.on_frame(f, t);
+    node.on_frame(f, t);
+  }
+  if (master.inputs_valid() && master.state() != IoNodeState::operational) __builtin_trap();
   return 0;
 }
