@@ -25,9 +25,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   error_said(sdo);
   if (sdo) {
     if (c.node != sdo->node || sdo->size > 4) __builtin_trap();
-    if (sdo->type == SdoType::download_request &&
-        sdo_download_request(sdo->node, sdo->at, sdo->value, sdo->size)->data[0] != f.data[0])
-      __builtin_trap();
+    // The same transfer: the command but its reserved bit 4 (accepted either way), the
+    // address, and the value's bytes.
+    if (sdo->type == SdoType::download_request) {
+      const CanFrame again = *sdo_download_request(sdo->node, sdo->at, sdo->value, sdo->size);
+      if ((again.data[0] ^ f.data[0]) & ~0x10 || again.data[1] != f.data[1] || again.data[2] != f.data[2] ||
+          again.data[3] != f.data[3])
+        __builtin_trap();
+      for (std::size_t i = 0; i < sdo->size; ++i)
+        if (again.data[4 + i] != f.data[4 + i]) __builtin_trap();
+    }
   }
   const auto hb = decode_heartbeat(f);
   error_said(hb);
