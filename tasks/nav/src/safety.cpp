@@ -21,17 +21,22 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
 }
 
 namespace {
-// A published mover predicted to now, position and velocity in the robot's body frame.
+// A published mover or person (map frame, stamped) predicted to now, position and velocity in
+// the robot's body frame.
 struct BodyMover {
   double x_m, y_m, vx_m_s, vy_m_s;
 };
-BodyMover in_body(const SafetyInputs& in, const msg::MovingObstacle& m) noexcept {
+template <typename Tracked>
+BodyMover in_body(const SafetyInputs& in, const Tracked& m, hal::Nanos stamp_ns) noexcept {
   const double c = std::cos(in.pose.theta_rad);
   const double s = std::sin(in.pose.theta_rad);
-  const double age_s = std::max(0.0, static_cast<double>(in.now_ns - in.movers->stamp_ns) * 1e-9);
+  const double age_s = std::max(0.0, static_cast<double>(in.now_ns - stamp_ns) * 1e-9);
   const double dx = m.x_m + m.vx_m_s * age_s - in.pose.x_m;
   const double dy = m.y_m + m.vy_m_s * age_s - in.pose.y_m;
   return {c * dx + s * dy, -s * dx + c * dy, c * m.vx_m_s + s * m.vy_m_s, -s * m.vx_m_s + c * m.vy_m_s};
+}
+BodyMover in_body(const SafetyInputs& in, const msg::MovingObstacle& m) noexcept {
+  return in_body(in, m, in.movers->stamp_ns);
 }
 // Distance from q (body frame) to the footprint, 0 inside it.
 double footprint_distance(const Footprint& fp, double qx, double qy) noexcept {
@@ -114,19 +119,12 @@ bool SafetyFilter::cage_refused(const SafetyInputs& in, double v, double w) cons
     const Gaps walking = gaps(in, v, w, x, y, vx, vy, radius, config_.cage_horizon_s);
     return walking.moving_m < 0.0 && walking.moving_m < walking.braking_m - kCageSlackM;
   };
-  const double c = std::cos(in.pose.theta_rad);
-  const double s = std::sin(in.pose.theta_rad);
   const std::size_t people = in.people != nullptr ? std::min<std::size_t>(in.people->count, msg::People::kMax) : 0;
-  const double age_s =
-      in.people != nullptr ? std::max(0.0, static_cast<double>(in.now_ns - in.people->stamp_ns) * 1e-9) : 0.0;
   for (std::size_t i = 0; i < people; ++i) {
     const msg::TrackedPerson& p = in.people->items[i];
-    const double dx = p.x_m + p.vx_m_s * age_s - in.pose.x_m;
-    const double dy = p.y_m + p.vy_m_s * age_s - in.pose.y_m;
+    const BodyMover b = in_body(in, p, in.people->stamp_ns);
     // The cage as a disc about the person's centre: a gap below zero is inside it.
-    if (closes(c * dx + s * dy, -s * dx + c * dy, c * p.vx_m_s + s * p.vy_m_s, -s * p.vx_m_s + c * p.vy_m_s,
-               p.cage_radius_m + config_.cage_margin_m))
-      return true;
+    if (closes(b.x_m, b.y_m, b.vx_m_s, b.vy_m_s, p.cage_radius_m + config_.cage_margin_m)) return true;
   }
   if (in.movers == nullptr || config_.mover_cage_m < 0.0) return false;
   for (std::size_t i = 0; i < std::min<std::size_t>(in.movers->count, msg::MovingObstacles::kMax); ++i) {
