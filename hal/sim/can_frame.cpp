@@ -5,6 +5,16 @@
 
 namespace sen3bot::hal {
 
+const char* to_string(CanLinkState state) noexcept {
+  switch (state) {
+    case CanLinkState::active: return "error-active";
+    case CanLinkState::warning: return "error-warning";
+    case CanLinkState::passive: return "error-passive";
+    case CanLinkState::bus_off: return "bus-off";
+  }
+  return "unknown";
+}
+
 Status CanFrame::validate() const {
   if (dlc > kMaxDataBytes) {
     return Error::format(Errc::invalid_argument, "CAN frame 0x%X: dlc %u exceeds %zu", static_cast<unsigned>(id),

@@ -20,10 +20,20 @@ Result<MemoryCanNode*> MemoryCanBus::attach(std::string_view name, MemoryCanNode
   return nodes_.back().get();
 }
 
-void MemoryCanBus::set_link_up(bool up) {
+void MemoryCanBus::set_link_up(bool up) { set_link_state(up ? CanLinkState::active : CanLinkState::bus_off); }
+
+void MemoryCanBus::set_link_state(CanLinkState state) {
   std::lock_guard lock(mutex_);
-  link_up_ = up;
+  link_state_ = state;
+  link_up_ = state != CanLinkState::bus_off;
 }
+
+CanLinkState MemoryCanBus::link_state() const {
+  std::lock_guard lock(mutex_);
+  return link_state_;
+}
+
+CanLinkState MemoryCanNode::link_state() const { return bus_.link_state(); }
 
 bool MemoryCanBus::link_up() const {
   std::lock_guard lock(mutex_);

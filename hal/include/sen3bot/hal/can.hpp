@@ -59,6 +59,11 @@ struct CanFilter {
   }
 };
 
+// The controller's fault confinement state (ISO 11898-1): error active is normal; warning and
+// passive mean many errors; bus-off means the controller has left the bus and sends nothing.
+enum class CanLinkState : std::uint8_t { active, warning, passive, bus_off };
+[[nodiscard]] const char* to_string(CanLinkState state) noexcept;
+
 // The most filters one bus handle keeps (a fixed array, so set_filters never allocates).
 constexpr std::size_t kMaxCanFilters = 16;
 
@@ -78,6 +83,10 @@ class CanBus {
     const CanFilter everything{};
     return set_filters({&everything, 1});
   }
+
+  // The link's state as last reported (SocketCAN: by the kernel's error frames, read by
+  // receive()). A user that needs the bus (the e-stop chain) treats bus_off as lost.
+  [[nodiscard]] virtual CanLinkState link_state() const { return CanLinkState::active; }
 
   // A descriptor to poll for readability, or -1 (the in-memory bus: poll by receiving).
   [[nodiscard]] virtual int poll_fd() const { return -1; }
@@ -130,6 +139,7 @@ class MemoryCanNode final : public CanBus {
   Result<std::optional<CanFrame>> receive() override;
   Status set_filters(std::span<const CanFilter> filters) override;
   [[nodiscard]] std::string_view name() const override { return name_; }
+  [[nodiscard]] CanLinkState link_state() const override;
 
   [[nodiscard]] std::size_t queued_frames() const;
   [[nodiscard]] std::uint64_t overflow_count() const;  // frames dropped on a full queue
@@ -171,6 +181,10 @@ class MemoryCanBus {
   // report Errc::disconnected on every node until it is brought up again.
   void set_link_up(bool up);
   [[nodiscard]] bool link_up() const;
+  // What every node's link_state() reports; bus_off takes the link down as set_link_up(false)
+  // does, any other state brings it up.
+  void set_link_state(CanLinkState state);
+  [[nodiscard]] CanLinkState link_state() const;
   [[nodiscard]] std::uint64_t frames_sent() const;  // frames put on the bus, all nodes
 
  private:
@@ -180,6 +194,7 @@ class MemoryCanBus {
   std::size_t max_nodes_;
   std::vector<std::unique_ptr<MemoryCanNode>> nodes_;
   bool link_up_ = true;
+  CanLinkState link_state_ = CanLinkState::active;
   std::uint64_t frames_sent_ = 0;
 };
 
