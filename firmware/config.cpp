@@ -62,9 +62,47 @@ void read_camera(const Reader& r, FirmwareConfig& c) {
   if (r.has("frames")) p.frame_pool_slots = static_cast<std::size_t>(r.integer("frames", 3, 64));
 }
 
+// devices.io_node: the CANopen safety I/O node (can_io_task.hpp).
+void read_io_node(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"interface", "node", "heartbeat_ms", "heartbeat_timeout_s", "inputs_period_ms", "inputs", "outputs",
+                "reset_at_start"});
+  CanIoConfig& p = c.devices.io_node;
+  c.devices.has_io_node = true;
+  p.interface = r.text("interface");
+  p.master.node = static_cast<std::uint8_t>(r.integer("node", 1, 127));
+  if (r.has("heartbeat_ms")) p.master.heartbeat_ms = static_cast<std::uint16_t>(r.integer("heartbeat_ms", 10, 10'000));
+  if (r.has("heartbeat_timeout_s")) p.master.heartbeat_timeout_s = r.number("heartbeat_timeout_s", 0.02, 60.0);
+  if (r.has("inputs_period_ms"))
+    p.master.inputs_period_ms = static_cast<std::uint16_t>(r.integer("inputs_period_ms", 10, 10'000));
+  if (r.has("reset_at_start")) p.reset_at_start = r.boolean("reset_at_start");
+  if (r.has("inputs")) {
+    const Reader in = r.child("inputs");
+    in.allow_only({"estop", "estop_active_low", "reset", "bumpers", "bumpers_active_low"});
+    if (in.has("estop")) p.estop_input = static_cast<std::uint8_t>(in.integer("estop", 1, 8));
+    if (in.has("estop_active_low")) p.estop_active_low = in.boolean("estop_active_low");
+    if (in.has("reset")) p.reset_input = static_cast<std::uint8_t>(in.integer("reset", 0, 8));
+    if (in.has("bumpers")) {
+      p.bumper_inputs = 0;
+      for (const Reader& b : in.sequence("bumpers")) p.bumper_inputs |= static_cast<std::uint8_t>(1u << (b.integer_here(1, 8) - 1));
+    }
+    if (in.has("bumpers_active_low")) p.bumpers_active_low = in.boolean("bumpers_active_low");
+  }
+  if (r.has("outputs")) {
+    const Reader out = r.child("outputs");
+    out.allow_only({"idle", "driving", "wait4col", "fault", "buzzer", "buzzer_period_s"});
+    const char* modes[] = {"idle", "driving", "wait4col", "fault"};
+    for (std::size_t m = 0; m < 4; ++m)
+      if (out.has(modes[m])) p.light_outputs[m + 1] = static_cast<std::uint8_t>(out.integer(modes[m], 0, 8));
+    if (out.has("buzzer")) p.buzzer_output = static_cast<std::uint8_t>(out.integer("buzzer", 0, 8));
+    if (out.has("buzzer_period_s")) p.buzzer_period_s = out.number("buzzer_period_s", 0.05, 60.0);
+  }
+  if (Status s = check(p); !s) r.fail_here(s.error().c_str());
+}
+
 void read_devices(const Reader& r, FirmwareConfig& c) {
-  r.allow_only({"base", "laser", "camera"});
+  r.allow_only({"base", "laser", "camera", "io_node"});
   if (r.has("camera")) read_camera(r.child("camera"), c);
+  if (r.has("io_node")) read_io_node(r.child("io_node"), c);
   if (r.has("base")) {
     const Reader b = r.child("base");
     b.allow_only({"port", "baud", "probe_bauds", "switch_to_baud", "link_timeout_s", "command_timeout_s",

@@ -21,6 +21,7 @@
 #include "sen3bot/nav/safety.hpp"
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
+#include "can_io_task.hpp"
 #include "mission.hpp"
 
 namespace sen3bot::firmware {
@@ -42,9 +43,11 @@ struct DevicesConfig {
   bool has_base = false;    // devices.base present
   bool has_laser = false;   // devices.laser present
   bool has_camera = false;  // devices.camera present
+  bool has_io_node = false; // devices.io_node present
   p2os::P2osConfig base;
   lms200::Lms200Config laser;
   camera::CameraConfig camera;
+  CanIoConfig io_node;  // the CANopen safety I/O node (can_io_task.hpp)
 };
 
 // Localization, planners and safety over one map, and the mission's goals. The algorithms'

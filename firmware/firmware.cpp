@@ -21,6 +21,7 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "telemetry") return &telemetry_;
   if (name == "base") return base_task_.get();
   if (name == "laser") return laser_task_.get();
+  if (name == "can_io") return can_io_task_.get();
   if (name == "camera") return camera_task_.get();
   if (name == "localization") return localization_task_.get();
   if (name == "planner") return planner_task_.get();
@@ -134,8 +135,10 @@ Status Firmware::create_navigation() {
   safety.safety.decel_m_s2 = config_.devices.has_base && config_.devices.base.trans_decel_mm_s2 > 0
                                  ? config_.devices.base.trans_decel_mm_s2 / 1000.0
                                  : kPowerUpDecelM_s2;
+  safety.io_reset_at_start = config_.devices.io_node.reset_at_start;
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
-                                                   nav_pose_, nav_movers_, nav_command_, nav_safety_, people);
+                                                   nav_pose_, nav_movers_, nav_command_, nav_safety_, people,
+                                                   config_.devices.has_io_node ? &nav_io_ : nullptr);
 
   mission_task_ = std::make_unique<MissionTask>(
       n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});
@@ -147,6 +150,9 @@ Status Firmware::create_tasks() {
     base_task_ = std::make_unique<BaseTask>(config_.devices.base, board_,
                                             BaseTopics{nav_command_, nav_odometry_, nav_base_flags_});
   if (config_.devices.has_laser) laser_task_ = std::make_unique<LaserTask>(config_.devices.laser, board_, nav_scan_);
+  if (config_.devices.has_io_node)
+    can_io_task_ = std::make_unique<CanIoTask>(config_.devices.io_node, board_,
+                                               CanIoTopics{nav_safety_, nav_command_, nav_mode_, nav_io_});
   if (config_.devices.has_camera) camera_task_ = std::make_unique<CameraTask>(config_.devices.camera, board_, bus_);
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
@@ -174,6 +180,7 @@ Status Firmware::init() {
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),
                            name == "base" || name == "laser" || name == "camera" ? "needs its device under devices"
+                           : name == "can_io"                                   ? "needs devices.io_node"
                            : name == "detector" || name == "people"             ? "needs navigation.people"
                            : name == "vision" ? "needs navigation.people.detector: onboard"
                                                                                 : "needs a navigation section");

@@ -20,6 +20,7 @@
 #include "sen3bot/nav/waypoints.hpp"
 #include "base_task.hpp"
 #include "camera_task.hpp"
+#include "can_io_task.hpp"
 #include "detector_task.hpp"
 #ifdef SEN3BOT_HAS_HOG
 #include "vision_task.hpp"
@@ -54,6 +55,11 @@ class Firmware {
   // Null without the device.
   [[nodiscard]] const BaseTask* base() const { return base_task_.get(); }
   [[nodiscard]] const LaserTask* laser() const { return laser_task_.get(); }
+  [[nodiscard]] const CanIoTask* can_io() const { return can_io_task_.get(); }
+  [[nodiscard]] const nav::SafetyTask* safety() const { return safety_task_.get(); }
+  // The safety I/O as the CAN I/O task reads it, and the collaborative mode's requests.
+  [[nodiscard]] const tasks::Topic<msg::SafetyIo>& safety_io() const { return nav_io_; }
+  [[nodiscard]] tasks::Topic<msg::OperatingMode>& operating_mode() { return nav_mode_; }
   // The newest decoded frames, for readers on any thread; null without a camera.
   [[nodiscard]] camera::FramePool* camera_frames() {
     return camera_task_ && camera_task_->camera() ? &camera_task_->camera()->frames() : nullptr;
@@ -106,6 +112,8 @@ class Firmware {
   tasks::Topic<msg::MovingObstacles> nav_movers_;
   tasks::Topic<msg::PersonDetections> nav_detections_;
   tasks::Topic<msg::People> nav_people_;
+  tasks::Topic<msg::SafetyIo> nav_io_;
+  tasks::Topic<msg::OperatingMode> nav_mode_;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
@@ -115,6 +123,7 @@ class Firmware {
   // Created by init() from the configuration; a row whose task is absent does not run.
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<LaserTask> laser_task_;
+  std::unique_ptr<CanIoTask> can_io_task_;
   std::unique_ptr<CameraTask> camera_task_;
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;

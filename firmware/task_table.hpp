@@ -18,7 +18,7 @@ namespace sen3bot::firmware {
 // and a camera can fall silent: neither may hold up anything else). Within
 // a thread, due rows run highest priority first, so each thread's rows are ordered by the data
 // flow: on "io" a scan is read, checked by the safety filter and answered by the base in the
-// same cycle, and a person detector's datagrams are taken in; on "control" localization feeds
+// same cycle (the CAN I/O node's e-stop chain too), and a person detector's datagrams are taken in; on "control" localization feeds
 // the people's fusion and the controller. A row runs when its task is configured: the
 // devices under `devices`, localization, planners, safety and the mission under `navigation`,
 // the detector and the people under `navigation.people`; the rest always. Budgets are for the Pi 3; the camera's allows one
@@ -26,7 +26,9 @@ namespace sen3bot::firmware {
 // (docs/navigation.md, benchmarks).
 inline constexpr std::array kTaskTable = {
     //                 name         period_us  budget_us  priority  thread
-    tasks::TaskSpec{"laser",        5'000,     500,       74,       "io"},
+    tasks::TaskSpec{"laser",        5'000,     500,       75,       "io"},
+    // Before safety: the e-stop chain read in a cycle stops the base in that cycle.
+    tasks::TaskSpec{"can_io",       10'000,    300,       74,       "io"},
     tasks::TaskSpec{"safety",       10'000,    1'000,     73,       "io"},
     tasks::TaskSpec{"base",         10'000,    500,       72,       "io"},
     tasks::TaskSpec{"detector",     20'000,    300,       71,       "io"},

@@ -101,6 +101,18 @@ Result<std::unique_ptr<DatagramPort>> Board::open_datagram(std::string_view name
                        name.data(), static_cast<int>(address.size()), address.data());
 }
 
+Result<std::unique_ptr<CanBus>> Board::open_can(std::string_view name, std::string_view interface) {
+  return Error::format(Errc::not_supported, "%.*s: this board has no CAN bus '%.*s'", static_cast<int>(name.size()),
+                       name.data(), static_cast<int>(interface.size()), interface.data());
+}
+
+Result<std::unique_ptr<CanBus>> PosixBoard::open_can(std::string_view name, std::string_view interface) {
+  Result<std::unique_ptr<SocketCanBus>> bus = SocketCanBus::open(interface);
+  if (!bus)
+    return Error::format(bus.error().code(), "%.*s: %s", static_cast<int>(name.size()), name.data(), bus.error().c_str());
+  return std::unique_ptr<CanBus>(std::move(*bus));
+}
+
 namespace {
 
 // A bound UDP socket as a DatagramPort.

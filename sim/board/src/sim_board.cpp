@@ -53,6 +53,14 @@ SimBoard::SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep)
     people_[i] = c.movers[i].person;
     mover_sizes_m_.push_back(c.movers[i].size_m);
   }
+  if (c.io_node.enabled) {
+    // Two stations: the firmware's and the node's; each queue holds far more than a 5 ms step.
+    can_firmware_ = *can_bus_.attach("firmware");
+    can_node_ = *can_bus_.attach("io-node");
+    io_node_ = std::make_unique<canopen::IoNodeEmulator>(canopen::IoNodeEmulatorConfig{.node = c.io_node.node});
+    io_node_->set_inputs(c.io_node.inputs);
+    io_node_->power_up(0);
+  }
 }
 
 SimBoard::~SimBoard() {
@@ -85,8 +93,33 @@ Result<hal::Link> SimBoard::open_link(std::string_view link, const hal::LinkRequ
                        static_cast<int>(link.size()), link.data());
 }
 
+void SimBoard::step_io_node(hal::Nanos now_ns) noexcept {
+  const std::vector<SimIoEvent>& events = simulation_->config().io_node.events;
+  for (; next_io_event_ < events.size() && static_cast<hal::Nanos>(events[next_io_event_].at_s * 1e9) <= now_ns; ++next_io_event_) {
+    const SimIoEvent& e = events[next_io_event_];
+    switch (e.what) {
+      case SimIoEvent::What::inputs: io_node_->set_inputs(e.inputs); break;
+      case SimIoEvent::What::silent: io_node_->set_silent(true); break;
+      case SimIoEvent::What::talking: io_node_->set_silent(false); break;
+      case SimIoEvent::What::reboot: io_node_->reboot(now_ns); break;
+      case SimIoEvent::What::bus_off: can_bus_.set_link_state(hal::CanLinkState::bus_off); break;
+      case SimIoEvent::What::bus_on: can_bus_.set_link_state(hal::CanLinkState::active); break;
+    }
+  }
+  for (;;) {
+    Result<std::optional<hal::CanFrame>> frame = can_node_->receive();
+    if (!frame || !frame->has_value()) break;
+    io_node_->on_frame(**frame, now_ns);
+  }
+  std::array<hal::CanFrame, 4> out;
+  const std::size_t n = io_node_->poll(now_ns, out);
+  // A bus that is off takes nothing: what the node had to say is lost, as on a real bus.
+  for (std::size_t i = 0; i < n; ++i) (void)can_node_->send(out[i]);
+}
+
 void SimBoard::step(hal::Nanos now_ns) noexcept {
   simulation_->step(now_ns);
+  if (io_node_) step_io_node(now_ns);
   referee_.observe(simulation_->truth());
   const SimulationConfig& c = simulation_->config();
   if (c.detector.enabled) {
@@ -116,6 +149,32 @@ Result<std::unique_ptr<hal::DatagramPort>> SimBoard::open_datagram(std::string_v
   if (!simulation_->config().detector.enabled)
     return Error(Errc::config, "detector: the simulated robot has no person detector (sim.detector)");
   return std::unique_ptr<hal::DatagramPort>(std::make_unique<DetectorPort>(*detector_));
+}
+
+namespace {
+// The firmware's station on the board's bus as its own CanBus (the bus keeps the station).
+class BorrowedCan final : public hal::CanBus {
+ public:
+  explicit BorrowedCan(hal::MemoryCanNode& node) : node_(node) {}
+  Status send(const hal::CanFrame& frame) override { return node_.send(frame); }
+  Result<std::optional<hal::CanFrame>> receive() override { return node_.receive(); }
+  Status set_filters(std::span<const hal::CanFilter> filters) override { return node_.set_filters(filters); }
+  [[nodiscard]] hal::CanLinkState link_state() const override { return node_.link_state(); }
+  [[nodiscard]] std::string_view name() const override { return node_.name(); }
+
+ private:
+  hal::MemoryCanNode& node_;
+};
+}  // namespace
+
+Result<std::unique_ptr<hal::CanBus>> SimBoard::open_can(std::string_view name, std::string_view interface) {
+  if (interface != "sim") return host_.open_can(name, interface);
+  if (name != "io_node" || !io_node_)
+    return Error::format(Errc::config, "%.*s: the simulated robot has no CAN I/O node (sim.io_node)",
+                         static_cast<int>(name.size()), name.data());
+  if (can_handed_out_) return Error(Errc::capacity, "io_node: the simulated CAN I/O node's bus is already open");
+  can_handed_out_ = true;
+  return std::unique_ptr<hal::CanBus>(std::make_unique<BorrowedCan>(*can_firmware_));
 }
 
 void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {

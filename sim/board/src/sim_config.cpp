@@ -32,9 +32,39 @@ world::MoverScript read_mover(const Reader& r, bool person) {
   return m;
 }
 
+// sim.io_node: the CAN I/O node and what happens to it.
+void read_io_node(const Reader& r, SimIoNodeConfig& n) {
+  r.allow_only({"node", "inputs", "events"});
+  n.enabled = true;
+  if (r.has("node")) n.node = static_cast<std::uint8_t>(r.integer("node", 1, 127));
+  if (r.has("inputs")) n.inputs = static_cast<std::uint8_t>(r.integer("inputs", 0, 255));
+  if (!r.has("events")) return;
+  for (const Reader& e : r.sequence("events")) {
+    e.allow_only({"at_s", "inputs", "silent", "reboot", "bus_off"});
+    SimIoEvent event;
+    event.at_s = e.number("at_s", 0.0, 1e7);
+    if (!n.events.empty() && event.at_s < n.events.back().at_s) e.fail("at_s", "events must be in time order", YAML::Node());
+    const int whats = int{e.has("inputs")} + int{e.has("silent")} + int{e.has("reboot")} + int{e.has("bus_off")};
+    if (whats != 1) e.fail_here("expected exactly one of inputs, silent, reboot, bus_off");
+    if (e.has("inputs")) {
+      event.what = SimIoEvent::What::inputs;
+      event.inputs = static_cast<std::uint8_t>(e.integer("inputs", 0, 255));
+    } else if (e.has("silent")) {
+      event.what = e.boolean("silent") ? SimIoEvent::What::silent : SimIoEvent::What::talking;
+    } else if (e.has("reboot")) {
+      if (!e.boolean("reboot")) e.fail("reboot", "only `reboot: true` means something", YAML::Node());
+      event.what = SimIoEvent::What::reboot;
+    } else {
+      event.what = e.boolean("bus_off") ? SimIoEvent::What::bus_off : SimIoEvent::What::bus_on;
+    }
+    n.events.push_back(event);
+  }
+}
+
 void read_sim(const Reader& r, SimulationConfig& w) {
   r.allow_only({"map", "start_pose", "seed", "range_noise_m", "laser_max_range_m", "people", "boxes", "laser_status",
-                "detector"});
+                "detector", "io_node"});
+  if (r.has("io_node")) read_io_node(r.child("io_node"), w.io_node);
   w.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));
   if (r.has("seed")) w.seed = static_cast<std::uint64_t>(r.integer("seed", 0, INT64_MAX));

@@ -394,6 +394,11 @@ void SafetyTask::step(const tasks::StepContext& context) {
       static_cast<double>(context.start_ns - people_sample_.stamp_ns) <= config_.people_timeout_s * 1e9) {
     in.people = &people_sample_.value;
   }
+  if (io_ != nullptr) {
+    tasks::Sample<msg::SafetyIo> io;
+    const bool fresh = io_->read(io) && static_cast<double>(context.start_ns - io.stamp_ns) <= config_.io_timeout_s * 1e9;
+    in.io_stops = latch_.update(fresh ? &io.value : nullptr);
+  }
   const SafetyOutput out = filter_.filter(in);
   if ((in.requested.v_m_s != 0.0 || in.requested.w_rad_s != 0.0) && out.command.v_m_s == 0.0 &&
       out.command.w_rad_s == 0.0) {

@@ -185,6 +185,31 @@ bool SafetyFilter::Crossers::gone_before(const Point2D& q, double arrival_s) con
   return false;
 }
 
+std::uint32_t SafetyLatch::update(const msg::SafetyIo* io) noexcept {
+  std::uint32_t causes = kSafetyNone;
+  bool latching = true;
+  if (io == nullptr || !io->healthy) {
+    causes |= kSafetyIoLost;
+    latching = reset_at_start_ || (io != nullptr && io->ever_healthy) || held_;
+  } else {
+    if (io->estop) causes |= kSafetyEstopChain;
+    if (io->bumper) causes |= kSafetyBumper;
+  }
+  // A reset counts only when pressed after the cause went away.
+  if (io != nullptr && causes != kSafetyNone) resets_seen_ = io->resets;
+  if (causes != kSafetyNone) {
+    if (latching && !held_) ++trips_;
+    held_ = held_ || latching;
+    return causes;
+  }
+  if (!held_) return kSafetyNone;
+  if (io->resets != resets_seen_) {
+    held_ = false;
+    return kSafetyNone;
+  }
+  return kSafetyResetNeeded;
+}
+
 SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   SafetyOutput out;
   out.command = in.requested;
@@ -197,6 +222,7 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
     out.reasons |= kSafetyOdomStale;
   }
   if (in.estop) out.reasons |= kSafetyEstop;
+  out.reasons |= in.io_stops;
   if (!in.motors_enabled) out.reasons |= kSafetyMotorsOff;
   if (in.localization_lost) out.reasons |= kSafetyLocalizationLost;
   if (out.reasons != kSafetyNone || !std::isfinite(in.requested.v_m_s) || !std::isfinite(in.requested.w_rad_s)) {

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "sen3bot/hal/byte_stream.hpp"
+#include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 
@@ -72,6 +73,9 @@ class Board {
   // robot (ADDRESS "0.0.0.0" for every interface), or a name the board knows ("sim").
   // Allocates; call at start-up.
   virtual Result<std::unique_ptr<DatagramPort>> open_datagram(std::string_view name, std::string_view address);
+  // Opens the CAN bus `name` ("io_node") on `interface`: a SocketCAN interface ("can0") on
+  // the robot, or a name the board knows ("sim"). Allocates; call at start-up.
+  virtual Result<std::unique_ptr<CanBus>> open_can(std::string_view name, std::string_view interface);
   // Named discrete I/O ("estop", "light"), or null when this board has no such line.
   [[nodiscard]] virtual DigitalInput* input(std::string_view name) noexcept {
     (void)name;
@@ -105,6 +109,7 @@ class PosixBoard final : public Board {
   [[nodiscard]] Clock& clock() override { return clock_; }
   Result<Link> open_link(std::string_view link, const LinkRequest& request) override;
   Result<std::unique_ptr<DatagramPort>> open_datagram(std::string_view name, std::string_view address) override;
+  Result<std::unique_ptr<CanBus>> open_can(std::string_view name, std::string_view interface) override;
   [[nodiscard]] DigitalInput* input(std::string_view name) noexcept override;
   [[nodiscard]] DigitalOutput* output(std::string_view name) noexcept override;
 

@@ -15,8 +15,11 @@
 //   SafetyOutput      navigation.hpp  safety (command and reasons)     mission, telemetry
 //   PersonDetections  people.hpp      a person detector (boxes)        people fusion
 //   People            people.hpp      people fusion (tracks, cages)    planner, controller
+//   SafetyIo          io.hpp          CAN I/O (e-stop chain, bumpers)  safety
+//   OperatingMode     io.hpp          collaborative mode (wait4col)    CAN I/O (status light)
 #include "sen3bot/msg/base.hpp"
 #include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/msg/io.hpp"
 #include "sen3bot/msg/laser.hpp"
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/msg/people.hpp"

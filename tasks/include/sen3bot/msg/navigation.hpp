@@ -158,6 +158,12 @@ enum SafetyReason : std::uint32_t {
   kSafetyReverseCapped = 1u << 7,
   kSafetyMoverApproach = 1u << 8,  // stopped: moving on would meet a tracked mover that braking avoids
   kSafetyCage = 1u << 9,           // stopped: moving on would take the body into a person's cage
+  // The safety I/O (msg::SafetyIo). Each holds the robot until its cause is gone and a reset
+  // was requested after that (SafetyLatch).
+  kSafetyEstopChain = 1u << 10,    // the e-stop chain is open
+  kSafetyBumper = 1u << 11,        // a bumper is pressed
+  kSafetyIoLost = 1u << 12,        // no current inputs: the node is lost, the bus is off
+  kSafetyResetNeeded = 1u << 13,   // the cause is gone; waiting for a reset
 };
 
 struct SafetyOutput {

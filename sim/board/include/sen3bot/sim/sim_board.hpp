@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "sen3bot/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/sim/referee.hpp"
 #include "sen3bot/sim/simulation.hpp"
@@ -58,6 +59,9 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   Result<hal::Link> open_link(std::string_view link, const hal::LinkRequest& request) override;
   // "detector" at "sim": the simulated person detector; any other address opens on the host.
   Result<std::unique_ptr<hal::DatagramPort>> open_datagram(std::string_view name, std::string_view address) override;
+  // "io_node" at "sim": the simulated CAN I/O node's bus (once); any other interface opens on
+  // the host.
+  Result<std::unique_ptr<hal::CanBus>> open_can(std::string_view name, std::string_view interface) override;
   [[nodiscard]] hal::DigitalInput* input(std::string_view name) noexcept override {
     return name == "estop" ? &estop_ : nullptr;
   }
@@ -72,6 +76,10 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   [[nodiscard]] SimDetector& detector() noexcept { return *detector_; }
   [[nodiscard]] SimLine& estop() noexcept { return estop_; }
   [[nodiscard]] SimLine& light() noexcept { return light_; }
+  // The CAN I/O node and its bus (sim.io_node); null without one. Lockstep: touch between
+  // slices only (the world's thread steps them in real time).
+  [[nodiscard]] canopen::IoNodeEmulator* io_node() noexcept { return io_node_.get(); }
+  [[nodiscard]] hal::MemoryCanBus& can_bus() noexcept { return can_bus_; }
   // Lockstep links only; set before the links are opened. Null: no tap.
   void set_wire_tap(WireTap* tap) noexcept { tap_ = tap; }
 
@@ -79,6 +87,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep);
   void before_advance(hal::Nanos now_ns, hal::Nanos to_ns) override;
   void step(hal::Nanos now_ns) noexcept;
+  void step_io_node(hal::Nanos now_ns) noexcept;
   void thread_main(std::atomic<int>& started);
 
   std::unique_ptr<Simulation> simulation_;
@@ -91,6 +100,12 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimLine light_;
   WireTap* tap_ = nullptr;
   std::unique_ptr<SimDetector> detector_;
+  hal::MemoryCanBus can_bus_{4};
+  hal::MemoryCanNode* can_firmware_ = nullptr;  // the firmware's station, handed out once
+  hal::MemoryCanNode* can_node_ = nullptr;      // the I/O node's
+  bool can_handed_out_ = false;
+  std::unique_ptr<canopen::IoNodeEmulator> io_node_;
+  std::size_t next_io_event_ = 0;
   std::unique_ptr<bool[]> people_;  // per mover: a person (the detector sees people only)
   std::vector<double> mover_sizes_m_;
   hal::Nanos next_step_ns_ = 0;

@@ -29,6 +29,23 @@ enum class LinkKind : std::uint8_t {
   pty,     // real pseudo-terminals, for real time
 };
 
+// A scripted happening on the simulated CAN I/O node: its inputs change (an e-stop pressed,
+// a reset button), it falls silent or talks again, reboots, or the bus goes off or on.
+struct SimIoEvent {
+  enum class What : std::uint8_t { inputs, silent, talking, reboot, bus_off, bus_on };
+  double at_s = 0.0;
+  What what = What::inputs;
+  std::uint8_t inputs = 0;  // What::inputs: the levels, bit i = input i + 1
+};
+
+// The robot's CANopen safety I/O node (the firmware's devices.io_node at interface "sim").
+struct SimIoNodeConfig {
+  bool enabled = false;
+  std::uint8_t node = 0x10;
+  std::uint8_t inputs = 0x01;  // levels at power-up: the e-stop chain on input 1 closed
+  std::vector<SimIoEvent> events;  // in time order
+};
+
 struct SimulationConfig {
   std::string map_path;               // ROS map_server YAML of the ground-truth world
   nav::Pose2D start_pose;             // true pose of the robot at t = 0 (map frame)
@@ -47,6 +64,7 @@ struct SimulationConfig {
   lms200::EmulatorOptions laser;
   std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
   SimDetectorConfig detector;          // the remote person detector, off unless configured
+  SimIoNodeConfig io_node;             // the CAN I/O node, absent unless configured
 };
 
 // What really happened, published every simulation step.

@@ -319,6 +319,9 @@ struct SafetyTaskConfig {
   double movers_timeout_s = 0.5;   // tracked movers older than this are not used
   double people_timeout_s = 0.5;   // and tracked people
   bool require_base_flags = true;  // with no BaseFlags ever published, stop
+  // The safety I/O (when the task is given its topic): older than this counts as lost.
+  double io_timeout_s = 0.1;
+  bool io_reset_at_start = false;  // SafetyLatch
 };
 
 class SafetyTask final : public tasks::Task {
@@ -327,16 +330,21 @@ class SafetyTask final : public tasks::Task {
              const tasks::Topic<ScanMessage>& scan, const tasks::Topic<Odometry>& odom,
              const tasks::Topic<BaseFlags>& base, const tasks::Topic<PoseEstimate>& pose,
              const tasks::Topic<msg::MovingObstacles>& movers, tasks::Topic<VelocityCommand>& command,
-             tasks::Topic<SafetyOutput>& status, const tasks::Topic<msg::People>* people = nullptr) noexcept
-      : config_(config), filter_(config.safety), requested_(requested), scan_(scan), odom_(odom), base_(base), pose_(pose),
-        movers_(movers), people_(people), command_(command), status_(status) {}
+             tasks::Topic<SafetyOutput>& status, const tasks::Topic<msg::People>* people = nullptr,
+             const tasks::Topic<msg::SafetyIo>* io = nullptr) noexcept
+      : config_(config), filter_(config.safety), latch_(config.io_reset_at_start), requested_(requested), scan_(scan),
+        odom_(odom), base_(base), pose_(pose), movers_(movers), people_(people), io_(io), command_(command),
+        status_(status) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
+  // Null without the safety I/O.
+  [[nodiscard]] const SafetyLatch* latch() const noexcept { return io_ != nullptr ? &latch_ : nullptr; }
 
  private:
   SafetyTaskConfig config_;
   SafetyFilter filter_;
+  SafetyLatch latch_;
   const tasks::Topic<VelocityCommand>& requested_;
   const tasks::Topic<ScanMessage>& scan_;
   const tasks::Topic<Odometry>& odom_;
@@ -344,6 +352,7 @@ class SafetyTask final : public tasks::Task {
   const tasks::Topic<PoseEstimate>& pose_;
   const tasks::Topic<msg::MovingObstacles>& movers_;
   const tasks::Topic<msg::People>* people_;  // null: no people layer
+  const tasks::Topic<msg::SafetyIo>* io_;    // null: no safety I/O
   tasks::Topic<VelocityCommand>& command_;
   tasks::Topic<SafetyOutput>& status_;
   tasks::Sample<ScanMessage> scan_sample_;

@@ -4,6 +4,7 @@
 //  * the newest laser scan is older than stale_scan_periods scan periods (or none arrived),
 //  * odometry is older than odom_timeout_s (or none arrived),
 //  * the e-stop is pressed or the motors are reported off,
+//  * the safety I/O holds a stop (the e-stop chain, a bumper, the I/O node lost; SafetyLatch),
 //  * localization is lost,
 //  * a laser point lies inside the stop zone along the direction of motion: the front half of
 //    the body (its width plus lateral_margin_m a side) swept forward along the commanded arc
@@ -46,6 +47,7 @@
 #include <cstdint>
 
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/msg/io.hpp"
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/msg/people.hpp"
 #include "sen3bot/nav/geometry.hpp"
@@ -101,6 +103,29 @@ struct SafetyInputs {
   // Tracked people (map frame, predicted to people->stamp_ns) with their cages; null: none.
   const msg::People* people = nullptr;
   Pose2D pose;
+  // Stops from the safety I/O, as SafetyLatch holds them (kSafetyEstopChain, kSafetyBumper,
+  // kSafetyIoLost, kSafetyResetNeeded): any of them stops the robot.
+  std::uint32_t io_stops = 0;
+};
+
+// The e-stop chain's rule (as machinery standards ask of an emergency stop): a stop from the
+// safety I/O holds the robot until its cause is gone AND a reset was requested after that.
+// A reset pressed while the chain is still open does not count, nor does releasing the chain
+// alone. Before the I/O has ever been healthy, its absence stops the robot without latching
+// (unless reset_at_start), so a robot that powers up with the chain closed needs no reset.
+class SafetyLatch {
+ public:
+  explicit SafetyLatch(bool reset_at_start = false) noexcept : reset_at_start_(reset_at_start) {}
+  // io: the newest SafetyIo, or null when it is missing or stale. Returns the stop reasons.
+  [[nodiscard]] std::uint32_t update(const msg::SafetyIo* io) noexcept;
+  [[nodiscard]] bool held() const noexcept { return held_; }
+  [[nodiscard]] std::uint64_t trips() const noexcept { return trips_; }  // times it began to hold
+
+ private:
+  bool reset_at_start_;
+  bool held_ = false;
+  std::uint32_t resets_seen_ = 0;
+  std::uint64_t trips_ = 0;
 };
 
 class SafetyFilter {
