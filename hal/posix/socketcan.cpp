@@ -1,13 +1,19 @@
 // SocketCAN raw sockets (Linux). Absent AF_CAN support is an expected, reported condition.
+// Error frames and receive times come with each read (recvmsg); the transmit queue is CanTxRing.
 #include <linux/can.h>
+#include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/time.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstddef>
 #include <cstring>
+#include <ctime>
 
 #include "posix_error.hpp"
 #include "sen3bot/hal/can.hpp"
@@ -34,9 +40,43 @@ CanFrame from_kernel(const can_frame& in) {
   return frame;
 }
 
+// What the kernel reports: the classes that change the link state, and a transmit timeout
+// (counted). Bus errors, lost arbitration and no-ACK come at the bus's error rate and say
+// nothing the controller state does not.
+constexpr can_err_mask_t kErrorMask = CAN_ERR_TX_TIMEOUT | CAN_ERR_CRTL | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED;
+
+// The error classes as parse_candump_line gives them: the id without CAN_ERR_FLAG, extended.
+CanFrame error_from_kernel(const can_frame& in) {
+  CanFrame frame;
+  frame.id = in.can_id & CAN_ERR_MASK;
+  frame.extended = true;
+  frame.dlc = in.len <= CAN_MAX_DLEN ? in.len : CAN_MAX_DLEN;
+  std::memcpy(frame.data.data(), in.data, frame.dlc);
+  return frame;
+}
+
+// The receive time from SO_TIMESTAMPNS (or SO_TIMESTAMP), or -1 without one.
+std::int64_t receive_time(msghdr& message) {
+  for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
+    if (c->cmsg_level != SOL_SOCKET) continue;
+    if (c->cmsg_type == SCM_TIMESTAMPNS && c->cmsg_len >= CMSG_LEN(sizeof(timespec))) {
+      timespec t{};
+      std::memcpy(&t, CMSG_DATA(c), sizeof t);
+      return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+    }
+    if (c->cmsg_type == SCM_TIMESTAMP && c->cmsg_len >= CMSG_LEN(sizeof(timeval))) {
+      timeval t{};
+      std::memcpy(&t, CMSG_DATA(c), sizeof t);
+      return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + static_cast<std::int64_t>(t.tv_usec) * 1'000;
+    }
+  }
+  return -1;
+}
+
 }  // namespace
 
-SocketCanBus::SocketCanBus(UniqueFd fd, std::string name) : fd_(std::move(fd)), name_(std::move(name)) {}
+SocketCanBus::SocketCanBus(UniqueFd fd, std::string name, std::size_t tx_queue_frames)
+    : fd_(std::move(fd)), name_(std::move(name)), tx_(tx_queue_frames, name_) {}
 
 Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(std::string_view interface, SocketCanOptions options) {
   const std::string name(interface);
@@ -67,6 +107,17 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(std::string_view interf
     const int on = 1;
     ::setsockopt(fd.get(), SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &on, sizeof on);
   }
+  // Without the error frames a bus-off would go unnoticed: a failure here fails open().
+  const can_err_mask_t errors = kErrorMask;
+  if (::setsockopt(fd.get(), SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) != 0) {
+    const int err = errno;
+    return posix::errno_error(Errc::io, err, "SocketCAN %s: CAN_RAW_ERR_FILTER", name.c_str());
+  }
+  // The kernel's receive time; a kernel that gives neither leaves the frames unstamped (-1).
+  const int on = 1;
+  if (::setsockopt(fd.get(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) != 0) {
+    (void)::setsockopt(fd.get(), SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on);
+  }
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = request.ifr_ifindex;
@@ -74,11 +125,10 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(std::string_view interf
     const int err = errno;
     return posix::errno_error(Errc::io, err, "SocketCAN %s: bind", name.c_str());
   }
-  return std::unique_ptr<SocketCanBus>(new SocketCanBus(std::move(fd), name));
+  return std::unique_ptr<SocketCanBus>(new SocketCanBus(std::move(fd), name, options.tx_queue_frames));
 }
 
-Status SocketCanBus::send(const CanFrame& frame) {
-  if (Status valid = frame.validate(); !valid) return valid;
+Status SocketCanBus::write_frame(const CanFrame& frame) {
   const can_frame out = to_kernel(frame);
   for (;;) {
     const ssize_t n = ::write(fd_.get(), &out, sizeof out);
@@ -94,13 +144,47 @@ Status SocketCanBus::send(const CanFrame& frame) {
   }
 }
 
+Status SocketCanBus::write_to(void* self, const CanFrame& frame) {
+  return static_cast<SocketCanBus*>(self)->write_frame(frame);
+}
+
+Status SocketCanBus::refuse_if_bus_off() {
+  if (link_state() != CanLinkState::bus_off) return {};
+  const std::size_t dropped = tx_.discard();
+  return Error::format(Errc::disconnected, "%s: bus-off, nothing is sent until the controller restarts%s",
+                       name_.c_str(), dropped > 0 ? " (queued frames dropped)" : "");
+}
+
+Status SocketCanBus::send(const CanFrame& frame) {
+  if (Status valid = frame.validate(); !valid) return valid;
+  if (Status on_bus = refuse_if_bus_off(); !on_bus) return on_bus;
+  return tx_.send(frame, &write_to, this);
+}
+
+Status SocketCanBus::flush() {
+  if (Status on_bus = refuse_if_bus_off(); !on_bus) return on_bus;
+  return tx_.flush(&write_to, this);
+}
+
 Result<std::optional<CanFrame>> SocketCanBus::receive() {
   for (;;) {
     can_frame in{};
-    const ssize_t n = ::read(fd_.get(), &in, sizeof in);
+    iovec data{&in, sizeof in};
+    alignas(cmsghdr) std::byte control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(timeval))];
+    msghdr message{};
+    message.msg_iov = &data;
+    message.msg_iovlen = 1;
+    message.msg_control = control;
+    message.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_.get(), &message, MSG_DONTWAIT);
     if (n == static_cast<ssize_t>(sizeof in)) {
-      // Error frames arrive only if an error mask was set; never hand them out as data.
-      if ((in.can_id & CAN_ERR_FLAG) != 0) continue;
+      // Error frames update the link state; they are never data.
+      if ((in.can_id & CAN_ERR_FLAG) != 0) {
+        error_frames_.fetch_add(1, std::memory_order_relaxed);
+        link_state_.store(next_link_state(link_state(), error_from_kernel(in)), std::memory_order_release);
+        continue;
+      }
+      last_receive_unix_ns_ = receive_time(message);
       return std::optional<CanFrame>(from_kernel(in));
     }
     if (n >= 0) return Error::format(Errc::protocol, "%s: short read of a CAN frame (%zd bytes)", name_.c_str(), n);

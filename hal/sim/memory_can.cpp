@@ -69,7 +69,7 @@ void MemoryCanNode::deliver(const CanFrame& frame) noexcept {
 Status MemoryCanNode::send(const CanFrame& frame) {
   if (Status valid = frame.validate(); !valid) return valid;
   std::lock_guard lock(bus_.mutex_);
-  if (!bus_.link_up_) return Error::format(Errc::disconnected, "%s: CAN bus is down", name_.c_str());
+  if (!bus_.link_up_) return Error::format(Errc::disconnected, "%s: CAN bus is down (bus-off)", name_.c_str());
   for (const std::unique_ptr<MemoryCanNode>& node : bus_.nodes_) {
     if (node.get() != this || options_.receive_own) node->deliver(frame);
   }

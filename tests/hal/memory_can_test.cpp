@@ -248,6 +248,65 @@ TEST(HalMemoryCan, LinkDownIsDisconnectedAfterDraining) {
   EXPECT_EQ(drain_ids(*b), std::vector<std::uint32_t>({0x3}));
 }
 
+TEST(HalMemoryCan, LinkStateFollowsTheBus) {
+  MemoryCanBus bus;
+  MemoryCanNode* a = attach(bus, "a");
+  MemoryCanNode* b = attach(bus, "b");
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->link_state(), CanLinkState::active);
+  EXPECT_EQ(bus.link_state(), CanLinkState::active);
+
+  // Warning and passive: many errors, but the controller is still on the bus.
+  for (const CanLinkState degraded : {CanLinkState::warning, CanLinkState::passive}) {
+    bus.set_link_state(degraded);
+    EXPECT_EQ(a->link_state(), degraded);
+    EXPECT_EQ(b->link_state(), degraded);
+    EXPECT_TRUE(bus.link_up());
+    ASSERT_TRUE(a->send(frame(0x10)).ok()) << to_string(degraded);
+    EXPECT_EQ(drain_ids(*b), std::vector<std::uint32_t>({0x10}));
+  }
+
+  // Bus-off: nothing is sent, and the error says so.
+  bus.set_link_state(CanLinkState::bus_off);
+  EXPECT_EQ(a->link_state(), CanLinkState::bus_off);
+  EXPECT_FALSE(bus.link_up());
+  Status refused = a->send(frame(0x11));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code(), Errc::disconnected);
+  EXPECT_TRUE(testing::contains(refused.error().message(), "bus-off")) << refused.error().c_str();
+  Result<std::optional<CanFrame>> nothing = b->receive();
+  ASSERT_FALSE(nothing.ok());
+  EXPECT_EQ(nothing.error().code(), Errc::disconnected);
+
+  // Back to error active: the bus works again.
+  bus.set_link_state(CanLinkState::active);
+  EXPECT_EQ(a->link_state(), CanLinkState::active);
+  EXPECT_TRUE(bus.link_up());
+  ASSERT_TRUE(a->send(frame(0x12)).ok());
+  EXPECT_EQ(drain_ids(*b), std::vector<std::uint32_t>({0x12}));
+
+  // set_link_up maps onto the same states.
+  bus.set_link_up(false);
+  EXPECT_EQ(a->link_state(), CanLinkState::bus_off);
+  bus.set_link_up(true);
+  EXPECT_EQ(a->link_state(), CanLinkState::active);
+}
+
+TEST(HalMemoryCan, NoKernelTimestampsAndNoTransmitQueue) {
+  MemoryCanBus bus;
+  MemoryCanNode* a = attach(bus, "a");
+  MemoryCanNode* b = attach(bus, "b");
+  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a->send(frame(0x20)).ok());
+  Result<std::optional<CanFrame>> received = b->receive();
+  ASSERT_TRUE(received.ok() && received->has_value());
+  EXPECT_EQ(b->last_receive_unix_ns(), -1);
+  EXPECT_TRUE(a->flush().ok());
+  EXPECT_EQ(a->tx_queued(), 0U);
+  EXPECT_EQ(a->tx_dropped(), 0U);
+  EXPECT_EQ(a->error_frames(), 0U);
+}
+
 TEST(HalMemoryCan, NodesOnSeparateThreads) {
   constexpr std::uint32_t kFrames = 20'000;
   MemoryCanBus bus;

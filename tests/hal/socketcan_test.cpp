@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 
+#include <cstdlib>
+
 #include "hal_test_util.hpp"
 #include "sen3bot/hal/can.hpp"
+#include "sen3bot/hal/clock.hpp"
 
 namespace sen3bot::hal {
 namespace {
@@ -59,12 +62,24 @@ TEST(HalSocketCan, FramesBetweenTwoSocketsOnVcan) {
   const std::uint8_t payload[] = {1, 2, 3, 4, 5, 6, 7, 8};
   ASSERT_TRUE((*a)->send(*CanFrame::make(0x124, payload)).ok());
   ASSERT_TRUE((*a)->send(*CanFrame::make(0x123, payload)).ok());
+  EXPECT_EQ((*b)->last_receive_unix_ns(), -1);  // nothing received yet
   pollfd p{(*b)->poll_fd(), POLLIN, 0};
   ASSERT_EQ(::poll(&p, 1, 1000), 1);
   Result<std::optional<CanFrame>> received = (*b)->receive();
   ASSERT_TRUE(received.ok() && received->has_value());
   EXPECT_EQ((*received)->id, 0x123U);
   EXPECT_EQ((*received)->dlc, 8);
+  // The kernel's receive time (SO_TIMESTAMPNS), on the wall clock, a moment ago.
+  const std::int64_t stamped = (*b)->last_receive_unix_ns();
+  const std::int64_t now = PosixClock().unix_now_ns();
+  EXPECT_GT(stamped, 0);
+  EXPECT_LE(std::llabs(now - stamped), seconds(1)) << "stamped " << stamped << ", now " << now;
+  // vcan has no controller: no error frames, the link stays active, nothing waits to be sent.
+  EXPECT_EQ((*b)->link_state(), CanLinkState::active);
+  EXPECT_EQ((*b)->error_frames(), 0U);
+  EXPECT_EQ((*a)->tx_queued(), 0U);
+  EXPECT_EQ((*a)->tx_dropped(), 0U);
+  EXPECT_TRUE((*a)->flush().ok());
   Result<std::optional<CanFrame>> nothing_else = (*b)->receive();
   ASSERT_TRUE(nothing_else.ok());
   EXPECT_FALSE(nothing_else->has_value());
