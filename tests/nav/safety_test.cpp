@@ -80,6 +80,95 @@ TEST(Safety, StopsOnEstopMotorsOdometryAndLostLocalization) {
   }
 }
 
+TEST(Safety, AStopFromTheSafetyIoStopsTheRobot) {
+  Scene s;
+  for (std::uint32_t reason : {kSafetyEstopChain, kSafetyBumper, kSafetyIoLost, kSafetyResetNeeded}) {
+    s.in.io_stops = reason;
+    const SafetyOutput out = SafetyFilter().filter(s.in);
+    EXPECT_EQ(out.reasons, reason);
+    EXPECT_EQ(out.command.v_m_s, 0.0);
+    EXPECT_EQ(out.command.w_rad_s, 0.0);
+  }
+}
+
+msg::SafetyIo healthy_io() {
+  msg::SafetyIo io;
+  io.healthy = true;
+  io.ever_healthy = true;
+  return io;
+}
+
+TEST(SafetyLatch, AnEstopHoldsUntilReleasedAndThenReset) {
+  SafetyLatch latch;
+  msg::SafetyIo io = healthy_io();
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+  io.estop = true;
+  EXPECT_EQ(latch.update(&io), kSafetyEstopChain);
+  EXPECT_TRUE(latch.held());
+  // Released, but no reset yet: still held, for ever.
+  io.estop = false;
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(latch.update(&io), kSafetyResetNeeded);
+  ++io.resets;
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+  EXPECT_FALSE(latch.held());
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+  EXPECT_EQ(latch.trips(), 1u);
+}
+
+TEST(SafetyLatch, AResetPressedWhileTheChainIsOpenDoesNotCount) {
+  SafetyLatch latch;
+  msg::SafetyIo io = healthy_io();
+  io.estop = true;
+  EXPECT_EQ(latch.update(&io), kSafetyEstopChain);
+  ++io.resets;  // pressed while the e-stop is still in
+  EXPECT_EQ(latch.update(&io), kSafetyEstopChain);
+  io.estop = false;
+  EXPECT_EQ(latch.update(&io), kSafetyResetNeeded);
+  ++io.resets;
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+}
+
+TEST(SafetyLatch, BumpersAndLostIoLatchToo) {
+  SafetyLatch latch;
+  msg::SafetyIo io = healthy_io();
+  io.bumper = true;
+  EXPECT_EQ(latch.update(&io), kSafetyBumper);
+  io.bumper = false;
+  EXPECT_EQ(latch.update(&io), kSafetyResetNeeded);
+  ++io.resets;
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+  // The node lost after it was healthy (or the message stale: null): held.
+  EXPECT_EQ(latch.update(nullptr), kSafetyIoLost);
+  EXPECT_EQ(latch.update(&io), kSafetyResetNeeded);
+  msg::SafetyIo lost = io;
+  lost.healthy = false;
+  EXPECT_EQ(latch.update(&lost), kSafetyIoLost);
+  // A reset counted while the node was away (the counter moved) is not a reset after the loss.
+  io.resets += 1;
+  EXPECT_EQ(latch.update(&lost), kSafetyIoLost);
+  EXPECT_EQ(latch.update(&io), kSafetyResetNeeded);
+  ++io.resets;
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+  EXPECT_EQ(latch.trips(), 2u);  // the bumper, then the loss (the second loss came while held)
+}
+
+TEST(SafetyLatch, AnIoNodeNotYetUpStopsWithoutLatchingUnlessAskedTo) {
+  msg::SafetyIo starting;  // not healthy, never was
+  SafetyLatch latch;
+  EXPECT_EQ(latch.update(nullptr), kSafetyIoLost);
+  EXPECT_EQ(latch.update(&starting), kSafetyIoLost);
+  EXPECT_FALSE(latch.held());
+  msg::SafetyIo io = healthy_io();
+  EXPECT_EQ(latch.update(&io), kSafetyNone);
+
+  SafetyLatch strict(true);
+  EXPECT_EQ(strict.update(&starting), kSafetyIoLost);
+  EXPECT_TRUE(strict.held());
+  EXPECT_EQ(strict.update(&io), kSafetyResetNeeded);
+  ++io.resets;
+  EXPECT_EQ(strict.update(&io), kSafetyNone);
+}
+
 TEST(Safety, StopsForAnObstacleAheadButNotBeside) {
   SafetyFilter f;
   Scene s;

@@ -20,44 +20,14 @@
 #include "sen3bot/p2os/codec.hpp"
 #include "sen3bot/p2os/protocol.hpp"
 #include "sim_rig.hpp"
+#include "vel_recorder.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot {
 namespace {
 
-// One VEL packet on the wire and what the bus held when it was written.
-struct VelPacket {
-  hal::Nanos t_ns = 0;
-  std::int32_t vel_mm_s = 0;
-  tasks::Sample<msg::VelocityCommand> request;
-  tasks::Sample<msg::VelocityCommand> command;
-  tasks::Sample<msg::SafetyOutput> safety;
-  tasks::Sample<msg::ScanMessage> scan;
-};
-
-class VelRecorder final : public sim::WireTap {
- public:
-  explicit VelRecorder(const firmware::Firmware& fw) : fw_(fw) {}
-  void on_write(std::string_view link, std::span<const std::uint8_t> bytes, hal::Nanos now_ns) override {
-    if (link != "base") return;
-    parser_.feed(bytes, now_ns, [&](const p2os::Frame& frame) {
-      if (frame.type != static_cast<std::uint8_t>(p2os::Command::vel)) return;
-      VelPacket p;
-      p.t_ns = now_ns;
-      p.vel_mm_s = p2os::decode_argument(frame.payload).value;
-      fw_.request().read(p.request);
-      fw_.command().read(p.command);
-      fw_.safety_output().read(p.safety);
-      fw_.scan().read(p.scan);
-      packets.push_back(p);
-    });
-  }
-  std::vector<VelPacket> packets;
-
- private:
-  const firmware::Firmware& fw_;
-  p2os::FrameParser parser_;
-};
+using testing::VelPacket;
+using testing::VelRecorder;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

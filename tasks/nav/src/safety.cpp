@@ -190,19 +190,26 @@ std::uint32_t SafetyLatch::update(const msg::SafetyIo* io) noexcept {
   bool latching = true;
   if (io == nullptr || !io->healthy) {
     causes |= kSafetyIoLost;
-    latching = reset_at_start_ || (io != nullptr && io->ever_healthy) || held_;
+    latching = reset_at_start_ || ever_healthy_ || (io != nullptr && io->ever_healthy);
   } else {
+    ever_healthy_ = true;
     if (io->estop) causes |= kSafetyEstopChain;
     if (io->bumper) causes |= kSafetyBumper;
   }
-  // A reset counts only when pressed after the cause went away.
-  if (io != nullptr && causes != kSafetyNone) resets_seen_ = io->resets;
   if (causes != kSafetyNone) {
     if (latching && !held_) ++trips_;
     held_ = held_ || latching;
+    counted_since_clear_ = false;
     return causes;
   }
   if (!held_) return kSafetyNone;
+  // A reset counts only when pressed after the cause went away: the counter as first seen
+  // with no cause is the baseline.
+  if (!counted_since_clear_) {
+    counted_since_clear_ = true;
+    resets_seen_ = io->resets;
+    return kSafetyResetNeeded;
+  }
   if (io->resets != resets_seen_) {
     held_ = false;
     return kSafetyNone;

@@ -124,6 +124,8 @@ class SafetyLatch {
  private:
   bool reset_at_start_;
   bool held_ = false;
+  bool ever_healthy_ = false;  // a stale message after that is a loss like any other
+  bool counted_since_clear_ = false;  // resets_seen_ taken since the cause went away
   std::uint32_t resets_seen_ = 0;
   std::uint64_t trips_ = 0;
 };
