@@ -101,6 +101,8 @@ void CanIoTask::step(const tasks::StepContext& context) {
       light_ == msg::LightMode::fault && std::fmod(static_cast<double>(now), period_ns) < period_ns / 2.0;
   master_.set_outputs(output_levels(config_, light_, buzzer_on));
 
+  // Frames the controller refused last cycle go first (SocketCAN's bounded queue).
+  if (Status s = bus_->flush(); !s && s.error().code() != Errc::would_block) ++bus_errors_;
   std::array<hal::CanFrame, 4> out;
   const std::size_t n = master_.poll(now, out);
   for (std::size_t i = 0; i < n; ++i) {

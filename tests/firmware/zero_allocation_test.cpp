@@ -34,6 +34,13 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   config->navigation.safe_curve_path = SEN3BOT_SOURCE_DIR "/config/maps/lab_curve.yaml";
   // People: the simulated detector's frames through the gate, the fusion and the cages.
   rig.world.detector.enabled = true;
+  // The safety I/O's faults in the window: an e-stop, a silent node and a node that reboots,
+  // each followed by a reset.
+  using What = sim::SimIoEvent::What;
+  rig.world.io_node.events = {
+      {15.0, What::inputs, 0x00}, {16.0, What::inputs, 0x01}, {17.0, What::inputs, 0x03}, {17.2, What::inputs, 0x01},
+      {25.0, What::silent, 0},    {26.0, What::talking, 0},   {28.0, What::inputs, 0x03}, {28.2, What::inputs, 0x01},
+      {35.0, What::reboot, 0},    {37.0, What::inputs, 0x03}, {37.2, What::inputs, 0x01}};
   rig.make_board();
   config->navigation.people_enabled = true;
   config->navigation.people_detector = "sim";
@@ -89,6 +96,12 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   ASSERT_NE(fw.people_task(), nullptr);
   EXPECT_GT(fw.people_task()->frames_fused(), 0u);
   EXPECT_GT(fw.people_task()->fusion().count(nav::BoxVerdict::located), 0u);
+  // The e-stop chain held the robot three times, and the node was set up again after its reboot.
+  ASSERT_NE(fw.safety(), nullptr);
+  EXPECT_EQ(fw.safety()->latch()->trips(), 3u);
+  EXPECT_FALSE(fw.safety()->latch()->held());
+  EXPECT_EQ(fw.can_io()->master().count(canopen::IoNodeEvent::boot_up), 2u);
+  EXPECT_EQ(fw.can_io()->master().count(canopen::IoNodeEvent::heartbeat_lost), 1u);
   fw.shutdown();
   std::fclose(sink);
 }
