@@ -36,6 +36,8 @@ namespace {
 
 constexpr double kKidnapRecoveryAlphaSlow = 0.001;
 constexpr double kKidnapRecoveryAlphaFast = 0.1;
+constexpr hal::Nanos kIoSliceNs = hal::millis(10);
+constexpr double kStandingM_s = 0.005;
 
 struct Kidnap {
   double time_s = -1.0;  // < 0: none
@@ -47,7 +49,23 @@ struct Case {
   const char* description;
   std::vector<world::MoverScript> movers;
   Kidnap kidnap = {};
+  // What happens to the CAN safety I/O node (needs sim.io_node and devices.io_node).
+  std::vector<SimIoEvent> io_events = {};
 };
+
+SimIoEvent io_inputs(double at_s, std::uint8_t inputs) { return {at_s, SimIoEvent::What::inputs, inputs}; }
+SimIoEvent io_fault(double at_s, SimIoEvent::What what) { return {at_s, what, 0}; }
+// config/sim.yaml's wiring: the e-stop chain on input 1 (active-low), reset on 2, a bumper on 3.
+constexpr std::uint8_t kChainClosed = 0x01, kEstopPressed = 0x00, kResetPressed = 0x03, kBumperHit = 0x05;
+// The reset button pressed for 0.2 s at at_s.
+std::vector<SimIoEvent> reset_at(double at_s) {
+  return {io_inputs(at_s, kResetPressed), io_inputs(at_s + 0.2, kChainClosed)};
+}
+std::vector<SimIoEvent> events(std::initializer_list<std::vector<SimIoEvent>> parts) {
+  std::vector<SimIoEvent> all;
+  for (const auto& part : parts) all.insert(all.end(), part.begin(), part.end());
+  return all;
+}
 
 struct Scenario {
   const char* name;
@@ -144,6 +162,23 @@ std::vector<Scenario> scenarios() {
          "at t = 19 s, leaving (4, 7) m in the upper storage area, carried to (5, 3.5) m in the lower work area, facing east",
          {},
          {19.0, {5.0, 3.5, 0.0}}}}},
+      {"estop",
+       "the main mission, (2.5, 2) m to (4, 7) m and back, with the CAN safety I/O node's e-stop chain: each case stops "
+       "the robot while it drives, and it goes on only once the cause is gone and the reset button was pressed",
+       {2.5, 2.0, std::numbers::pi / 2},
+       {{4.0, 7.0}, {2.5, 2.0}},
+       "",
+       "",
+       {{"estop-pressed", "the e-stop pressed at t = 6 s, released at 9 s, reset at 11 s", {}, {},
+         events({{io_inputs(6.0, kEstopPressed), io_inputs(9.0, kChainClosed)}, reset_at(11.0)})},
+        {"bumper-hit", "a bumper pressed for 0.3 s at t = 6 s, reset at 8 s", {}, {},
+         events({{io_inputs(6.0, kBumperHit), io_inputs(6.3, kChainClosed)}, reset_at(8.0)})},
+        {"node-silent", "the I/O node silent from t = 6 s to 7 s (a cut cable), reset at 9 s", {}, {},
+         events({{io_fault(6.0, SimIoEvent::What::silent), io_fault(7.0, SimIoEvent::What::talking)}, reset_at(9.0)})},
+        {"bus-off", "the CAN bus off from t = 6 s to 6.5 s, reset at 8 s", {}, {},
+         events({{io_fault(6.0, SimIoEvent::What::bus_off), io_fault(6.5, SimIoEvent::What::bus_on)}, reset_at(8.0)})},
+        {"node-reboot", "the I/O node reboots at t = 6 s (configured and started again), reset at 8 s", {}, {},
+         events({{io_fault(6.0, SimIoEvent::What::reboot)}, reset_at(8.0)})}}},
       {"osgp",
        "the source's online-SGP cases: (4, 7) m to (2.5, 2) m on the lab's safe curve, with people found by the camera "
        "and the laser and kept in cages",
@@ -213,6 +248,13 @@ struct CaseResult {
   std::vector<report::CageMark> cages;
   std::vector<msg::Point2D> planned;    // the last goal's safe path, before any re-plan
   std::vector<msg::Point2D> replanned;  // the last online re-plan's safe path
+  // With safety I/O events (lockstep): the first event's effect on the true robot.
+  bool safety_io = false;
+  std::uint64_t io_trips = 0;
+  double io_speed_at_event_m_s = 0;
+  double io_stop_s = -1;  // from the first event to the robot standing (-1: it never stood)
+  double io_stop_distance_m = 0;
+  double io_held_s = 0;   // time the safety I/O held the robot (its stop reasons on)
 };
 
 void write_json_string(std::FILE* f, std::string_view s) {
@@ -260,6 +302,12 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                    c.sgp_runs, nav::to_string(c.sgp_result.stop), c.safe_path_points, c.sgp_result.length_m, c.sgp_time_ms);
     else
       std::fprintf(f, "\n     \"safe_path\": {\"source\": \"file\", \"waypoints\": %zu},", c.safe_path_points);
+    if (c.safety_io)
+      std::fprintf(f,
+                   "\n     \"safety_io\": {\"trips\": %llu, \"speed_at_event_m_s\": %.3f, \"stop_s\": %.3f, "
+                   "\"stop_distance_m\": %.3f, \"held_s\": %.2f},",
+                   static_cast<unsigned long long>(c.io_trips), c.io_speed_at_event_m_s, c.io_stop_s,
+                   c.io_stop_distance_m, c.io_held_s);
     if (c.people)
       std::fprintf(f,
                    "\n     \"replans_triggered\": %llu, \"min_person_distance_m\": %.3f, \"cage_entries\": %llu, "
@@ -369,9 +417,35 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     }
   } else {
     hal::SimClock& clock = *board.lockstep_clock();
+    // Safety I/O events are watched in 10 ms slices: when the robot stands, and how far it went.
+    const std::vector<SimIoEvent>& io_events = board.simulation().config().io_node.events;
+    result.safety_io = !io_events.empty();
+    const double first_event_s = result.safety_io ? io_events.front().at_s : 0.0;
+    msg::Pose2D last_pose{};
+    bool event_seen = false;
+    auto watch_io = [&] {
+      const GroundTruth& truth = board.simulation().truth();
+      const double now_s = hal::to_seconds(truth.stamp_ns);
+      if (now_s >= first_event_s && result.io_stop_s < 0) {
+        if (!event_seen) {
+          event_seen = true;
+          result.io_speed_at_event_m_s = truth.speed_m_s;
+          last_pose = truth.pose;
+        }
+        result.io_stop_distance_m += std::hypot(truth.pose.x_m - last_pose.x_m, truth.pose.y_m - last_pose.y_m);
+        last_pose = truth.pose;
+        if (std::fabs(truth.speed_m_s) < kStandingM_s) result.io_stop_s = now_s - first_event_s;
+      }
+      tasks::Sample<msg::SafetyOutput> safety;
+      constexpr std::uint32_t kIoStops =
+          msg::kSafetyEstopChain | msg::kSafetyBumper | msg::kSafetyIoLost | msg::kSafetyResetNeeded;
+      if (fw.safety_output().read(safety) && (safety.value.reasons & kIoStops) != 0) result.io_held_s += hal::to_seconds(kIoSliceNs);
+    };
     while (!mission.finished() && sim_s < limit_s) {
-      if (Status s = scheduler.run_lockstep(clock, hal::millis(500)); !s) return fail(s.error());
+      const hal::Nanos slice = result.safety_io ? kIoSliceNs : hal::millis(500);
+      if (Status s = scheduler.run_lockstep(clock, slice); !s) return fail(s.error());
       sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+      if (result.safety_io) watch_io();
       sample_people();
       if (sim_s >= next_progress_s) {
         progress();
@@ -387,6 +461,12 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   result.truth = board.referee().report();
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
   result.safe_path_points = fw.safe_path().size();
+  if (result.safety_io) {
+    if (fw.safety() != nullptr && fw.safety()->latch() != nullptr) result.io_trips = fw.safety()->latch()->trips();
+    std::fprintf(out, "  safety I/O: %llu stops; the robot stood %.2f s after the first event, from %.2f m/s in %.3f m; held %.1f s\n",
+                 static_cast<unsigned long long>(result.io_trips), result.io_stop_s, result.io_speed_at_event_m_s,
+                 result.io_stop_distance_m, result.io_held_s);
+  }
   if (const nav::PeopleTask* people = fw.people_task(); people != nullptr) {
     result.people = true;
     result.boxes_located = people->fusion().count(nav::BoxVerdict::located);
@@ -529,6 +609,14 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     world.movers = c.movers;
     world.kidnap_time_s = c.kidnap.time_s;
     world.kidnap_pose = c.kidnap.to;
+    if (!c.io_events.empty()) {
+      if (!world.io_node.enabled || !config.devices.has_io_node) {
+        std::fprintf(err, "sen3bot-sim sim: %s: scenario %s needs sim.io_node and devices.io_node (config/sim.yaml has both)\n",
+                     config_path.c_str(), scenario->name);
+        return 2;
+      }
+      world.io_node.events = c.io_events;
+    }
     if (have_seed) {
       world.seed = seed;
       world.base.noise_seed = static_cast<std::uint32_t>(seed);
