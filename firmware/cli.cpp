@@ -83,6 +83,22 @@ constexpr const char* kUsage =
     "        writes each frame seen as PNG. Stops at once when the camera cannot\n"
     "        work (unsupported codec, no video, credentials rejected, no such stream).\n"
     "        Exit status 1 when no frame was decoded or the camera cannot work.\n"
+    "  can dump SOURCE [--node N] [--count N]\n"
+    "        Decode CAN frames as CANopen, one JSON object a frame (t_s, interface, id,\n"
+    "        kind, node and the decoded fields; error frames as link events). SOURCE\n"
+    "        is a candump -l log, - for standard input, or else a SocketCAN interface,\n"
+    "        printed live until SIGINT or --count frames. --node keeps one node's\n"
+    "        frames, NMT commands to it or to all, and error frames. A bad log line\n"
+    "        prints {\"line\":N,\"error\":...} and the dump goes on; exit status 1.\n"
+    "  can io --iface IFACE --node N [--set OUT=0|1 ...] [--timeout S]\n"
+    "        Bring a CiA 401 I/O node up with the master (configuration over SDO,\n"
+    "        NMT start, heartbeat), set outputs 1..8 (the others off), wait until\n"
+    "        they went out and print one JSON object: state, inputs, outputs,\n"
+    "        heartbeat state, event counters, the last emergency. Exit status 1 when\n"
+    "        the node is not up within --timeout (3 s), with the master's state and\n"
+    "        counters. --iface sim [--sim-inputs 0xHH] [--sim-silent] runs against an\n"
+    "        emulated node on an in-memory bus (its inputs; a node that never answers):\n"
+    "        a demonstration and a test of the command.\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -145,6 +161,8 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"drive", "", drive_command},
       {"scan", "", scan_command},
       {"camera", "", camera_command},
+      {"can", "dump", can_dump_command},
+      {"can", "io", can_io_command},
   };
   return dispatch(argc, argv, "sen3bot", SEN3BOT_VERSION, kUsage, kCommands, out, err);
 }

@@ -18,6 +18,12 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot camera probe URL [--transport tcp|udp] [--frames N] [--save DIR] [--timeout S]
 int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+// sen3bot can dump SOURCE [--node N] [--count N]  (SOURCE: candump -l log, -, or a SocketCAN interface)
+int can_dump_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot can io --iface IFACE|sim --node N [--set OUT=0|1 ...] [--timeout S] [--sim-inputs 0xHH]
+//            [--sim-silent]
+int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
 // sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]
 int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot sgp --map MAP.yaml --curve CURVE.yaml --start X,Y --goal X,Y [--direction 1|-1] [--png FILE]

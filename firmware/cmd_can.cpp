@@ -1,0 +1,699 @@
+// CAN command-line tools: `can dump` decodes a candump log (or a live SocketCAN bus) as
+// CANopen JSON lines, `can io` brings one CiA 401 I/O node up with the master's state machine,
+// sets its outputs and prints its inputs (on a SocketCAN bus, or against the in-process
+// emulator for a demonstration and a test of the command).
+#include <poll.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdarg>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "sen3bot/canopen/codec.hpp"
+#include "sen3bot/canopen/io_node.hpp"
+#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/hal/can.hpp"
+#include "sen3bot/hal/candump.hpp"
+#include "sen3bot/hal/clock.hpp"
+
+namespace sen3bot::firmware {
+
+namespace {
+
+using canopen::Classified;
+using canopen::Kind;
+using hal::CanFrame;
+
+constexpr const char* kDumpUsage =
+    "usage: sen3bot can dump SOURCE [--node N] [--count N]\n"
+    "  SOURCE: a candump -l log file, - for standard input, or a SocketCAN interface\n";
+constexpr const char* kIoUsage =
+    "usage: sen3bot can io --iface IFACE|sim --node N [--set OUT=0|1 ...] [--timeout S]\n"
+    "                      [--sim-inputs 0xHH] [--sim-silent]\n";
+
+[[gnu::format(printf, 2, 3)]] void append(std::string& out, const char* fmt, ...) {
+  char text[256];
+  va_list args;
+  va_start(args, fmt);
+  const int n = std::vsnprintf(text, sizeof text, fmt, args);
+  va_end(args);
+  if (n > 0) out.append(text, std::min(static_cast<std::size_t>(n), sizeof text - 1));
+}
+
+// A JSON string: quotes and backslashes escaped, control and non-ASCII bytes as \u00XX (the
+// text comes from a file that may hold anything).
+void append_string(std::string& out, std::string_view key, std::string_view value) {
+  out += ",\"";
+  out += key;
+  out += "\":\"";
+  for (const char ch : value) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c < 0x20 || c >= 0x7F) {
+      append(out, "\\u%04x", static_cast<unsigned>(c));
+    } else {
+      out += ch;
+    }
+  }
+  out += '"';
+}
+
+void append_hex(std::string& out, std::string_view key, std::span<const std::uint8_t> bytes) {
+  append(out, ",\"%.*s\":\"", static_cast<int>(key.size()), key.data());
+  for (const std::uint8_t b : bytes) append(out, "%02X", static_cast<unsigned>(b));
+  out += '"';
+}
+
+// The 8 bits of a CiA 401 digital byte: "0x05" and the numbers (1..8) of the bits that are set.
+void append_bits(std::string& out, std::string_view key, std::uint8_t bits) {
+  append(out, ",\"%.*s\":\"0x%02X\",\"%.*s_on\":[", static_cast<int>(key.size()), key.data(),
+         static_cast<unsigned>(bits), static_cast<int>(key.size()), key.data());
+  bool first = true;
+  for (unsigned i = 0; i < 8; ++i) {
+    if ((bits >> i & 1u) == 0) continue;
+    append(out, first ? "%u" : ",%u", i + 1);
+    first = false;
+  }
+  out += ']';
+}
+
+// Seconds as candump writes them (microseconds), exact rather than through a double.
+void append_time(std::string& out, std::int64_t unix_ns) {
+  append(out, "{\"t_s\":%lld.%06lld", static_cast<long long>(unix_ns / 1'000'000'000),
+         static_cast<long long>(unix_ns % 1'000'000'000 / 1000));
+}
+
+// --- Error frames --------------------------------------------------------------------------
+
+struct Bit {
+  std::uint32_t bit;
+  const char* name;
+};
+constexpr std::array<Bit, 9> kErrorClasses = {{
+    {hal::can_error::kTxTimeout, "tx_timeout"},
+    {hal::can_error::kLostArbitration, "lost_arbitration"},
+    {hal::can_error::kController, "controller"},
+    {hal::can_error::kProtocol, "protocol"},
+    {hal::can_error::kTransceiver, "transceiver"},
+    {hal::can_error::kNoAck, "no_ack"},
+    {hal::can_error::kBusOff, "bus_off"},
+    {hal::can_error::kBusError, "bus_error"},
+    {hal::can_error::kRestarted, "restarted"},
+}};
+constexpr std::array<Bit, 7> kControllerStates = {{
+    {hal::can_error::kRxOverflow, "rx_overflow"},
+    {hal::can_error::kTxOverflow, "tx_overflow"},
+    {hal::can_error::kRxWarning, "rx_warning"},
+    {hal::can_error::kTxWarning, "tx_warning"},
+    {hal::can_error::kRxPassive, "rx_passive"},
+    {hal::can_error::kTxPassive, "tx_passive"},
+    {hal::can_error::kActive, "active"},
+}};
+
+template <std::size_t N>
+void append_names(std::string& out, std::string_view key, std::uint32_t bits, const std::array<Bit, N>& names) {
+  append(out, ",\"%.*s\":[", static_cast<int>(key.size()), key.data());
+  bool first = true;
+  std::uint32_t known = 0;
+  for (const Bit& b : names) {
+    known |= b.bit;
+    if ((bits & b.bit) == 0) continue;
+    append(out, first ? "\"%s\"" : ",\"%s\"", b.name);
+    first = false;
+  }
+  // Bits Linux may add later are shown rather than dropped.
+  if ((bits & ~known) != 0) append(out, first ? "\"0x%X\"" : ",\"0x%X\"", static_cast<unsigned>(bits & ~known));
+  out += ']';
+}
+
+// The link state one error frame reports, by the SocketCAN backend's rule: bus-off first,
+// then the controller's state (passive over warning over active), then restarted (back on
+// the bus: active). Other classes say nothing about the state.
+std::optional<hal::CanLinkState> link_after(const CanFrame& f) {
+  const std::uint32_t classes = f.id;
+  if ((classes & hal::can_error::kBusOff) != 0) return hal::CanLinkState::bus_off;
+  if ((classes & hal::can_error::kController) != 0 && f.dlc >= 2) {
+    const std::uint8_t s = f.data[1];
+    if ((s & (hal::can_error::kRxPassive | hal::can_error::kTxPassive)) != 0) return hal::CanLinkState::passive;
+    if ((s & (hal::can_error::kRxWarning | hal::can_error::kTxWarning)) != 0) return hal::CanLinkState::warning;
+    if ((s & hal::can_error::kActive) != 0) return hal::CanLinkState::active;
+  }
+  if ((classes & hal::can_error::kRestarted) != 0) return hal::CanLinkState::active;
+  return std::nullopt;
+}
+
+void describe_error_frame(std::string& out, const CanFrame& f) {
+  out += ",\"kind\":\"error\"";
+  append_names(out, "events", f.id, kErrorClasses);
+  if ((f.id & hal::can_error::kController) != 0 && f.dlc >= 2)
+    append_names(out, "controller", f.data[1], kControllerStates);
+  if (const std::optional<hal::CanLinkState> link = link_after(f))
+    append(out, ",\"link\":\"%s\"", hal::to_string(*link));
+  append_hex(out, "data", f.payload());
+}
+
+// --- CANopen ---------------------------------------------------------------------------------
+
+void describe_canopen(std::string& out, const CanFrame& f, const Classified& c) {
+  append(out, ",\"kind\":\"%s\"", canopen::to_string(c.kind));
+  if (c.node != 0) append(out, ",\"node\":%u", static_cast<unsigned>(c.node));
+  if (c.kind == Kind::tpdo || c.kind == Kind::rpdo) append(out, ",\"pdo\":%u", static_cast<unsigned>(c.pdo));
+  if (f.extended) out += ",\"extended\":true";
+  if (f.rtr) append(out, ",\"rtr\":true,\"dlc\":%u", static_cast<unsigned>(f.dlc));
+  else append_hex(out, "data", f.payload());
+  const auto malformed = [&](const Error& e) { append_string(out, "malformed", e.message()); };
+  switch (c.kind) {
+    case Kind::nmt:
+      if (auto n = canopen::decode_nmt(f)) {
+        append(out, ",\"command\":\"%s\",\"target\":%u", canopen::to_string(n->command),
+               static_cast<unsigned>(n->node));
+      } else {
+        malformed(n.error());
+      }
+      break;
+    case Kind::heartbeat:
+      if (auto h = canopen::decode_heartbeat(f)) {
+        append(out, ",\"state\":\"%s\"", canopen::to_string(h->state));
+        if (h->toggle) out += ",\"toggle\":true";
+      } else {
+        malformed(h.error());
+      }
+      break;
+    case Kind::emcy:
+      if (auto e = canopen::decode_emergency(f)) {
+        append(out, ",\"code\":\"0x%04X\",\"register\":\"0x%02X\"", static_cast<unsigned>(e->code),
+               static_cast<unsigned>(e->error_register));
+        append_string(out, "description", canopen::describe_emergency(e->code));
+        append_hex(out, "vendor", e->vendor);
+      } else {
+        malformed(e.error());
+      }
+      break;
+    case Kind::sdo_request:
+    case Kind::sdo_response:
+      if (auto s = canopen::decode_sdo(f)) {
+        append(out, ",\"sdo\":\"%s\",\"index\":\"0x%04X\",\"sub\":%u", canopen::to_string(s->type),
+               static_cast<unsigned>(s->at.index), static_cast<unsigned>(s->at.sub));
+        if (s->type == canopen::SdoType::abort) {
+          append(out, ",\"abort_code\":\"0x%08X\"", static_cast<unsigned>(s->value));
+          append_string(out, "abort", canopen::describe_abort(s->value));
+        } else if (s->size > 0) {
+          append(out, ",\"size\":%u,\"value\":%lu", static_cast<unsigned>(s->size),
+                 static_cast<unsigned long>(s->value));
+        }
+      } else {
+        malformed(s.error());
+      }
+      break;
+    case Kind::tpdo:
+    case Kind::rpdo:
+      // PDO1's first byte is the 8 digital inputs (TPDO1) or outputs (RPDO1) of a CiA 401
+      // node's default mapping: what the robot's I/O node sends.
+      if (c.pdo == 1 && !f.rtr && f.dlc >= 1) append_bits(out, c.kind == Kind::tpdo ? "inputs" : "outputs", f.data[0]);
+      break;
+    case Kind::sync:
+      if (f.dlc >= 1 && !f.rtr) append(out, ",\"counter\":%u", static_cast<unsigned>(f.data[0]));
+      break;
+    case Kind::other:
+      break;
+  }
+}
+
+// One frame as a JSON object, without its newline.
+std::string describe_frame_json(std::int64_t unix_ns, std::string_view interface, const CanFrame& f, bool error_frame) {
+  std::string out;
+  out.reserve(256);
+  append_time(out, unix_ns);
+  append_string(out, "interface", interface);
+  const std::uint32_t logged_id = error_frame ? (f.id | hal::can_error::kFlag) : f.id;
+  append(out, f.extended ? ",\"id\":\"%08X\"" : ",\"id\":\"%03X\"", static_cast<unsigned>(logged_id));
+  if (error_frame) {
+    describe_error_frame(out, f);
+  } else {
+    describe_canopen(out, f, canopen::classify(f));
+  }
+  out += '}';
+  return out;
+}
+
+// --node N: that node's frames, NMT commands to it or to all, and the link's error frames
+// (a bus-off silences every node, so it is kept).
+bool keep_for_node(const CanFrame& f, bool error_frame, unsigned node) {
+  if (error_frame) return true;
+  const Classified c = canopen::classify(f);
+  if (c.kind == Kind::nmt) return f.dlc < 2 || f.data[1] == 0 || f.data[1] == node;
+  return c.node == node;
+}
+
+struct DumpOptions {
+  std::string source;
+  unsigned node = 0;  // 0: every frame
+  std::uint64_t count = 0;  // 0: no limit
+};
+
+void print_line(std::FILE* out, const std::string& line) {
+  std::fputs(line.c_str(), out);
+  std::fputc('\n', out);
+}
+
+// A log file (or stdin): one object per frame, one per bad line with its number and what is
+// wrong with it. Exit status 1 when a line was bad.
+int dump_log(std::FILE* in, const DumpOptions& o, std::FILE* out, std::FILE* err) {
+  char* buffer = nullptr;
+  std::size_t capacity = 0;
+  std::uint64_t line_number = 0;
+  std::uint64_t printed = 0;
+  std::uint64_t bad_lines = 0;
+  ssize_t n = 0;
+  while ((o.count == 0 || printed < o.count) && (n = ::getline(&buffer, &capacity, in)) >= 0) {
+    ++line_number;
+    const std::string_view text(buffer, static_cast<std::size_t>(n));
+    if (text.find_first_not_of(" \t\r\n") == std::string_view::npos) continue;  // blank lines say nothing
+    const Result<hal::CandumpLine> line = hal::parse_candump_line(text);
+    if (!line) {
+      ++bad_lines;
+      std::string obj;
+      append(obj, "{\"line\":%llu", static_cast<unsigned long long>(line_number));
+      append_string(obj, "error", line.error().message());
+      obj += '}';
+      print_line(out, obj);
+      continue;
+    }
+    if (o.node != 0 && !keep_for_node(line->frame, line->error_frame, o.node)) continue;
+    print_line(out, describe_frame_json(line->unix_ns, line->interface_name(), line->frame, line->error_frame));
+    ++printed;
+  }
+  const bool read_error = std::ferror(in) != 0;
+  std::free(buffer);
+  const char* name = o.source == "-" ? "standard input" : o.source.c_str();
+  if (read_error) {
+    std::fprintf(err, "sen3bot can dump: %s: read error after line %llu\n", name,
+                 static_cast<unsigned long long>(line_number));
+    return 1;
+  }
+  if (bad_lines > 0) {
+    std::fprintf(err, "sen3bot can dump: %s: %llu bad line%s of %llu\n", name,
+                 static_cast<unsigned long long>(bad_lines), bad_lines == 1 ? "" : "s",
+                 static_cast<unsigned long long>(line_number));
+    return 1;
+  }
+  return 0;
+}
+
+// A live bus until SIGINT/SIGTERM or --count frames. The time is the kernel's receive time
+// when the backend has it, else when the frame was read (the wall clock). The backend reads
+// the kernel's error frames itself; the link state changes they bring are printed as they come.
+int dump_live(hal::CanBus& bus, const DumpOptions& o, std::FILE* out, std::FILE* err) {
+  const StopOnSignal stop;
+  hal::PosixClock clock;
+  hal::CanLinkState link = bus.link_state();
+  std::uint64_t printed = 0;
+  const std::string interface(bus.name());
+  while (StopOnSignal::requested() == 0 && (o.count == 0 || printed < o.count)) {
+    if (bus.poll_fd() >= 0) {
+      pollfd p{bus.poll_fd(), POLLIN, 0};
+      (void)::poll(&p, 1, 100);  // wakes up to look at the stop flag
+    } else {
+      clock.sleep_until(clock.now() + hal::millis(10));
+    }
+    while (o.count == 0 || printed < o.count) {
+      Result<std::optional<CanFrame>> r = bus.receive();
+      if (!r) {
+        std::fprintf(err, "sen3bot can dump: %s: %s\n", interface.c_str(), r.error().c_str());
+        return 1;
+      }
+      if (!*r) break;
+      const CanFrame& f = **r;
+      if (o.node != 0 && !keep_for_node(f, false, o.node)) continue;
+      const std::int64_t stamp = bus.last_receive_unix_ns();
+      print_line(out, describe_frame_json(stamp >= 0 ? stamp : clock.unix_now_ns(), interface, f, false));
+      ++printed;
+    }
+    if (const hal::CanLinkState now = bus.link_state(); now != link) {
+      link = now;
+      std::string obj;
+      append_time(obj, clock.unix_now_ns());
+      append_string(obj, "interface", interface);
+      append(obj, ",\"kind\":\"link\",\"link\":\"%s\"}", hal::to_string(now));
+      print_line(out, obj);
+    }
+    std::fflush(out);
+  }
+  return 0;
+}
+
+// A SocketCAN interface name: what is left when SOURCE is no file.
+bool interface_like(std::string_view s) {
+  if (s.empty() || s.size() > hal::CandumpLine::kMaxInterface) return false;
+  for (const char c : s)
+    if (c == '/' || c <= ' ' || c > '~') return false;
+  return true;
+}
+
+bool parse_node(std::string_view text, unsigned& node) {
+  std::uint32_t v = 0;
+  if (!parse_u32(text, v) || !canopen::valid_node(v)) return false;
+  node = v;
+  return true;
+}
+
+}  // namespace
+
+int can_dump_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  DumpOptions o;
+  bool have_source = false;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--node" || arg == "--count") {
+      if (i + 1 >= argc) {
+        std::fprintf(err, "sen3bot can dump: %s needs a value\n%s", argv[i], kDumpUsage);
+        return 2;
+      }
+      const std::string_view value = argv[++i];
+      if (arg == "--node" && !parse_node(value, o.node)) {
+        std::fprintf(err, "sen3bot can dump: --node '%s': a node id is 1..127\n", argv[i]);
+        return 2;
+      }
+      if (arg == "--count" && (!parse_u64(value, o.count) || o.count == 0)) {
+        std::fprintf(err, "sen3bot can dump: --count '%s': a positive number of frames\n", argv[i]);
+        return 2;
+      }
+    } else if (arg.size() > 1 && arg.front() == '-') {
+      std::fprintf(err, "sen3bot can dump: unknown option '%s'\n%s", argv[i], kDumpUsage);
+      return 2;
+    } else if (!have_source) {
+      o.source = arg;
+      have_source = true;
+    } else {
+      std::fprintf(err, "sen3bot can dump: one SOURCE only ('%s' is a second)\n%s", argv[i], kDumpUsage);
+      return 2;
+    }
+  }
+  if (!have_source) {
+    std::fputs(kDumpUsage, err);
+    return 2;
+  }
+  if (o.source == "-") return dump_log(stdin, o, out, err);
+  struct stat st {};
+  if (::stat(o.source.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) {
+      std::fprintf(err, "sen3bot can dump: %s is a directory, not a candump log\n", o.source.c_str());
+      return 1;
+    }
+    std::FILE* in = std::fopen(o.source.c_str(), "r");
+    if (in == nullptr) {
+      std::fprintf(err, "sen3bot can dump: %s: %s\n", o.source.c_str(), std::strerror(errno));
+      return 1;
+    }
+    const int rc = dump_log(in, o, out, err);
+    std::fclose(in);
+    return rc;
+  }
+  const int stat_errno = errno;
+  if (stat_errno != ENOENT || !interface_like(o.source)) {
+    std::fprintf(err, "sen3bot can dump: %s: %s\n", o.source.c_str(), std::strerror(stat_errno));
+    return 1;
+  }
+  Result<std::unique_ptr<hal::SocketCanBus>> bus = hal::SocketCanBus::open(o.source);
+  if (!bus) {
+    // Say both readings of SOURCE: a typo in a file name must not look like a CAN problem only.
+    std::fprintf(err, "sen3bot can dump: %s: no such file, and as a CAN interface: %s\n", o.source.c_str(),
+                 bus.error().c_str());
+    return 1;
+  }
+  return dump_live(**bus, o, out, err);
+}
+
+// --- can io ---------------------------------------------------------------------------------
+
+namespace {
+
+struct IoOptions {
+  std::string iface;
+  unsigned node = 0;
+  std::uint8_t set_mask = 0;  // outputs named by --set
+  std::uint8_t set_values = 0;
+  double timeout_s = 3.0;
+  bool sim_inputs_given = false;
+  std::uint8_t sim_inputs = 0;
+  bool sim_silent = false;  // the emulated node never answers: what a missing node looks like
+};
+
+// "OUT=V", OUT 1..8, V 0 or 1.
+bool parse_set(std::string_view text, IoOptions& o) {
+  const std::size_t eq = text.find('=');
+  if (eq == std::string_view::npos) return false;
+  std::uint32_t output = 0;
+  const std::string_view value = text.substr(eq + 1);
+  if (!parse_u32(text.substr(0, eq), output) || output < 1 || output > 8) return false;
+  if (value != "0" && value != "1") return false;
+  const auto bit = static_cast<std::uint8_t>(1u << (output - 1));
+  o.set_mask = static_cast<std::uint8_t>(o.set_mask | bit);
+  o.set_values = static_cast<std::uint8_t>(value == "1" ? (o.set_values | bit) : (o.set_values & ~bit));
+  return true;
+}
+
+void append_events(std::string& out, const canopen::IoNodeMaster& m) {
+  out += ",\"events\":{";
+  for (std::size_t i = 0; i < canopen::kIoNodeEvents; ++i) {
+    const auto e = static_cast<canopen::IoNodeEvent>(i);
+    append(out, i == 0 ? "\"%s\":%llu" : ",\"%s\":%llu", canopen::to_string(e),
+           static_cast<unsigned long long>(m.count(e)));
+  }
+  out += '}';
+}
+
+// The master's state and counters, for an error message.
+std::string master_summary(const canopen::IoNodeMaster& m, bool heard, const hal::CanBus& bus, std::uint64_t sent,
+                           std::uint64_t received) {
+  std::string s;
+  append(s, "master state %s, %s%s, link %s, %llu frames sent, %llu received;", canopen::to_string(m.state()),
+         heard ? "last heartbeat state " : "no heartbeat heard", heard ? canopen::to_string(m.node_state()) : "",
+         hal::to_string(bus.link_state()), static_cast<unsigned long long>(sent),
+         static_cast<unsigned long long>(received));
+  for (std::size_t i = 0; i < canopen::kIoNodeEvents; ++i) {
+    const auto e = static_cast<canopen::IoNodeEvent>(i);
+    append(s, " %s %llu", canopen::to_string(e), static_cast<unsigned long long>(m.count(e)));
+  }
+  if (m.count(canopen::IoNodeEvent::sdo_abort) > 0)
+    append(s, "; last SDO abort 0x%08X at 0x%04X:%u (%s)", static_cast<unsigned>(m.last_abort()),
+           static_cast<unsigned>(m.last_abort_at().index), static_cast<unsigned>(m.last_abort_at().sub),
+           canopen::describe_abort(m.last_abort()));
+  return s;
+}
+
+}  // namespace
+
+int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  IoOptions o;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--sim-silent") {
+      o.sim_silent = true;
+      continue;
+    }
+    if (i + 1 >= argc) {
+      std::fprintf(err, "sen3bot can io: %s needs a value\n%s", argv[i], kIoUsage);
+      return 2;
+    }
+    const std::string_view value = argv[++i];
+    std::uint32_t number = 0;
+    bool ok = true;
+    if (arg == "--iface") {
+      o.iface = value;
+      ok = value == "sim" || interface_like(value);
+    } else if (arg == "--node") {
+      ok = parse_node(value, o.node);
+    } else if (arg == "--set") {
+      ok = parse_set(value, o);
+    } else if (arg == "--timeout") {
+      ok = parse_double(value, o.timeout_s) && o.timeout_s > 0 && o.timeout_s <= 3600;
+    } else if (arg == "--sim-inputs") {
+      ok = parse_u32(value, number) && number <= 0xFF;
+      o.sim_inputs = static_cast<std::uint8_t>(number);
+      o.sim_inputs_given = true;
+    } else {
+      std::fprintf(err, "sen3bot can io: unknown option '%s'\n%s", argv[i - 1], kIoUsage);
+      return 2;
+    }
+    if (!ok) {
+      std::fprintf(err, "sen3bot can io: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kIoUsage);
+      return 2;
+    }
+  }
+  if (o.iface.empty() || o.node == 0) {
+    std::fprintf(err, "sen3bot can io: --iface and --node are required\n%s", kIoUsage);
+    return 2;
+  }
+  const bool sim = o.iface == "sim";
+  if ((o.sim_inputs_given || o.sim_silent) && !sim) {
+    std::fprintf(err, "sen3bot can io: --sim-inputs and --sim-silent are for the emulated node: "
+                      "only with --iface sim\n");
+    return 2;
+  }
+
+  canopen::IoNodeConfig config;
+  config.node = static_cast<std::uint8_t>(o.node);
+  if (Status s = canopen::IoNodeMaster::check(config); !s) {
+    std::fprintf(err, "sen3bot can io: %s\n", s.error().c_str());
+    return 2;
+  }
+
+  // The bus: a SocketCAN interface, or an in-memory bus with the emulated node on it.
+  std::unique_ptr<hal::SocketCanBus> socket;
+  std::unique_ptr<hal::MemoryCanBus> memory;
+  hal::CanBus* bus = nullptr;
+  hal::MemoryCanNode* node_port = nullptr;
+  std::optional<canopen::IoNodeEmulator> emulator;
+  hal::PosixClock clock;
+  if (sim) {
+    memory = std::make_unique<hal::MemoryCanBus>(2);
+    Result<hal::MemoryCanNode*> master_port = memory->attach("sim");
+    Result<hal::MemoryCanNode*> emulated = memory->attach("io-node");
+    if (!master_port || !emulated) {
+      std::fprintf(err, "sen3bot can io: sim: %s\n", (!master_port ? master_port : emulated).error().c_str());
+      return 1;
+    }
+    bus = *master_port;
+    node_port = *emulated;
+    canopen::IoNodeEmulatorConfig node_config;
+    node_config.node = config.node;
+    emulator.emplace(node_config);
+    emulator->set_inputs(o.sim_inputs);
+    emulator->set_silent(o.sim_silent);
+    emulator->power_up(clock.now());
+  } else {
+    Result<std::unique_ptr<hal::SocketCanBus>> opened = hal::SocketCanBus::open(o.iface);
+    if (!opened) {
+      std::fprintf(err, "sen3bot can io: %s\n", opened.error().c_str());
+      return 1;
+    }
+    socket = std::move(*opened);
+    bus = socket.get();
+  }
+
+  const StopOnSignal stop;
+  canopen::IoNodeMaster master(config);
+  constexpr hal::Nanos kCycle = hal::millis(10);
+  const hal::Nanos start = clock.now();
+  const hal::Nanos deadline = start + static_cast<hal::Nanos>(o.timeout_s * 1e9);
+  std::uint64_t sent = 0;
+  std::uint64_t received = 0;
+  bool heard = false;  // a heartbeat or boot-up from the node
+  hal::Nanos operational_ns = -1;
+  bool outputs_applied = false;
+  std::optional<std::uint8_t> outputs_sent;  // the last RPDO1 that went to the bus
+
+  const auto fail = [&](const char* what) {
+    std::fprintf(err, "sen3bot can io: node %u on %s %s after %.1f s: %s\n", o.node, o.iface.c_str(), what,
+                 hal::to_seconds(clock.now() - start), master_summary(master, heard, *bus, sent, received).c_str());
+    return 1;
+  };
+  const auto transmit = [&](const CanFrame& f) -> Status {
+    if (Status s = bus->send(f); !s) return s;
+    ++sent;
+    const Classified c = canopen::classify(f);
+    if (c.kind == Kind::rpdo && c.pdo == 1 && f.dlc >= 1) outputs_sent = f.data[0];
+    return {};
+  };
+
+  hal::Nanos next = start;
+  for (;;) {
+    const hal::Nanos now = clock.now();
+    // What the bus brought, then the master's timers and frames.
+    for (;;) {
+      Result<std::optional<CanFrame>> r = bus->receive();
+      if (!r) {
+        std::fprintf(err, "sen3bot can io: %s: %s\n", o.iface.c_str(), r.error().c_str());
+        return 1;
+      }
+      if (!*r) break;
+      ++received;
+      const Classified c = canopen::classify(**r);
+      heard = heard || (c.kind == Kind::heartbeat && c.node == o.node);
+      master.on_frame(**r, now);
+    }
+    std::array<CanFrame, 4> frames{};
+    const std::size_t n = master.poll(now, frames);
+    for (std::size_t i = 0; i < n; ++i) {
+      // A full transmit queue or a bus-off drops the frame: the master sends again (SDO
+      // retries, NMT start repeated, outputs refreshed), and the timeout's report says why.
+      if (Status s = transmit(frames[i]); !s && s.error().code() != Errc::would_block &&
+                                              s.error().code() != Errc::disconnected) {
+        std::fprintf(err, "sen3bot can io: %s: %s\n", o.iface.c_str(), s.error().c_str());
+        return 1;
+      }
+    }
+    (void)bus->flush();  // what the backend queued goes out as soon as there is room
+    // The emulated node's turn: it answers within the same cycle, as a node on a bus would.
+    if (emulator) {
+      for (;;) {
+        Result<std::optional<CanFrame>> r = node_port->receive();
+        if (!r || !*r) break;
+        emulator->on_frame(**r, now);
+      }
+      const std::size_t k = emulator->poll(now, frames);
+      for (std::size_t i = 0; i < k; ++i) (void)node_port->send(frames[i]);
+    }
+
+    if (operational_ns < 0 && master.state() == canopen::IoNodeState::operational) operational_ns = now;
+    // The outputs are set once the inputs are there (the node is fully up), and the command
+    // is done when an RPDO1 carrying them went out.
+    if (!outputs_applied && master.inputs_valid()) {
+      master.set_outputs(static_cast<std::uint8_t>((master.outputs() & ~o.set_mask) | o.set_values));
+      outputs_applied = true;
+    } else if (outputs_applied && outputs_sent == master.outputs()) {
+      break;
+    }
+    if (StopOnSignal::requested() != 0) return fail("interrupted");
+    if (now >= deadline) {
+      if (master.state() != canopen::IoNodeState::operational) return fail("not operational");
+      if (!master.inputs_valid()) return fail("operational but no inputs (TPDO1) came");
+      return fail("outputs not sent");
+    }
+    next += kCycle;
+    clock.sleep_until(next);
+  }
+
+  std::string json;
+  append(json, "{\"iface\":\"%s\",\"node\":%u,\"state\":\"%s\",\"heartbeat\":\"%s\",\"inputs_valid\":%s",
+         o.iface.c_str(), o.node, canopen::to_string(master.state()), canopen::to_string(master.node_state()),
+         master.inputs_valid() ? "true" : "false");
+  append_bits(json, "inputs", master.inputs());
+  append_bits(json, "outputs", master.outputs());
+  append(json, ",\"link\":\"%s\",\"operational_s\":%.3f,\"frames_sent\":%llu,\"frames_received\":%llu",
+         hal::to_string(bus->link_state()), hal::to_seconds(operational_ns - start),
+         static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received));
+  append_events(json, master);
+  if (master.count(canopen::IoNodeEvent::emergency) + master.count(canopen::IoNodeEvent::emergency_reset) > 0) {
+    const canopen::Emergency& e = master.last_emergency();
+    append(json, ",\"last_emergency\":{\"code\":\"0x%04X\",\"register\":\"0x%02X\"", static_cast<unsigned>(e.code),
+           static_cast<unsigned>(e.error_register));
+    append_string(json, "description", canopen::describe_emergency(e.code));
+    json += '}';
+  }
+  if (emulator) {
+    // What the emulated node itself now has: the outputs arrived, not only went out.
+    append(json, ",\"emulator\":{\"state\":\"%s\"", canopen::to_string(emulator->state()));
+    append_bits(json, "outputs", emulator->outputs());
+    json += '}';
+  }
+  json += '}';
+  print_line(out, json);
+  return 0;
+}
+
+}  // namespace sen3bot::firmware
