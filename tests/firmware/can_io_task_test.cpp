@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "can_board.hpp"
 #include "can_io_task.hpp"
 #include "config.hpp"
 #include "sen3bot/canopen/io_node_emulator.hpp"
@@ -99,51 +100,9 @@ TEST(CanIoLight, FaultBeatsDrivingBeatsWait4colBeatsIdle) {
   EXPECT_EQ(output_levels(c, LightMode::idle, false), 0x00);
 }
 
-// A board with one CAN bus: the I/O node's emulator on the other station.
-class CanBoard final : public hal::Board {
- public:
-  CanBoard() {
-    firmware_ = *bus_.attach("firmware");
-    node_ = *bus_.attach("node");
-  }
-  [[nodiscard]] std::string_view name() const override { return "can-test"; }
-  [[nodiscard]] hal::Clock& clock() override { return clock_; }
-  Result<hal::Link> open_link(std::string_view, const hal::LinkRequest&) override {
-    return Error(Errc::not_found, "no links");
-  }
-  Result<std::unique_ptr<hal::CanBus>> open_can(std::string_view, std::string_view interface) override {
-    if (interface != "test") return Error(Errc::not_found, "no such CAN interface");
-    struct Borrowed final : hal::CanBus {
-      explicit Borrowed(hal::MemoryCanNode& n) : node(n) {}
-      Status send(const hal::CanFrame& f) override { return node.send(f); }
-      Result<std::optional<hal::CanFrame>> receive() override { return node.receive(); }
-      Status set_filters(std::span<const hal::CanFilter> f) override { return node.set_filters(f); }
-      [[nodiscard]] hal::CanLinkState link_state() const override { return node.link_state(); }
-      [[nodiscard]] std::string_view name() const override { return "test"; }
-      hal::MemoryCanNode& node;
-    };
-    return std::unique_ptr<hal::CanBus>(std::make_unique<Borrowed>(*firmware_));
-  }
-  // The node's side of one 5 ms step.
-  void step_node(canopen::IoNodeEmulator& emulator, hal::Nanos now) {
-    for (;;) {
-      Result<std::optional<hal::CanFrame>> f = node_->receive();
-      if (!f || !f->has_value()) break;
-      emulator.on_frame(**f, now);
-    }
-    std::array<hal::CanFrame, 4> out;
-    const std::size_t n = emulator.poll(now, out);
-    for (std::size_t i = 0; i < n; ++i) ASSERT_TRUE(node_->send(out[i]));
-  }
-  hal::MemoryCanBus bus_;
-  hal::MemoryCanNode* firmware_ = nullptr;
-  hal::MemoryCanNode* node_ = nullptr;
-  hal::SimClock clock_;
-};
-
 struct TaskRig {
   CanIoConfig config;
-  CanBoard board;
+  testing::CanBoard board;
   tasks::Topic<msg::SafetyOutput> safety;
   tasks::Topic<msg::VelocityCommand> command;
   tasks::Topic<msg::OperatingMode> mode;
@@ -241,7 +200,7 @@ TEST(CanIoTask, PublishesTheChainTheBumpersAndResetEdges) {
   EXPECT_EQ(rig.node.outputs(), 0x04) << "wait4col light";
 
   // Bus-off: not healthy at once, though the master has not missed a heartbeat yet.
-  rig.board.bus_.set_link_state(hal::CanLinkState::bus_off);
+  rig.board.bus.set_link_state(hal::CanLinkState::bus_off);
   rig.run(hal::millis(10));
   EXPECT_FALSE(rig.latest().healthy);
   EXPECT_GT(rig.task->bus_errors(), 0u);

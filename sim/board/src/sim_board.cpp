@@ -151,21 +151,6 @@ Result<std::unique_ptr<hal::DatagramPort>> SimBoard::open_datagram(std::string_v
   return std::unique_ptr<hal::DatagramPort>(std::make_unique<DetectorPort>(*detector_));
 }
 
-namespace {
-// The firmware's station on the board's bus as its own CanBus (the bus keeps the station).
-class BorrowedCan final : public hal::CanBus {
- public:
-  explicit BorrowedCan(hal::MemoryCanNode& node) : node_(node) {}
-  Status send(const hal::CanFrame& frame) override { return node_.send(frame); }
-  Result<std::optional<hal::CanFrame>> receive() override { return node_.receive(); }
-  Status set_filters(std::span<const hal::CanFilter> filters) override { return node_.set_filters(filters); }
-  [[nodiscard]] hal::CanLinkState link_state() const override { return node_.link_state(); }
-  [[nodiscard]] std::string_view name() const override { return node_.name(); }
-
- private:
-  hal::MemoryCanNode& node_;
-};
-}  // namespace
 
 Result<std::unique_ptr<hal::CanBus>> SimBoard::open_can(std::string_view name, std::string_view interface) {
   if (interface != "sim") return host_.open_can(name, interface);
@@ -174,7 +159,7 @@ Result<std::unique_ptr<hal::CanBus>> SimBoard::open_can(std::string_view name, s
                          static_cast<int>(name.size()), name.data());
   if (can_handed_out_) return Error(Errc::capacity, "io_node: the simulated CAN I/O node's bus is already open");
   can_handed_out_ = true;
-  return std::unique_ptr<hal::CanBus>(std::make_unique<BorrowedCan>(*can_firmware_));
+  return std::unique_ptr<hal::CanBus>(std::make_unique<hal::CanBusRef>(*can_firmware_));
 }
 
 void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {

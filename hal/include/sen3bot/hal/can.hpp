@@ -182,6 +182,27 @@ class CanTxRing {
   std::array<char, 32> name_{};
 };
 
+// A handle on a bus someone else owns (a station of a MemoryCanBus, kept by its bus), for an
+// interface that hands out owned CanBus objects (hal::Board::open_can).
+class CanBusRef final : public CanBus {
+ public:
+  explicit CanBusRef(CanBus& bus) noexcept : bus_(bus) {}
+  Status send(const CanFrame& frame) override { return bus_.send(frame); }
+  Result<std::optional<CanFrame>> receive() override { return bus_.receive(); }
+  Status set_filters(std::span<const CanFilter> filters) override { return bus_.set_filters(filters); }
+  [[nodiscard]] CanLinkState link_state() const override { return bus_.link_state(); }
+  [[nodiscard]] std::int64_t last_receive_unix_ns() const override { return bus_.last_receive_unix_ns(); }
+  Status flush() override { return bus_.flush(); }
+  [[nodiscard]] std::size_t tx_queued() const override { return bus_.tx_queued(); }
+  [[nodiscard]] std::uint64_t tx_dropped() const override { return bus_.tx_dropped(); }
+  [[nodiscard]] std::uint64_t error_frames() const override { return bus_.error_frames(); }
+  [[nodiscard]] int poll_fd() const override { return bus_.poll_fd(); }
+  [[nodiscard]] std::string_view name() const override { return bus_.name(); }
+
+ private:
+  CanBus& bus_;
+};
+
 struct SocketCanOptions {
   bool receive_own = false;  // CAN_RAW_RECV_OWN_MSGS: also receive what this socket sent
   // Frames kept when the kernel's transmit queue is full (CanTxRing), allocated at open();
