@@ -7,50 +7,22 @@
 #include <memory_resource>
 
 #include "can_board.hpp"
-#include "can_io_task.hpp"
 
 namespace {
 
 using namespace sen3bot;
 
-constexpr hal::Nanos kCycleNs = hal::millis(10);
-
-struct Rig {
-  firmware::CanIoConfig config;
-  testing::CanBoard board;
-  tasks::Topic<msg::SafetyOutput> safety;
-  tasks::Topic<msg::VelocityCommand> command;
-  tasks::Topic<msg::OperatingMode> mode;
-  tasks::Topic<msg::SafetyIo> io;
-  canopen::IoNodeEmulator node{canopen::IoNodeEmulatorConfig{}};
-  std::unique_ptr<firmware::CanIoTask> task;
+// Up and running, and driving (the light's driving output), a command every cycle.
+struct Rig : testing::CanIoRig {
   std::pmr::monotonic_buffer_resource arena;
-  hal::Nanos now = 0;
-  std::uint64_t cycle = 0;
-
   Rig() {
-    config.interface = "test";
-    config.reset_input = 2;
-    config.bumper_inputs = 0x0C;
-    config.buzzer_output = 5;
-    task = std::make_unique<firmware::CanIoTask>(config, board,
-                                                 firmware::CanIoTopics{safety, command, mode, io});
     if (!task->init(arena)) std::abort();
-    node.set_inputs(0x01);
-    node.power_up(0);
-    // Up and running, and driving (the light's driving output).
-    command.publish(msg::VelocityCommand{0.4, 0.0, 0}, 0);
-    for (int i = 0; i < 200; ++i) cycle_once(true);
+    for (int i = 0; i < 200; ++i) step(true);
     if (task->master().state() != canopen::IoNodeState::operational) std::abort();
   }
-  void cycle_once(bool with_task) {
-    board.step_node(node, now);
-    board.step_node(node, now + kCycleNs / 2);
-    if (with_task) {
-      command.publish(msg::VelocityCommand{0.4, 0.0, now}, now);
-      task->step(tasks::StepContext{now, now, cycle++});
-    }
-    now += kCycleNs;
+  void step(bool with_task) {
+    command.publish(msg::VelocityCommand{0.4, 0.0, now}, now);
+    cycle_once(with_task);
   }
   bool healthy() const {
     tasks::Sample<msg::SafetyIo> s;
@@ -60,14 +32,14 @@ struct Rig {
 
 void BM_TaskAndNode(benchmark::State& state) {
   Rig rig;
-  for (auto _ : state) rig.cycle_once(true);
+  for (auto _ : state) rig.step(true);
   if (!rig.healthy()) state.SkipWithError("the node dropped out");
 }
 BENCHMARK(BM_TaskAndNode);
 
 void BM_NodeOnly(benchmark::State& state) {
   Rig rig;
-  for (auto _ : state) rig.cycle_once(false);
+  for (auto _ : state) rig.step(false);
 }
 BENCHMARK(BM_NodeOnly);
 

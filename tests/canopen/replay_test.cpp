@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "text_file.hpp"
 #include "estop_log.hpp"
 #include "sen3bot/canopen/codec.hpp"
 #include "sen3bot/canopen/io_node.hpp"
@@ -25,12 +26,7 @@ using namespace estop_log;
 
 const std::string kLogPath = std::string(SEN3BOT_SOURCE_DIR) + "/tests/data/can/io_node_estop.log";
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using sen3bot::testing::read_file;
 
 std::vector<hal::CandumpLine> read_log() {
   std::vector<hal::CandumpLine> lines;

@@ -100,41 +100,14 @@ TEST(CanIoLight, FaultBeatsDrivingBeatsWait4colBeatsIdle) {
   EXPECT_EQ(output_levels(c, LightMode::idle, false), 0x00);
 }
 
-struct TaskRig {
-  CanIoConfig config;
-  testing::CanBoard board;
-  tasks::Topic<msg::SafetyOutput> safety;
-  tasks::Topic<msg::VelocityCommand> command;
-  tasks::Topic<msg::OperatingMode> mode;
-  tasks::Topic<msg::SafetyIo> io;
-  canopen::IoNodeEmulator node{canopen::IoNodeEmulatorConfig{}};
-  std::unique_ptr<CanIoTask> task;
-  hal::Nanos now = 0;
-  std::uint64_t cycle = 0;
+using TaskRig = testing::CanIoRig;
 
-  TaskRig() {
-    config.interface = "test";
-    config.reset_input = 2;
-    config.bumper_inputs = 0x0C;
-    config.buzzer_output = 5;
-    task = std::make_unique<CanIoTask>(config, board, CanIoTopics{safety, command, mode, io});
-    node.set_inputs(0x01);
-    node.power_up(0);
-  }
-  // 10 ms: the node's two steps, then the task.
-  void run(hal::Nanos duration) {
-    for (const hal::Nanos end = now + duration; now < end; now += hal::millis(10)) {
-      board.step_node(node, now);
-      board.step_node(node, now + hal::millis(5));
-      task->step(tasks::StepContext{now, now, cycle++});
-    }
-  }
-  msg::SafetyIo latest() const {
-    tasks::Sample<msg::SafetyIo> s;
-    EXPECT_TRUE(io.read(s));
-    return s.value;
-  }
-};
+// The newest SafetyIo the task published.
+msg::SafetyIo latest(const TaskRig& rig) {
+  tasks::Sample<msg::SafetyIo> s;
+  EXPECT_TRUE(rig.io.read(s));
+  return s.value;
+}
 
 TEST(CanIoTask, OpensTheBusOrSaysWhyNot) {
   TaskRig rig;
@@ -157,9 +130,9 @@ TEST(CanIoTask, PublishesTheChainTheBumpersAndResetEdges) {
   std::pmr::monotonic_buffer_resource arena;
   ASSERT_TRUE(rig.task->init(arena));
   rig.run(hal::millis(20));
-  EXPECT_FALSE(rig.latest().healthy) << "not healthy before the node is operational";
+  EXPECT_FALSE(latest(rig).healthy) << "not healthy before the node is operational";
   rig.run(hal::millis(500));
-  msg::SafetyIo io = rig.latest();
+  msg::SafetyIo io = latest(rig);
   EXPECT_TRUE(io.healthy);
   EXPECT_TRUE(io.ever_healthy);
   EXPECT_FALSE(io.estop);
@@ -168,10 +141,10 @@ TEST(CanIoTask, PublishesTheChainTheBumpersAndResetEdges) {
 
   rig.node.set_inputs(0x00);  // the chain opens (active-low)
   rig.run(hal::millis(20));
-  EXPECT_TRUE(rig.latest().estop);
+  EXPECT_TRUE(latest(rig).estop);
   rig.node.set_inputs(0x01 | 0x08);
   rig.run(hal::millis(20));
-  io = rig.latest();
+  io = latest(rig);
   EXPECT_FALSE(io.estop);
   EXPECT_TRUE(io.bumper);
   // Each press of the reset button is one request, however long it is held.
@@ -181,7 +154,7 @@ TEST(CanIoTask, PublishesTheChainTheBumpersAndResetEdges) {
   rig.run(hal::millis(20));
   rig.node.set_inputs(0x01 | 0x02);
   rig.run(hal::millis(20));
-  EXPECT_EQ(rig.latest().resets, 2u);
+  EXPECT_EQ(latest(rig).resets, 2u);
 
   // The light follows the safety task and the command.
   msg::SafetyOutput stop;
@@ -202,7 +175,7 @@ TEST(CanIoTask, PublishesTheChainTheBumpersAndResetEdges) {
   // Bus-off: not healthy at once, though the master has not missed a heartbeat yet.
   rig.board.bus.set_link_state(hal::CanLinkState::bus_off);
   rig.run(hal::millis(10));
-  EXPECT_FALSE(rig.latest().healthy);
+  EXPECT_FALSE(latest(rig).healthy);
   EXPECT_GT(rig.task->bus_errors(), 0u);
 }
 

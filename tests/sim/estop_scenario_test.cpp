@@ -13,17 +13,13 @@
 #include <string>
 #include <vector>
 
+#include "text_file.hpp"
 #include "sim_commands.hpp"
 
 namespace sen3bot::sim {
 namespace {
 
-std::string read_file(const std::string& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
+using sen3bot::testing::read_file;
 
 // The value of `key` in the n-th case of the report.
 double field(const std::string& json, const std::string& key, int n) {

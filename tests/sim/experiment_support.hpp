@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "text_file.hpp"
 #include "command_capture.hpp"
 #include "sim_commands.hpp"
 
@@ -17,12 +18,7 @@ namespace sen3bot::sim::testing {
 
 inline const std::string kConfig = SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml";
 
-inline std::string read_file(const std::string& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
+using sen3bot::testing::read_file;
 
 using sen3bot::testing::read_all;
 using CommandRun = sen3bot::testing::CommandOutcome;

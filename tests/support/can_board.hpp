@@ -7,6 +7,7 @@
 #include <optional>
 #include <string_view>
 
+#include "can_io_task.hpp"
 #include "sen3bot/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/hal/can.hpp"
@@ -46,6 +47,44 @@ class CanBoard final : public hal::Board {
   hal::MemoryCanNode* firmware_ = nullptr;
   hal::MemoryCanNode* node_ = nullptr;
   hal::SimClock clock_;
+};
+
+// The firmware's CAN I/O task on a CanBoard, wired as config/sim.yaml wires the node (the
+// chain on input 1, reset on 2, bumpers on 3 and 4, buzzer on output 5), the node powered up
+// with its chain closed. The task is built, not initialised.
+struct CanIoRig {
+  static constexpr hal::Nanos kCycleNs = hal::millis(10);
+
+  firmware::CanIoConfig config;
+  CanBoard board;
+  tasks::Topic<msg::SafetyOutput> safety;
+  tasks::Topic<msg::VelocityCommand> command;
+  tasks::Topic<msg::OperatingMode> mode;
+  tasks::Topic<msg::SafetyIo> io;
+  canopen::IoNodeEmulator node{canopen::IoNodeEmulatorConfig{}};
+  std::unique_ptr<firmware::CanIoTask> task;
+  hal::Nanos now = 0;
+  std::uint64_t cycle = 0;
+
+  CanIoRig() {
+    config.interface = "test";
+    config.reset_input = 2;
+    config.bumper_inputs = 0x0C;
+    config.buzzer_output = 5;
+    task = std::make_unique<firmware::CanIoTask>(config, board, firmware::CanIoTopics{safety, command, mode, io});
+    node.set_inputs(0x01);
+    node.power_up(0);
+  }
+  // One 10 ms cycle: the node's two 5 ms steps, then the task (unless with_task is false).
+  void cycle_once(bool with_task = true) {
+    board.step_node(node, now);
+    board.step_node(node, now + kCycleNs / 2);
+    if (with_task) task->step(tasks::StepContext{now, now, cycle++});
+    now += kCycleNs;
+  }
+  void run(hal::Nanos duration) {
+    for (const hal::Nanos end = now + duration; now < end;) cycle_once();
+  }
 };
 
 }  // namespace sen3bot::testing
