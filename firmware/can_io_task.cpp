@@ -7,7 +7,7 @@ namespace sen3bot::firmware {
 namespace {
 
 constexpr std::uint8_t bit(std::uint8_t number) noexcept {
-  return number == 0 ? 0 : static_cast<std::uint8_t>(1u << (number - 1));
+  return number == 0 ? std::uint8_t{0} : static_cast<std::uint8_t>(1u << (number - 1));
 }
 
 }  // namespace
