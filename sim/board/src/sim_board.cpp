@@ -151,7 +151,6 @@ Result<std::unique_ptr<hal::DatagramPort>> SimBoard::open_datagram(std::string_v
   return std::unique_ptr<hal::DatagramPort>(std::make_unique<DetectorPort>(*detector_));
 }
 
-
 Result<std::unique_ptr<hal::CanBus>> SimBoard::open_can(std::string_view name, std::string_view interface) {
   if (interface != "sim") return host_.open_can(name, interface);
   if (name != "io_node" || !io_node_)
