@@ -139,20 +139,14 @@ void append_names(std::string& out, std::string_view key, std::uint32_t bits, co
   out += ']';
 }
 
-// The link state one error frame reports, by the SocketCAN backend's rule: bus-off first,
-// then the controller's state (passive over warning over active), then restarted (back on
-// the bus: active). Other classes say nothing about the state.
+// The link state one error frame leads to, by the SocketCAN backend's own rule
+// (hal::next_link_state), or nothing when the frame leaves every state as it was.
 std::optional<hal::CanLinkState> link_after(const CanFrame& f) {
-  const std::uint32_t classes = f.id;
-  if ((classes & hal::can_error::kBusOff) != 0) return hal::CanLinkState::bus_off;
-  if ((classes & hal::can_error::kController) != 0 && f.dlc >= 2) {
-    const std::uint8_t s = f.data[1];
-    if ((s & (hal::can_error::kRxPassive | hal::can_error::kTxPassive)) != 0) return hal::CanLinkState::passive;
-    if ((s & (hal::can_error::kRxWarning | hal::can_error::kTxWarning)) != 0) return hal::CanLinkState::warning;
-    if ((s & hal::can_error::kActive) != 0) return hal::CanLinkState::active;
-  }
-  if ((classes & hal::can_error::kRestarted) != 0) return hal::CanLinkState::active;
-  return std::nullopt;
+  const hal::CanLinkState from_off = hal::next_link_state(hal::CanLinkState::bus_off, f);
+  if (from_off == hal::CanLinkState::bus_off &&
+      hal::next_link_state(hal::CanLinkState::active, f) == hal::CanLinkState::active)
+    return std::nullopt;
+  return from_off;
 }
 
 void describe_error_frame(std::string& out, const CanFrame& f) {
