@@ -52,6 +52,9 @@ NATIVE_PACKAGES=(
   ffmpeg                     # camera tests: ffprobe cross-checks what the peer streams
   tshark                     # camera tests: the checked-in RTSP capture must dissect
   libjpeg-turbo-progs        # camera tests: cjpeg makes restart-marker JPEGs for the type 65 peer
+  libmosquitto-dev           # fleet: the MQTT client (Eclipse Mosquitto's libmosquitto)
+  mosquitto                  # fleet tests: the real broker, with the shipped TLS + ACL configuration
+  openssl                    # fleet tests: toolchain/broker-pki.sh makes the test CA
 )
 
 # --- Raspberry Pi cross build (--cross) -------------------------------------------------------

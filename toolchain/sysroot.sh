@@ -45,6 +45,7 @@ SYSROOT_PACKAGES=(
   libssl-dev                   # camera: libcrypto (Digest auth)
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
   libpugixml-dev libcurl4-openssl-dev          # camera: ONVIF
+  libmosquitto-dev             # fleet: MQTT
 )
 # Unpacked without their dependencies: libopencv-objdetect-dev (the header and the .so link)
 # depends on libopencv-highgui-dev, which would bring Qt 5, Mesa and GTK (~150 packages) for

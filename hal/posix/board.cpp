@@ -113,6 +113,18 @@ Result<std::unique_ptr<CanBus>> PosixBoard::open_can(std::string_view name, std:
   return std::unique_ptr<CanBus>(std::move(*bus));
 }
 
+Result<std::unique_ptr<PubSub>> Board::open_pubsub(std::string_view name, const PubSubOptions& options) {
+  return Error::format(Errc::not_supported, "%.*s: this board has no publish/subscribe link to '%s'", static_cast<int>(name.size()),
+                       name.data(), options.url.c_str());
+}
+
+Result<std::unique_ptr<PubSub>> PosixBoard::open_pubsub(std::string_view name, const PubSubOptions& options) {
+  Result<std::unique_ptr<PubSub>> client = open_mqtt(options);
+  if (!client)
+    return Error::format(client.error().code(), "%.*s: %s", static_cast<int>(name.size()), name.data(), client.error().c_str());
+  return client;
+}
+
 namespace {
 
 // A bound UDP socket as a DatagramPort.

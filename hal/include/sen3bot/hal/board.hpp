@@ -13,6 +13,7 @@
 #include "sen3bot/hal/byte_stream.hpp"
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/hal/pubsub.hpp"
 #include "sen3bot/hal/result.hpp"
 
 namespace sen3bot::hal {
@@ -76,6 +77,10 @@ class Board {
   // Opens the CAN bus `name` ("io_node") on `interface`: a SocketCAN interface ("can0") on
   // the robot, or a name the board knows ("sim"). Allocates; call at start-up.
   virtual Result<std::unique_ptr<CanBus>> open_can(std::string_view name, std::string_view interface);
+  // Opens the publish/subscribe link `name` ("fleet"): an MQTT broker on the robot
+  // (options.url mqtt:// or mqtts://), the site's in-process broker in simulation ("sim").
+  // Allocates; call at start-up. Reconnecting is the link's own business.
+  virtual Result<std::unique_ptr<PubSub>> open_pubsub(std::string_view name, const PubSubOptions& options);
   // Named discrete I/O ("estop", "light"), or null when this board has no such line.
   [[nodiscard]] virtual DigitalInput* input(std::string_view name) noexcept {
     (void)name;
@@ -110,6 +115,7 @@ class PosixBoard final : public Board {
   Result<Link> open_link(std::string_view link, const LinkRequest& request) override;
   Result<std::unique_ptr<DatagramPort>> open_datagram(std::string_view name, std::string_view address) override;
   Result<std::unique_ptr<CanBus>> open_can(std::string_view name, std::string_view interface) override;
+  Result<std::unique_ptr<PubSub>> open_pubsub(std::string_view name, const PubSubOptions& options) override;
   [[nodiscard]] DigitalInput* input(std::string_view name) noexcept override;
   [[nodiscard]] DigitalOutput* output(std::string_view name) noexcept override;
 
