@@ -42,6 +42,7 @@ NATIVE_PACKAGES=(
   libswscale-dev             # camera: YUV -> BGR/grey and downscaling
   libpugixml-dev             # camera: ONVIF SOAP replies (no DTD, no external entities)
   libcurl4-openssl-dev       # camera: ONVIF over HTTP (chunked bodies, HTTP Digest)
+  python3-jsonschema         # vda5050 tests: encoder output checked against the VDA 5050 JSON schemas
   python3-gi                 # camera tests: the RTSP peer is gst-rtsp-server driven from Python
   python3-gst-1.0
   gir1.2-gst-rtsp-server-1.0
