@@ -292,7 +292,7 @@ class Decoder {
     auto at = field("actionParameters");
     std::size_t i = 0;
     for (Value p : params.items()) {
-      auto ai = index(i++);
+      auto item = index(i++);
       if (!expect(p, Type::object)) return false;
       (void)a.parameters.emplace_back();
       ActionParameter& out = a.parameters.back();
@@ -324,7 +324,7 @@ class Decoder {
     auto at = field(key);
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = index(i++);
+      auto item = index(i++);
       (void)out.emplace_back();
       if (!action(v, out.back())) return false;
     }
@@ -379,7 +379,7 @@ class Decoder {
       auto at = field("knotVector");
       std::size_t i = 0;
       for (Value k : knots.items()) {
-        auto ai = index(i++);
+        auto item = index(i++);
         if (!expect(k, Type::number)) return false;
         const double d = *k.number();
         if (d < 0 || d > 1) return fail(kValidationError, "%.17g outside [0, 1]", d);
@@ -388,7 +388,7 @@ class Decoder {
     auto at = field("controlPoints");
     std::size_t i = 0;
     for (Value p : points.items()) {
-      auto ai = index(i++);
+      auto item = index(i++);
       if (!expect(p, Type::object)) return false;
       double x = 0, y = 0, w = 0;
       if (!number(p, "x", x, true) || !number(p, "y", y, true) || !number(p, "weight", w, false, 0)) return false;
@@ -478,7 +478,7 @@ bool check_graph(Decoder& d, const Order& o) noexcept {
     const Node& n = o.nodes[i];
     {
       auto at = d.field("nodes");
-      auto ai = d.index(i);
+      auto item = d.index(i);
       Decoder::IdScope id(d, "nodeId");
       d.set_id(n.node_id);
       if (i > 0 && n.sequence_id <= last_seq) {
@@ -495,7 +495,7 @@ bool check_graph(Decoder& d, const Order& o) noexcept {
     if (i == o.edges.size()) break;
     const Edge& e = o.edges[i];
     auto at = d.field("edges");
-    auto ai = d.index(i);
+    auto item = d.index(i);
     Decoder::IdScope id(d, "edgeId");
     d.set_id(e.edge_id);
     if (e.sequence_id <= last_seq) {
@@ -590,7 +590,7 @@ Decoded decode_order(std::string_view text, Version version, Order& out, DecodeS
       auto at = d.field("nodes");
       std::size_t i = 0;
       for (Value v : nodes.items()) {
-        auto ai = d.index(i++);
+        auto item = d.index(i++);
         (void)out.nodes.emplace_back();
         if (!d.node(v, out.nodes.back())) return false;
       }
@@ -599,7 +599,7 @@ Decoded decode_order(std::string_view text, Version version, Order& out, DecodeS
       auto at = d.field("edges");
       std::size_t i = 0;
       for (Value v : edges.items()) {
-        auto ai = d.index(i++);
+        auto item = d.index(i++);
         (void)out.edges.emplace_back();
         if (!d.edge(v, out.edges.back())) return false;
       }
@@ -665,7 +665,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("nodeStates");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       Decoder::IdScope id(d, "nodeId");
       if (!d.expect(v, Type::object)) return false;
       (void)s.node_states.emplace_back();
@@ -689,7 +689,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("edgeStates");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       Decoder::IdScope id(d, "edgeId");
       if (!d.expect(v, Type::object)) return false;
       (void)s.edge_states.emplace_back();
@@ -733,7 +733,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("loads");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       double w = 0;
       if (!d.expect(v, Type::object) || !d.string_type(v, "loadId") || !d.string_type(v, "loadType") ||
           !d.string_type(v, "loadPosition") || !d.number(v, "weight", w, false, 0))
@@ -745,7 +745,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("actionStates");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       Decoder::IdScope id(d, "actionId");
       if (!d.expect(v, Type::object)) return false;
       (void)s.action_states.emplace_back();
@@ -773,7 +773,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("errors");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       if (!d.expect(v, Type::object)) return false;
       (void)s.errors.emplace_back();
       VehicleError& e = s.errors.back();
@@ -799,7 +799,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     auto at = d.field("information");
     std::size_t i = 0;
     for (Value v : list.items()) {
-      auto ai = d.index(i++);
+      auto item = d.index(i++);
       Value t;
       int level = 0;
       if (!d.expect(v, Type::object) || !d.require(v, "infoType", t) || !d.string_type(v, "infoType") ||
@@ -821,7 +821,7 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
       auto at = d.field("maps");
       std::size_t i = 0;
       for (Value v : list.items()) {
-        auto ai = d.index(i++);
+        auto item = d.index(i++);
         if (!d.expect(v, Type::object)) return false;
         (void)s.maps.emplace_back();
         MapState& m = s.maps.back();
