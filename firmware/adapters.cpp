@@ -43,6 +43,8 @@ msg::Odometry to_nav_odometry(const p2os::BaseState& in) noexcept {
   return odom;
 }
 
-msg::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept { return msg::BaseFlags{in.estop, in.motors_enabled}; }
+msg::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept {
+  return msg::BaseFlags{in.estop, in.motors_enabled, in.battery_v};
+}
 
 }  // namespace sen3bot::firmware

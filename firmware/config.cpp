@@ -310,10 +310,11 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("approach")) {
     // The safety filter's check against tracked movers coming from the side (safety.hpp).
     const Reader p = r.child("approach");
-    p.allow_only({"horizon_s", "margin_m", "min_speed_m_s"});
+    p.allow_only({"horizon_s", "margin_m", "min_speed_m_s", "candidates"});
     if (p.has("horizon_s")) n.safety.approach_horizon_s = p.number("horizon_s", 0.0, 5.0);
     if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
     if (p.has("min_speed_m_s")) n.safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
+    if (p.has("candidates")) n.safety.approach_candidates = p.boolean("candidates");
   }
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
   if (r.has("local_costmap")) {
@@ -343,19 +344,55 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("weight")) n.dwa.mover_weight = p.number("weight", 0.0, 100.0);
     if (p.has("max_yield_s")) n.dwa.max_yield_s = p.number("max_yield_s", 0.0, 600.0);
   }
-  const std::vector<Reader> goals = r.sequence("goals");
-  if (goals.empty() || goals.size() > MissionConfig::kMaxGoals)
-    r.fail("goals", "expected 1 to " + std::to_string(MissionConfig::kMaxGoals) + " points", YAML::Node());
-  for (std::size_t i = 0; i < goals.size(); ++i) n.mission.goals[i] = goals[i].point();
-  n.mission.goal_count = goals.size();
+  // Optional here: with a `fleet` section the goals come from the fleet's orders instead.
+  if (r.has("goals")) {
+    const std::vector<Reader> goals = r.sequence("goals");
+    if (goals.empty() || goals.size() > MissionConfig::kMaxGoals)
+      r.fail("goals", "expected 1 to " + std::to_string(MissionConfig::kMaxGoals) + " points", YAML::Node());
+    for (std::size_t i = 0; i < goals.size(); ++i) n.mission.goals[i] = goals[i].point();
+    n.mission.goal_count = goals.size();
+  }
   if (r.has("start_delay_s")) n.mission.start_delay_s = r.number("start_delay_s", 0.0, 600.0);
   if (r.has("goal_timeout_s")) n.mission.goal_timeout_s = r.number("goal_timeout_s", 1.0, 86400.0);
+}
+
+// fleet: the robot as a VDA 5050 vehicle (fleet_task.hpp, docs/fleet.md).
+void read_fleet(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"broker", "interface_name", "version", "manufacturer", "serial_number", "map_id", "username",
+                "password_file", "ca_file", "cert_file", "key_file", "keepalive_s", "state_period_s",
+                "visualization_period_s", "people_period_s", "deviation_xy_m", "battery_empty_v", "battery_full_v"});
+  FleetConfig& f = c.fleet;
+  c.has_fleet = true;
+  f.broker = r.text("broker");
+  f.serial_number = r.text("serial_number");
+  if (r.has("interface_name")) f.interface_name = r.text("interface_name");
+  if (r.has("version")) {
+    const std::string version = r.text("version");
+    const auto parsed = vda5050::parse_version(version);
+    if (!parsed) r.fail("version", "expected 2.1.0 or 2.0.0, got '" + version + "'", YAML::Node());
+    f.version = *parsed;
+  }
+  if (r.has("manufacturer")) f.manufacturer = r.text("manufacturer");
+  if (r.has("map_id")) f.map_id = r.text("map_id");
+  if (r.has("username")) f.username = r.text("username");
+  if (r.has("password_file")) f.password_file = r.text("password_file");
+  if (r.has("ca_file")) f.ca_file = r.text("ca_file");
+  if (r.has("cert_file")) f.cert_file = r.text("cert_file");
+  if (r.has("key_file")) f.key_file = r.text("key_file");
+  if (r.has("keepalive_s")) f.keepalive_s = static_cast<int>(r.integer("keepalive_s", 1, 3600));
+  if (r.has("state_period_s")) f.state_period_s = r.number("state_period_s", 0.01, 30.0);
+  if (r.has("visualization_period_s")) f.visualization_period_s = r.number("visualization_period_s", 0.0, 60.0);
+  if (r.has("people_period_s")) f.people_period_s = r.number("people_period_s", 0.0, 60.0);
+  if (r.has("deviation_xy_m")) f.deviation_xy_m = r.number("deviation_xy_m", 0.01, 10.0);
+  if (r.has("battery_empty_v")) f.battery_empty_v = r.number("battery_empty_v", 0.0, 100.0);
+  if (r.has("battery_full_v")) f.battery_full_v = r.number("battery_full_v", 0.0, 100.0);
+  if (Status s = check(f); !s) r.fail_here(s.error().c_str());
 }
 
 FirmwareConfig read(const Reader& top, const std::string& source, std::span<const std::string_view> board_sections) {
   FirmwareConfig c;
   c.source_path = source;
-  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation"};
+  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet"};
   keys.insert(keys.end(), board_sections.begin(), board_sections.end());
   if (top.has("sim") && std::find(keys.begin(), keys.end(), "sim") == keys.end())
     top.fail("sim", "a simulated robot: run this configuration with sen3bot-sim", YAML::Node());
@@ -421,6 +458,14 @@ FirmwareConfig read(const Reader& top, const std::string& source, std::span<cons
   }
   if (top.has("devices")) read_devices(top.child("devices"), c);
   if (top.has("navigation")) read_navigation(top.child("navigation"), c);
+  if (top.has("fleet")) {
+    read_fleet(top.child("fleet"), c);
+    if (!c.navigation.enabled) top.fail("fleet", "the fleet drives the robot through its navigation: needs a navigation section", YAML::Node());
+    if (c.navigation.mission.goal_count > 0)
+      top.fail("navigation", "goals: the fleet's orders give the goals; remove navigation.goals or the fleet section", YAML::Node());
+  } else if (c.navigation.enabled && c.navigation.mission.goal_count == 0) {
+    top.fail("navigation", "goals: missing (1 to " + std::to_string(MissionConfig::kMaxGoals) + " points, or a fleet section)", YAML::Node());
+  }
   return c;
 }
 

@@ -22,6 +22,7 @@
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "can_io_task.hpp"
+#include "fleet_task.hpp"
 #include "mission.hpp"
 
 namespace sen3bot::firmware {
@@ -112,6 +113,8 @@ struct FirmwareConfig {
   BoardIo board;
   DevicesConfig devices;
   NavigationSection navigation;
+  bool has_fleet = false;  // a `fleet` section: the goals come from VDA 5050 orders
+  FleetConfig fleet;
 };
 
 // `board_sections` are top-level sections that belong to the board the firmware runs on (the

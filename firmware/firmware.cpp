@@ -28,6 +28,7 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "controller") return controller_task_.get();
   if (name == "safety") return safety_task_.get();
   if (name == "mission") return mission_task_.get();
+  if (name == "fleet") return fleet_task_.get();
   if (name == "detector") return detector_task_.get();
   if (name == "people") return people_task_.get();
 #ifdef SEN3BOT_HAS_HOG
@@ -140,8 +141,14 @@ Status Firmware::create_navigation() {
                                                    nav_pose_, nav_movers_, nav_command_, nav_safety_, people,
                                                    config_.devices.has_io_node ? &nav_io_ : nullptr);
 
-  mission_task_ = std::make_unique<MissionTask>(
-      n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});
+  if (config_.has_fleet) {
+    fleet_task_ = std::make_unique<FleetTask>(config_.fleet, board_,
+                                              FleetTopics{nav_pose_, nav_odometry_, nav_base_flags_, nav_controller_, nav_path_,
+                                                          nav_safety_, nav_people_, nav_goal_});
+  } else {
+    mission_task_ = std::make_unique<MissionTask>(
+        n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});
+  }
   return Status::success();
 }
 
@@ -183,6 +190,8 @@ Status Firmware::init() {
                            : name == "can_io"                                   ? "needs devices.io_node"
                            : name == "detector" || name == "people"             ? "needs navigation.people"
                            : name == "vision" ? "needs navigation.people.detector: onboard"
+                           : name == "fleet"  ? "needs a fleet section"
+                           : name == "mission" && config_.has_fleet ? "the fleet gives the goals: no mission"
                                                                                 : "needs a navigation section");
   }
   for (const tasks::TaskSpec* row : rows_) {

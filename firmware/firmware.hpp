@@ -22,6 +22,7 @@
 #include "camera_task.hpp"
 #include "can_io_task.hpp"
 #include "detector_task.hpp"
+#include "fleet_task.hpp"
 #ifdef SEN3BOT_HAS_HOG
 #include "vision_task.hpp"
 #endif
@@ -67,6 +68,8 @@ class Firmware {
   [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
+  // Null without a `fleet` section.
+  [[nodiscard]] const FleetTask* fleet() const { return fleet_task_.get(); }
   // The local planner and its costmap, for a simulator's figures; read while the scheduler is
   // stopped or between lockstep slices. Null without a `navigation` section.
   [[nodiscard]] const nav::ControllerTask* controller() const { return controller_task_.get(); }
@@ -135,6 +138,7 @@ class Firmware {
 #endif
   std::unique_ptr<nav::PeopleTask> people_task_;
   std::unique_ptr<MissionTask> mission_task_;
+  std::unique_ptr<FleetTask> fleet_task_;
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;
 };

@@ -38,6 +38,8 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
+    // Decoding a full order takes ~1 ms on a Pi 3 (benchmarks); the network is the link's thread.
+    tasks::TaskSpec{"fleet",        100'000,   5'000,     4,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
     tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
     // After the camera: its init() reads the camera's frame pool.

@@ -689,8 +689,8 @@ int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (!loaded) return bad(err, loaded.error().c_str());
   plan.base = std::move(loaded->firmware);
   plan.base_world = std::move(loaded->world);
-  if (!plan.base.navigation.enabled || plan.base.navigation.mission.goal_count == 0)
-    return bad(err, o.config_path + ": needs a navigation section with a goal");
+  if (!plan.base.navigation.enabled || plan.base.navigation.mission.goal_count == 0 || plan.base.has_fleet)
+    return bad(err, o.config_path + ": needs a navigation section with a goal (and no fleet section)");
   if (!o.report_dir.empty()) {
     if (::mkdir(o.report_dir.c_str(), 0755) != 0 && errno != EEXIST)
       return bad(err, "--report: cannot create " + o.report_dir + ": " + std::strerror(errno));

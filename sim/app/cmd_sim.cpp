@@ -587,8 +587,9 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
   const FirmwareConfig& base = loaded->firmware;
   const SimulationConfig& base_world = loaded->world;
-  if (!base.navigation.enabled) {
-    std::fprintf(err, "sen3bot-sim sim: %s: needs a navigation section\n", config_path.c_str());
+  if (!base.navigation.enabled || base.has_fleet) {
+    std::fprintf(err, "sen3bot-sim sim: %s: needs a navigation section%s\n", config_path.c_str(),
+                 base.has_fleet ? " and no fleet section (a scenario gives its own goals)" : "");
     return 2;
   }
   if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST) {

@@ -690,6 +690,19 @@ void Vehicle::add_error(std::string_view type, std::string_view description, Err
   state_changed_ = true;
 }
 
+void Vehicle::report_rejected_message(const VehicleError& error) noexcept {
+  if (errors_.full()) {
+    errors_.erase(errors_.begin());
+    error_sources_.erase(error_sources_.begin());
+    ++dropped_errors_;
+  }
+  VehicleError warning = error;
+  warning.level = ErrorLevel::warning;
+  (void)errors_.push_back(warning);
+  (void)error_sources_.push_back(ErrorSource::order_message);
+  state_changed_ = true;
+}
+
 void Vehicle::clear_errors(ErrorSource source) noexcept {
   std::size_t i = 0;
   while (i < errors_.size()) {

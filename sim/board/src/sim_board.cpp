@@ -161,6 +161,11 @@ Result<std::unique_ptr<hal::CanBus>> SimBoard::open_can(std::string_view name, s
   return std::unique_ptr<hal::CanBus>(std::make_unique<hal::CanBusRef>(*can_firmware_));
 }
 
+Result<std::unique_ptr<hal::PubSub>> SimBoard::open_pubsub(std::string_view name, const hal::PubSubOptions& options) {
+  if (options.url != "sim") return host_.open_pubsub(name, options);
+  return site_broker().connect(options);
+}
+
 void SimBoard::before_advance(hal::Nanos, hal::Nanos to_ns) {
   while (next_step_ns_ <= to_ns) {
     step(next_step_ns_);

@@ -21,6 +21,7 @@ static_assert(std::is_trivially_copyable_v<Odometry>);
 struct BaseFlags {
   bool estop = false;
   bool motors_enabled = false;
+  double battery_v = 0.0;  // 0: not reported
 };
 static_assert(std::is_trivially_copyable_v<BaseFlags>);
 

@@ -97,6 +97,10 @@ class Vehicle {
   // (same orderId and orderUpdateId) returns false without an error.
   bool receive_order(const Order& order, const Pose& now) noexcept;
   void receive_instant_actions(const InstantActions& message) noexcept;
+  // A message the codec refused (malformed, a schema violation, a field we cannot hold): its
+  // error is reported as a warning until a new order is accepted (section 6.6.4); the current
+  // order goes on untouched.
+  void report_rejected_message(const VehicleError& error) noexcept;
   void update(const Progress& progress) noexcept;
   // The host's report on an action it runs (host_run): RUNNING, PAUSED, FINISHED or FAILED.
   // invalid_argument for an unknown id, an action not run by the host, or one already done.

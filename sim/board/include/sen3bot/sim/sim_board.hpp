@@ -62,6 +62,9 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   // "io_node" at "sim": the simulated CAN I/O node's bus (once); any other interface opens on
   // the host.
   Result<std::unique_ptr<hal::CanBus>> open_can(std::string_view name, std::string_view interface) override;
+  // "fleet" at "sim": a client of the site's in-process broker; mqtt:// and mqtts:// open a
+  // real MQTT client on the host.
+  Result<std::unique_ptr<hal::PubSub>> open_pubsub(std::string_view name, const hal::PubSubOptions& options) override;
   [[nodiscard]] hal::DigitalInput* input(std::string_view name) noexcept override {
     return name == "estop" ? &estop_ : nullptr;
   }
@@ -80,6 +83,10 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   // slices only (the world's thread steps them in real time).
   [[nodiscard]] canopen::IoNodeEmulator* io_node() noexcept { return io_node_.get(); }
   [[nodiscard]] hal::MemoryCanBus& can_bus() noexcept { return can_bus_; }
+  // The in-process broker "sim" clients join: the board's own, unless a site with several
+  // robots shares one (set before the firmware opens its link; it must outlive the link).
+  [[nodiscard]] hal::MemoryBroker& site_broker() noexcept { return shared_broker_ != nullptr ? *shared_broker_ : own_broker_; }
+  void set_site_broker(hal::MemoryBroker* broker) noexcept { shared_broker_ = broker; }
   // Lockstep links only; set before the links are opened. Null: no tap.
   void set_wire_tap(WireTap* tap) noexcept { tap_ = tap; }
 
@@ -105,6 +112,8 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   hal::MemoryCanNode* can_node_ = nullptr;      // the I/O node's
   bool can_handed_out_ = false;
   std::unique_ptr<canopen::IoNodeEmulator> io_node_;
+  hal::MemoryBroker own_broker_;
+  hal::MemoryBroker* shared_broker_ = nullptr;
   std::size_t next_io_event_ = 0;
   std::unique_ptr<bool[]> people_;  // per mover: a person (the detector sees people only)
   std::vector<double> mover_sizes_m_;
