@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -24,9 +25,12 @@ std::span<const std::uint8_t> bytes(std::string_view text) {
   return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
 }
 
+// The version the master writes in its headers.
+std::string g_version = "2.1.0";
+
 std::string header(int id) {
-  return "\"headerId\":" + std::to_string(id) +
-         ",\"timestamp\":\"2026-12-03T10:00:00.00Z\",\"version\":\"2.1.0\",\"manufacturer\":\"Sen3Bot\",\"serialNumber\":\"r1\"";
+  return "\"headerId\":" + std::to_string(id) + ",\"timestamp\":\"2026-12-03T10:00:00.00Z\",\"version\":\"" + g_version +
+         "\",\"manufacturer\":\"Sen3Bot\",\"serialNumber\":\"r1\"";
 }
 
 struct NodeSpec {
@@ -70,7 +74,10 @@ std::string instant_json(int header_id, const std::string& action_id, const std:
 
 class FleetRig {
  public:
-  FleetRig() : rig_(testing::load_sim_rig()) {
+  // capture: a folder each message the robot sends is written to, as TOPIC.N.json.
+  explicit FleetRig(vda5050::Version version = vda5050::Version::v2_1_0, std::string capture = {})
+      : rig_(testing::load_sim_rig()), version_(version), capture_(std::move(capture)) {
+    g_version = std::string(vda5050::to_string(version));
     firmware::FirmwareConfig& c = rig_.config;
     // People on: the simulated detector's boxes fused with the laser, as the robot sends them.
     rig_.world.detector.enabled = true;
@@ -87,6 +94,7 @@ class FleetRig {
     c.fleet.serial_number = "r1";
     c.fleet.map_id = "lab";
     c.fleet.state_period_s = 1.0;
+    c.fleet.version = version;
     sink_ = std::fopen("/dev/null", "w");
     fw_ = std::make_unique<firmware::Firmware>(c, *rig_.board, sink_);
     hal::PubSubOptions master;
@@ -150,9 +158,19 @@ class FleetRig {
       const std::string text(reinterpret_cast<const char*>(payload.data()), message.value()->payload_size);
       const std::string leaf = name.substr(name.rfind('/') + 1);
       ++counts_[leaf];
+      // The master hears its own orders too (it reads the robot's whole topic tree): only what
+      // the robot sent is captured.
+      if (!capture_.empty() && leaf != "order" && leaf != "instantActions") {
+        const std::string file = capture_ + "/" + (leaf == "r1" ? std::string("people") : leaf) + "." +
+                                 std::to_string(counts_[leaf]) + ".json";
+        std::FILE* f = std::fopen(file.c_str(), "w");
+        ASSERT_NE(f, nullptr) << file;
+        std::fwrite(text.data(), 1, text.size(), f);
+        std::fclose(f);
+      }
       last_[leaf] = text;
       if (leaf == "state") {
-        const vda5050::Decoded decoded = vda5050::decode_state(text, vda5050::Version::v2_1_0, *scratch_state_, scratch_);
+        const vda5050::Decoded decoded = vda5050::decode_state(text, version_, *scratch_state_, scratch_);
         if (decoded.ok()) {
           state_ = *scratch_state_;
           have_state_ = true;
@@ -162,7 +180,7 @@ class FleetRig {
         }
       } else if (leaf == "connection") {
         vda5050::Connection connection;
-        const vda5050::Decoded decoded = vda5050::decode_connection(text, vda5050::Version::v2_1_0, connection, scratch_);
+        const vda5050::Decoded decoded = vda5050::decode_connection(text, version_, connection, scratch_);
         if (!decoded.ok()) ++bad_;
         connections_.emplace_back(vda5050::to_string(connection.state));
       }
@@ -170,6 +188,8 @@ class FleetRig {
   }
 
   testing::SimRig rig_;
+  vda5050::Version version_;
+  std::string capture_;
   std::FILE* sink_ = nullptr;
   std::unique_ptr<firmware::Firmware> fw_;
   std::unique_ptr<hal::PubSub> master_;
@@ -310,6 +330,47 @@ TEST(Fleet, ARobotCutOffFromTheBrokerKeepsDrivingItsOrderAndComesBackOnline) {
   EXPECT_EQ(rig.connections().back(), "ONLINE");
   EXPECT_EQ(rig.firmware().fleet()->counters().sessions, 2u);
 }
+
+// Every message the robot sends in an eventful run (an order, a pause, a cancel, a refused
+// message, an unknown action, a lost broker) validates against the shipped schemas of the
+// site's version: VDA 5050's and the people schema.
+class FleetSchemas : public ::testing::TestWithParam<vda5050::Version> {};
+
+TEST_P(FleetSchemas, EveryMessageTheRobotSendsValidates) {
+  char folder[] = "/tmp/sen3bot-fleet-XXXXXX";
+  ASSERT_NE(::mkdtemp(folder), nullptr);
+  {
+    FleetRig rig(GetParam(), folder);
+    ASSERT_TRUE(rig.init().ok());
+    rig.run_for(2.0);
+    rig.send("order", order_json(1, "o1", 0, kRoute));
+    ASSERT_TRUE(rig.run_until([](const vda5050::State& s) { return s.driving; }, 10.0));
+    rig.send("instantActions", instant_json(1, "p1", "startPause"));
+    rig.run_for(1.0);
+    rig.send("instantActions", instant_json(2, "p2", "stopPause"));
+    rig.send("instantActions", instant_json(3, "f1", "factsheetRequest"));
+    rig.send("instantActions", instant_json(4, "x1", "selfDestruct"));
+    rig.send("order", "[1, 2");
+    rig.run_for(1.0);
+    rig.board().site_broker().set_reachable("r1", false);
+    rig.run_for(1.0);
+    rig.board().site_broker().set_reachable("r1", true);
+    rig.send("instantActions", instant_json(5, "c1", "cancelOrder"));
+    rig.run_for(2.0);
+    EXPECT_EQ(rig.bad_messages(), 0);
+  }
+  const std::string version(vda5050::to_string(GetParam()));
+  const std::string command = std::string("python3 ") + SEN3BOT_SOURCE_DIR + "/tests/vda5050/validate_messages.py " + folder + " " +
+                              version + " " + SEN3BOT_SOURCE_DIR + "/docs/vda5050/schemas " + SEN3BOT_SOURCE_DIR +
+                              "/docs/fleet/people.schema.json";
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  std::system((std::string("rm -rf ") + folder).c_str());
+}
+
+INSTANTIATE_TEST_SUITE_P(Versions, FleetSchemas, ::testing::Values(vda5050::Version::v2_1_0, vda5050::Version::v2_0_0),
+                         [](const ::testing::TestParamInfo<vda5050::Version>& param) {
+                           return param.param == vda5050::Version::v2_1_0 ? std::string("v2_1_0") : std::string("v2_0_0");
+                         });
 
 }  // namespace
 }  // namespace sen3bot
