@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <fstream>
 #include <new>
 
-#include "fleet_people.hpp"
+#include "sen3bot/vda5050/extensions.hpp"
 
 namespace sen3bot::firmware {
 
@@ -17,6 +16,7 @@ struct FleetTask::Buffers {
   vda5050::InstantActions actions;
   vda5050::State state;
   vda5050::DecodeScratch scratch;
+  vda5050::PeopleMessage people;
   std::array<char, 256> topic{};
   std::array<std::uint8_t, 64 * 1024> payload{};
   std::array<char, kOutBytes> out{};
@@ -24,19 +24,6 @@ struct FleetTask::Buffers {
 
 std::size_t FleetTask::arena_bytes_needed() noexcept {
   return sizeof(Buffers) + alignof(Buffers) + sizeof(vda5050::Vehicle) + alignof(vda5050::Vehicle);
-}
-
-vda5050::Id iso8601(std::int64_t unix_ns) noexcept {
-  const std::time_t seconds = static_cast<std::time_t>(unix_ns / 1'000'000'000);
-  const int hundredths = static_cast<int>((unix_ns % 1'000'000'000) / 10'000'000);
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[40];
-  const int n = std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%02dZ", utc.tm_year + 1900, utc.tm_mon + 1,
-                              utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, hundredths < 0 ? 0 : hundredths);
-  vda5050::Id id;
-  (void)id.assign(std::string_view(text, n > 0 ? static_cast<std::size_t>(n) : 0));
-  return id;
 }
 
 Status check(const FleetConfig& c) {
@@ -68,7 +55,7 @@ FleetTask::~FleetTask() {
 
 void FleetTask::stamp(vda5050::Header& header, std::uint32_t& counter) {
   header.header_id = counter++;
-  header.timestamp = iso8601(board_.clock().unix_now_ns());
+  header.timestamp = vda5050::iso8601(board_.clock().unix_now_ns());
   (void)header.version.assign(vda5050::to_string(config_.version));
   (void)header.manufacturer.assign(config_.manufacturer);
   (void)header.serial_number.assign(config_.serial_number);
@@ -88,7 +75,7 @@ Status FleetTask::init(std::pmr::memory_resource& arena) {
   topic_connection_ = topic("connection");
   topic_visualization_ = topic("visualization");
   topic_factsheet_ = topic("factsheet");
-  topic_people_ = people_topic(config_.manufacturer, config_.serial_number);
+  topic_people_ = vda5050::people_topic(config_.manufacturer, config_.serial_number);
 
   std::pmr::polymorphic_allocator<std::byte> alloc(&arena);
   buffers_ = alloc.new_object<Buffers>();
@@ -342,19 +329,37 @@ void FleetTask::publish_visualization() {
 void FleetTask::publish_people() {
   tasks::Sample<msg::People> people;
   if (!topics_.people.read(people)) return;
+  vda5050::PeopleMessage& m = buffers_->people;
+  m = vda5050::PeopleMessage{};
+  m.header_id = people_header_++;
+  m.timestamp = vda5050::iso8601(board_.clock().unix_now_ns());
+  (void)m.manufacturer.assign(config_.manufacturer);
+  (void)m.serial_number.assign(config_.serial_number);
+  (void)m.map_id.assign(config_.map_id);
   tasks::Sample<msg::PoseEstimate> estimate;
-  const bool have_pose = topics_.pose.read(estimate);
-  PeopleReport report;
-  report.header_id = people_header_++;
-  report.timestamp = iso8601(board_.clock().unix_now_ns());
-  report.manufacturer = config_.manufacturer;
-  report.serial_number = config_.serial_number;
-  report.map_id = config_.map_id;
-  report.robot_valid = have_pose && estimate.value.valid;
-  if (have_pose) report.robot = estimate.value.pose;
-  report.people = &people.value;
-  report.now_ns = board_.clock().now();
-  auto text = encode_people(report, buffers_->out);
+  if (topics_.pose.read(estimate)) {
+    m.robot_valid = estimate.value.valid && !estimate.value.lost;
+    m.robot_x = estimate.value.pose.x_m;
+    m.robot_y = estimate.value.pose.y_m;
+    m.robot_theta = estimate.value.pose.theta_rad;
+  }
+  const hal::Nanos now = board_.clock().now();
+  for (std::size_t i = 0; i < people.value.count && i < msg::People::kMax; ++i) {
+    const msg::TrackedPerson& p = people.value.items[i];
+    vda5050::PersonReport r;
+    r.id = p.id;
+    r.x = p.x_m;
+    r.y = p.y_m;
+    r.vx = p.vx_m_s;
+    r.vy = p.vy_m_s;
+    r.width = p.width_m;
+    r.cage_radius = p.cage_radius_m;
+    r.dynamic = p.state == msg::PersonState::dynamic_person;
+    r.age_s = now > p.last_seen_ns ? static_cast<double>(now - p.last_seen_ns) * 1e-9 : 0.0;
+    r.laser_points = p.points;
+    if (!m.people.push_back(r)) break;
+  }
+  auto text = vda5050::encode_people(m, buffers_->out);
   if (!text) {
     ++counters_.publish_failures;
     return;

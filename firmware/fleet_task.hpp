@@ -141,7 +141,4 @@ class FleetTask final : public tasks::Task {
   FleetCounters counters_;
 };
 
-// ISO 8601 UTC with hundredths, as VDA 5050 writes timestamps: "2026-12-03T15:04:13.25Z".
-vda5050::Id iso8601(std::int64_t unix_ns) noexcept;
-
 }  // namespace sen3bot::firmware

@@ -60,6 +60,9 @@ enum class Version : std::uint8_t { v2_0_0, v2_1_0 };
 std::string_view to_string(Version version) noexcept;               // "2.0.0", "2.1.0"
 std::optional<Version> parse_version(std::string_view text) noexcept;  // exact "2.0.0" / "2.1.0"
 
+// ISO 8601 UTC with hundredths, as VDA 5050 writes timestamps: "2026-12-03T15:04:13.25Z".
+Id iso8601(std::int64_t unix_ns) noexcept;
+
 // The header every message starts with (section 6.4).
 struct Header {
   std::uint32_t header_id = 0;

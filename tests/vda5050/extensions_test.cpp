@@ -1,0 +1,107 @@
+// Sen3Bot's own fleet messages: the people report and the advisory, round trips and refusals.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "sen3bot/vda5050/extensions.hpp"
+
+namespace sen3bot::vda5050 {
+namespace {
+
+TEST(PeopleMessage, RoundTripsEveryField) {
+  auto scratch = std::make_unique<DecodeScratch>();
+  PeopleMessage m;
+  m.header_id = 7;
+  (void)m.timestamp.assign("2026-12-03T15:04:13.25Z");
+  (void)m.manufacturer.assign("Sen3Bot");
+  (void)m.serial_number.assign("r1");
+  (void)m.map_id.assign("lab");
+  m.robot_valid = true;
+  m.robot_x = 2.5;
+  m.robot_y = -1.25;
+  m.robot_theta = 3.0;
+  (void)m.people.push_back(PersonReport{4, 1.5, 2.5, 0.3, -0.1, 0.45, 0.95, true, 0.2, 17});
+  (void)m.people.push_back(PersonReport{9, -3.0, 0.0, 0.0, 0.0, 0.5, 1.0, false, 0.0, 4});
+  std::array<char, 4096> out{};
+  auto text = encode_people(m, out);
+  ASSERT_TRUE(text.ok()) << text.error().c_str();
+  PeopleMessage back;
+  ASSERT_TRUE(decode_people(*text, back, *scratch).ok());
+  EXPECT_EQ(back.header_id, 7u);
+  EXPECT_EQ(back.serial_number, "r1");
+  EXPECT_TRUE(back.robot_valid);
+  EXPECT_DOUBLE_EQ(back.robot_y, -1.25);
+  ASSERT_EQ(back.people.size(), 2u);
+  EXPECT_EQ(back.people[0].id, 4u);
+  EXPECT_DOUBLE_EQ(back.people[0].vx, 0.3);
+  EXPECT_TRUE(back.people[0].dynamic);
+  EXPECT_FALSE(back.people[1].dynamic);
+  EXPECT_EQ(back.people[1].laser_points, 4u);
+}
+
+TEST(PeopleMessage, RefusesWhatTheSchemaDoesNot) {
+  auto scratch = std::make_unique<DecodeScratch>();
+  PeopleMessage m;
+  const std::string head =
+      R"({"schemaVersion":"1.0.0","headerId":1,"timestamp":"t","manufacturer":"m","serialNumber":"s","mapId":"lab",)"
+      R"("robot":{"positionInitialized":true,"x":0,"y":0,"theta":0},"people":)";
+  EXPECT_TRUE(decode_people(head + "[]}", m, *scratch).ok());
+  const Status other_major = decode_people(R"({"schemaVersion":"2.0.0"})", m, *scratch);
+  ASSERT_FALSE(other_major.ok());
+  EXPECT_EQ(other_major.error().code(), Errc::not_supported);
+  const Status bad_state = decode_people(
+      head + R"([{"id":1,"x":0,"y":0,"vx":0,"vy":0,"width":0,"cageRadius":0,"state":"RUNNING","ageS":0,"laserPoints":0}]})", m,
+      *scratch);
+  EXPECT_FALSE(bad_state.ok());
+  const Status missing = decode_people(head + R"([{"id":1}]})", m, *scratch);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(std::string(missing.error().c_str()).find("'x'"), std::string::npos) << missing.error().c_str();
+  std::string many = head + "[";
+  for (int i = 0; i < 17; ++i)
+    many += std::string(i ? "," : "") +
+            R"({"id":1,"x":0,"y":0,"vx":0,"vy":0,"width":0,"cageRadius":0,"state":"STATIC","ageS":0,"laserPoints":0})";
+  const Status too_many = decode_people(many + "]}", m, *scratch);
+  ASSERT_FALSE(too_many.ok());
+  EXPECT_EQ(too_many.error().code(), Errc::capacity);
+  EXPECT_FALSE(decode_people("{not json", m, *scratch).ok());
+}
+
+TEST(AdvisoryMessage, RoundTripsAndChecksTheAdviceAndFactor) {
+  auto scratch = std::make_unique<DecodeScratch>();
+  AdvisoryMessage m;
+  m.header_id = 3;
+  (void)m.timestamp.assign("2026-12-03T15:04:13.25Z");
+  (void)m.agv_manufacturer.assign("PlantAGV");
+  (void)m.agv_serial_number.assign("agv1");
+  m.advice = AdviceKind::slow;
+  m.speed_factor = 0.3;
+  (void)m.area_id.assign("cross-1");
+  (void)m.area_type.assign("1.1");
+  m.people = 2;
+  m.dynamic_people = 1;
+  m.distance_to_area_m = 7.5;
+  (void)m.reason.assign("2 people in 1.1 area cross-1, 7.5 m ahead");
+  std::array<char, 2048> out{};
+  auto text = encode_advisory(m, out);
+  ASSERT_TRUE(text.ok());
+  AdvisoryMessage back;
+  ASSERT_TRUE(decode_advisory(*text, back, *scratch).ok());
+  EXPECT_EQ(back.advice, AdviceKind::slow);
+  EXPECT_DOUBLE_EQ(back.speed_factor, 0.3);
+  EXPECT_EQ(back.area_type, "1.1");
+  EXPECT_EQ(back.dynamic_people, 1u);
+  EXPECT_EQ(back.reason, m.reason.view());
+  std::string wrong(*text);
+  wrong.replace(wrong.find("SLOW"), 4, "FAST");
+  EXPECT_FALSE(decode_advisory(wrong, back, *scratch).ok());
+  std::string factor(*text);
+  factor.replace(factor.find("0.3"), 3, "1.5");
+  EXPECT_FALSE(decode_advisory(factor, back, *scratch).ok());
+  EXPECT_EQ(advisory_topic("PlantAGV", "agv1"), "sen3bot/v1/advisory/PlantAGV/agv1");
+  EXPECT_EQ(people_topic("Sen3Bot", "r1"), "sen3bot/v1/people/Sen3Bot/r1");
+}
+
+}  // namespace
+}  // namespace sen3bot::vda5050
