@@ -215,12 +215,15 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
   Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
   EXPECT_DOUBLE_EQ(defaults->navigation.safety.approach_horizon_s, 1.0);
+  EXPECT_TRUE(defaults->navigation.safety.approach_candidates);
   Result<FirmwareConfig> r = parse_config(
-      std::string(kNavigation) + "  approach: { horizon_s: 0.8, margin_m: 0.15, min_speed_m_s: 0.4 }\n", "robot.yaml");
+      std::string(kNavigation) + "  approach: { horizon_s: 0.8, margin_m: 0.15, min_speed_m_s: 0.4, candidates: false }\n",
+      "robot.yaml");
   ASSERT_TRUE(r) << r.error().c_str();
   EXPECT_DOUBLE_EQ(r->navigation.safety.approach_horizon_s, 0.8);
   EXPECT_DOUBLE_EQ(r->navigation.safety.approach_margin_m, 0.15);
   EXPECT_DOUBLE_EQ(r->navigation.safety.approach_min_speed_m_s, 0.4);
+  EXPECT_FALSE(r->navigation.safety.approach_candidates);
   std::string m = message_of(std::string(kNavigation) + "  approach: { horizon_s: 9 }\n");
   EXPECT_NE(m.find("navigation.approach.horizon_s: value 9 is outside"), std::string::npos) << m;
   m = message_of(std::string(kNavigation) + "  approach: { margin: 0.1 }\n");

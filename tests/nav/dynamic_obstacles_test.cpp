@@ -905,6 +905,44 @@ void track_crossing_box(double robot_heading_rad, double robot_speed_m_s) {
   EXPECT_GT(rig.dol.detections(), 0u);
 }
 
+// The same box, robot standing: between its confirmation and its travel far enough from where
+// it came into view, the box is published as a candidate after the movers, then as a mover.
+TEST(DynamicObstacleLayer, AConfirmedBoxIsACandidateUntilItHasTravelled) {
+  DynamicObstacleConfig cfg;
+  Rig rig(cfg);
+  world::MoverScript box;
+  box.path = {{3.3, 7.2}, {5.3, 7.2}};
+  box.speed_m_s = 0.6;
+  box.size_m = 0.2;
+  box.shape = world::MoverShape::square;
+  box.start_time_s = 2.0;
+  box.appear_time_s = 2.0;
+  rig.truth.add_mover(box);
+  ASSERT_TRUE(rig.init());
+  const Pose2D robot{3.0, 6.3, M_PI / 2.0};
+  int candidate_scans = 0;
+  int mover_scans = 0;
+  for (int k = 0; k <= 20 * 4; ++k) {
+    rig.tick(k, robot, robot);
+    if (k % 2 != 0) continue;
+    msg::MovingObstacles movers;
+    rig.dol.movers(k * kTickNs, movers);
+    ASSERT_LE(movers.count + movers.candidate_count, 1) << "k=" << k;
+    const bool confirmed = rig.confirmed_count() > 0;
+    if (movers.candidate_count == 1) {
+      // Confirmed, not yet a mover, and never after it became one.
+      EXPECT_TRUE(confirmed);
+      EXPECT_EQ(mover_scans, 0);
+      EXPECT_NEAR(movers.items[0].vx_m_s, 0.6, 0.3);
+      ++candidate_scans;
+    }
+    if (movers.count == 1) ++mover_scans;
+    if (!confirmed) EXPECT_EQ(movers.count + movers.candidate_count, 0) << "k=" << k;
+  }
+  EXPECT_GE(candidate_scans, 1);
+  EXPECT_GE(mover_scans, 5);
+}
+
 TEST(DynamicObstacleLayer, MovingBoxIsConfirmedAndItsVelocityTracked) {
   SCOPED_TRACE("robot standing, facing +y");
   track_crossing_box(M_PI / 2.0, 0.0);

@@ -460,6 +460,37 @@ TEST(Safety, TheApproachCheckCanBeTurnedOff) {
   EXPECT_EQ(approaching(0.6, -1.0, 0.0, 1.0, 0.3, 0.0, c).reasons, kSafetyNone);
 }
 
+// The door scene: a walker 0.45 m beyond the robot's nose and 0.5 m to its right, coming across
+// at 0.5 m/s, tracked but not yet a mover (it has not yet travelled far from where it came into
+// view), the robot at 0.5 m/s.
+SafetyOutput candidate_ahead(const SafetyConfig& config) {
+  const SafetyFilter f(config);
+  Scene s;
+  s.in.pose = {0.0, 0.0, 0.0};
+  s.in.requested = {0.5, 0.0, s.in.now_ns};
+  s.in.measured_v_m_s = 0.5;
+  msg::MovingObstacles movers;
+  movers.stamp_ns = s.in.now_ns;
+  movers.count = 0;
+  movers.candidate_count = 1;
+  movers.items[0] = {3, 0.9, -0.5, 0.0, 0.5, 0.25, 0.0, 0.0};
+  s.in.movers = &movers;
+  return f.filter(s.in);
+}
+
+TEST(Safety, TheApproachCheckStopsForACandidateMover) {
+  const SafetyOutput on = candidate_ahead({});
+  EXPECT_TRUE(on.reasons & kSafetyMoverApproach);
+  EXPECT_EQ(on.command.v_m_s, 0.0);
+  // Only the approach check reads candidates: not the closing speed of the stop zone.
+  EXPECT_EQ(on.closing_speed_m_s, 0.0);
+  SafetyConfig c;
+  c.approach_candidates = false;
+  const SafetyOutput off = candidate_ahead(c);
+  EXPECT_EQ(off.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(off.command.v_m_s, 0.5);
+}
+
 
 // --- Virtual cages ---
 

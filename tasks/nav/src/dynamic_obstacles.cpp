@@ -589,6 +589,11 @@ bool MoverTracker::moving(const DolTrack& track) const noexcept {
          (!track.in_view || seconds_between(track.last_hit_ns, last_update_ns_) <= config_.publish_max_coast_s);
 }
 
+bool MoverTracker::candidate(const DolTrack& track) const noexcept {
+  return track.confirmed && !track.mover && track.last_hit_ns == last_update_ns_ &&
+         std::hypot(track.x(2), track.x(3)) >= config_.moving_min_speed_m_s;
+}
+
 // --- Cost ---------------------------------------------------------------------------------
 
 namespace {
@@ -951,23 +956,32 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
 
 void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept {
   out.count = 0;
+  out.candidate_count = 0;
   out.stamp_ns = stamp_ns;
   if (!active_) return;
   for (const DolTrack& track : tracker_.tracks()) {
     if (!tracker_.moving(track) || !track.x.allFinite()) continue;
     if (out.count >= msg::MovingObstacles::kMax) break;
-    const DolTrack at = tracker_.predicted(track, stamp_ns);
-    msg::MovingObstacle& m = out.items[out.count++];
-    m.id = track.id;
-    m.x_m = at.x(0);
-    m.y_m = at.x(1);
-    const Vector2 v = tracker_.velocity(at);
-    m.vx_m_s = v(0);
-    m.vy_m_s = v(1);
-    m.radius_m = track.radius_m;
-    m.position_var_m2 = (at.P(0, 0) + at.P(1, 1)) / 2.0;
-    m.velocity_var_m2_s2 = (at.P(2, 2) + at.P(3, 3)) / 2.0;
+    put(track, stamp_ns, out.items[out.count++]);
   }
+  for (const DolTrack& track : tracker_.tracks()) {
+    if (!tracker_.candidate(track) || !track.x.allFinite()) continue;
+    if (out.count + out.candidate_count >= msg::MovingObstacles::kMax) break;
+    put(track, stamp_ns, out.items[out.count + out.candidate_count++]);
+  }
+}
+
+void DynamicObstacleLayer::put(const DolTrack& track, hal::Nanos stamp_ns, msg::MovingObstacle& m) const noexcept {
+  const DolTrack at = tracker_.predicted(track, stamp_ns);
+  m.id = track.id;
+  m.x_m = at.x(0);
+  m.y_m = at.x(1);
+  const Vector2 v = tracker_.velocity(at);
+  m.vx_m_s = v(0);
+  m.vy_m_s = v(1);
+  m.radius_m = track.radius_m;
+  m.position_var_m2 = (at.P(0, 0) + at.P(1, 1)) / 2.0;
+  m.velocity_var_m2_s2 = (at.P(2, 2) + at.P(3, 3)) / 2.0;
 }
 
 }  // namespace sen3bot::nav

@@ -98,7 +98,8 @@ SafetyFilter::Gaps SafetyFilter::gaps(const SafetyInputs& in, double v, double w
 
 bool SafetyFilter::approach_refused(const SafetyInputs& in, double v, double w) const noexcept {
   if (in.movers == nullptr || !(config_.approach_horizon_s > 0.0) || (v == 0.0 && w == 0.0)) return false;
-  for (std::size_t i = 0; i < std::min<std::size_t>(in.movers->count, msg::MovingObstacles::kMax); ++i) {
+  const std::size_t tracks = in.movers->count + (config_.approach_candidates ? in.movers->candidate_count : 0u);
+  for (std::size_t i = 0; i < std::min<std::size_t>(tracks, msg::MovingObstacles::kMax); ++i) {
     const msg::MovingObstacle& m = in.movers->items[i];
     if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
     const BodyMover b = in_body(in, m);

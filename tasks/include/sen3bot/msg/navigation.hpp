@@ -194,6 +194,11 @@ struct MovingObstacles {
   static constexpr std::size_t kMax = 16;
   std::array<MovingObstacle, kMax> items{};
   std::uint8_t count = 0;
+  // After the movers, items[count, count + candidate_count): confirmed tracks moving at speed
+  // that have not yet left where they were first seen. A walker coming out from behind a door
+  // jamb is one for about half a second before it is a mover; only the safety filter's
+  // approach check reads them.
+  std::uint8_t candidate_count = 0;
   hal::Nanos stamp_ns = 0;  // the time the positions are predicted to
 };
 static_assert(std::is_trivially_copyable_v<MovingObstacles>);

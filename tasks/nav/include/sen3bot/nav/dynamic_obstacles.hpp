@@ -221,6 +221,9 @@ class MoverTracker {
   void classify(std::span<const std::uint8_t> image, const GridGeometry& geometry) noexcept;
   // Whether a track counts as a mover now (classified, and hit recently).
   [[nodiscard]] bool moving(const DolTrack& track) const noexcept;
+  // Whether a track is a candidate: confirmed, hit by the newest update and faster than
+  // moving_min_speed_m_s, but not (yet) a mover.
+  [[nodiscard]] bool candidate(const DolTrack& track) const noexcept;
   // A track's position predicted to stamp_ns (constant velocity), without changing it; a
   // stamp before the track's own gives its current position.
   [[nodiscard]] static Eigen::Matrix<double, 2, 1> predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
@@ -323,7 +326,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   [[nodiscard]] const BackgroundSubtractor& detector() const noexcept { return detector_; }
   [[nodiscard]] const DynamicObstacleConfig& config() const noexcept { return config_; }
   // The movers predicted to stamp_ns (state and covariance), for the planner and the safety
-  // filter; count 0 when the layer is disabled.
+  // filter, then the candidates (MovingObstacles::candidate_count) in the slots left; count 0
+  // when the layer is disabled.
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
   // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
@@ -335,6 +339,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   // A mover out of sight whose prediction runs into the static map turns back there, as
   // something going back and forth along an aisle does; it does not go through the wall.
   void turn_back_at_walls(hal::Nanos stamp_ns) noexcept;
+  // One track predicted to stamp_ns, as published.
+  void put(const DolTrack& track, hal::Nanos stamp_ns, msg::MovingObstacle& m) const noexcept;
 
   DynamicObstacleConfig config_;
   const OccupancyMap* static_map_;

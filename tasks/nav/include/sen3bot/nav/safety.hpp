@@ -30,7 +30,8 @@
 //    before it meets the body. The command is held for approach_horizon_s (the robot on its
 //    arc, each mover at its velocity); when that brings the body within approach_margin_m of
 //    a mover and braking now would keep the two farther apart, the robot stops. Moving away
-//    from a mover that walks up to the robot stays allowed.
+//    from a mover that walks up to the robot stays allowed. With approach_candidates, the
+//    layer's candidates (confirmed, moving, not yet movers) count as well.
 //  * Virtual cages: a command is refused when the robot could no longer stop outside a
 //    tracked person's cage radius plus cage_margin_m (the margin is for the error of the
 //    person's placement): held for reaction_s and then braked along its arc, the body comes
@@ -82,6 +83,10 @@ struct SafetyConfig {
   // Slower tracks are left to the corridor: a still box whose faces come into view one after
   // another is tracked at up to about 0.1 m/s; people walk at 0.5-1.5 m/s.
   double approach_min_speed_m_s = 0.3;
+  // Also check the layer's candidates (MovingObstacles::candidate_count): a walker coming out
+  // from behind a door jamb is tracked for about half a second before it has travelled far
+  // enough to be a mover, and the robot needs that time to stop.
+  bool approach_candidates = true;
   double cage_margin_m = 0.1;   // < 0: no cage check
   double cage_horizon_s = 1.0;
   double mover_cage_m = -1.0;   // < 0: movers are not caged (people tracking sets it)
