@@ -58,6 +58,11 @@ NATIVE_PACKAGES=(
   openssl                    # fleet tests: toolchain/broker-pki.sh makes the test CA
 )
 
+# vda5050 peer test (tests/peers/vda5050): Node.js and npm run the independent master control.
+# Debian's (nodejs 18, npm 9) only when none is on PATH: a Node.js installed otherwise is kept.
+if ! command -v node >/dev/null; then NATIVE_PACKAGES+=(nodejs); fi
+if ! command -v npm >/dev/null; then NATIVE_PACKAGES+=(npm); fi
+
 # --- Raspberry Pi cross build (--cross) -------------------------------------------------------
 CROSS_PACKAGES=(
   g++-aarch64-linux-gnu      # 64-bit Raspberry Pi OS (Pi 3/4/5)
