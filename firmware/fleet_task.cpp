@@ -237,6 +237,10 @@ void FleetTask::drive() {
   const vda5050::DriveTarget& target = vehicle_->target();
   const hal::Nanos now = board_.clock().now();
   if (target.hold) {
+    // Past the last released node (within its deviation) the robot still finishes its approach
+    // to the node itself, and stands there; a pause, a cancel or a blocking action stops it now.
+    const bool finishing = target.reason == vda5050::HoldReason::decision_point || target.reason == vda5050::HoldReason::no_order;
+    if (finishing) return;
     if (!goal_hold_) {
       goal_ = msg::NavGoal{0.0, 0.0, ++counters_.goals_sent, false};
       topics_.goal.publish(goal_, now);
@@ -245,7 +249,8 @@ void FleetTask::drive() {
     }
     return;
   }
-  if (goal_hold_ || target.sequence_id != goal_sequence_) {
+  // A new order restarts sequence ids: a different position is a new goal too.
+  if (goal_hold_ || target.sequence_id != goal_sequence_ || target.x != goal_.x_m || target.y != goal_.y_m) {
     goal_ = msg::NavGoal{target.x, target.y, ++counters_.goals_sent, true};
     topics_.goal.publish(goal_, now);
     goal_hold_ = false;
