@@ -937,7 +937,9 @@ TEST(DynamicObstacleLayer, AConfirmedBoxIsACandidateUntilItHasTravelled) {
       ++candidate_scans;
     }
     if (movers.count == 1) ++mover_scans;
-    if (!confirmed) EXPECT_EQ(movers.count + movers.candidate_count, 0) << "k=" << k;
+    if (!confirmed) {
+      EXPECT_EQ(movers.count + movers.candidate_count, 0) << "k=" << k;
+    }
   }
   EXPECT_GE(candidate_scans, 1);
   EXPECT_GE(mover_scans, 5);
