@@ -7,10 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
+#include "sen3bot/vda5050/codec.hpp"
 #include "sim_rig.hpp"
 #include "task_table.hpp"
 
@@ -103,6 +107,250 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   EXPECT_FALSE(fw.safety()->latch()->held());
   EXPECT_EQ(fw.can_io()->master().count(canopen::IoNodeEvent::boot_up), 2u);
   EXPECT_EQ(fw.can_io()->master().count(canopen::IoNodeEvent::heartbeat_lost), 1u);
+  fw.shutdown();
+  std::fclose(sink);
+}
+
+// The robot's VDA 5050 messages as a master control writes them (tests/sim/fleet_test.cpp).
+std::string fleet_header(int header_id) {
+  return "\"headerId\":" + std::to_string(header_id) +
+         ",\"timestamp\":\"2026-12-03T10:00:00.00Z\",\"version\":\"2.1.0\",\"manufacturer\":\"Sen3Bot\",\"serialNumber\":\"r1\"";
+}
+
+// From the robot's start in the lab, (2.5, 2.0), north to (2.9, 4.25), joined by edges e<i>.
+std::string fleet_order(int header_id, const char* order_id) {
+  struct Node {
+    const char* id;
+    double x, y;
+  };
+  const Node nodes[] = {{"n0", 2.5, 2.0}, {"n1", 2.85, 3.5}, {"n2", 2.9, 4.25}};
+  std::string text = "{" + fleet_header(header_id) + ",\"orderId\":\"" + order_id + "\",\"orderUpdateId\":0,\"nodes\":[";
+  char buffer[256];
+  for (int i = 0; i < 3; ++i) {
+    std::snprintf(buffer, sizeof buffer,
+                  "%s{\"nodeId\":\"%s\",\"sequenceId\":%d,\"released\":true,\"nodePosition\":{\"x\":%.3f,\"y\":%.3f,"
+                  "\"mapId\":\"lab\",\"allowedDeviationXY\":0.3},\"actions\":[]}",
+                  i ? "," : "", nodes[i].id, 2 * i, nodes[i].x, nodes[i].y);
+    text += buffer;
+  }
+  text += "],\"edges\":[";
+  for (int i = 0; i < 2; ++i) {
+    std::snprintf(buffer, sizeof buffer,
+                  "%s{\"edgeId\":\"e%d\",\"sequenceId\":%d,\"released\":true,\"startNodeId\":\"%s\",\"endNodeId\":\"%s\","
+                  "\"actions\":[]}",
+                  i ? "," : "", i, 2 * i + 1, nodes[i].id, nodes[i + 1].id);
+    text += buffer;
+  }
+  return text + "]}";
+}
+
+std::string fleet_instant(int header_id, const char* action_id, const char* type) {
+  return "{" + fleet_header(header_id) + ",\"actions\":[{\"actionId\":\"" + action_id + "\",\"actionType\":\"" + type +
+         "\",\"blockingType\":\"HARD\"}]}";
+}
+
+// A master control on the site's broker. Everything it uses in the counted window (topics,
+// message texts, receive buffers, the state it decodes into) is made beforehand.
+class Master {
+ public:
+  explicit Master(sim::SimBoard& board) {
+    hal::PubSubOptions options;
+    options.client_id = "master";
+    options.subscriptions = {{kPrefix + std::string("#"), 1}, {"sen3bot/v1/people/Sen3Bot/r1", 0}};
+    options.inbound_slots = 512;
+    options.max_payload = kPayload;
+    auto client = board.site_broker().connect(options);
+    EXPECT_TRUE(client.ok());
+    if (client.ok()) client_ = std::move(client.value());
+  }
+  [[nodiscard]] bool connected() const { return client_ != nullptr; }
+  void send(const std::string& topic, const std::string& json) {
+    const Status sent = client_->publish(topic, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()}, 0, false);
+    if (!sent) ++send_failures;
+  }
+  // Reads what the robot published; the newest state is decoded.
+  void drain() {
+    for (;;) {
+      auto message = client_->receive(topic_, payload_);
+      if (!message.ok()) {
+        ++bad;
+        return;
+      }
+      if (!message.value()) return;
+      const std::string_view topic(topic_.data(), message.value()->topic_size);
+      const std::string_view text(reinterpret_cast<const char*>(payload_.data()), message.value()->payload_size);
+      ++messages;
+      if (!topic.ends_with("/state")) continue;
+      ++states;
+      if (vda5050::decode_state(text, vda5050::Version::v2_1_0, *state_, *scratch_).ok()) {
+        have_state = true;
+      } else {
+        ++bad;
+      }
+    }
+  }
+  [[nodiscard]] const vda5050::State& state() const { return *state_; }
+  [[nodiscard]] bool action_finished(std::string_view action_id) const {
+    if (!have_state) return false;
+    for (const vda5050::ActionState& a : state_->action_states)
+      if (a.action_id == action_id) return a.status == vda5050::ActionStatus::finished;
+    return false;
+  }
+
+  static constexpr const char* kPrefix = "uagv/v2/Sen3Bot/r1/";
+  static constexpr std::size_t kPayload = 32 * 1024;
+  const std::string order_topic = kPrefix + std::string("order");
+  const std::string instant_topic = kPrefix + std::string("instantActions");
+  std::uint64_t messages = 0, states = 0, bad = 0, send_failures = 0;
+  bool have_state = false;
+
+ private:
+  std::unique_ptr<hal::PubSub> client_;
+  std::vector<char> topic_ = std::vector<char>(256);
+  std::vector<std::uint8_t> payload_ = std::vector<std::uint8_t>(kPayload);
+  std::unique_ptr<vda5050::DecodeScratch> scratch_ = std::make_unique<vda5050::DecodeScratch>();
+  std::unique_ptr<vda5050::State> state_ = std::make_unique<vda5050::State>();
+};
+
+TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWithoutAllocating) {
+  testing::SimRig rig = testing::load_sim_rig();
+  ASSERT_NE(rig.board, nullptr);
+  FirmwareConfig* config = &rig.config;
+  config->telemetry_status_period_ms = 1'000;
+  config->navigation.dynamic_obstacles.enabled = true;
+  config->navigation.dwa.mover_prediction = true;
+  // People: the fleet task sends them on its Sen3Bot topic.
+  rig.world.detector.enabled = true;
+  rig.make_board();
+  config->navigation.people_enabled = true;
+  config->navigation.people_detector = "sim";
+  config->tasks["detector"].arena_bytes = 4 * 1024;
+  config->tasks["people"].arena_bytes = 64 * 1024;
+  // The fleet gives the goals instead of the mission (tests/sim/fleet_test.cpp).
+  config->navigation.mission.goal_count = 0;
+  config->tasks.erase("mission");
+  config->tasks["fleet"] = TaskConfig{FleetTask::arena_bytes_needed() + 64 * 1024};
+  config->has_fleet = true;
+  config->fleet.broker = "sim";
+  config->fleet.serial_number = "r1";
+  config->fleet.map_id = "lab";
+  hal::SimClock& clock = rig.clock();
+
+  std::FILE* sink = std::fopen("/dev/null", "w");
+  ASSERT_NE(sink, nullptr);
+  Firmware fw(*config, *rig.board, sink);
+  Master master(*rig.board);
+  ASSERT_TRUE(master.connected());
+  ASSERT_TRUE(fw.init());
+  tasks::Scheduler& scheduler = fw.scheduler();
+  // Every row but the camera's, the on-board detector's and the mission's.
+  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 3);
+  ASSERT_NE(fw.fleet(), nullptr);
+
+  // What master control sends in the window, written now.
+  const std::string malformed = "{\"headerId\": 1, this is not JSON";
+  const std::string order_text = fleet_order(2, "o1");
+  const std::string pause = fleet_instant(1, "pause-1", "startPause");
+  const std::string resume = fleet_instant(2, "pause-2", "stopPause");
+  const std::string cancel = fleet_instant(3, "cancel-1", "cancelOrder");
+
+  // Warm-up: the robot comes online (connection, factsheet, states) and master control reads it.
+  const hal::Nanos chunk = hal::millis(10);
+  for (hal::Nanos t = 0; t < hal::seconds(5); t += chunk) {
+    ASSERT_TRUE(scheduler.run_lockstep(clock, chunk));
+    master.drain();
+  }
+  ASSERT_TRUE(master.have_state);
+  std::vector<std::uint64_t> runs_before;
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i) runs_before.push_back(scheduler.stats(i).runs);
+  const FleetCounters before = fw.fleet()->counters();
+
+  // As long as the test above; the order, the pause and the cancel come early in it.
+  std::int64_t longest_period_us = 0;
+  for (const auto& row : kTaskTable) longest_period_us = std::max(longest_period_us, row.period_us);
+  const hal::Nanos window = hal::micros(longest_period_us) * static_cast<hal::Nanos>(kSlowestTaskRuns);
+
+  enum class Step { order, driving, paused, resumed, past_n1, cancelled, done };
+  Step step = Step::order;
+  bool was_paused_standing = false;
+  hal::Nanos paused_at = 0;
+  bool ran = true;
+
+  mem::testing::AllocationScope scope;
+  for (hal::Nanos t = 0; t < window && ran; t += chunk) {
+    ran = scheduler.run_lockstep(clock, chunk).ok();
+    master.drain();
+    const vda5050::State& s = master.state();
+    switch (step) {
+      case Step::order:
+        master.send(master.order_topic, malformed);  // refused, reported; nothing else changes
+        master.send(master.order_topic, order_text);
+        step = Step::driving;
+        break;
+      case Step::driving:
+        if (s.order_id == "o1" && s.driving) {
+          master.send(master.instant_topic, pause);
+          step = Step::paused;
+        }
+        break;
+      case Step::paused:
+        if (s.paused && !s.driving && !was_paused_standing) {
+          was_paused_standing = true;
+          paused_at = t;
+        }
+        if (was_paused_standing && t - paused_at >= hal::seconds(2)) {
+          master.send(master.instant_topic, resume);
+          step = Step::resumed;
+        }
+        break;
+      case Step::resumed:
+        if (!s.paused && s.driving) step = Step::past_n1;
+        break;
+      case Step::past_n1:
+        if (s.last_node_id == "n1") {
+          master.send(master.instant_topic, cancel);
+          step = Step::cancelled;
+        }
+        break;
+      case Step::cancelled:
+        if (master.action_finished("cancel-1")) step = Step::done;
+        break;
+      case Step::done:
+        break;
+    }
+  }
+  const std::uint64_t allocations = scope.allocations();
+  const std::uint64_t malloc_calls = scope.malloc_calls();
+  ASSERT_TRUE(ran);
+
+  EXPECT_EQ(allocations, 0u) << "operator new called in steady state";
+  EXPECT_EQ(malloc_calls, 0u) << "malloc called in steady state";
+  std::uint64_t total_runs = 0;
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i) {
+    const tasks::TaskStats s = scheduler.stats(i);
+    EXPECT_GE(s.runs - runs_before[i], kSlowestTaskRuns) << s.name;
+    total_runs += s.runs - runs_before[i];
+  }
+  EXPECT_GE(total_runs, kSteadyStateTicks);
+  // The whole exchange happened inside the window: order, pause, resume, cancel.
+  EXPECT_EQ(step, Step::done);
+  EXPECT_TRUE(was_paused_standing);
+  const FleetCounters& after = fw.fleet()->counters();
+  EXPECT_EQ(after.orders_received - before.orders_received, 2u);
+  EXPECT_EQ(after.orders_accepted - before.orders_accepted, 1u);
+  EXPECT_EQ(after.orders_rejected - before.orders_rejected, 1u);
+  EXPECT_EQ(after.instant_actions_received - before.instant_actions_received, 3u);
+  EXPECT_GT(after.goals_sent, before.goals_sent);
+  // A state at least every second, and on the events.
+  EXPECT_GE(after.states_published - before.states_published,
+            static_cast<std::uint64_t>(window / hal::seconds(1)));
+  EXPECT_GT(after.visualizations_published, before.visualizations_published);
+  EXPECT_GT(after.people_published, before.people_published);
+  EXPECT_EQ(after.publish_failures, 0u);
+  EXPECT_GE(master.states, after.states_published - before.states_published);
+  EXPECT_EQ(master.bad, 0u);
+  EXPECT_EQ(master.send_failures, 0u);
+  EXPECT_TRUE(master.state().node_states.empty());
   fw.shutdown();
   std::fclose(sink);
 }
