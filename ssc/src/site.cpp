@@ -1,0 +1,187 @@
+#include "sen3bot/ssc/site.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sen3bot::ssc {
+namespace {
+
+constexpr double kEps = 1e-9;
+
+double cross(Point o, Point a, Point b) noexcept { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+double segment_distance(Point p, Point a, Point b) noexcept {
+  const double dx = b.x - a.x;
+  const double dy = b.y - a.y;
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? ((p.x - a.x) * dx + (p.y - a.y) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  return distance(p, {a.x + t * dx, a.y + t * dy});
+}
+
+// Parameters along a→b where it meets edge c→d (one point, or the ends of a collinear overlap).
+void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool& any) noexcept {
+  const Point r{b.x - a.x, b.y - a.y};
+  const Point s{d.x - c.x, d.y - c.y};
+  const Point ca{c.x - a.x, c.y - a.y};
+  const double denom = r.x * s.y - r.y * s.x;
+  const double rr = r.x * r.x + r.y * r.y;
+  auto take = [&](double t) {
+    t = std::clamp(t, 0.0, 1.0);
+    lo = any ? std::min(lo, t) : t;
+    hi = any ? std::max(hi, t) : t;
+    any = true;
+  };
+  const double scale = std::max({1.0, rr, s.x * s.x + s.y * s.y});
+  if (std::fabs(denom) <= kEps * scale) {
+    if (rr <= 0) return;
+    if (std::fabs(ca.x * r.y - ca.y * r.x) > kEps * scale) return;  // parallel, apart
+    const double t0 = (ca.x * r.x + ca.y * r.y) / rr;
+    const double t1 = ((d.x - a.x) * r.x + (d.y - a.y) * r.y) / rr;
+    const double from = std::max(0.0, std::min(t0, t1));
+    const double to = std::min(1.0, std::max(t0, t1));
+    if (from <= to + kEps) {
+      take(from);
+      take(to);
+    }
+    return;
+  }
+  const double t = (ca.x * s.y - ca.y * s.x) / denom;
+  const double u = (ca.x * r.y - ca.y * r.x) / denom;
+  if (t >= -kEps && t <= 1 + kEps && u >= -kEps && u <= 1 + kEps) take(t);
+}
+
+}  // namespace
+
+double distance(Point a, Point b) noexcept { return std::hypot(a.x - b.x, a.y - b.y); }
+
+std::string_view to_string(AreaType type) noexcept {
+  switch (type) {
+    case AreaType::blind_intersection: return "1.1";
+    case AreaType::transition: return "1.2";
+    case AreaType::workstation: return "2";
+    case AreaType::not_monitored: return "3";
+  }
+  return "?";
+}
+
+const Area* Site::area(AreaId id) const noexcept {
+  for (const Area& a : areas)
+    if (a.id == id) return &a;
+  return nullptr;
+}
+
+const RobotHome* Site::robot(RobotId id) const noexcept {
+  for (const RobotHome& r : robots)
+    if (r.robot == id) return &r;
+  return nullptr;
+}
+
+Status Site::validate() const {
+  for (std::size_t i = 0; i < areas.size(); ++i) {
+    const Area& a = areas[i];
+    if (a.id == kNone) return Error::format(Errc::config, "area '%s' has no id", a.name.c_str());
+    for (std::size_t j = 0; j < i; ++j)
+      if (areas[j].id == a.id) return Error::format(Errc::config, "area id %u is used twice", a.id);
+    if (a.outline.size() < 3) return Error::format(Errc::config, "area '%s' needs at least three vertices", a.name.c_str());
+    double twice_area = 0;
+    for (std::size_t k = 0; k < a.outline.size(); ++k)
+      twice_area += cross({0, 0}, a.outline[k], a.outline[(k + 1) % a.outline.size()]);
+    if (std::fabs(twice_area) < 1e-6) return Error::format(Errc::config, "area '%s' has no surface", a.name.c_str());
+    if (monitored(a.type) && a.sentries.empty()) {
+      const bool overlooked = std::any_of(robots.begin(), robots.end(), [&](const RobotHome& r) { return r.overlooks == a.id; });
+      if (!overlooked) return Error::format(Errc::config, "area '%s' has no sentry pose and no home overlooks it", a.name.c_str());
+    }
+  }
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const RobotHome& r = robots[i];
+    // The people map marks which robots see a track in a 32-bit mask.
+    if (r.robot >= 32) return Error::format(Errc::config, "robot '%s' needs an id below 32", r.name.c_str());
+    for (std::size_t j = 0; j < i; ++j)
+      if (robots[j].robot == r.robot) return Error::format(Errc::config, "robot id %u is used twice", r.robot);
+    if (r.overlooks != kNone && area(r.overlooks) == nullptr)
+      return Error::format(Errc::config, "robot '%s' overlooks unknown area %u", r.name.c_str(), r.overlooks);
+  }
+  return Status::success();
+}
+
+bool contains(std::span<const Point> polygon, Point p) noexcept {
+  const std::size_t n = polygon.size();
+  if (n < 3) return false;
+  bool inside = false;
+  for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
+    const Point a = polygon[i];
+    const Point b = polygon[j];
+    if (segment_distance(p, a, b) <= kEps) return true;
+    if ((a.y > p.y) != (b.y > p.y)) {
+      const double x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
+      if (p.x < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+double distance_to(std::span<const Point> polygon, Point p) noexcept {
+  if (contains(polygon, p)) return 0;
+  double best = INFINITY;
+  for (std::size_t i = 0; i < polygon.size(); ++i)
+    best = std::min(best, segment_distance(p, polygon[i], polygon[(i + 1) % polygon.size()]));
+  return best;
+}
+
+Point centroid(std::span<const Point> polygon) noexcept {
+  Point c;
+  if (polygon.empty()) return c;
+  for (const Point& p : polygon) {
+    c.x += p.x;
+    c.y += p.y;
+  }
+  const double n = static_cast<double>(polygon.size());
+  return {c.x / n, c.y / n};
+}
+
+std::optional<SegmentSpan> segment_span(std::span<const Point> polygon, Point a, Point b) noexcept {
+  if (polygon.size() < 3) return std::nullopt;
+  double lo = 0;
+  double hi = 0;
+  bool any = false;
+  if (contains(polygon, a)) {
+    lo = hi = 0;
+    any = true;
+  }
+  if (contains(polygon, b)) {
+    lo = any ? lo : 1;
+    hi = 1;
+    any = true;
+  }
+  for (std::size_t i = 0; i < polygon.size(); ++i) edge_hits(a, b, polygon[i], polygon[(i + 1) % polygon.size()], lo, hi, any);
+  if (!any) return std::nullopt;
+  return SegmentSpan{lo, hi};
+}
+
+Crossings crossings(const Site& site, std::span<const Point> route, bool include_unmonitored) {
+  Crossings out;
+  if (route.empty()) return out;
+  for (const Area& area : site.areas) {
+    if (!include_unmonitored && !monitored(area.type)) continue;
+    std::optional<Crossing> found;
+    if (route.size() == 1) {
+      if (contains(area.outline.as_span(), route[0])) found = Crossing{area.id, area.type, 0, 0};
+    } else {
+      double along = 0;
+      for (std::size_t i = 0; i + 1 < route.size(); ++i) {
+        const double length = distance(route[i], route[i + 1]);
+        if (const auto span = segment_span(area.outline.as_span(), route[i], route[i + 1])) {
+          if (!found) found = Crossing{area.id, area.type, along + span->first * length, 0};
+          found->exit = along + span->last * length;
+        }
+        along += length;
+      }
+    }
+    if (found) (void)out.push_back(*found);  // as many slots as areas: never full
+  }
+  std::stable_sort(out.begin(), out.end(), [](const Crossing& x, const Crossing& y) { return x.entry < y.entry; });
+  return out;
+}
+
+}  // namespace sen3bot::ssc
