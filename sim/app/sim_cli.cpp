@@ -42,6 +42,12 @@ constexpr const char* kUsage =
     "        misses its goal or collides.\n"
     "  sim --list\n"
     "        List the scenarios and their cases.\n"
+    "  fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE]\n"
+    "        The fleet's scenarios in lockstep: several robots (each a whole firmware), plant\n"
+    "        AGVs speaking VDA 5050 and the Sensors Synergy Centre on one in-process broker;\n"
+    "        with --report write DIR/report.json (timeline, AGV speeds, closest AGV-person\n"
+    "        distance, the advice's lead on the AGV's own scanner), DIR/events.jsonl and\n"
+    "        PNGs of the site. Exit status 3 when a scenario's checks fail. --list lists them.\n"
     "  experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]\n"
     "                 [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]\n"
     "        The thesis' moving-obstacle experiment: the robot crosses the empty 10 m x 6 m\n"
@@ -112,6 +118,7 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"run", "", run_command},
       {"sim", "", sim_command},
       {"experiment", "", experiment_command},
+      {"fleet-sim", "", fleet_command},
       {"p2os-emulator", "", p2os_emulator_command},
       {"lms200-emulator", "", lms200_emulator_command},
   };

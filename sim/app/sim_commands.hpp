@@ -16,6 +16,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]
 //   [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE]
+int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]
 int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--baud B] [--variant A/R]
