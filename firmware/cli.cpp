@@ -99,6 +99,20 @@ constexpr const char* kUsage =
     "        counters. --iface sim [--sim-inputs 0xHH] [--sim-silent] runs against an\n"
     "        emulated node on an in-memory bus (its inputs; a node that never answers):\n"
     "        a demonstration and a test of the command.\n"
+    "  ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
+    "      [--event-log FILE] [--duration S] [--client-id ID]\n"
+    "        The Sensors Synergy Centre on the site's MQTT broker (mqtt:// or mqtts://,\n"
+    "        the latter with --ca-file): reads every vehicle's VDA 5050 state and\n"
+    "        connection and the robots' people reports; sends the robots their orders\n"
+    "        and cancels, and publishes each plant AGV's advisory (CLEAR, SLOW, STOP) on\n"
+    "        sen3bot/v1/advisory/MANUFACTURER/SERIAL (and, where the site's\n"
+    "        agv_cc.direct_pause allows, startPause/stopPause to the AGV). Steps every\n"
+    "        0.1 s in real time until SIGINT or SIGTERM or --duration S (0: until a\n"
+    "        signal). The password is the first line of --password-file. --event-log\n"
+    "        appends each decision with its reason as a JSON line; at the end one JSON\n"
+    "        line of counters goes to standard output. --client-id: default ssc. A\n"
+    "        restarted centre learns the robots and AGVs again from the retained\n"
+    "        connection messages and their next states.\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -163,6 +177,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"camera", "", camera_command},
       {"can", "dump", can_dump_command},
       {"can", "io", can_io_command},
+      {"ssc", "", ssc_command},
   };
   return dispatch(argc, argv, "sen3bot", SEN3BOT_VERSION, kUsage, kCommands, out, err);
 }

@@ -48,6 +48,16 @@ constexpr const char* kUsage =
     "        with --report write DIR/report.json (timeline, AGV speeds, closest AGV-person\n"
     "        distance, the advice's lead on the AGV's own scanner), DIR/events.jsonl and\n"
     "        PNGs of the site. Exit status 3 when a scenario's checks fail. --list lists them.\n"
+    "  agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S]\n"
+    "      [--x X --y Y --theta RAD] [--duration S] [--username U --password-file F\n"
+    "      --ca-file F] [--client-id ID]\n"
+    "        One simulated plant AGV in real time (20 Hz) on a real MQTT broker: a VDA 5050\n"
+    "        vehicle (default manufacturer PlantAGV, map map, 1 m/s, from 0,0,0) that\n"
+    "        takes orders and instant actions (startPause, stopPause, cancelOrder) from\n"
+    "        master control, reports its state with the nodes ahead, and obeys its\n"
+    "        advisory where the broker lets it read it. No people are simulated. Until\n"
+    "        SIGINT or SIGTERM or --duration S; then OFFLINE and one JSON line with\n"
+    "        its pose, pause and advice.\n"
     "  experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]\n"
     "                 [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]\n"
     "        The thesis' moving-obstacle experiment: the robot crosses the empty 10 m x 6 m\n"
@@ -119,6 +129,7 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"sim", "", sim_command},
       {"experiment", "", experiment_command},
       {"fleet-sim", "", fleet_command},
+      {"agv", "", agv_command},
       {"p2os-emulator", "", p2os_emulator_command},
       {"lms200-emulator", "", lms200_emulator_command},
   };

@@ -18,6 +18,9 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE]
 int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S] [--x X --y Y --theta RAD]
+//   [--duration S] [--username U --password-file F --ca-file F] [--client-id ID]
+int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]
 int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim lms200-emulator --pty LINK [--map MAP.yaml --pose X,Y,TH] [--baud B] [--variant A/R]

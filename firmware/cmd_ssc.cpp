@@ -1,0 +1,209 @@
+// `sen3bot ssc`: the Sensors Synergy Centre as a host program on the site's broker. The
+// decisions are ssc::Service's; this is only its real-time loop: the MQTT link, the site file,
+// the event log, the clock and the stop signals.
+#include <time.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/ssc/service.hpp"
+
+namespace sen3bot::firmware {
+
+namespace {
+
+constexpr const char* kSscUsage =
+    "usage: sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
+    "                   [--event-log FILE] [--duration S] [--client-id ID]\n";
+
+std::int64_t clock_ns(clockid_t clock) {
+  timespec ts{};
+  ::clock_gettime(clock, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// The password is the file's first line (mosquitto_passwd's users keep theirs the same way);
+// it never appears on the command line, where any user of the host could read it.
+bool read_secret(const std::string& path, std::string& out, std::string& problem) {
+  std::ifstream in(path);
+  if (!in) {
+    problem = std::strerror(errno);
+    return false;
+  }
+  std::getline(in, out);
+  while (!out.empty() && (out.back() == '\r' || out.back() == ' ' || out.back() == '\t')) out.pop_back();
+  if (out.empty()) {
+    problem = "empty";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  std::string broker, site_path, username, password_file, ca_file, event_log_path;
+  std::string client_id = "ssc";
+  double duration_s = 0;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(err, "sen3bot ssc: %s needs a value\n%s", argv[i], kSscUsage);
+      return 2;
+    }
+    const std::string value = argv[++i];
+    bool ok = !value.empty();
+    if (arg == "--broker") {
+      broker = value;
+    } else if (arg == "--site") {
+      site_path = value;
+    } else if (arg == "--username") {
+      username = value;
+    } else if (arg == "--password-file") {
+      password_file = value;
+    } else if (arg == "--ca-file") {
+      ca_file = value;
+    } else if (arg == "--event-log") {
+      event_log_path = value;
+    } else if (arg == "--client-id") {
+      client_id = value;
+    } else if (arg == "--duration") {
+      ok = parse_double(value, duration_s) && duration_s >= 0;
+    } else {
+      std::fprintf(err, "sen3bot ssc: unknown option '%s'\n%s", argv[i - 1], kSscUsage);
+      return 2;
+    }
+    if (!ok) {
+      std::fprintf(err, "sen3bot ssc: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kSscUsage);
+      return 2;
+    }
+  }
+  if (broker.empty() || site_path.empty()) {
+    std::fprintf(err, "sen3bot ssc: %s is required\n%s", broker.empty() ? "--broker" : "--site", kSscUsage);
+    return 2;
+  }
+  if (!password_file.empty() && username.empty()) {
+    std::fprintf(err, "sen3bot ssc: --password-file needs --username\n");
+    return 2;
+  }
+
+  Result<ssc::SiteFile> site = ssc::load_site(site_path);
+  if (!site) {
+    std::fprintf(err, "sen3bot ssc: %s\n", site.error().c_str());
+    return 2;
+  }
+
+  hal::PubSubOptions link;
+  link.url = broker;
+  link.client_id = client_id;
+  link.username = username;
+  link.ca_file = ca_file;
+  if (!password_file.empty()) {
+    std::string problem;
+    if (!read_secret(password_file, link.password, problem)) {
+      std::fprintf(err, "sen3bot ssc: --password-file %s: %s\n", password_file.c_str(), problem.c_str());
+      return 2;
+    }
+  }
+  link.subscriptions = ssc::Service::subscriptions(site->service);
+  // Every vehicle's state and every robot's people report arrive between two steps: room for a
+  // few hundred (50 robots at 5 people reports a second and 100 AGVs, with margin).
+  link.inbound_slots = 512;
+  link.outbound_slots = 256;
+  Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
+  if (!opened) {
+    std::fprintf(err, "sen3bot ssc: --broker %s: %s\n", broker.c_str(), opened.error().c_str());
+    return opened.error().code() == Errc::config ? 2 : 1;
+  }
+
+  std::FILE* event_log = nullptr;
+  if (!event_log_path.empty()) {
+    // Appended: a restarted centre's decisions follow the earlier ones' in one file.
+    event_log = std::fopen(event_log_path.c_str(), "a");
+    if (event_log == nullptr) {
+      std::fprintf(err, "sen3bot ssc: --event-log %s: %s\n", event_log_path.c_str(), std::strerror(errno));
+      return 2;
+    }
+  }
+
+  Result<std::unique_ptr<ssc::Service>> created = ssc::Service::create(*site, std::move(opened.value()), event_log);
+  if (!created) {
+    std::fprintf(err, "sen3bot ssc: %s: %s\n", site_path.c_str(), created.error().c_str());
+    if (event_log != nullptr) std::fclose(event_log);
+    return 2;
+  }
+  ssc::Service& service = **created;
+  std::fprintf(err, "sen3bot ssc: site %s (%zu robots, %zu areas) on %s as %s\n", site_path.c_str(),
+               site->robot_serials.size(), site->area_names.size(), broker.c_str(), client_id.c_str());
+
+  const StopOnSignal stop;
+  const std::int64_t period = static_cast<std::int64_t>(site->service.step_period_s * 1e9);
+  const std::int64_t start = clock_ns(CLOCK_MONOTONIC);
+  const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
+  std::int64_t next = start;
+  std::uint64_t steps = 0, overruns = 0;
+  std::uint64_t refusals_seen = 0;
+  std::uint64_t connects_seen = 0;
+  while (StopOnSignal::requested() == 0) {
+    const std::int64_t now = clock_ns(CLOCK_MONOTONIC);
+    if (now >= end) break;
+    service.step(now, clock_ns(CLOCK_REALTIME));
+    ++steps;
+
+    // The link connects and reconnects by itself; the operator hears about it once each time.
+    const hal::PubSubStats stats = service.link().stats();
+    if (stats.connections_refused != refusals_seen) {
+      refusals_seen = stats.connections_refused;
+      std::fprintf(err, "sen3bot ssc: the broker refused the connection (credentials or client id); retrying\n");
+    }
+    if (stats.connects != connects_seen) {
+      connects_seen = stats.connects;
+      std::fprintf(err, "sen3bot ssc: connected to the broker (connection %llu)\n", static_cast<unsigned long long>(connects_seen));
+    }
+
+    next += period;
+    if (clock_ns(CLOCK_MONOTONIC) > next) {
+      // Late: skip the missed steps rather than running them back to back.
+      ++overruns;
+      next = clock_ns(CLOCK_MONOTONIC);
+      continue;
+    }
+    const timespec wake{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR && StopOnSignal::requested() == 0) {
+    }
+  }
+
+  const ssc::ServiceCounters& c = service.counters();
+  const hal::PubSubStats link_stats = service.link().stats();
+  const int signal = StopOnSignal::requested();
+  std::fprintf(out,
+               "{\"stopped_by\":\"%s\",\"run_s\":%.1f,\"steps\":%llu,\"overruns\":%llu,\"states\":%llu,"
+               "\"people_reports\":%llu,\"rejected\":%llu,\"orders_sent\":%llu,\"cancels_sent\":%llu,"
+               "\"advisories_sent\":%llu,\"pauses_sent\":%llu,\"unknown_agvs\":%llu,\"connects\":%llu,"
+               "\"connection_losses\":%llu,\"receive_dropped\":%llu,\"publish_dropped\":%llu}\n",
+               signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration",
+               static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, static_cast<unsigned long long>(steps),
+               static_cast<unsigned long long>(overruns), static_cast<unsigned long long>(c.states),
+               static_cast<unsigned long long>(c.people_reports), static_cast<unsigned long long>(c.rejected),
+               static_cast<unsigned long long>(c.orders_sent), static_cast<unsigned long long>(c.cancels_sent),
+               static_cast<unsigned long long>(c.advisories_sent), static_cast<unsigned long long>(c.pauses_sent),
+               static_cast<unsigned long long>(c.unknown_agvs), static_cast<unsigned long long>(link_stats.connects),
+               static_cast<unsigned long long>(link_stats.connection_losses),
+               static_cast<unsigned long long>(link_stats.receive_dropped),
+               static_cast<unsigned long long>(link_stats.publish_dropped));
+  std::fflush(out);
+  created.value().reset();  // closes the link cleanly before the log
+  if (event_log != nullptr) std::fclose(event_log);
+  return 0;
+}
+
+}  // namespace sen3bot::firmware
