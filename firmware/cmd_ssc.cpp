@@ -201,7 +201,8 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
                static_cast<unsigned long long>(link_stats.receive_dropped),
                static_cast<unsigned long long>(link_stats.publish_dropped));
   std::fflush(out);
-  created.value().reset();  // closes the link cleanly before the log
+  service.close(1.0);  // what the last step queued goes out, then a clean disconnect
+  created.value().reset();
   if (event_log != nullptr) std::fclose(event_log);
   return 0;
 }

@@ -130,8 +130,7 @@ vda5050::Pose FleetTask::current_pose() const {
 }
 
 void FleetTask::publish(const std::string& topic, std::string_view payload, int qos, bool retain) {
-  const Status status =
-      link_->publish(topic, {reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()}, qos, retain);
+  const Status status = link_->publish(topic, hal::as_bytes(payload), qos, retain);
   if (!status) ++counters_.publish_failures;
 }
 
@@ -259,28 +258,34 @@ void FleetTask::drive() {
   }
 }
 
+std::optional<vda5050::AgvPosition> FleetTask::position() const {
+  tasks::Sample<msg::PoseEstimate> estimate;
+  if (!topics_.pose.read(estimate)) return std::nullopt;
+  vda5050::AgvPosition position;
+  position.position_initialized = estimate.value.valid;
+  position.x = estimate.value.pose.x_m;
+  position.y = estimate.value.pose.y_m;
+  position.theta = std::remainder(estimate.value.pose.theta_rad, 2 * 3.14159265358979323846);
+  position.deviation_range = std::sqrt(std::max(0.0, estimate.value.cov_xx + estimate.value.cov_yy));
+  position.localization_score = estimate.value.lost ? 0.0 : 1.0;
+  (void)position.map_id.assign(config_.map_id);
+  return position;
+}
+
+std::optional<vda5050::Velocity> FleetTask::velocity() const {
+  tasks::Sample<msg::Odometry> odometry;
+  if (!topics_.odometry.read(odometry) || !odometry.value.valid) return std::nullopt;
+  return vda5050::Velocity{odometry.value.v_m_s, 0.0, odometry.value.w_rad_s};
+}
+
 void FleetTask::publish_state(hal::Nanos now) {
   vda5050::State& state = buffers_->state;
   state = vda5050::State{};
   vehicle_->fill_state(state);
   stamp(state.header, state_header_);
-  tasks::Sample<msg::PoseEstimate> estimate;
-  if (topics_.pose.read(estimate)) {
-    vda5050::AgvPosition position;
-    position.position_initialized = estimate.value.valid;
-    position.x = estimate.value.pose.x_m;
-    position.y = estimate.value.pose.y_m;
-    position.theta = std::remainder(estimate.value.pose.theta_rad, 2 * 3.14159265358979323846);
-    position.deviation_range = std::sqrt(std::max(0.0, estimate.value.cov_xx + estimate.value.cov_yy));
-    position.localization_score = estimate.value.lost ? 0.0 : 1.0;
-    (void)position.map_id.assign(config_.map_id);
-    state.agv_position = position;
-  }
-  tasks::Sample<msg::Odometry> odometry;
-  if (topics_.odometry.read(odometry) && odometry.value.valid) {
-    state.velocity = vda5050::Velocity{odometry.value.v_m_s, 0.0, odometry.value.w_rad_s};
-    state.driving = std::abs(odometry.value.v_m_s) > 0.02 || std::abs(odometry.value.w_rad_s) > 0.02;
-  }
+  state.agv_position = position();
+  state.velocity = velocity();
+  if (state.velocity) state.driving = std::abs(state.velocity->vx) > 0.02 || std::abs(state.velocity->omega) > 0.02;
   tasks::Sample<msg::BaseFlags> base;
   if (topics_.base.read(base) && base.value.battery_v > 0) {
     const double fraction = (base.value.battery_v - config_.battery_empty_v) / (config_.battery_full_v - config_.battery_empty_v);
@@ -288,11 +293,9 @@ void FleetTask::publish_state(hal::Nanos now) {
     state.battery.battery_voltage = base.value.battery_v;
   }
   const std::uint32_t reasons = safety_.reasons;
-  if ((reasons & (msg::kSafetyEstopChain | msg::kSafetyEstop)) != 0) {
+  // The chain, a bumper and the reset latch all hold until someone resets at the robot.
+  if ((reasons & (msg::kSafetyEstopChain | msg::kSafetyEstop | msg::kSafetyBumper | msg::kSafetyResetNeeded)) != 0)
     state.e_stop = vda5050::EStop::manual;
-  } else if ((reasons & (msg::kSafetyBumper | msg::kSafetyResetNeeded)) != 0) {
-    state.e_stop = vda5050::EStop::manual;
-  }
   state.field_violation = (reasons & (msg::kSafetyObstacle | msg::kSafetyCage | msg::kSafetyMoverApproach)) != 0;
   auto text = vda5050::encode_state(state, config_.version, buffers_->out);
   if (!text) {
@@ -309,19 +312,8 @@ void FleetTask::publish_state(hal::Nanos now) {
 void FleetTask::publish_visualization() {
   vda5050::Visualization message;
   stamp(message.header, visualization_header_);
-  tasks::Sample<msg::PoseEstimate> estimate;
-  if (topics_.pose.read(estimate)) {
-    vda5050::AgvPosition position;
-    position.position_initialized = estimate.value.valid;
-    position.x = estimate.value.pose.x_m;
-    position.y = estimate.value.pose.y_m;
-    position.theta = std::remainder(estimate.value.pose.theta_rad, 2 * 3.14159265358979323846);
-    (void)position.map_id.assign(config_.map_id);
-    message.agv_position = position;
-  }
-  tasks::Sample<msg::Odometry> odometry;
-  if (topics_.odometry.read(odometry) && odometry.value.valid)
-    message.velocity = vda5050::Velocity{odometry.value.v_m_s, 0.0, odometry.value.w_rad_s};
+  message.agv_position = position();
+  message.velocity = velocity();
   auto text = vda5050::encode_visualization(message, config_.version, buffers_->out);
   if (!text) {
     ++counters_.publish_failures;

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <memory>
 #include <memory_resource>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -115,6 +116,8 @@ class FleetTask final : public tasks::Task {
   void publish(const std::string& topic, std::string_view payload, int qos, bool retain);
   void stamp(vda5050::Header& header, std::uint32_t& counter);
   [[nodiscard]] vda5050::Pose current_pose() const;
+  [[nodiscard]] std::optional<vda5050::AgvPosition> position() const;
+  [[nodiscard]] std::optional<vda5050::Velocity> velocity() const;
 
   FleetConfig config_;
   hal::Board& board_;

@@ -116,12 +116,12 @@ class MqttClient final : public PubSub {
 
   Status publish(std::string_view topic, std::span<const std::uint8_t> payload, int qos, bool retain) override {
     if (closing_.load() || !valid_publish_topic(topic, options_.max_topic) || payload.size() > options_.max_payload || qos < 0 || qos > 1) {
-      refused_.fetch_add(1);
+      counters_.publish_refused.fetch_add(1);
       return Error::format(Errc::invalid_argument, "publish refused: topic '%.*s', %zu bytes, qos %d",
                            static_cast<int>(std::min<std::size_t>(topic.size(), 80)), topic.data(), payload.size(), qos);
     }
     if (!outbound_.push(topic, payload, qos, retain)) {
-      dropped_.fetch_add(1);
+      counters_.publish_dropped.fetch_add(1);
       return Error(Errc::capacity, "publish dropped: the outbound queue is full");
     }
     return Status::success();
@@ -131,20 +131,8 @@ class MqttClient final : public PubSub {
     return inbound_.pop(topic, payload);
   }
   [[nodiscard]] PubSubState state() const noexcept override { return state_.load(); }
-  [[nodiscard]] std::uint32_t session() const noexcept override { return session_.load(); }
-  [[nodiscard]] PubSubStats stats() const noexcept override {
-    PubSubStats stats;
-    stats.published = published_.load();
-    stats.publish_dropped = dropped_.load();
-    stats.publish_refused = refused_.load();
-    stats.received = received_.load();
-    stats.receive_dropped = receive_dropped_.load();
-    stats.receive_oversized = receive_oversized_.load();
-    stats.connects = session_.load();
-    stats.connection_losses = losses_.load();
-    stats.connections_refused = refused_connections_.load();
-    return stats;
-  }
+  [[nodiscard]] std::uint32_t session() const noexcept override { return counters_.sessions.load(); }
+  [[nodiscard]] PubSubStats stats() const noexcept override { return counters_.snapshot(); }
 
   void close(double timeout_s) noexcept override {
     if (!thread_.joinable()) return;
@@ -160,7 +148,7 @@ class MqttClient final : public PubSub {
   static void on_connect(mosquitto* mosq, void* user, int rc) {
     MqttClient& client = self(user);
     if (rc != 0) {
-      client.refused_connections_.fetch_add(1);
+      client.counters_.connections_refused.fetch_add(1);
       std::fprintf(stderr, "mqtt: %s:%d refused the connection: %s\n", client.address_.host.c_str(), client.address_.port,
                    mosquitto_connack_string(rc));
       return;  // the broker closes the socket; the loop sees it and backs off
@@ -170,12 +158,12 @@ class MqttClient final : public PubSub {
     }
     client.backoff_s_ = client.options_.reconnect_min_s;
     client.state_.store(PubSubState::connected);
-    client.session_.fetch_add(1);
+    client.counters_.sessions.fetch_add(1);
   }
 
   static void on_disconnect(mosquitto*, void* user, int) {
     MqttClient& client = self(user);
-    if (client.state_.load() == PubSubState::connected) client.losses_.fetch_add(1);
+    if (client.state_.load() == PubSubState::connected) client.counters_.connection_losses.fetch_add(1);
     client.state_.store(PubSubState::disconnected);
   }
 
@@ -184,19 +172,19 @@ class MqttClient final : public PubSub {
     const std::string_view topic = message->topic != nullptr ? std::string_view(message->topic) : std::string_view();
     const std::size_t size = message->payloadlen > 0 ? static_cast<std::size_t>(message->payloadlen) : 0;
     if (topic.size() > client.options_.max_topic || size > client.options_.max_payload) {
-      client.receive_oversized_.fetch_add(1);
+      client.counters_.receive_oversized.fetch_add(1);
       return;
     }
     if (!client.inbound_.push(topic, {static_cast<const std::uint8_t*>(message->payload), size}, message->qos, message->retain)) {
-      client.receive_dropped_.fetch_add(1);
+      client.counters_.receive_dropped.fetch_add(1);
       return;
     }
-    client.received_.fetch_add(1);
+    client.counters_.received.fetch_add(1);
   }
 
   static void on_publish(mosquitto*, void* user, int) {
     MqttClient& client = self(user);
-    client.published_.fetch_add(1);
+    client.counters_.published.fetch_add(1);
     if (client.inflight_ > 0) --client.inflight_;
   }
 
@@ -209,7 +197,7 @@ class MqttClient final : public PubSub {
       send_topic_[m.topic_size] = '\0';
       const int rc = mosquitto_publish(mosq_, nullptr, send_topic_.data(), static_cast<int>(m.payload_size), send_payload_.data(), m.qos, m.retained);
       if (rc != MOSQ_ERR_SUCCESS) {
-        dropped_.fetch_add(1);  // the connection went while sending: the loop will notice
+        counters_.publish_dropped.fetch_add(1);  // the connection went while sending: the loop will notice
         return;
       }
       ++inflight_;
@@ -245,7 +233,7 @@ class MqttClient final : public PubSub {
         const int rc = mosquitto_loop(mosq_, outbound_.size() > 0 && inflight_ < options_.max_inflight ? 0 : 10, 1);
         if (rc != MOSQ_ERR_SUCCESS) {
           socket_open = false;
-          if (state_.load() == PubSubState::connected) losses_.fetch_add(1);
+          if (state_.load() == PubSubState::connected) counters_.connection_losses.fetch_add(1);
           state_.store(PubSubState::disconnected);
           inflight_ = 0;  // libmosquitto resends its unacknowledged QoS 1 messages itself on reconnect
           next_attempt = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(backoff_s_));
@@ -287,9 +275,7 @@ class MqttClient final : public PubSub {
   std::size_t inflight_ = 0;  // the network thread's own
   double backoff_s_ = 0.5;    // the network thread's own
   std::atomic<PubSubState> state_{PubSubState::connecting};
-  std::atomic<std::uint32_t> session_{0};
-  std::atomic<std::uint64_t> published_{0}, dropped_{0}, refused_{0}, received_{0}, receive_dropped_{0}, receive_oversized_{0},
-      losses_{0}, refused_connections_{0};
+  PubSubCounters counters_;
 };
 
 }  // namespace

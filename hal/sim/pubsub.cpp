@@ -177,12 +177,12 @@ class MemoryClient final : public PubSub {
   Status publish(std::string_view topic, std::span<const std::uint8_t> payload, int qos, bool retain) override {
     if (state_.load() == PubSubState::closed || !valid_publish_topic(topic, options_.max_topic) ||
         payload.size() > options_.max_payload || qos < 0 || qos > 1) {
-      refused_.fetch_add(1);
+      counters_.publish_refused.fetch_add(1);
       return Error::format(Errc::invalid_argument, "publish refused: topic '%.*s', %zu bytes, qos %d",
                            static_cast<int>(std::min<std::size_t>(topic.size(), 80)), topic.data(), payload.size(), qos);
     }
     if (!outbound_.push(topic, payload, qos, retain)) {
-      dropped_.fetch_add(1);
+      counters_.publish_dropped.fetch_add(1);
       return Error(Errc::capacity, "publish dropped: the outbound queue is full");
     }
     const std::lock_guard lock(broker_.mutex_);
@@ -194,19 +194,8 @@ class MemoryClient final : public PubSub {
     return inbound_.pop(topic, payload);
   }
   [[nodiscard]] PubSubState state() const noexcept override { return state_.load(); }
-  [[nodiscard]] std::uint32_t session() const noexcept override { return session_.load(); }
-  [[nodiscard]] PubSubStats stats() const noexcept override {
-    PubSubStats stats;
-    stats.published = published_.load();
-    stats.publish_dropped = dropped_.load();
-    stats.publish_refused = refused_.load();
-    stats.received = received_.load();
-    stats.receive_dropped = receive_dropped_.load();
-    stats.receive_oversized = receive_oversized_.load();
-    stats.connects = session_.load();
-    stats.connection_losses = losses_.load();
-    return stats;
-  }
+  [[nodiscard]] std::uint32_t session() const noexcept override { return counters_.sessions.load(); }
+  [[nodiscard]] PubSubStats stats() const noexcept override { return counters_.snapshot(); }
   void close(double) noexcept override {
     if (state_.load() == PubSubState::closed) return;
     {
@@ -219,13 +208,13 @@ class MemoryClient final : public PubSub {
   // Broker side, with the broker's mutex held.
   void deliver(std::string_view topic, std::span<const std::uint8_t> payload, int qos, bool retained) {
     if (topic.size() > options_.max_topic || payload.size() > options_.max_payload) {
-      receive_oversized_.fetch_add(1);
+      counters_.receive_oversized.fetch_add(1);
       ++broker_.dropped_;
     } else if (!inbound_.push(topic, payload, qos, retained)) {
-      receive_dropped_.fetch_add(1);
+      counters_.receive_dropped.fetch_add(1);
       ++broker_.dropped_;
     } else {
-      received_.fetch_add(1);
+      counters_.received.fetch_add(1);
     }
   }
   void flush_locked() {
@@ -234,17 +223,17 @@ class MemoryClient final : public PubSub {
       if (!message || !message.value()) return;
       const PubSubMessage& m = *message.value();
       broker_.route({scratch_topic_.data(), m.topic_size}, {scratch_payload_.data(), m.payload_size}, m.qos, m.retained);
-      published_.fetch_add(1);
+      counters_.published.fetch_add(1);
     }
   }
   void set_connected(MemoryBroker::Impl::Record* record) {
     record_ = record;
     state_.store(PubSubState::connected);
-    session_.fetch_add(1);
+    counters_.sessions.fetch_add(1);
   }
   void set_cut_off() {
     state_.store(PubSubState::disconnected);
-    losses_.fetch_add(1);
+    counters_.connection_losses.fetch_add(1);
   }
   void set_closed() {
     record_ = nullptr;
@@ -261,9 +250,7 @@ class MemoryClient final : public PubSub {
   std::vector<std::uint8_t> scratch_payload_;
   MemoryBroker::Impl::Record* record_ = nullptr;  // guarded by the broker's mutex
   std::atomic<PubSubState> state_{PubSubState::connecting};
-  std::atomic<std::uint32_t> session_{0};
-  std::atomic<std::uint64_t> published_{0}, dropped_{0}, refused_{0}, received_{0}, receive_dropped_{0},
-      receive_oversized_{0}, losses_{0};
+  PubSubCounters counters_;
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -246,6 +247,7 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   std::string site_path = SEN3BOT_SOURCE_DIR "/config/fleet/site.yaml";
   std::string config_path = SEN3BOT_SOURCE_DIR "/config/fleet/robot.yaml";
   std::string report_dir;
+  std::string capture_dir;
   for (int i = 0; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&]() -> std::string {
@@ -260,11 +262,14 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       config_path = value();
     } else if (arg == "--report") {
       report_dir = value();
+    } else if (arg == "--capture") {
+      capture_dir = value();
     } else if (arg == "--list") {
       for (const FleetScenario& s : scenarios()) std::fprintf(out, "%-6s %s\n", s.name, s.description);
       return 0;
     } else if (arg == "--help" || arg == "-h") {
-      std::fprintf(out, "usage: sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE] | --list\n");
+      std::fprintf(out, "usage: sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--capture DIR] [--site FILE] "
+                   "[--config FILE] | --list\n");
       return 0;
     } else {
       return fail(err, "unknown argument '" + arg + "' (try --help)");
@@ -276,6 +281,8 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const FleetScenario& scenario = *found;
   if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST)
     return fail(err, "--report: cannot create " + report_dir + ": " + std::strerror(errno), 1);
+  if (!capture_dir.empty() && ::mkdir(capture_dir.c_str(), 0755) != 0 && errno != EEXIST)
+    return fail(err, "--capture: cannot create " + capture_dir + ": " + std::strerror(errno), 1);
 
   Result<ssc::SiteFile> site = ssc::load_site(site_path);
   if (!site) return fail(err, site.error().c_str());
@@ -341,6 +348,36 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     agvs.push_back(std::make_unique<SimAgv>(c, std::move(client.value())));
   }
 
+  // --capture: every message on the broker, as TOPIC.N.json (TOPIC its last level, or people /
+  // advisory), for checking against the schemas.
+  std::unique_ptr<hal::PubSub> capture;
+  std::map<std::string, int> captured;
+  std::vector<char> capture_topic(256);
+  std::vector<std::uint8_t> capture_payload(64 * 1024);
+  if (!capture_dir.empty()) {
+    hal::PubSubOptions everything;
+    everything.client_id = "capture";
+    everything.subscriptions = {{"#", 1}};
+    everything.inbound_slots = 1024;
+    everything.max_payload = 16 * 1024;
+    auto client = broker.connect(everything);
+    if (!client) return fail(err, client.error().c_str(), 1);
+    capture = std::move(client.value());
+  }
+  auto drain_capture = [&] {
+    if (!capture) return;
+    for (;;) {
+      auto m = capture->receive(capture_topic, capture_payload);
+      if (!m || !m.value()) return;
+      const std::string topic(capture_topic.data(), m.value()->topic_size);
+      std::string leaf = topic.substr(topic.rfind('/') + 1);
+      if (topic.starts_with("sen3bot/v1/people/")) leaf = "people";
+      if (topic.starts_with("sen3bot/v1/advisory/")) leaf = "advisory";
+      const std::string path = capture_dir + "/" + leaf + "." + std::to_string(++captured[leaf]) + ".json";
+      (void)write_text(path, std::string(reinterpret_cast<const char*>(capture_payload.data()), m.value()->payload_size));
+    }
+  };
+
   // The plant's master control: each AGV's order, as a VDA 5050 order of its route.
   auto send_agv_order = [&](const AgvPlan& plan, std::int64_t unix_ns) {
     auto order = std::make_unique<vda5050::Order>();
@@ -370,7 +407,7 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     auto encoded = vda5050::encode_order(*order, site->service.version, text);
     if (!encoded) return;
     broker.publish("uagv/v2/PlantAGV/" + std::string(plan.serial) + "/order",
-                   {reinterpret_cast<const std::uint8_t*>(encoded->data()), encoded->size()}, false);
+                   hal::as_bytes(*encoded), false);
   };
 
   std::fprintf(out, "fleet-sim %s: %s\n", scenario.name, scenario.description);
@@ -470,6 +507,7 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
         snapshot(t_s, "the AGV gets the centre's advice");
         shot_advice = true;
       }
+    drain_capture();
     if (t_s + 1e-9 >= next_sample_s) {
       next_sample_s += 0.5;
       for (std::size_t i = 0; i < agvs.size(); ++i)

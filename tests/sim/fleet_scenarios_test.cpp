@@ -56,7 +56,9 @@ Report run(const char* scenario) {
   Report r;
   char dir[] = "/tmp/sen3bot-fleet-sim-XXXXXX";
   EXPECT_NE(::mkdtemp(dir), nullptr);
-  std::vector<char*> argv = {const_cast<char*>("--scenario"), const_cast<char*>(scenario), const_cast<char*>("--report"), dir};
+  std::string capture = std::string(dir) + "/messages";
+  std::vector<char*> argv = {const_cast<char*>("--scenario"), const_cast<char*>(scenario), const_cast<char*>("--report"), dir,
+                             const_cast<char*>("--capture"), capture.data()};
   std::FILE* out = std::tmpfile();
   std::FILE* err = std::tmpfile();
   r.code = fleet_command(static_cast<int>(argv.size()), argv.data(), out, err);
@@ -78,6 +80,13 @@ Report run(const char* scenario) {
     }
   }
   EXPECT_NE(read_file(std::string(dir) + "/site_1.png").size(), 0u);
+  // Every message anyone sent on the site's broker (robots, AGVs, the centre's orders, cancels
+  // and advisories) against the shipped schemas.
+  const std::string check = std::string("python3 ") + SEN3BOT_SOURCE_DIR + "/tests/vda5050/validate_messages.py " + capture +
+                            " 2.1.0 " + SEN3BOT_SOURCE_DIR + "/docs/vda5050/schemas " + SEN3BOT_SOURCE_DIR + "/docs/fleet";
+  EXPECT_EQ(std::system(check.c_str()), 0) << check;
+  EXPECT_NE(read_file(capture + "/advisory.1.json").size(), 0u);
+  EXPECT_NE(read_file(capture + "/order.1.json").size(), 0u);
   std::system((std::string("rm -rf ") + dir).c_str());
   return r;
 }

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Validates captured fleet messages against the shipped schemas.
 
-usage: validate_messages.py DIR VERSION SCHEMA_ROOT PEOPLE_SCHEMA
+usage: validate_messages.py DIR VERSION SCHEMA_ROOT SEN3BOT_SCHEMAS
 
 DIR holds one file per message, named TOPIC.N.json, TOPIC being the last level of the MQTT
-topic (state, connection, visualization, factsheet, order, instantActions) or "people".
-VDA 5050 messages are checked against SCHEMA_ROOT/VERSION (or 2.1.0's schemas when VERSION has
-none shipped, plus a check that no member added in 2.1 appears), people messages against
-PEOPLE_SCHEMA. Exits non-zero on the first file set with any failure, listing every failure.
+topic (state, connection, visualization, factsheet, order, instantActions) or one of Sen3Bot's
+own ("people", "advisory"). VDA 5050 messages are checked against SCHEMA_ROOT/VERSION (or
+2.1.0's schemas when VERSION has none shipped, plus a check that no member added in 2.1
+appears), Sen3Bot's against SEN3BOT_SCHEMAS/TOPIC.schema.json. Exits non-zero when any message
+fails, listing every failure.
 """
 import json
 import os
@@ -16,6 +17,7 @@ import sys
 import jsonschema
 
 ADDED_IN_2_1 = {"corridor", "maps", "vehicleConfig", "blockingTypes"}
+SEN3BOT_TOPICS = {"people", "advisory"}
 
 
 def keys(value):
@@ -40,7 +42,7 @@ def main():
     if len(sys.argv) != 5:
         print(__doc__, file=sys.stderr)
         return 2
-    folder, version, schema_root, people_schema = sys.argv[1:]
+    folder, version, schema_root, sen3bot_schemas = sys.argv[1:]
     schema_dir = os.path.join(schema_root, version)
     if not os.path.isdir(schema_dir):
         schema_dir = os.path.join(schema_root, "2.1.0")
@@ -52,7 +54,8 @@ def main():
             continue
         topic = name.split(".")[0]
         if topic not in validators:
-            path = people_schema if topic == "people" else os.path.join(schema_dir, topic + ".schema")
+            path = (os.path.join(sen3bot_schemas, topic + ".schema.json") if topic in SEN3BOT_TOPICS
+                    else os.path.join(schema_dir, topic + ".schema"))
             if not os.path.exists(path):
                 failures.append(f"{name}: no schema for topic '{topic}'")
                 continue
@@ -66,7 +69,7 @@ def main():
         counts[topic] = counts.get(topic, 0) + 1
         for e in validators[topic].iter_errors(message):
             failures.append(f"{name}: {'/'.join(map(str, e.path)) or '(root)'}: {e.message}")
-        if topic != "people":
+        if topic not in SEN3BOT_TOPICS:
             if message.get("version", "")[:4] != version[:4]:
                 failures.append(f"{name}: version {message.get('version')!r}, the site speaks {version}")
             if version.startswith("2.0"):

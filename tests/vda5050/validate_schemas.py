@@ -15,20 +15,11 @@ import tempfile
 
 import jsonschema
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from validate_messages import ADDED_IN_2_1, keys  # noqa: E402  (one list of 2.1's additions)
+
 TOPICS = ["order", "instantActions", "state", "connection", "visualization", "factsheet"]
 VERSIONS = ["2.0.0", "2.1.0"]
-# Members 2.1.0 added: a 2.0.0 message must not have them.
-ADDED_IN_2_1 = {"corridor", "maps", "vehicleConfig", "blockingTypes"}
-
-
-def keys(value):
-    if isinstance(value, dict):
-        for k, v in value.items():
-            yield k
-            yield from keys(v)
-    elif isinstance(value, list):
-        for v in value:
-            yield from keys(v)
 
 
 def main():

@@ -99,7 +99,7 @@ void SimAgv::publish_state(std::int64_t unix_ns) {
   state.field_violation = own_stop_;
   auto text = vda5050::encode_state(state, config_.version, buffers_->out);
   if (text) {
-    (void)link_->publish(topic_state_, {reinterpret_cast<const std::uint8_t*>(text->data()), text->size()}, 0, false);
+    (void)link_->publish(topic_state_, hal::as_bytes(*text), 0, false);
     vehicle_->state_published();
   }
 }
@@ -112,7 +112,7 @@ void SimAgv::step(hal::Nanos now_ns, std::int64_t unix_ns, double dt_s, std::spa
     online.header.timestamp = vda5050::iso8601(unix_ns);
     online.state = vda5050::ConnectionState::online;
     auto text = vda5050::encode_connection(online, config_.version, buffers_->out);
-    if (text) (void)link_->publish(topic_connection_, {reinterpret_cast<const std::uint8_t*>(text->data()), text->size()}, 1, true);
+    if (text) (void)link_->publish(topic_connection_, hal::as_bytes(*text), 1, true);
     last_state_ns_ = -1;
   }
   take_messages();

@@ -12,10 +12,6 @@ namespace {
 
 constexpr std::size_t kMaxLatencies = 100'000;
 
-std::span<const std::uint8_t> bytes(std::string_view text) {
-  return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
-}
-
 // "uagv/v2/MANUFACTURER/SERIAL/TOPIC" -> its three last levels.
 bool split_vehicle_topic(std::string_view topic, std::string_view& manufacturer, std::string_view& serial,
                          std::string_view& leaf) {
@@ -124,7 +120,7 @@ Service::AgvEntry* Service::agv_entry(std::string_view manufacturer, std::string
 }
 
 void Service::publish(const std::string& topic, std::string_view payload, int qos, bool retain) {
-  (void)link_->publish(topic, bytes(payload), qos, retain);
+  (void)link_->publish(topic, hal::as_bytes(payload), qos, retain);
 }
 
 void Service::on_state(std::string_view manufacturer, std::string_view serial, std::string_view text, hal::Nanos now) {

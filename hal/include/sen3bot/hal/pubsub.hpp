@@ -80,6 +80,31 @@ struct PubSubStats {
   std::uint64_t connections_refused = 0; // the broker said no (credentials, identifier)
 };
 
+// The counters a link keeps, bumped from any thread; stats() is their snapshot.
+struct PubSubCounters {
+  std::atomic<std::uint64_t> published{0}, publish_dropped{0}, publish_refused{0}, received{0}, receive_dropped{0},
+      receive_oversized{0}, connection_losses{0}, connections_refused{0};
+  std::atomic<std::uint32_t> sessions{0};
+  [[nodiscard]] PubSubStats snapshot() const noexcept {
+    PubSubStats s;
+    s.published = published.load();
+    s.publish_dropped = publish_dropped.load();
+    s.publish_refused = publish_refused.load();
+    s.received = received.load();
+    s.receive_dropped = receive_dropped.load();
+    s.receive_oversized = receive_oversized.load();
+    s.connects = sessions.load();
+    s.connection_losses = connection_losses.load();
+    s.connections_refused = connections_refused.load();
+    return s;
+  }
+};
+
+// A payload given as text.
+[[nodiscard]] inline std::span<const std::uint8_t> as_bytes(std::string_view text) noexcept {
+  return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
+}
+
 class PubSub {
  public:
   virtual ~PubSub() = default;

@@ -68,6 +68,8 @@ class Service {
 
   // Takes every message waiting, steps the centre at `now`, publishes its decisions.
   void step(hal::Nanos now, std::int64_t unix_ns);
+  // Sends what is queued (up to timeout_s) and disconnects cleanly.
+  void close(double timeout_s) noexcept { link_->close(timeout_s); }
 
   [[nodiscard]] const Centre& centre() const noexcept { return *centre_; }
   [[nodiscard]] const ServiceCounters& counters() const noexcept { return counters_; }
