@@ -379,7 +379,7 @@ void read_fleet(const Reader& r, FirmwareConfig& c) {
   if (r.has("ca_file")) f.ca_file = r.text("ca_file");
   if (r.has("cert_file")) f.cert_file = r.text("cert_file");
   if (r.has("key_file")) f.key_file = r.text("key_file");
-  if (r.has("keepalive_s")) f.keepalive_s = static_cast<int>(r.integer("keepalive_s", 1, 3600));
+  if (r.has("keepalive_s")) f.keepalive_s = static_cast<int>(r.integer("keepalive_s", 5, 3600));
   if (r.has("state_period_s")) f.state_period_s = r.number("state_period_s", 0.01, 30.0);
   if (r.has("visualization_period_s")) f.visualization_period_s = r.number("visualization_period_s", 0.0, 60.0);
   if (r.has("people_period_s")) f.people_period_s = r.number("people_period_s", 0.0, 60.0);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cerrno>
 #include <cstring>
 #include <mutex>
 #include <thread>
@@ -255,6 +256,10 @@ class MqttClient final : public PubSub {
         ever_connected_socket = true;
         socket_open = true;
       } else {
+        if (rc != last_connect_error_)
+          std::fprintf(stderr, "mqtt: connecting to %s:%d: %s\n", address_.host.c_str(), address_.port,
+                       rc == MOSQ_ERR_ERRNO ? std::strerror(errno) : mosquitto_strerror(rc));
+        last_connect_error_ = rc;
         state_.store(PubSubState::disconnected);
         next_attempt = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(backoff_s_));
         backoff_s_ = std::min(backoff_s_ * 2, options_.reconnect_max_s);
@@ -273,6 +278,7 @@ class MqttClient final : public PubSub {
   std::atomic<bool> closing_{false};
   std::atomic<double> close_timeout_s_{1.0};
   std::size_t inflight_ = 0;  // the network thread's own
+  int last_connect_error_ = MOSQ_ERR_SUCCESS;  // reported once until it changes
   double backoff_s_ = 0.5;    // the network thread's own
   std::atomic<PubSubState> state_{PubSubState::connecting};
   PubSubCounters counters_;
@@ -284,6 +290,8 @@ Result<std::unique_ptr<PubSub>> open_mqtt(const PubSubOptions& options) {
   auto address = parse_url(options.url);
   if (!address) return address.error();
   if (options.max_topic == 0 || options.max_payload == 0) return Error(Errc::config, "mqtt: zero-sized topic or payload limit");
+  // libmosquitto refuses to connect with less, and would only say so on every attempt.
+  if (options.keepalive_s < 5) return Error::format(Errc::config, "mqtt: keepalive_s %d: at least 5 s", options.keepalive_s);
   auto client = std::make_unique<MqttClient>(options, std::move(address.value()));
   if (Status status = client->init(); !status) return status.error();
   return std::unique_ptr<PubSub>(std::move(client));

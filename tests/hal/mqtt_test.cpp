@@ -225,6 +225,11 @@ TEST_F(MqttSite, WrongCredentialsAreRefusedAndPlainTextIsNotSpoken) {
   auto bad_url = open_mqtt(http);
   ASSERT_FALSE(bad_url.ok());
   EXPECT_EQ(bad_url.error().code(), Errc::config);
+  PubSubOptions hasty = tls("r1", "robot1-secret");
+  hasty.keepalive_s = 2;  // libmosquitto would refuse every connect
+  auto too_short = open_mqtt(hasty);
+  ASSERT_FALSE(too_short.ok());
+  EXPECT_EQ(too_short.error().code(), Errc::config);
 }
 
 TEST(Mqtt, ABrokerKilledAndRestartedMidStreamLosesNoSessionAndTheQueueCatchesUp) {
