@@ -9,7 +9,7 @@
 namespace sen3bot::ssc {
 namespace {
 
-std::uint32_t robot_bit(RobotId robot) noexcept { return robot < 32 ? (std::uint32_t{1} << robot) : 0; }
+RobotMask robot_bit(RobotId robot) noexcept { return robot < kMaxRobots ? (RobotMask{1} << robot) : 0; }
 
 Point predict(const Track& t, Nanos at) noexcept {
   const double dt = std::max(0.0, hal::to_seconds(at - t.last_seen));
@@ -23,7 +23,7 @@ PeopleMap::PeopleMap(const PeopleMapConfig& config) noexcept : config_(config) {
 }
 
 void PeopleMap::update(const PeopleReport& report) noexcept {
-  const std::uint32_t bit = robot_bit(report.robot);
+  const RobotMask bit = robot_bit(report.robot);
   // This robot's earlier sighting is replaced by the new one.
   for (Track& t : tracks_) t.seen_by &= ~bit;
 

@@ -95,8 +95,8 @@ Status Site::validate() const {
   }
   for (std::size_t i = 0; i < robots.size(); ++i) {
     const RobotHome& r = robots[i];
-    // The people map marks which robots see a track in a 32-bit mask.
-    if (r.robot >= 32) return Error::format(Errc::config, "robot '%s' needs an id below 32", r.name.c_str());
+    // The people map marks which robots see a track in a mask of kMaxRobots bits.
+    if (r.robot >= kMaxRobots) return Error::format(Errc::config, "robot '%s' needs an id below %zu", r.name.c_str(), kMaxRobots);
     for (std::size_t j = 0; j < i; ++j)
       if (robots[j].robot == r.robot) return Error::format(Errc::config, "robot id %u is used twice", r.robot);
     if (r.overlooks != kNone && area(r.overlooks) == nullptr)

@@ -114,11 +114,16 @@ struct Event {
   Reason reason;
 };
 
+// Room for one step's output with every robot and AGV changing at once (a robot gets at most a
+// suspend, an order and their events in a step; an AGV an advisory and coalition events).
+inline constexpr std::size_t kMaxCommands = 4 * kMaxRobots;
+inline constexpr std::size_t kMaxEvents = 4 * (kMaxRobots + kMaxAgvs);
+
 struct Decisions {
   Nanos time = 0;
-  StaticVector<RobotCommand, 64> commands;
+  StaticVector<RobotCommand, kMaxCommands> commands;
   StaticVector<Advisory, kMaxAgvs> advisories;
-  StaticVector<Event, 256> events;
+  StaticVector<Event, kMaxEvents> events;
   std::uint32_t dropped = 0;  // commands or events that did not fit (never expected)
 };
 
@@ -223,7 +228,7 @@ class Centre {
   StaticVector<AgvSlot, kMaxAgvs> agvs_;
   StaticVector<Coalition, kMaxAreas> coalitions_;
   StaticVector<Pending, 32> pending_;
-  StaticVector<Event, 32> inbox_;  // events of the input calls, reported at the next step
+  StaticVector<Event, 2 * kMaxRobots + 32> inbox_;  // events of the input calls (connections, requests), reported at the next step
   Decisions out_;
   Nanos now_ = 0;
   TaskId next_task_ = 1;

@@ -35,6 +35,10 @@ struct PeopleMapConfig {
   std::size_t max_tracks = kMaxTracks;  // at most kMaxTracks; lower only to exercise overflow
 };
 
+// One bit per robot id: every id the site can hold has a bit.
+using RobotMask = std::uint64_t;
+static_assert(kMaxRobots <= 64, "robot ids must fit the people map's 64-bit mask");
+
 struct Track {
   std::uint32_t id = 0;  // global, never reused
   Point position;
@@ -44,7 +48,7 @@ struct Track {
   Nanos first_seen = 0;
   Nanos last_seen = 0;
   bool dynamic = false;
-  std::uint32_t seen_by = 0;  // bit per robot id (ids below 32) that saw it in its latest report
+  RobotMask seen_by = 0;  // bit per robot id that saw it in its latest report
   std::uint32_t updates = 0;
 };
 

@@ -45,7 +45,7 @@ struct Site {
 
   [[nodiscard]] const Area* area(AreaId id) const noexcept;
   [[nodiscard]] const RobotHome* robot(RobotId id) const noexcept;
-  // Unique ids (robots' below 32), outlines of at least three vertices with a surface, homes
+  // Unique ids (robots' below kMaxRobots), outlines of at least three vertices with a surface, homes
   // that overlook existing areas, and a way to monitor every monitored area (a sentry pose or
   // a home overlooking it).
   [[nodiscard]] Status validate() const;

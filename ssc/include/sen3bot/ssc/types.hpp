@@ -40,8 +40,8 @@ using TaskId = std::uint32_t;
 inline constexpr std::uint16_t kNone = 0xFFFF;  // "no robot / AGV / area"
 
 // Capacities of the whole centre; every container is sized by them at compile time.
-inline constexpr std::size_t kMaxRobots = 16;
-inline constexpr std::size_t kMaxAgvs = 16;
+inline constexpr std::size_t kMaxRobots = 64;    // robot ids are below this (the people map's 64-bit mask)
+inline constexpr std::size_t kMaxAgvs = 128;
 inline constexpr std::size_t kMaxAreas = 32;
 inline constexpr std::size_t kMaxVertices = 16;      // per area outline
 inline constexpr std::size_t kMaxSentryPoses = 4;    // per area
