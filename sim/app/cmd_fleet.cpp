@@ -37,7 +37,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr hal::Nanos kSliceNs = hal::millis(10);
 constexpr double kAgvStepS = 0.05;
-constexpr double kCentreStepS = 0.1;
+constexpr double kCentreStepS = 0.05;  // as the centre's program steps
 constexpr std::int64_t kEpochUnixNs = hal::SimClock::kEpochUnixNs;
 
 struct AgvPlan {

@@ -105,9 +105,32 @@ Status Site::validate() const {
   return Status::success();
 }
 
+namespace {
+
+// The polygon's axis-aligned bounds: what lies outside them needs no edge-by-edge test, which
+// keeps the centre's step short with many areas, routes and people.
+struct Bounds {
+  double x0, x1, y0, y1;
+};
+
+Bounds bounds(std::span<const Point> polygon) noexcept {
+  Bounds b{polygon[0].x, polygon[0].x, polygon[0].y, polygon[0].y};
+  for (const Point& v : polygon) {
+    b.x0 = std::min(b.x0, v.x);
+    b.x1 = std::max(b.x1, v.x);
+    b.y0 = std::min(b.y0, v.y);
+    b.y1 = std::max(b.y1, v.y);
+  }
+  return b;
+}
+
+}  // namespace
+
 bool contains(std::span<const Point> polygon, Point p) noexcept {
   const std::size_t n = polygon.size();
   if (n < 3) return false;
+  const Bounds box = bounds(polygon);
+  if (p.x < box.x0 - kEps || p.x > box.x1 + kEps || p.y < box.y0 - kEps || p.y > box.y1 + kEps) return false;
   bool inside = false;
   for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
     const Point a = polygon[i];
@@ -142,6 +165,11 @@ Point centroid(std::span<const Point> polygon) noexcept {
 
 std::optional<SegmentSpan> segment_span(std::span<const Point> polygon, Point a, Point b) noexcept {
   if (polygon.size() < 3) return std::nullopt;
+  const Bounds box = bounds(polygon);
+  const double slack = 1e-6 * std::max({1.0, box.x1 - box.x0, box.y1 - box.y0});
+  if (std::max(a.x, b.x) < box.x0 - slack || std::min(a.x, b.x) > box.x1 + slack || std::max(a.y, b.y) < box.y0 - slack ||
+      std::min(a.y, b.y) > box.y1 + slack)
+    return std::nullopt;
   double lo = 0;
   double hi = 0;
   bool any = false;

@@ -1,6 +1,6 @@
 // The Sensors Synergy Centre under a fleet's load, through a real Mosquitto on loopback.
 //
-//   sen3bot_fleet_load [--robots 50] [--agvs 100] [--seconds 60] [--step-hz 10]
+//   sen3bot_fleet_load [--robots 50] [--agvs 100] [--seconds 60] [--step-hz 20]
 //                      [--people-hz 10] [--robot-state-hz 1] [--agv-state-hz 1]
 //                      [--threads 4] [--seed 1]
 //
@@ -146,7 +146,7 @@ struct Options {
   int robots = 50;
   int agvs = 100;
   double seconds = 60;
-  double step_hz = 10;
+  double step_hz = 20;
   double people_hz = 10;
   double robot_state_hz = 1;
   double agv_state_hz = 1;
@@ -626,7 +626,7 @@ int run(const Options& o) {
   const int mosquitto = broker_pid();
 
   // The centre's link, configured as firmware/cmd_ssc.cpp configures it, but subscribing to
-  // states and people at QoS 1 (Service::subscriptions asks QoS 0 for them).
+  // states at QoS 1 too (Service::subscriptions asks QoS 0 for states, as VDA 5050 does).
   hal::PubSubOptions centre_options;
   centre_options.url = broker.url();
   centre_options.client_id = "ssc";

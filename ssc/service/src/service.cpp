@@ -71,7 +71,7 @@ struct Service::Buffers {
 std::vector<hal::PubSubSubscription> Service::subscriptions(const ServiceConfig& config) {
   return {{config.interface_name + "/v2/+/+/state", 0},
           {config.interface_name + "/v2/+/+/connection", 1},
-          {"sen3bot/v1/people/+/+", 0}};
+          {"sen3bot/v1/people/+/+", 1}};  // a robot that publishes people at QoS 1 gets them delivered so
 }
 
 Result<std::unique_ptr<Service>> Service::create(const SiteFile& site, std::unique_ptr<hal::PubSub> link, std::FILE* event_log) {
