@@ -4,6 +4,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
 #include <string>
 
 namespace sen3bot::firmware {
@@ -101,5 +103,26 @@ StopOnSignal::~StopOnSignal() {
 }
 
 int StopOnSignal::requested() noexcept { return g_stop_signal.load(); }
+
+bool read_secret(const std::string& path, std::string& out, std::string& problem) {
+  std::ifstream in(path);
+  if (!in) {
+    problem = std::strerror(errno);
+    return false;
+  }
+  std::getline(in, out);
+  while (!out.empty() && (out.back() == '\r' || out.back() == ' ' || out.back() == '\t')) out.pop_back();
+  if (out.empty()) {
+    problem = "empty";
+    return false;
+  }
+  return true;
+}
+
+std::int64_t clock_ns(clockid_t clock) noexcept {
+  timespec ts{};
+  ::clock_gettime(clock, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
 
 }  // namespace sen3bot::firmware

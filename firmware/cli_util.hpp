@@ -2,10 +2,12 @@
 // Small pieces every command of both binaries shares: strict number parsing and a scope that
 // turns SIGINT/SIGTERM into a stop request.
 #include <signal.h>
+#include <time.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "sen3bot/lms200/protocol.hpp"
@@ -15,6 +17,12 @@ namespace sen3bot::firmware {
 
 // The whole text must be a finite number (no trailing characters, no NaN or infinity).
 bool parse_double(std::string_view text, double& out);
+// A secret kept in a file of its own (a broker password): its first line, trailing blanks cut.
+// False with the problem when the file cannot be read or the line is empty. Passwords never go
+// on a command line, where any user of the host could read them.
+bool read_secret(const std::string& path, std::string& out, std::string& problem);
+// The time of a POSIX clock (CLOCK_MONOTONIC, CLOCK_REALTIME) in ns.
+std::int64_t clock_ns(clockid_t clock) noexcept;
 // Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
 bool parse_u32(std::string_view text, std::uint32_t& out);
 bool parse_u64(std::string_view text, std::uint64_t& out);

@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -24,29 +23,6 @@ namespace {
 constexpr const char* kSscUsage =
     "usage: sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
     "                   [--event-log FILE] [--duration S] [--client-id ID]\n";
-
-std::int64_t clock_ns(clockid_t clock) {
-  timespec ts{};
-  ::clock_gettime(clock, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
-
-// The password is the file's first line (mosquitto_passwd's users keep theirs the same way);
-// it never appears on the command line, where any user of the host could read it.
-bool read_secret(const std::string& path, std::string& out, std::string& problem) {
-  std::ifstream in(path);
-  if (!in) {
-    problem = std::strerror(errno);
-    return false;
-  }
-  std::getline(in, out);
-  while (!out.empty() && (out.back() == '\r' || out.back() == ' ' || out.back() == '\t')) out.pop_back();
-  if (out.empty()) {
-    problem = "empty";
-    return false;
-  }
-  return true;
-}
 
 }  // namespace
 

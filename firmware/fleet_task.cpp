@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <new>
 
+#include "cli_util.hpp"
 #include "sen3bot/vda5050/extensions.hpp"
 
 namespace sen3bot::firmware {
@@ -91,9 +91,9 @@ Status FleetTask::init(std::pmr::memory_resource& arena) {
   options.client_id = config_.serial_number;
   options.username = config_.username;
   if (!config_.password_file.empty()) {
-    std::ifstream in(config_.password_file);
-    if (!in || !std::getline(in, options.password))
-      return Error::format(Errc::config, "fleet.password_file: cannot read '%s'", config_.password_file.c_str());
+    std::string problem;
+    if (!read_secret(config_.password_file, options.password, problem))
+      return Error::format(Errc::config, "fleet.password_file: '%s': %s", config_.password_file.c_str(), problem.c_str());
   }
   options.ca_file = config_.ca_file;
   options.cert_file = config_.cert_file;

@@ -116,16 +116,7 @@ class MqttClient final : public PubSub {
   }
 
   Status publish(std::string_view topic, std::span<const std::uint8_t> payload, int qos, bool retain) override {
-    if (closing_.load() || !valid_publish_topic(topic, options_.max_topic) || payload.size() > options_.max_payload || qos < 0 || qos > 1) {
-      counters_.publish_refused.fetch_add(1);
-      return Error::format(Errc::invalid_argument, "publish refused: topic '%.*s', %zu bytes, qos %d",
-                           static_cast<int>(std::min<std::size_t>(topic.size(), 80)), topic.data(), payload.size(), qos);
-    }
-    if (!outbound_.push(topic, payload, qos, retain)) {
-      counters_.publish_dropped.fetch_add(1);
-      return Error(Errc::capacity, "publish dropped: the outbound queue is full");
-    }
-    return Status::success();
+    return queue_publish(outbound_, counters_, closing_.load(), topic, payload, qos, retain);
   }
 
   Result<std::optional<PubSubMessage>> receive(std::span<char> topic, std::span<std::uint8_t> payload) override {

@@ -105,6 +105,20 @@ Result<std::optional<PubSubMessage>> MessageQueue::pop(std::span<char> topic, st
   return std::optional<PubSubMessage>{message};
 }
 
+Status queue_publish(MessageQueue& queue, PubSubCounters& counters, bool closed, std::string_view topic,
+                     std::span<const std::uint8_t> payload, int qos, bool retain) noexcept {
+  if (closed || !valid_publish_topic(topic, queue.max_topic()) || payload.size() > queue.max_payload() || qos < 0 || qos > 1) {
+    counters.publish_refused.fetch_add(1);
+    return Error::format(Errc::invalid_argument, "publish refused: topic '%.*s', %zu bytes, qos %d",
+                         static_cast<int>(std::min<std::size_t>(topic.size(), 80)), topic.data(), payload.size(), qos);
+  }
+  if (!queue.push(topic, payload, qos, retain)) {
+    counters.publish_dropped.fetch_add(1);
+    return Error(Errc::capacity, "publish dropped: the outbound queue is full");
+  }
+  return Status::success();
+}
+
 std::size_t MessageQueue::size() const {
   const std::lock_guard lock(mutex_);
   return count_;
@@ -175,16 +189,9 @@ class MemoryClient final : public PubSub {
   }
 
   Status publish(std::string_view topic, std::span<const std::uint8_t> payload, int qos, bool retain) override {
-    if (state_.load() == PubSubState::closed || !valid_publish_topic(topic, options_.max_topic) ||
-        payload.size() > options_.max_payload || qos < 0 || qos > 1) {
-      counters_.publish_refused.fetch_add(1);
-      return Error::format(Errc::invalid_argument, "publish refused: topic '%.*s', %zu bytes, qos %d",
-                           static_cast<int>(std::min<std::size_t>(topic.size(), 80)), topic.data(), payload.size(), qos);
-    }
-    if (!outbound_.push(topic, payload, qos, retain)) {
-      counters_.publish_dropped.fetch_add(1);
-      return Error(Errc::capacity, "publish dropped: the outbound queue is full");
-    }
+    if (Status queued = queue_publish(outbound_, counters_, state_.load() == PubSubState::closed, topic, payload, qos, retain);
+        !queued)
+      return queued;
     const std::lock_guard lock(broker_.mutex_);
     if (record_ != nullptr && record_->reachable) flush_locked();
     return Status::success();

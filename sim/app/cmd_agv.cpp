@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -29,27 +28,6 @@ constexpr const char* kAgvUsage =
     "                       [--username U --password-file F --ca-file F] [--client-id ID]\n";
 
 constexpr double kStepS = 0.05;  // 20 Hz
-
-std::int64_t clock_ns(clockid_t clock) {
-  timespec ts{};
-  ::clock_gettime(clock, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
-
-bool read_secret(const std::string& path, std::string& out, std::string& problem) {
-  std::ifstream in(path);
-  if (!in) {
-    problem = std::strerror(errno);
-    return false;
-  }
-  std::getline(in, out);
-  while (!out.empty() && (out.back() == '\r' || out.back() == ' ' || out.back() == '\t')) out.pop_back();
-  if (out.empty()) {
-    problem = "empty";
-    return false;
-  }
-  return true;
-}
 
 }  // namespace
 
@@ -115,7 +93,7 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   link.ca_file = ca_file;
   if (!password_file.empty()) {
     std::string problem;
-    if (!read_secret(password_file, link.password, problem)) {
+    if (!firmware::read_secret(password_file, link.password, problem)) {
       std::fprintf(err, "sen3bot-sim agv: --password-file %s: %s\n", password_file.c_str(), problem.c_str());
       return 2;
     }
@@ -126,7 +104,7 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       config.interface_name + "/v2/" + config.manufacturer + "/" + config.serial_number + "/connection";
   auto connection_text = [&](vda5050::ConnectionState state) {
     vda5050::Connection c;
-    c.header.timestamp = vda5050::iso8601(clock_ns(CLOCK_REALTIME));
+    c.header.timestamp = vda5050::iso8601(firmware::clock_ns(CLOCK_REALTIME));
     (void)c.header.version.assign(vda5050::to_string(config.version));
     (void)c.header.manufacturer.assign(config.manufacturer);
     (void)c.header.serial_number.assign(config.serial_number);
@@ -146,20 +124,20 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 
   const firmware::StopOnSignal stop;
   const auto period = static_cast<std::int64_t>(kStepS * 1e9);
-  const std::int64_t start = clock_ns(CLOCK_MONOTONIC);
+  const std::int64_t start = firmware::clock_ns(CLOCK_MONOTONIC);
   const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
   std::int64_t next = start;
   std::int64_t last = start;
   while (firmware::StopOnSignal::requested() == 0) {
-    const std::int64_t now = clock_ns(CLOCK_MONOTONIC);
+    const std::int64_t now = firmware::clock_ns(CLOCK_MONOTONIC);
     if (now >= end) break;
     // The real time since the last step, so a late step still moves the AGV the right distance.
     const double dt = static_cast<double>(now - last) * 1e-9;
     last = now;
-    agv.step(now - start, clock_ns(CLOCK_REALTIME), dt);
+    agv.step(now - start, firmware::clock_ns(CLOCK_REALTIME), dt);
     next += period;
-    if (clock_ns(CLOCK_MONOTONIC) > next) {
-      next = clock_ns(CLOCK_MONOTONIC);
+    if (firmware::clock_ns(CLOCK_MONOTONIC) > next) {
+      next = firmware::clock_ns(CLOCK_MONOTONIC);
       continue;
     }
     const timespec wake{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};

@@ -134,6 +134,13 @@ class PubSub {
 // A filter a client may subscribe with: '+' and '#' only as whole levels, '#' last.
 [[nodiscard]] bool valid_topic_filter(std::string_view filter) noexcept;
 
+class MessageQueue;
+// What every link does with a publish: refuse it (counted, Errc::invalid_argument) when the link
+// is closed or the topic, size or QoS is not allowed, else queue it (Errc::capacity, counted,
+// when the queue is full).
+Status queue_publish(MessageQueue& queue, PubSubCounters& counters, bool closed, std::string_view topic,
+                     std::span<const std::uint8_t> payload, int qos, bool retain) noexcept;
+
 // A bounded queue of messages in memory allocated once (slots x (max_topic + max_payload)).
 // Thread-safe for one or more producers and consumers; every call is O(size of one message).
 class MessageQueue {
