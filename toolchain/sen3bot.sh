@@ -52,6 +52,7 @@ case "${1:-}" in
       # MRPT's client and the 30 s keep-alive run test peers and wall-clock time, not our memory
       # use; the native suite runs them.
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+        LSAN_OPTIONS=suppressions="$root/toolchain/lsan.supp" \
         ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -LE "slow|mrpt"
     fi
     if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then

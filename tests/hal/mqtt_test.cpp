@@ -64,6 +64,26 @@ struct Inbox {
   }
 };
 
+// Clean sessions keep nothing for a subscription not yet made: publish probes on `probe_topic`
+// until the reader has one, so the reader's subscription is known to be in place.
+void await_subscription(PubSub& writer, PubSub& reader, std::string_view probe_topic) {
+  std::vector<char> topic(256);
+  std::vector<std::uint8_t> payload(64 * 1024);
+  const bool seen = wait_for([&] {
+    (void)writer.publish(probe_topic, bytes("probe"), 1, false);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    auto m = reader.receive(topic, payload);
+    return m.ok() && m.value().has_value();
+  }, 20.0);
+  ASSERT_TRUE(seen) << "the reader's subscription never came into place";
+  // Probes still on their way go too.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  for (;;) {
+    auto m = reader.receive(topic, payload);
+    if (!m.ok() || !m.value()) break;
+  }
+}
+
 // Publishes, retrying while the outbound queue is full.
 void publish_all(PubSub& client, std::string_view topic, int count, int first = 0) {
   for (int i = first; i < first + count; ++i) {
@@ -87,7 +107,7 @@ TEST(Mqtt, TwoThousandQos1MessagesArriveInOrder) {
   ASSERT_TRUE(reader.ok()) << reader.error().c_str();
   ASSERT_TRUE(writer.ok()) << writer.error().c_str();
   ASSERT_TRUE(wait_for([&] { return (*reader)->state() == PubSubState::connected && (*writer)->state() == PubSubState::connected; }));
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the subscription is in place
+  await_subscription(**writer, **reader, "fleet/probe");
   publish_all(**writer, "fleet/r1/people", 2000);
   Inbox inbox;
   ASSERT_TRUE(wait_for([&] {
@@ -96,7 +116,7 @@ TEST(Mqtt, TwoThousandQos1MessagesArriveInOrder) {
   }, 20.0)) << inbox.payloads.size();
   ASSERT_EQ(inbox.payloads.size(), 2000u);
   for (int i = 0; i < 2000; ++i) ASSERT_EQ(inbox.payloads[static_cast<std::size_t>(i)], std::to_string(i));
-  EXPECT_TRUE(wait_for([&] { return (*writer)->stats().published == 2000; })) << (*writer)->stats().published;
+  EXPECT_TRUE(wait_for([&] { return (*writer)->stats().published >= 2000; })) << (*writer)->stats().published;
   EXPECT_EQ((*reader)->stats().receive_dropped, 0u);
 }
 
@@ -176,7 +196,7 @@ TEST_F(MqttSite, ARobotPublishesOnlyItsOwnTopicsAndOnlyTheCentreSendsOrders) {
     return (*centre)->state() == PubSubState::connected && (*r1)->state() == PubSubState::connected &&
            (*r2)->state() == PubSubState::connected;
   })) << broker_.log();
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the three subscriptions are in place
 
   ASSERT_TRUE((*r1)->publish("uagv/v2/S3B/r1/state", bytes("own state"), 1, false).ok());
   ASSERT_TRUE((*r1)->publish("uagv/v2/S3B/r2/state", bytes("forged state"), 1, false).ok());
@@ -248,7 +268,7 @@ TEST(Mqtt, ABrokerKilledAndRestartedMidStreamLosesNoSessionAndTheQueueCatchesUp)
   auto writer = open_mqtt(writer_options);
   ASSERT_TRUE(reader.ok() && writer.ok());
   ASSERT_TRUE(wait_for([&] { return (*reader)->state() == PubSubState::connected && (*writer)->state() == PubSubState::connected; }));
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  await_subscription(**writer, **reader, "fleet/probe");
   publish_all(**writer, "fleet/state", 100);
   Inbox inbox;
   ASSERT_TRUE(wait_for([&] {
