@@ -125,4 +125,30 @@ std::int64_t clock_ns(clockid_t clock) noexcept {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
+bool BrokerArgs::take(std::string_view arg, const std::string& value) {
+  std::string* field = arg == "--broker"          ? &broker
+                       : arg == "--username"      ? &username
+                       : arg == "--password-file" ? &password_file
+                       : arg == "--ca-file"       ? &ca_file
+                       : arg == "--client-id"     ? &client_id
+                                                  : nullptr;
+  if (field != nullptr) *field = value;
+  return field != nullptr;
+}
+
+Result<hal::PubSubOptions> BrokerArgs::options() const {
+  if (!password_file.empty() && username.empty()) return Error(Errc::config, "--password-file needs --username");
+  hal::PubSubOptions link;
+  link.url = broker;
+  link.client_id = client_id;
+  link.username = username;
+  link.ca_file = ca_file;
+  if (!password_file.empty()) {
+    std::string problem;
+    if (!read_secret(password_file, link.password, problem))
+      return Error::format(Errc::config, "--password-file %s: %s", password_file.c_str(), problem.c_str());
+  }
+  return link;
+}
+
 }  // namespace sen3bot::firmware

@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/hal/result.hpp"
 #include "sen3bot/lms200/protocol.hpp"
 #include "sen3bot/msg/geometry.hpp"
 
@@ -23,6 +25,21 @@ bool parse_double(std::string_view text, double& out);
 bool read_secret(const std::string& path, std::string& out, std::string& problem);
 // The time of a POSIX clock (CLOCK_MONOTONIC, CLOCK_REALTIME) in ns.
 std::int64_t clock_ns(clockid_t clock) noexcept;
+
+// The broker options the fleet's programs share: --broker, --username, --password-file,
+// --ca-file, --client-id.
+struct BrokerArgs {
+  std::string broker;
+  std::string username;
+  std::string password_file;
+  std::string ca_file;
+  std::string client_id;
+  // True when arg is one of them (its value taken).
+  bool take(std::string_view arg, const std::string& value);
+  // The link's options (url, credentials, CA), the password read from its file; an error naming
+  // the option when it cannot be.
+  [[nodiscard]] Result<hal::PubSubOptions> options() const;
+};
 // Decimal, or 0x-prefixed hexadecimal; the whole text, in range.
 bool parse_u32(std::string_view text, std::uint32_t& out);
 bool parse_u64(std::string_view text, std::uint64_t& out);

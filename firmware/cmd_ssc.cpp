@@ -27,8 +27,9 @@ constexpr const char* kSscUsage =
 }  // namespace
 
 int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  std::string broker, site_path, username, password_file, ca_file, event_log_path;
-  std::string client_id = "ssc";
+  BrokerArgs args;
+  args.client_id = "ssc";
+  std::string site_path, event_log_path;
   double duration_s = 0;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -38,20 +39,11 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     const std::string value = argv[++i];
     bool ok = !value.empty();
-    if (arg == "--broker") {
-      broker = value;
+    if (args.take(arg, value)) {
     } else if (arg == "--site") {
       site_path = value;
-    } else if (arg == "--username") {
-      username = value;
-    } else if (arg == "--password-file") {
-      password_file = value;
-    } else if (arg == "--ca-file") {
-      ca_file = value;
     } else if (arg == "--event-log") {
       event_log_path = value;
-    } else if (arg == "--client-id") {
-      client_id = value;
     } else if (arg == "--duration") {
       ok = parse_double(value, duration_s) && duration_s >= 0;
     } else {
@@ -63,12 +55,8 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       return 2;
     }
   }
-  if (broker.empty() || site_path.empty()) {
-    std::fprintf(err, "sen3bot ssc: %s is required\n%s", broker.empty() ? "--broker" : "--site", kSscUsage);
-    return 2;
-  }
-  if (!password_file.empty() && username.empty()) {
-    std::fprintf(err, "sen3bot ssc: --password-file needs --username\n");
+  if (args.broker.empty() || site_path.empty()) {
+    std::fprintf(err, "sen3bot ssc: %s is required\n%s", args.broker.empty() ? "--broker" : "--site", kSscUsage);
     return 2;
   }
 
@@ -78,18 +66,12 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     return 2;
   }
 
-  hal::PubSubOptions link;
-  link.url = broker;
-  link.client_id = client_id;
-  link.username = username;
-  link.ca_file = ca_file;
-  if (!password_file.empty()) {
-    std::string problem;
-    if (!read_secret(password_file, link.password, problem)) {
-      std::fprintf(err, "sen3bot ssc: --password-file %s: %s\n", password_file.c_str(), problem.c_str());
-      return 2;
-    }
+  Result<hal::PubSubOptions> options = args.options();
+  if (!options) {
+    std::fprintf(err, "sen3bot ssc: %s\n", options.error().c_str());
+    return 2;
   }
+  hal::PubSubOptions& link = *options;
   link.subscriptions = ssc::Service::subscriptions(site->service);
   // What arrives between two steps: 50 robots at 10 people reports a second and 150 vehicles'
   // states at 1 Hz are about 35 messages a step at 20 Hz; room for a burst of 512.
@@ -97,7 +79,7 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   link.outbound_slots = 256;
   Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
   if (!opened) {
-    std::fprintf(err, "sen3bot ssc: --broker %s: %s\n", broker.c_str(), opened.error().c_str());
+    std::fprintf(err, "sen3bot ssc: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
     return opened.error().code() == Errc::config ? 2 : 1;
   }
 
@@ -119,7 +101,7 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
   ssc::Service& service = **created;
   std::fprintf(err, "sen3bot ssc: site %s (%zu robots, %zu areas) on %s as %s\n", site_path.c_str(),
-               site->robot_serials.size(), site->area_names.size(), broker.c_str(), client_id.c_str());
+               site->robot_serials.size(), site->area_names.size(), args.broker.c_str(), args.client_id.c_str());
 
   const StopOnSignal stop;
   const std::int64_t period = static_cast<std::int64_t>(site->service.step_period_s * 1e9);

@@ -33,7 +33,8 @@ constexpr double kStepS = 0.05;  // 20 Hz
 
 int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   SimAgvConfig config;
-  std::string broker, username, password_file, ca_file, client_id;
+  firmware::BrokerArgs args;
+  bool serial_given = false;
   double duration_s = 0;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -43,10 +44,10 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     const std::string value = argv[++i];
     bool ok = !value.empty();
-    if (arg == "--broker") {
-      broker = value;
+    if (args.take(arg, value)) {
     } else if (arg == "--serial") {
       config.serial_number = value;
+      serial_given = true;
     } else if (arg == "--manufacturer") {
       config.manufacturer = value;
     } else if (arg == "--map-id") {
@@ -61,14 +62,6 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       ok = firmware::parse_double(value, config.theta);
     } else if (arg == "--duration") {
       ok = firmware::parse_double(value, duration_s) && duration_s >= 0;
-    } else if (arg == "--username") {
-      username = value;
-    } else if (arg == "--password-file") {
-      password_file = value;
-    } else if (arg == "--ca-file") {
-      ca_file = value;
-    } else if (arg == "--client-id") {
-      client_id = value;
     } else {
       std::fprintf(err, "sen3bot-sim agv: unknown option '%s'\n%s", argv[i - 1], kAgvUsage);
       return 2;
@@ -78,26 +71,18 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       return 2;
     }
   }
-  // SimAgvConfig's default serial is a placeholder; a real broker needs the one the plant uses.
-  bool serial_given = false;
-  for (int i = 0; i + 1 < argc; i += 2) serial_given = serial_given || std::string_view(argv[i]) == "--serial";
-  if (broker.empty() || !serial_given) {
-    std::fprintf(err, "sen3bot-sim agv: %s is required\n%s", broker.empty() ? "--broker" : "--serial", kAgvUsage);
+  // The AGV answers to the serial number its plant's master control orders it by: no default.
+  if (args.broker.empty() || !serial_given) {
+    std::fprintf(err, "sen3bot-sim agv: %s is required\n%s", args.broker.empty() ? "--broker" : "--serial", kAgvUsage);
     return 2;
   }
-
-  hal::PubSubOptions link;
-  link.url = broker;
-  link.client_id = client_id.empty() ? config.serial_number : client_id;
-  link.username = username;
-  link.ca_file = ca_file;
-  if (!password_file.empty()) {
-    std::string problem;
-    if (!firmware::read_secret(password_file, link.password, problem)) {
-      std::fprintf(err, "sen3bot-sim agv: --password-file %s: %s\n", password_file.c_str(), problem.c_str());
-      return 2;
-    }
+  if (args.client_id.empty()) args.client_id = config.serial_number;
+  Result<hal::PubSubOptions> options = args.options();
+  if (!options) {
+    std::fprintf(err, "sen3bot-sim agv: %s\n", options.error().c_str());
+    return 2;
   }
+  hal::PubSubOptions& link = *options;
   link.subscriptions = SimAgv::subscriptions(config);
   // The broker's last will tells the centre the AGV is gone (VDA 5050 section 6.14).
   const std::string connection_topic =
@@ -116,7 +101,7 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   link.will = hal::PubSubWill{connection_topic, connection_text(vda5050::ConnectionState::connection_broken), 1, true};
   Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
   if (!opened) {
-    std::fprintf(err, "sen3bot-sim agv: --broker %s: %s\n", broker.c_str(), opened.error().c_str());
+    std::fprintf(err, "sen3bot-sim agv: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
     return opened.error().code() == Errc::config ? 2 : 1;
   }
   hal::PubSub& link_handle = *opened.value();  // the AGV owns it; kept for the goodbye below

@@ -308,19 +308,41 @@ int fail(std::FILE* err, const std::string& message, int code = 2) {
 }
 
 
+// The scenario's own checks, the same in lockstep and in real time: no AGV within 1 m of a
+// person, and what the scenario is about (net-1: the advice beats the AGV's scanner; net-2: both
+// robots at the blind intersection; net-3: a robot released and sent on).
+std::vector<std::string> scenario_failures(const FleetScenario& scenario, const std::vector<std::string>& events, double first_advice_s,
+                                           double own_sensor_s, double unadvised_sensor_s, double min_agv_person_m) {
+  auto count_events = [&](const char* type, const char* area, const char* robot = nullptr) {
+    std::size_t n = 0;
+    for (const std::string& line : events) {
+      if (line.find(std::string("\"type\":\"") + type + "\"") == std::string::npos) continue;
+      if (area != nullptr && line.find(std::string("\"area\":\"") + area + "\"") == std::string::npos) continue;
+      if (robot != nullptr && line.find(std::string("\"") + robot + "\"") == std::string::npos) continue;
+      ++n;
+    }
+    return n;
+  };
+  std::vector<std::string> failures;
+  if (min_agv_person_m < 1.0) failures.push_back("an AGV came within 1 m of a person");
+  if (scenario.name == std::string("net-1")) {
+    if (first_advice_s < 0) failures.push_back("the AGV was never advised");
+    if (first_advice_s >= 0 && own_sensor_s >= 0 && first_advice_s >= own_sensor_s)
+      failures.push_back("the advice came after the AGV's own scanner could have seen the person");
+    if (unadvised_sensor_s < 0) failures.push_back("unadvised, the AGV would never have met the person: the scenario shows nothing");
+    if (first_advice_s >= 0 && unadvised_sensor_s >= 0 && first_advice_s >= unadvised_sensor_s)
+      failures.push_back("the advice came after the unadvised AGV's scanner would have seen the person");
+  } else if (scenario.name == std::string("net-2")) {
+    if (count_events("allocation", "cross", "r1") == 0 || count_events("allocation", "cross", "r2") == 0)
+      failures.push_back("both robots should have gone to the blind intersection");
+  } else if (scenario.name == std::string("net-3")) {
+    if (count_events("release", "bench") == 0) failures.push_back("no robot was released from the workstation");
+    if (count_events("allocation", "dock") == 0) failures.push_back("no robot went to the next monitoring request");
+  }
+  return failures;
+}
+
 // ---- --realtime: the same scenario as separate programs on a real Mosquitto ----
-
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
-
-std::int64_t realtime_ns() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_REALTIME, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
 
 bool read_text(const std::string& path, std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "r");
@@ -423,7 +445,7 @@ class Children {
   void stop_from(std::size_t first, double grace_s) {
     for (std::size_t i = children_.size(); i-- > first;)
       if (children_[i].pid > 0) ::kill(children_[i].pid, SIGTERM);
-    const std::int64_t deadline = monotonic_ns() + static_cast<std::int64_t>(grace_s * 1e9);
+    const std::int64_t deadline = firmware::clock_ns(CLOCK_MONOTONIC) + static_cast<std::int64_t>(grace_s * 1e9);
     for (;;) {
       bool running = false;
       for (std::size_t i = first; i < children_.size(); ++i) {
@@ -438,7 +460,7 @@ class Children {
         }
       }
       if (!running) return;
-      if (monotonic_ns() >= deadline) break;
+      if (firmware::clock_ns(CLOCK_MONOTONIC) >= deadline) break;
       ::usleep(20'000);
     }
     for (std::size_t i = first; i < children_.size(); ++i) {
@@ -646,7 +668,7 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
   std::map<std::string, double> robots_online;
   std::int64_t t0 = 0;  // scenario time 0: when the robots start
   bool started = false;
-  auto scenario_s = [&] { return started ? static_cast<double>(monotonic_ns() - t0) * 1e-9 : 0.0; };
+  auto scenario_s = [&] { return started ? static_cast<double>(firmware::clock_ns(CLOCK_MONOTONIC) - t0) * 1e-9 : 0.0; };
   auto agv_index = [&](std::string_view serial) -> int {
     for (std::size_t i = 0; i < scenario.agvs.size(); ++i)
       if (serial == scenario.agvs[i].serial) return static_cast<int>(i);
@@ -695,11 +717,11 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
   };
 
   // The centre and the AGVs first, online before the robots start the scenario's clock.
-  for (const std::int64_t deadline = monotonic_ns() + 10'000'000'000;;) {
+  for (const std::int64_t deadline = firmware::clock_ns(CLOCK_MONOTONIC) + 10'000'000'000;;) {
     if (std::string problem = drain(); !problem.empty()) return fail(err, problem, 1);
     if (std::string problem = check_children(); !problem.empty()) return fail(err, problem, 1);
     if (std::all_of(agv_online.begin(), agv_online.end(), [](bool b) { return b; })) break;
-    if (monotonic_ns() > deadline) return fail(err, "the AGVs did not come online within 10 s", 1);
+    if (firmware::clock_ns(CLOCK_MONOTONIC) > deadline) return fail(err, "the AGVs did not come online within 10 s", 1);
     ::usleep(20'000);
   }
   const std::size_t first_robot = children.size();
@@ -713,7 +735,7 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
       return fail(err, "cannot write " + path, 1);
     robot_configs.push_back(path);
   }
-  t0 = monotonic_ns();
+  t0 = firmware::clock_ns(CLOCK_MONOTONIC);
   started = true;
   for (std::size_t r = 0; r < scenario.robots.size(); ++r) {
     const std::string serial = scenario.robots[r];
@@ -739,7 +761,7 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
     if (t_s >= scenario.duration_s) break;
     for (std::size_t i = 0; i < n_agvs; ++i)
       if (!ordered[i] && t_s >= scenario.agvs[i].order_s) {
-        const std::string text = plant_order_text(scenario.agvs[i], site, realtime_ns());
+        const std::string text = plant_order_text(scenario.agvs[i], site, firmware::clock_ns(CLOCK_REALTIME));
         if (text.empty() || !(*plant)->publish(plant_topic(scenario.agvs[i], "order"), hal::as_bytes(text), 0, false))
           return fail(err, std::string("cannot publish the order of ") + scenario.agvs[i].serial, 1);
         ordered[i] = true;
@@ -828,34 +850,11 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
   }
 
   std::vector<std::string> failures;
-  auto count_events = [&](const char* type, const char* area, const char* robot = nullptr) {
-    std::size_t n = 0;
-    for (const std::string& line : events) {
-      if (line.find(std::string("\"type\":\"") + type + "\"") == std::string::npos) continue;
-      if (area != nullptr && line.find(std::string("\"area\":\"") + area + "\"") == std::string::npos) continue;
-      if (robot != nullptr && line.find(std::string("\"") + robot + "\"") == std::string::npos) continue;
-      ++n;
-    }
-    return n;
-  };
   const bool never_in_range = own_sensor_s[0] < 0;
   const double lead_s = first_advice_s[0] < 0 || never_in_range ? 0.0 : own_sensor_s[0] - first_advice_s[0];
   if (samples[0].empty()) failures.push_back("no state from the AGV");
-  if (min_agv_person_m < 1.0) failures.push_back("an AGV came within 1 m of a person");
-  if (scenario.name == std::string("net-1")) {
-    if (first_advice_s[0] < 0) failures.push_back("the AGV was never advised");
-    if (first_advice_s[0] >= 0 && own_sensor_s[0] >= 0 && first_advice_s[0] >= own_sensor_s[0])
-      failures.push_back("the advice came after the AGV's own scanner could have seen the person");
-    if (unadvised_sensor_s[0] < 0) failures.push_back("unadvised, the AGV would never have met the person: the scenario shows nothing");
-    if (first_advice_s[0] >= 0 && unadvised_sensor_s[0] >= 0 && first_advice_s[0] >= unadvised_sensor_s[0])
-      failures.push_back("the advice came after the unadvised AGV's scanner would have seen the person");
-  } else if (scenario.name == std::string("net-2")) {
-    if (count_events("allocation", "cross", "r1") == 0 || count_events("allocation", "cross", "r2") == 0)
-      failures.push_back("both robots should have gone to the blind intersection");
-  } else if (scenario.name == std::string("net-3")) {
-    if (count_events("release", "bench") == 0) failures.push_back("no robot was released from the workstation");
-    if (count_events("allocation", "dock") == 0) failures.push_back("no robot went to the next monitoring request");
-  }
+  for (std::string& f : scenario_failures(scenario, events, first_advice_s[0], own_sensor_s[0], unadvised_sensor_s[0], min_agv_person_m))
+    failures.push_back(std::move(f));
   std::fprintf(out, "\nresult %s (realtime): %s", scenario.name, failures.empty() ? "ok" : "FAILED");
   for (const std::string& f : failures) std::fprintf(out, "; %s", f.c_str());
   auto seconds = [](double t) { return t < 0 ? std::string("never") : json_number_or_null(true, t) + " s"; };
@@ -1163,34 +1162,12 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 
   // Results and the scenario's own checks.
   std::vector<std::string> failures;
-  auto count_events = [&](const char* type, const char* area, const char* robot = nullptr) {
-    std::size_t n = 0;
-    for (const std::string& line : (*service)->event_lines()) {
-      if (line.find(std::string("\"type\":\"") + type + "\"") == std::string::npos) continue;
-      if (area != nullptr && line.find(std::string("\"area\":\"") + area + "\"") == std::string::npos) continue;
-      if (robot != nullptr && line.find(std::string("\"") + robot + "\"") == std::string::npos) continue;
-      ++n;
-    }
-    return n;
-  };
   // The advice's lead on the AGV's own scanner; the scanner may never have had a person in range.
   const bool never_in_range = own_sensor_s[0] < 0;
   const double lead_s = first_advice_s[0] < 0 || never_in_range ? 0.0 : own_sensor_s[0] - first_advice_s[0];
-  if (min_agv_person_m < 1.0) failures.push_back("an AGV came within 1 m of a person");
-  if (scenario.name == std::string("net-1")) {
-    if (first_advice_s[0] < 0) failures.push_back("the AGV was never advised");
-    if (first_advice_s[0] >= 0 && own_sensor_s[0] >= 0 && first_advice_s[0] >= own_sensor_s[0])
-      failures.push_back("the advice came after the AGV's own scanner could have seen the person");
-    if (unadvised_sensor_s[0] < 0) failures.push_back("unadvised, the AGV would never have met the person: the scenario shows nothing");
-    if (first_advice_s[0] >= 0 && unadvised_sensor_s[0] >= 0 && first_advice_s[0] >= unadvised_sensor_s[0])
-      failures.push_back("the advice came after the unadvised AGV's scanner would have seen the person");
-  } else if (scenario.name == std::string("net-2")) {
-    if (count_events("allocation", "cross", "r1") == 0 || count_events("allocation", "cross", "r2") == 0)
-      failures.push_back("both robots should have gone to the blind intersection");
-  } else if (scenario.name == std::string("net-3")) {
-    if (count_events("release", "bench") == 0) failures.push_back("no robot was released from the workstation");
-    if (count_events("allocation", "dock") == 0) failures.push_back("no robot went to the next monitoring request");
-  }
+  for (std::string& f : scenario_failures(scenario, (*service)->event_lines(), first_advice_s[0], own_sensor_s[0],
+                                          unadvised_sensor_s[0], min_agv_person_m))
+    failures.push_back(std::move(f));
 
   std::fprintf(out, "\nresult %s: %s", scenario.name, failures.empty() ? "ok" : "FAILED");
   for (const std::string& f : failures) std::fprintf(out, "; %s", f.c_str());
