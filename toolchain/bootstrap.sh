@@ -30,7 +30,8 @@ NATIVE_PACKAGES=(
   libopencv-core-dev
   libopencv-imgproc-dev
   libopencv-imgcodecs-dev
-  libopencv-objdetect-dev    # the on-board people detector (HOG)
+  libopencv-objdetect-dev    # the on-board people detector (HOG), the QR tag reader
+  libopencv-ml-dev           # operation recognition: the worker-path classifier (an MLP)
   opencv-doc                 # its tests: the people in OpenCV's sample images (Apache-2.0)
   rt-tests                   # cyclictest, compared against by the jitter benchmark
   clang                      # the bounded libFuzzer run of the test command (SEN3BOT_LIBFUZZER=ON)

@@ -5,7 +5,7 @@
 #
 # The sysroot is a plain directory of unpacked Debian arm64 (or armhf) packages: the libraries
 # the firmware and its tests link against (yaml-cpp, GoogleTest/GoogleMock, Google Benchmark,
-# Eigen, OpenCV core/imgproc/imgcodecs/objdetect) and their whole dependency closure, including libc6 and
+# Eigen, OpenCV core/imgproc/imgcodecs/objdetect/ml) and their whole dependency closure, including libc6 and
 # its dynamic loader so qemu-user can run the test binaries (qemu -L <sysroot>).
 #
 # Why a separate directory and not `dpkg --add-architecture arm64; apt install foo:arm64`:
@@ -46,6 +46,7 @@ SYSROOT_PACKAGES=(
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
   libpugixml-dev libcurl4-openssl-dev          # camera: ONVIF
   libmosquitto-dev             # fleet: MQTT
+  libopencv-ml-dev             # operation recognition (cv::ml)
 )
 # Unpacked without their dependencies: libopencv-objdetect-dev (the header and the .so link)
 # depends on libopencv-highgui-dev, which would bring Qt 5, Mesa and GTK (~150 packages) for

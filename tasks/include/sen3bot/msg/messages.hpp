@@ -17,7 +17,12 @@
 //   People            people.hpp      people fusion (tracks, cages)    planner, controller
 //   SafetyIo          io.hpp          CAN I/O (e-stop chain, bumpers)  safety
 //   OperatingMode     io.hpp          collaborative mode (wait4col)    CAN I/O (status light)
+//   TagFrame          cobot.hpp       QR reader (camera frames)        collaborative mode
+//   CobotState        cobot.hpp       collaborative mode               people (operator's cage), mission
+//   WorkerPath        cobot.hpp       collaborative mode (recorder)    operation recognition
+//   OperationEstimate cobot.hpp       operation recognition            collaborative mode, telemetry
 #include "sen3bot/msg/base.hpp"
+#include "sen3bot/msg/cobot.hpp"
 #include "sen3bot/msg/geometry.hpp"
 #include "sen3bot/msg/io.hpp"
 #include "sen3bot/msg/laser.hpp"
