@@ -61,6 +61,8 @@ Status CollaborationTrigger::init(const TriggerConfig& config) noexcept {
   gap_ns_ = to_nanos(config.max_sighting_gap_s);
   delay_ns_ = to_nanos(config.max_frame_delay_s);
   reset();
+  requests_ = 0;
+  rejections_ = {};
   return Status::success();
 }
 
@@ -69,6 +71,7 @@ void CollaborationTrigger::reset() noexcept {
   operator_ = 0;
   first_front_ns_ = last_front_ns_ = first_back_ns_ = last_back_ns_ = seen_ns_ = 0;
   watch_ = Watch{};
+  have_frame_ = false;
 }
 
 bool CollaborationTrigger::known(std::uint32_t operator_id) const noexcept {
@@ -135,7 +138,8 @@ void CollaborationTrigger::advance(hal::Nanos t_ns, TriggerOutput& out) noexcept
         }
         break;
       case TriggerPhase::cooldown:
-        if (t_ns - seen_ns_ > gap_ns_) {
+        // After a front, the back may still come a turn later and belongs to the same attempt.
+        if (t_ns - seen_ns_ > (seen_side_ == msg::TagSide::front ? std::max(turn_ns_, gap_ns_) : gap_ns_)) {
           phase_ = TriggerPhase::idle;
           operator_ = 0;
         }
@@ -143,7 +147,9 @@ void CollaborationTrigger::advance(hal::Nanos t_ns, TriggerOutput& out) noexcept
     }
     if (phase_ == before) break;
   }
-  if (watch_.active && t_ns - watch_.last_ns > gap_ns_) watch_ = Watch{};
+  if (watch_.active &&
+      t_ns - watch_.last_ns > (watch_.side == msg::TagSide::front ? std::max(turn_ns_, gap_ns_) : gap_ns_))
+    watch_ = Watch{};
 }
 
 void CollaborationTrigger::apply(const msg::TagFrame& frame, hal::Nanos c_ns, TriggerOutput& out) noexcept {
@@ -174,12 +180,13 @@ void CollaborationTrigger::apply(const msg::TagFrame& frame, hal::Nanos c_ns, Tr
     }
   }
   if (phase_ == TriggerPhase::cooldown) {
-    // The ended attempt's operator, still showing: ignored, unless turning to the front again,
-    // which starts a new attempt (the operator who has just toggled may toggle back).
+    // The ended attempt's operator, still showing or turning: ignored. Facing the robot again
+    // after the back, or after the tags were hidden for longer than a gap, starts a new attempt
+    // (the operator who has just toggled may toggle back).
     for (std::size_t i = 0; i < count; ++i) {
       const msg::TagSighting& tag = frame.tags[i];
       if (tag.operator_id != operator_) continue;
-      if (tag.side == msg::TagSide::front && seen_side_ == msg::TagSide::back) {
+      if (tag.side == msg::TagSide::front && (seen_side_ == msg::TagSide::back || c_ns - seen_ns_ > gap_ns_)) {
         phase_ = TriggerPhase::idle;
         operator_ = 0;
         break;
@@ -298,9 +305,15 @@ void CollaborationTrigger::idle_sighting(std::uint32_t id, msg::TagSide side, ha
     start_front(id, c_ns);
     return;
   }
-  const bool same = watch_.active && watch_.id == id && watch_.side == side;
-  if (watch_.active && !same) return;  // one showing watched at a time
+  // One showing watched at a time: one id's tags, either side (a refused front and the back
+  // after the turn are one attempt, refused once).
+  const bool same = watch_.active && watch_.id == id;
+  if (watch_.active && !same) return;
   if (!same) watch_ = Watch{true, false, id, side, c_ns, c_ns};
+  if (watch_.side != side) {
+    watch_.side = side;
+    watch_.first_ns = c_ns;  // each side is timed on its own
+  }
   watch_.last_ns = c_ns;
   if (watch_.reported || watch_.last_ns - watch_.first_ns < front_min_ns_) return;
   if (!known(id)) {

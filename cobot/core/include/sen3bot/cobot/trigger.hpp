@@ -45,7 +45,7 @@ enum class TriggerPhase : std::uint8_t {
   front,     // the operator shows the front tag
   turning,   // the front showing ended long enough; waiting for the back tag
   back,      // the operator shows the back tag
-  cooldown,  // an attempt ended; its showing is ignored until it stops or turns to the front
+  cooldown,  // an attempt ended; the rest of its showing and turn is ignored
 };
 [[nodiscard]] const char* to_string(TriggerPhase phase) noexcept;
 
