@@ -38,4 +38,16 @@ class CameraTask final : public tasks::Task {
   bool failure_reported_ = false;
 };
 
+// Where a frame reader's frames come from: the camera row's pool, which exists once that row's
+// init() ran (it runs first: the readers' rows come after it in the table), or a pool given
+// outright (a simulated camera).
+struct FrameSource {
+  camera::FramePool* pool = nullptr;
+  CameraTask* camera = nullptr;
+  [[nodiscard]] camera::FramePool* get() const noexcept {
+    if (pool != nullptr) return pool;
+    return camera != nullptr && camera->camera() != nullptr ? &camera->camera()->frames() : nullptr;
+  }
+};
+
 }  // namespace sen3bot::firmware

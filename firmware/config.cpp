@@ -389,10 +389,87 @@ void read_fleet(const Reader& r, FirmwareConfig& c) {
   if (Status s = check(f); !s) r.fail_here(s.error().c_str());
 }
 
+// cobot: the collaborative mode (cobot_task.hpp, docs/cobot.md).
+void read_cobot(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"site", "operators", "operator_safety_radius_m", "wait4col", "reach_m", "in_way_m", "qr", "trigger",
+                "follow", "path", "recognition"});
+  CobotSection& k = c.cobot;
+  CobotTaskConfig& t = k.task;
+  k.enabled = true;
+  k.site_path = relative_to(r.file(), r.text("site"));
+  for (const Reader& id : r.sequence("operators")) {
+    const auto v = static_cast<std::uint32_t>(id.integer_here(1, 999'999));
+    if (!t.trigger.operators.push_back(v))
+      r.fail("operators", "at most " + std::to_string(cobot::TriggerConfig::kMaxOperators) + " operators", YAML::Node());
+  }
+  if (t.trigger.operators.empty()) r.fail("operators", "expected at least one trained operator's id", YAML::Node());
+  if (r.has("operator_safety_radius_m")) k.operator_safety_radius_m = r.number("operator_safety_radius_m", 0.0, 2.0);
+  if (r.has("wait4col")) t.mode.wait4col_enabled = r.boolean("wait4col");
+  if (r.has("reach_m")) t.reach_m = r.number("reach_m", 0.5, 10.0);
+  if (r.has("in_way_m")) t.in_way_m = r.number("in_way_m", 0.0, 5.0);
+  if (r.has("qr")) {
+    const Reader q = r.child("qr");
+    q.allow_only({"rate_hz", "reach_m", "tag_side_m", "band_height_m", "whole_frame"});
+    if (q.has("rate_hz")) k.qr_rate_hz = q.number("rate_hz", 0.1, 30.0);
+    if (q.has("reach_m")) k.qr_reach_m = q.number("reach_m", 0.5, 10.0);
+    if (q.has("tag_side_m")) k.tag_side_m = q.number("tag_side_m", 0.02, 0.5);
+    if (q.has("band_height_m")) t.band_height_m = q.number("band_height_m", 0.0, 2.0);
+    if (q.has("whole_frame")) k.qr_whole_frame = q.boolean("whole_frame");
+  }
+  if (r.has("trigger")) {
+    const Reader q = r.child("trigger");
+    q.allow_only({"min_distance_m", "max_distance_m", "front_min_s", "front_max_s", "back_min_s", "back_max_s",
+                  "max_turn_s", "max_sighting_gap_s", "max_frame_delay_s"});
+    cobot::TriggerConfig& g = t.trigger;
+    if (q.has("min_distance_m")) g.min_distance_m = q.number("min_distance_m", 0.0, 5.0);
+    if (q.has("max_distance_m")) g.max_distance_m = q.number("max_distance_m", 0.0, 5.0);
+    if (q.has("front_min_s")) g.front_min_s = q.number("front_min_s", 0.0, 30.0);
+    if (q.has("front_max_s")) g.front_max_s = q.number("front_max_s", 0.0, 30.0);
+    if (q.has("back_min_s")) g.back_min_s = q.number("back_min_s", 0.0, 30.0);
+    if (q.has("back_max_s")) g.back_max_s = q.number("back_max_s", 0.0, 30.0);
+    if (q.has("max_turn_s")) g.max_turn_s = q.number("max_turn_s", 0.0, 30.0);
+    if (q.has("max_sighting_gap_s")) g.max_sighting_gap_s = q.number("max_sighting_gap_s", 0.01, 10.0);
+    if (q.has("max_frame_delay_s")) g.max_frame_delay_s = q.number("max_frame_delay_s", 0.0, 10.0);
+  }
+  if (r.has("follow")) {
+    const Reader q = r.child("follow");
+    q.allow_only({"distance_m", "min_step_m", "trail_capacity", "stop_speed_m_s", "stop_after_s", "lost_s",
+                  "robot_radius_m", "goal_step_m"});
+    cobot::FollowConfig& f = t.follow;
+    if (q.has("distance_m")) f.distance_m = q.number("distance_m", 0.3, 5.0);
+    if (q.has("min_step_m")) f.min_step_m = q.number("min_step_m", 0.01, 1.0);
+    if (q.has("trail_capacity")) f.trail_capacity = static_cast<std::size_t>(q.integer("trail_capacity", 2, 4096));
+    if (q.has("stop_speed_m_s")) f.stop_speed_m_s = q.number("stop_speed_m_s", 0.0, 2.0);
+    if (q.has("stop_after_s")) f.stop_after_s = q.number("stop_after_s", 0.01, 60.0);
+    if (q.has("lost_s")) f.lost_s = q.number("lost_s", 0.01, 60.0);
+    if (q.has("robot_radius_m")) f.robot_radius_m = q.number("robot_radius_m", 0.0, 2.0);
+    if (q.has("goal_step_m")) t.goal_step_m = q.number("goal_step_m", 0.01, 5.0);
+  }
+  if (r.has("path")) {
+    const Reader q = r.child("path");
+    q.allow_only({"capacity", "min_spacing_m", "depth_band_m"});
+    cobot::PathConfig& p = t.path;
+    if (q.has("capacity")) p.capacity = static_cast<std::size_t>(q.integer("capacity", 3, msg::WorkerPath::kMax));
+    if (q.has("min_spacing_m")) p.min_spacing_m = q.number("min_spacing_m", 0.001, 5.0);
+    if (q.has("depth_band_m")) p.depth_band_m = q.number("depth_band_m", 0.01, 5.0);
+  }
+  if (r.has("recognition")) {
+    const Reader q = r.child("recognition");
+    q.allow_only({"operations", "model", "rate_hz"});
+    k.recognition = true;
+    k.operations_path = relative_to(q.file(), q.text("operations"));
+    k.model_path = relative_to(q.file(), q.text("model"));
+    if (q.has("rate_hz")) k.recognition_rate_hz = q.number("rate_hz", 0.01, 10.0);
+  }
+  const cobot::TriggerConfig& g = t.trigger;
+  if (!(g.min_distance_m < g.max_distance_m && g.front_min_s <= g.front_max_s && g.back_min_s <= g.back_max_s))
+    r.fail("trigger", "each window's minimum must be below its maximum", YAML::Node());
+}
+
 FirmwareConfig read(const Reader& top, const std::string& source, std::span<const std::string_view> board_sections) {
   FirmwareConfig c;
   c.source_path = source;
-  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet"};
+  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet", "cobot"};
   keys.insert(keys.end(), board_sections.begin(), board_sections.end());
   if (top.has("sim") && std::find(keys.begin(), keys.end(), "sim") == keys.end())
     top.fail("sim", "a simulated robot: run this configuration with sen3bot-sim", YAML::Node());
@@ -465,6 +542,11 @@ FirmwareConfig read(const Reader& top, const std::string& source, std::span<cons
       top.fail("navigation", "goals: the fleet's orders give the goals; remove navigation.goals or the fleet section", YAML::Node());
   } else if (c.navigation.enabled && c.navigation.mission.goal_count == 0) {
     top.fail("navigation", "goals: missing (1 to " + std::to_string(MissionConfig::kMaxGoals) + " points, or a fleet section)", YAML::Node());
+  }
+  if (top.has("cobot")) {
+    read_cobot(top.child("cobot"), c);
+    if (!c.navigation.enabled || !c.navigation.people_enabled)
+      top.fail("cobot", "the collaborative mode follows people: needs navigation with navigation.people", YAML::Node());
   }
   return c;
 }

@@ -22,6 +22,7 @@
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "can_io_task.hpp"
+#include "cobot_task.hpp"
 #include "fleet_task.hpp"
 #include "mission.hpp"
 
@@ -95,6 +96,24 @@ struct BoardIo {
   std::string light_output;  // the warning light
 };
 
+// The collaborative mode (Sen3CoBot; cobot_task.hpp, docs/cobot.md): the site's areas, the
+// trained operators, the QR tags, follow-me, the worker's path and operation recognition.
+struct CobotSection {
+  bool enabled = false;           // a `cobot` section is present
+  std::string site_path;          // the site file's areas (ssc site format)
+  CobotTaskConfig task;           // the areas are filled in from site_path when the firmware starts
+  double operator_safety_radius_m = 0.25;  // the followed operator's cage, instead of the tracker's
+  double qr_rate_hz = 5.0;        // frames searched for tags a second, at most
+  double qr_reach_m = 2.0;        // only near people within this of the laser
+  double tag_side_m = 0.10;
+  bool qr_whole_frame = false;
+  // Operation recognition (off without `recognition`).
+  bool recognition = false;
+  std::string operations_path;
+  std::string model_path;
+  double recognition_rate_hz = 1.0;
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
@@ -115,6 +134,7 @@ struct FirmwareConfig {
   NavigationSection navigation;
   bool has_fleet = false;  // a `fleet` section: the goals come from VDA 5050 orders
   FleetConfig fleet;
+  CobotSection cobot;
 };
 
 // `board_sections` are top-level sections that belong to the board the firmware runs on (the

@@ -1,6 +1,7 @@
 #include "firmware.hpp"
 
 #include "safe_curve.hpp"
+#include "sen3bot/ssc/service.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {
@@ -31,6 +32,10 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "fleet") return fleet_task_.get();
   if (name == "detector") return detector_task_.get();
   if (name == "people") return people_task_.get();
+  if (name == "cobot") return cobot_task_.get();
+#ifdef SEN3BOT_HAS_QR
+  if (name == "qr") return qr_task_.get();
+#endif
 #ifdef SEN3BOT_HAS_HOG
   if (name == "vision") return vision_task_.get();
 #endif
@@ -73,14 +78,14 @@ Status Firmware::create_navigation() {
     if (n.people_detector == "onboard") {
       // The boxes come from the camera's own frames (vision_task.hpp).
 #ifdef SEN3BOT_HAS_HOG
-      if (!config_.devices.has_camera)
+      if (!config_.devices.has_camera && external_frames_ == nullptr)
         return Error::format(Errc::config, "%s: navigation.people.detector: onboard needs devices.camera", file);
       VisionTaskConfig vision;
       vision.hog = n.onboard_hog;
       vision.rate_hz = n.onboard_rate_hz;
       vision.calibration_width_px = static_cast<std::uint32_t>(camera.width_px);
       vision.calibration_height_px = static_cast<std::uint32_t>(camera.height_px);
-      vision_task_ = std::make_unique<VisionTask>(vision, camera_frames(), nav_detections_);
+      vision_task_ = std::make_unique<VisionTask>(vision, FrameSource{external_frames_, camera_task_.get()}, nav_detections_);
 #else
       return Error::format(Errc::config,
                            "%s: navigation.people.detector: onboard: this build has no on-board detector (it needs "
@@ -100,7 +105,9 @@ Status Firmware::create_navigation() {
     fusion.tracker = n.person_tracker;
     fusion.camera = camera;
     fusion.laser_mount = mount;
-    people_task_ = std::make_unique<nav::PeopleTask>(fusion, map_, nav_scan_, nav_pose_, nav_detections_, nav_people_);
+    if (config_.cobot.enabled) fusion.operator_safety_radius_m = config_.cobot.operator_safety_radius_m;
+    people_task_ = std::make_unique<nav::PeopleTask>(fusion, map_, nav_scan_, nav_pose_, nav_detections_, nav_people_,
+                                                     config_.cobot.enabled ? &nav_cobot_ : nullptr);
     people = &nav_people_;
     planner.use_people = true;
     planner.people_layer = n.cages;
@@ -141,13 +148,65 @@ Status Firmware::create_navigation() {
                                                    nav_pose_, nav_movers_, nav_command_, nav_safety_, people,
                                                    config_.devices.has_io_node ? &nav_io_ : nullptr);
 
+  // With the collaborative mode the mission's or the fleet's goals are the cooperative ones:
+  // the cobot row passes them on.
+  tasks::Topic<msg::NavGoal>& goals = config_.cobot.enabled ? nav_coop_goal_ : nav_goal_;
   if (config_.has_fleet) {
     fleet_task_ = std::make_unique<FleetTask>(config_.fleet, board_,
                                               FleetTopics{nav_pose_, nav_odometry_, nav_base_flags_, nav_controller_, nav_path_,
-                                                          nav_safety_, nav_people_, nav_goal_});
+                                                          nav_safety_, nav_people_, goals});
   } else {
     mission_task_ = std::make_unique<MissionTask>(
-        n.mission, MissionTopics{nav_goal_, nav_controller_, nav_path_, nav_pose_, nav_safety_});
+        n.mission, MissionTopics{goals, nav_controller_, nav_path_, nav_pose_, nav_safety_});
+  }
+  if (config_.cobot.enabled) return create_cobot(mount, nav::CameraCalibration{});
+  return Status::success();
+}
+
+Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCalibration& camera) {
+  const char* file = config_.source_path.c_str();
+  const CobotSection& k = config_.cobot;
+  Result<ssc::SiteFile> site = ssc::load_site(k.site_path);
+  if (!site) return Error::format(site.error().code(), "%s: cobot.site: %s", file, site.error().c_str());
+  CobotTaskConfig task = k.task;
+  task.laser_mount = mount;
+  task.camera = camera;
+  task.area_count = 0;
+  for (const ssc::Area& a : site->site.areas) {
+    if (task.area_count == CobotTaskConfig::kMaxAreas)
+      return Error::format(Errc::config, "%s: cobot.site: more than %zu areas", file, CobotTaskConfig::kMaxAreas);
+    CobotArea& area = task.areas[task.area_count++];
+    switch (a.type) {
+      case ssc::AreaType::blind_intersection: area.type = cobot::AreaType::critical_1_1; break;
+      case ssc::AreaType::transition: area.type = cobot::AreaType::critical_1_2; break;
+      case ssc::AreaType::workstation: area.type = cobot::AreaType::sub_critical_2; break;
+      case ssc::AreaType::not_monitored: area.type = cobot::AreaType::not_monitored_3; break;
+    }
+    if (a.outline.size() > CobotArea::kMaxVertices)
+      return Error::format(Errc::config, "%s: cobot.site: an area of more than %zu corners", file, CobotArea::kMaxVertices);
+    for (const ssc::Point& p : a.outline) area.outline[area.vertices++] = {p.x, p.y};
+  }
+  cobot_task_ = std::make_unique<CobotTask>(
+      task, CobotTopics{nav_people_, nav_pose_, nav_odometry_, nav_scan_, nav_tags_, nav_coop_goal_, nav_path_,
+                        nav_controller_, nav_goal_, nav_cobot_, nav_mode_, nav_worker_path_});
+  if (external_frames_ != nullptr || config_.devices.has_camera) {
+#ifdef SEN3BOT_HAS_QR
+    QrTaskConfig qr;
+    qr.rate_hz = k.qr_rate_hz;
+    qr.reach_m = k.qr_reach_m;
+    qr.band_height_m = task.band_height_m;
+    qr.laser_height_m = task.laser_height_m;
+    qr.tag_side_m = k.tag_side_m;
+    qr.whole_frame = k.qr_whole_frame;
+    qr.camera = camera;
+    qr.laser_mount = mount;
+    qr_task_ = std::make_unique<QrTask>(qr, FrameSource{external_frames_, camera_task_.get()}, QrTopics{nav_people_, nav_pose_, nav_tags_});
+#else
+    return Error::format(Errc::config,
+                         "%s: cobot: this build has no QR tag reader (it needs OpenCV's objdetect module, "
+                         "libopencv-objdetect-dev)",
+                         file);
+#endif
   }
   return Status::success();
 }
@@ -191,6 +250,9 @@ Status Firmware::init() {
                            : name == "detector" || name == "people"             ? "needs navigation.people"
                            : name == "vision" ? "needs navigation.people.detector: onboard"
                            : name == "fleet"  ? "needs a fleet section"
+                           : name == "cobot" ? "needs a cobot section"
+                           : name == "qr" ? "needs a cobot section and a camera"
+                           : name == "recognition" ? "needs cobot.recognition"
                            : name == "mission" && config_.has_fleet ? "the fleet gives the goals: no mission"
                                                                                 : "needs a navigation section");
   }

@@ -21,10 +21,14 @@
 #include "base_task.hpp"
 #include "camera_task.hpp"
 #include "can_io_task.hpp"
+#include "cobot_task.hpp"
 #include "detector_task.hpp"
 #include "fleet_task.hpp"
 #ifdef SEN3BOT_HAS_HOG
 #include "vision_task.hpp"
+#endif
+#ifdef SEN3BOT_HAS_QR
+#include "qr_task.hpp"
 #endif
 #include "laser_task.hpp"
 #include "mission.hpp"
@@ -41,6 +45,9 @@ class Firmware {
   // init() asks for more than its budget, a bad specification.
   Status init();
   void shutdown();
+  // Frames from elsewhere than the camera row (a simulated camera): the QR and vision rows
+  // read these. Before init(); the pool must outlive the firmware.
+  void use_camera_frames(camera::FramePool* frames) noexcept { external_frames_ = frames; }
 
   [[nodiscard]] tasks::Scheduler& scheduler() { return scheduler_; }
   [[nodiscard]] tasks::Bus& bus() { return bus_; }
@@ -63,6 +70,7 @@ class Firmware {
   [[nodiscard]] tasks::Topic<msg::OperatingMode>& operating_mode() { return nav_mode_; }
   // The newest decoded frames, for readers on any thread; null without a camera.
   [[nodiscard]] camera::FramePool* camera_frames() {
+    if (external_frames_ != nullptr) return external_frames_;
     return camera_task_ && camera_task_->camera() ? &camera_task_->camera()->frames() : nullptr;
   }
   [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
@@ -81,6 +89,16 @@ class Firmware {
   [[nodiscard]] const DetectorTask* detector() const { return detector_task_.get(); }
   [[nodiscard]] const nav::PeopleTask* people_task() const { return people_task_.get(); }
   [[nodiscard]] const nav::OccupancyMap& map() const { return map_; }
+  // The collaborative mode; null without a `cobot` section.
+  [[nodiscard]] const CobotTask* cobot() const { return cobot_task_.get(); }
+  [[nodiscard]] const tasks::Topic<msg::CobotState>& cobot_state() const { return nav_cobot_; }
+  [[nodiscard]] const tasks::Topic<msg::TagFrame>& tags() const { return nav_tags_; }
+  [[nodiscard]] const tasks::Topic<msg::WorkerPath>& worker_path() const { return nav_worker_path_; }
+  [[nodiscard]] const tasks::Topic<msg::OperationEstimate>& operation() const { return nav_operation_; }
+  [[nodiscard]] const tasks::Topic<msg::NavGoal>& goal() const { return nav_goal_; }
+#ifdef SEN3BOT_HAS_QR
+  [[nodiscard]] const QrTask* qr() const { return qr_task_.get(); }
+#endif
   // The waypoints the global planner follows: the file's, or the supervisory planner's path
   // for the newest goal. The planner task, for its supervisory planner. Null or empty without
   // a `navigation` section; read while the scheduler is stopped.
@@ -93,6 +111,7 @@ class Firmware {
   tasks::Task* task_named(std::string_view name);
   Status create_tasks();
   Status create_navigation();
+  Status create_cobot(const msg::SensorMount& mount, const nav::CameraCalibration& camera);
 
   const FirmwareConfig& config_;
   hal::Board& board_;
@@ -117,6 +136,13 @@ class Firmware {
   tasks::Topic<msg::People> nav_people_;
   tasks::Topic<msg::SafetyIo> nav_io_;
   tasks::Topic<msg::OperatingMode> nav_mode_;
+  // The collaborative mode's: the mission's or fleet's goals pass through it.
+  tasks::Topic<msg::NavGoal> nav_coop_goal_;
+  tasks::Topic<msg::TagFrame> nav_tags_;
+  tasks::Topic<msg::CobotState> nav_cobot_;
+  tasks::Topic<msg::WorkerPath> nav_worker_path_;
+  tasks::Topic<msg::OperationEstimate> nav_operation_;
+  camera::FramePool* external_frames_ = nullptr;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
@@ -139,6 +165,10 @@ class Firmware {
   std::unique_ptr<nav::PeopleTask> people_task_;
   std::unique_ptr<MissionTask> mission_task_;
   std::unique_ptr<FleetTask> fleet_task_;
+  std::unique_ptr<CobotTask> cobot_task_;
+#ifdef SEN3BOT_HAS_QR
+  std::unique_ptr<QrTask> qr_task_;
+#endif
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;
 };

@@ -35,6 +35,8 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"localization", 50'000,    15'000,    66,       "control"},
     tasks::TaskSpec{"people",       100'000,   2'000,     65,       "control"},
     tasks::TaskSpec{"controller",   100'000,   20'000,    64,       "control"},
+    // After the people: the collaborative mode reads this cycle's tracks.
+    tasks::TaskSpec{"cobot",        100'000,   1'000,     63,       "control"},
     tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
     tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
     tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
@@ -44,6 +46,10 @@ inline constexpr std::array kTaskTable = {
     tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
     // After the camera: its init() reads the camera's frame pool.
     tasks::TaskSpec{"vision",       500'000,   300'000,   0,        "vision"},
+    // The collaborative mode's OpenCV work, off the real-time threads: reading the operators'
+    // tags near the people within reach, and recognising a worker's operation from their path.
+    tasks::TaskSpec{"qr",           200'000,   120'000,   1,        "cobot"},
+    tasks::TaskSpec{"recognition",  1'000'000, 50'000,    0,        "cobot"},
 };
 static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 

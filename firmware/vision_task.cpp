@@ -4,6 +4,7 @@ namespace sen3bot::firmware {
 
 Status VisionTask::init(std::pmr::memory_resource& arena) {
   (void)arena;  // the detector's images are OpenCV matrices, sized here once
+  frames_ = source_.get();
   if (frames_ == nullptr) return Error::format(Errc::config, "vision task: the on-board detector needs the camera");
   if (!(config_.rate_hz > 0.0 && config_.rate_hz <= 30.0))
     return Error::format(Errc::config, "vision task: rate_hz must be in (0, 30]");

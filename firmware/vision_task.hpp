@@ -16,6 +16,7 @@
 #include "sen3bot/msg/people.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
+#include "camera_task.hpp"
 
 namespace sen3bot::firmware {
 
@@ -30,8 +31,8 @@ class VisionTask final : public tasks::Task {
  public:
   static constexpr std::uint32_t kSource = 0x484F47;  // "HOG"
 
-  VisionTask(const VisionTaskConfig& config, camera::FramePool* frames, tasks::Topic<msg::PersonDetections>& topic)
-      : config_(config), frames_(frames), topic_(topic) {}
+  VisionTask(const VisionTaskConfig& config, const FrameSource& frames, tasks::Topic<msg::PersonDetections>& topic)
+      : config_(config), source_(frames), topic_(topic) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
 
@@ -40,7 +41,8 @@ class VisionTask final : public tasks::Task {
 
  private:
   VisionTaskConfig config_;
-  camera::FramePool* frames_;
+  FrameSource source_;
+  camera::FramePool* frames_ = nullptr;  // from source_, at init()
   tasks::Topic<msg::PersonDetections>& topic_;
   std::optional<camera::FrameReader> reader_;
   detector::HogPeopleDetector hog_;

@@ -59,8 +59,9 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   tasks::Scheduler& scheduler = fw.scheduler();
   // Every row but the camera's and the on-board detector's (the simulated robot has no camera
   // yet, and OpenCV's search, on its own thread, allocates; docs/people.md) and the fleet's,
-  // which takes the mission's place when the robot has one (counted in the test below).
-  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 3);
+  // which takes the mission's place when the robot has one (counted in the test below), and the
+  // collaborative mode's three (counted in their own test).
+  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 6);
 
   // Warm-up: first-use work (stdio buffers, lazily sized state) happens here.
   ASSERT_TRUE(scheduler.run_lockstep(clock, hal::seconds(5)));
@@ -243,8 +244,9 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
   ASSERT_TRUE(master.connected());
   ASSERT_TRUE(fw.init());
   tasks::Scheduler& scheduler = fw.scheduler();
-  // Every row but the camera's, the on-board detector's and the mission's.
-  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 3);
+  // Every row but the camera's, the on-board detector's, the mission's and the collaborative
+  // mode's three.
+  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 6);
   ASSERT_NE(fw.fleet(), nullptr);
 
   // What master control sends in the window, written now.

@@ -160,7 +160,28 @@ std::size_t World::add_mover(const MoverScript& script) {
   return movers_.size() - 1;
 }
 
+void World::extend_timeline(std::size_t index, Point2D at, double time_s) {
+  MoverScript& script = movers_[index].script;
+  if (!script.times_s.empty() && !(time_s > script.times_s.back())) return;
+  script.timeline.push_back(at);
+  script.times_s.push_back(time_s);
+  movers_[index].position = position_at(movers_[index], time_s_);
+}
+
 Point2D World::position_at(const Mover& mover, double time_s) noexcept {
+  const auto& timeline = mover.script.timeline;
+  const auto& times = mover.script.times_s;
+  if (!timeline.empty() && times.size() == timeline.size()) {
+    if (time_s <= times.front()) return timeline.front();
+    for (std::size_t i = 1; i < times.size(); ++i) {
+      if (time_s > times[i]) continue;
+      const double span = times[i] - times[i - 1];
+      const double f = span > 0.0 ? (time_s - times[i - 1]) / span : 1.0;
+      return {timeline[i - 1].x_m + f * (timeline[i].x_m - timeline[i - 1].x_m),
+              timeline[i - 1].y_m + f * (timeline[i].y_m - timeline[i - 1].y_m)};
+    }
+    return timeline.back();
+  }
   const auto& path = mover.script.path;
   const double total = mover.cumulative_m.back();
   if (path.size() < 2 || mover.script.speed_m_s <= 0.0 || total <= 0.0) return path.front();

@@ -502,6 +502,15 @@ void PeopleTask::step(const tasks::StepContext& context) {
   }
   tracker_.expire(context.start_ns);
   tracker_.publish(context.start_ns, message_);
+  tasks::Sample<msg::CobotState> cobot;
+  if (cobot_ != nullptr && config_.operator_safety_radius_m >= 0.0 && cobot_->read(cobot) &&
+      cobot.value.mode == msg::CobotMode::collaborative && cobot.value.operator_track != 0) {
+    for (std::size_t i = 0; i < message_.count; ++i) {
+      msg::TrackedPerson& p = message_.items[i];
+      if (p.id != cobot.value.operator_track) continue;
+      p.cage_radius_m = std::max(p.width_m, config_.tracker.min_width_m) / 2.0 + config_.operator_safety_radius_m;
+    }
+  }
   people_.publish(message_, context.start_ns);
 }
 

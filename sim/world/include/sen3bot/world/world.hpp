@@ -41,6 +41,11 @@ struct MoverScript {
   // acceleration; 0 turns back at full speed. People turn in about a second, not in no time.
   double accel_m_s2 = 0.0;
   bool person = false;
+  // A timed walk instead of the polyline: the mover is at timeline[i] at times_s[i] (same
+  // length, times increasing) and moves straight between them, standing before the first and
+  // after the last. For an operator who stops, shows a tag, turns and walks on.
+  std::vector<Point2D> timeline;
+  std::vector<double> times_s;
 };
 
 struct WorldConfig {
@@ -55,6 +60,9 @@ class World {
 
   [[nodiscard]] const nav::OccupancyMap& map() const noexcept { return map_; }
   std::size_t add_mover(const MoverScript& script);
+  // Appends a keyframe to a timed mover's walk (time after its last): a script written as the
+  // run goes, e.g. an operator who reacts to where the robot stopped. Allocates.
+  void extend_timeline(std::size_t index, Point2D at, double time_s);
   [[nodiscard]] std::size_t mover_count() const noexcept { return movers_.size(); }
 
   // Moves every scripted obstacle to its place at time_s.

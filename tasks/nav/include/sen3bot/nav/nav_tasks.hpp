@@ -256,6 +256,9 @@ struct PeopleTaskConfig {
   // A frame waits this long for its scan (a scan arrives after the frame it matches at slow
   // baud rates); then it is fused with the nearest one it has, or counted out of the window.
   double frame_wait_s = 0.5;
+  // The operator a collaborative robot follows is a trained person: their cage uses this
+  // safety radius instead of the tracker's (< 0: no difference).
+  double operator_safety_radius_m = -1.0;
 };
 
 // Camera-laser fusion on the bus: each detector frame is fused with the scan nearest it in
@@ -265,8 +268,8 @@ class PeopleTask final : public tasks::Task {
  public:
   PeopleTask(const PeopleTaskConfig& config, const OccupancyMap& map, const tasks::Topic<ScanMessage>& scan,
              const tasks::Topic<PoseEstimate>& pose, const tasks::Topic<msg::PersonDetections>& detections,
-             tasks::Topic<msg::People>& people) noexcept
-      : config_(config), map_(map), scan_(scan), pose_(pose), detections_(detections), people_(people) {}
+             tasks::Topic<msg::People>& people, const tasks::Topic<msg::CobotState>* cobot = nullptr) noexcept
+      : config_(config), map_(map), scan_(scan), pose_(pose), detections_(detections), people_(people), cobot_(cobot) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const PeopleFusion& fusion() const noexcept { return fusion_; }
@@ -292,6 +295,7 @@ class PeopleTask final : public tasks::Task {
   const tasks::Topic<PoseEstimate>& pose_;
   const tasks::Topic<msg::PersonDetections>& detections_;
   tasks::Topic<msg::People>& people_;
+  const tasks::Topic<msg::CobotState>* cobot_;
   PeopleFusion fusion_;
   PersonTracker tracker_;
   std::span<PosedScan> scans_;             // ring, newest at scans_[(scan_next_ - 1) % kScans]
