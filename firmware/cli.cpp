@@ -113,6 +113,11 @@ constexpr const char* kUsage =
     "        line of counters goes to standard output. --client-id: default ssc. A\n"
     "        restarted centre learns the robots and AGVs again from the retained\n"
     "        connection messages and their next states.\n"
+    "  cobot tags --operator ID --out DIR [--module-px N]\n"
+    "        Write an operator's leg band tags, DIR/operator-ID-front.png and -back.png\n"
+    "        (ID 1..999999): each QR code with its quiet zone and a caption. At 300 dpi\n"
+    "        the default --module-px 47 prints the code 10 cm wide. (Where OpenCV's\n"
+    "        objdetect is built in.)\n"
     "  version\n"
     "        Print the firmware version.\n"
     "  --help, -h\n"
@@ -178,6 +183,9 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"can", "dump", can_dump_command},
       {"can", "io", can_io_command},
       {"ssc", "", ssc_command},
+#ifdef SEN3BOT_HAS_COBOT_TAGS
+      {"cobot", "", cobot_command},
+#endif
   };
   return dispatch(argc, argv, "sen3bot", SEN3BOT_VERSION, kUsage, kCommands, out, err);
 }

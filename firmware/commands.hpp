@@ -38,4 +38,7 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 //             [--duration S] [--client-id ID]
 int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+// sen3bot cobot tags --operator ID --out DIR [--module-px N]
+int cobot_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
 }  // namespace sen3bot::firmware
