@@ -98,7 +98,17 @@ void CobotTask::look(const msg::People& people, const msg::Pose2D& laser, const 
     for (std::size_t k = 0; k < n; ++k)
       if (chosen == nullptr || front[k].range < chosen->range) chosen = &front[k];
   in.operator_present = chosen != nullptr;
-  in.operator_distance_m = chosen != nullptr ? chosen->range : 0.0;
+  in.operator_distance_m = 0.0;
+  if (chosen != nullptr) {
+    // To the nearest point of their body in this scan: the track's centre lags a walker and
+    // is an estimate behind the legs the laser sees.
+    msg::Point2D body;
+    if (scan_ != nullptr &&
+        recorder_.nearest_return(scan_->view(), laser, {chosen->person->x_m, chosen->person->y_m}, chosen->person->width_m, body))
+      in.operator_distance_m = std::hypot(body.x_m - laser.x_m, body.y_m - laser.y_m);
+    else
+      in.operator_distance_m = std::max(0.0, chosen->range - chosen->person->width_m / 2);
+  }
   in.others_in_way = 0;
   candidate_ = chosen != nullptr ? chosen->person->id : 0;
   if (chosen == nullptr) return;
@@ -157,11 +167,10 @@ void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal:
   }
 
   // The worker's path, from each new scan.
-  tasks::Sample<msg::ScanMessage> scan;
-  if (p == nullptr || !topics_.scan.read(scan) || scan.sequence == scan_seq_) return;
-  scan_seq_ = scan.sequence;
+  if (p == nullptr || scan_ == nullptr || scan_sample_.sequence == scan_seq_) return;
+  scan_seq_ = scan_sample_.sequence;
   const msg::Pose2D laser = msg::compose(robot, config_.laser_mount);
-  if (recorder_.add_scan(scan.value.view(), laser, operator_at_, p->width_m)) {
+  if (recorder_.add_scan(scan_->view(), laser, operator_at_, p->width_m)) {
     recorder_.fill(path_out_);
     topics_.worker_path.publish(path_out_, now_ns);
   }
@@ -199,6 +208,7 @@ void CobotTask::step(const tasks::StepContext& context) {
 
   tasks::Sample<msg::People> people;
   if (!topics_.people.read(people)) people.value.count = 0;
+  scan_ = topics_.scan.read(scan_sample_) ? &scan_sample_.value : nullptr;
   tasks::Sample<msg::TagFrame> tags;
   const bool new_tags = topics_.tags.read(tags) && tags.sequence != tags_seq_;
   if (new_tags) tags_seq_ = tags.sequence;

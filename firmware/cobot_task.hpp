@@ -46,6 +46,8 @@ struct CobotTaskConfig {
   double reach_m = 2.5;              // people farther from the laser are not the operator
   double front_half_angle_rad = 0.6; // nor people further off the laser's axis
   double in_way_m = 1.0;             // another person this near the operator is in the way
+  // The operator's distance (the trigger's D_f window) is from the laser to the nearest point
+  // of their body in the newest scan.
   double idle_speed_m_s = 0.02;      // slower: standing
   double goal_step_m = 0.25;         // a follow-me goal is sent again when its target moved this far
   double band_height_m = 0.35;       // where the tags are worn, for telling whose they are
@@ -126,6 +128,8 @@ class CobotTask final : public tasks::Task {
   std::uint32_t operator_track_ = 0;
   msg::Point2D operator_at_;
   int area_index_ = -1;           // the type-2 area collaborated in
+  tasks::Sample<msg::ScanMessage> scan_sample_;  // this cycle's newest scan
+  const msg::ScanMessage* scan_ = nullptr;        // it, when there is one
   msg::WorkerPath path_out_;
   msg::CobotState state_;
 };

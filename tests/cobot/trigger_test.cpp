@@ -370,13 +370,26 @@ TEST_F(TriggerTest, NoRequestWithoutBothPhases) {
 
 TEST_F(TriggerTest, ASecondAttemptAfterARefusalWorks) {
   Script s;
-  s.show(kAnna, TagSide::front, 0.0, 1.0);               // too short, then the tag is hidden
-  s.show(kAnna, TagSide::front, 3.0, 5.4).show(kAnna, TagSide::back, 6.0, 8.4);
-  const auto events = run(trigger, s, 12.0);
+  s.show(kAnna, TagSide::front, 0.0, 1.0).show(kAnna, TagSide::back, 1.6, 4.0);  // the front too short
+  s.show(kAnna, TagSide::front, 7.0, 9.4).show(kAnna, TagSide::back, 10.0, 12.4);
+  const auto events = run(trigger, s, 15.0);
   ASSERT_EQ(events.size(), 2u);
   EXPECT_EQ(events[0].kind, TriggerEventKind::rejection);
   EXPECT_EQ(events[0].reason, TriggerRejection::front_too_short);
   EXPECT_EQ(events[1].kind, TriggerEventKind::request);
+}
+
+TEST_F(TriggerTest, AGlimpseOfTheFrontThatNoBackFollowsIsNoAttempt) {
+  // Someone walking past with the band towards the robot: nothing to refuse.
+  Script s;
+  s.show(kAnna, TagSide::front, 0.0, 1.0);
+  EXPECT_TRUE(run(trigger, s, 6.0).empty());
+  // And a real request right after one.
+  ASSERT_TRUE(trigger.init(config()));
+  s.show(kAnna, TagSide::front, 4.0, 6.4).show(kAnna, TagSide::back, 7.0, 9.4);
+  const auto events = run(trigger, s, 12.0);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, TriggerEventKind::request);
 }
 
 TEST_F(TriggerTest, AfterARefusedBackTheOperatorTurningToTheFrontStartsOver) {

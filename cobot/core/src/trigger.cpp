@@ -117,16 +117,19 @@ void CollaborationTrigger::advance(hal::Nanos t_ns, TriggerOutput& out) noexcept
     switch (phase_) {
       case TriggerPhase::idle: break;
       case TriggerPhase::front:
-        if (t_ns - last_front_ns_ > gap_ns_) {
-          if (last_front_ns_ - first_front_ns_ < front_min_ns_) {
-            reject(TriggerRejection::front_too_short, operator_, t_ns, out);
-          } else {
-            phase_ = TriggerPhase::turning;
-          }
-        }
+        // Whether the front was long enough is judged when the back comes: a short front that
+        // no back follows was a glimpse (someone walking past), not an attempt.
+        if (t_ns - last_front_ns_ > gap_ns_) phase_ = TriggerPhase::turning;
         break;
       case TriggerPhase::turning:
-        if (t_ns - last_front_ns_ > turn_ns_) reject(TriggerRejection::turn_too_long, operator_, t_ns, out);
+        if (t_ns - last_front_ns_ > turn_ns_) {
+          if (last_front_ns_ - first_front_ns_ < front_min_ns_) {
+            phase_ = TriggerPhase::idle;
+            operator_ = 0;
+          } else {
+            reject(TriggerRejection::turn_too_long, operator_, t_ns, out);
+          }
+        }
         break;
       case TriggerPhase::back:
         if (t_ns - last_back_ns_ > gap_ns_) {
@@ -252,7 +255,13 @@ void CollaborationTrigger::on_back(hal::Nanos c_ns, TriggerOutput& out) noexcept
       }
       start_back(c_ns, out);
       break;
-    case TriggerPhase::turning: start_back(c_ns, out); break;
+    case TriggerPhase::turning:
+      if (last_front_ns_ - first_front_ns_ < front_min_ns_) {
+        reject(TriggerRejection::front_too_short, operator_, c_ns, out);
+        break;
+      }
+      start_back(c_ns, out);
+      break;
     case TriggerPhase::back: {
       const PersonCheck check = check_person();
       last_back_ns_ = c_ns;
@@ -301,7 +310,9 @@ void CollaborationTrigger::start_front(std::uint32_t id, hal::Nanos c_ns) noexce
 void CollaborationTrigger::idle_sighting(std::uint32_t id, msg::TagSide side, hal::Nanos c_ns,
                                          TriggerOutput& out) noexcept {
   const PersonCheck check = check_person();
-  if (side == msg::TagSide::front && known(id) && check == PersonCheck::ok) {
+  // A refused showing going on (the back shown first, now the front) is the same attempt.
+  const bool refused_showing = watch_.active && watch_.id == id && watch_.reported;
+  if (side == msg::TagSide::front && known(id) && check == PersonCheck::ok && !refused_showing) {
     start_front(id, c_ns);
     return;
   }

@@ -107,11 +107,14 @@ AttemptPlan plan_attempt(OperatorScript& op, AttemptKind kind, std::uint32_t ope
   plan.operator_id = operator_id;
   // Inside the trained window with a margin for the robot's measurement of where they stand;
   // the failure kinds clearly outside theirs.
-  plan.stand_distance_m = kind == AttemptKind::too_far ? uniform(rng, 1.25, 1.6) : uniform(rng, 0.6, 0.9);
-  plan.front_s = kind == AttemptKind::too_short ? uniform(rng, 0.8, 1.5) : uniform(rng, 2.2, 2.5);
-  plan.back_s = uniform(rng, 2.2, 2.5);
+  // Centre distances: the robot measures to the body's near side, 0.2 m nearer.
+  plan.stand_distance_m = kind == AttemptKind::too_far ? uniform(rng, 1.5, 1.8) : uniform(rng, 0.8, 1.1);
+  // Standing still; the tag is also read during part of each turn (until it is turned about 70
+  // degrees away), which the robot counts: 2.4-2.8 s shown in all.
+  plan.front_s = kind == AttemptKind::too_short ? uniform(rng, 0.6, 1.2) : uniform(rng, 1.9, 2.2);
+  plan.back_s = uniform(rng, 1.9, 2.2);
   const double side = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
-  const double bearing = std::numbers::pi / 3;
+  const double bearing = options.approach_bearing_rad;
   const Point2D from = ahead(laser, options.approach_m * std::cos(bearing), side * options.approach_m * std::sin(bearing));
   const Point2D to = ahead(laser, options.approach_m * std::cos(bearing), -side * options.approach_m * std::sin(bearing));
   const Point2D stand = ahead(laser, plan.stand_distance_m, uniform(rng, -0.1, 0.1));
@@ -132,14 +135,20 @@ AttemptPlan plan_attempt(OperatorScript& op, AttemptKind kind, std::uint32_t ope
     op.stand(plan.front_s);
     op.turn_to(away, options.turn_s);
     op.stand(plan.back_s);
+    if (options.twice) {
+      op.turn_to(face, options.turn_s);
+      op.stand(uniform(rng, 1.9, 2.2));
+      op.turn_to(away, options.turn_s);
+      op.stand(uniform(rng, 1.9, 2.2));
+    }
   }
-  op.walk_to(to, options.walk_speed_m_s);
+  if (options.leave) op.walk_to(to, options.walk_speed_m_s);
   plan.end_s = op.end_s();
   if (kind == AttemptKind::person_in_the_way) {
     plan.bystander = true;
-    // Beside the operator's line and nearer the robot: in the way of the robot and of the tags'
-    // owner, not in front of the tags.
-    plan.bystander_at = ahead(laser, std::max(0.45, plan.stand_distance_m - 0.15), side * uniform(rng, 0.55, 0.7));
+    // Shoulder to shoulder with the operator, a step nearer the robot, in the camera's view:
+    // in the robot's way, not in front of the tags.
+    plan.bystander_at = ahead(laser, plan.stand_distance_m - 0.1, side * uniform(rng, 0.42, 0.5));
   }
   return plan;
 }

@@ -348,6 +348,17 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
   expire(stamp_ns);
   for (std::size_t f = 0; f < fix_count && count_ < tracks_.size(); ++f) {
     if (fix_used_[f] != 0) continue;
+    // Two boxes on one body (a detector's double or stray box): a second person cannot stand
+    // this close to a tracked one.
+    bool same_body = false;
+    for (std::size_t t = 0; t < count_ && !same_body; ++t) {
+      const Point2D p = predicted(tracks_[t]);
+      same_body = std::hypot(fixes[f].x_m - p.x_m, fixes[f].y_m - p.y_m) < config_.min_separation_m;
+    }
+    if (same_body) {
+      ++duplicates_;
+      continue;
+    }
     Track& track = tracks_[count_++];
     track = Track{};
     track.id = next_id_++;

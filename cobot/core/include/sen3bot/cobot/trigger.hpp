@@ -43,7 +43,8 @@ struct TriggerConfig {
 enum class TriggerPhase : std::uint8_t {
   idle,      // no attempt under way (showings that start none are watched, see below)
   front,     // the operator shows the front tag
-  turning,   // the front showing ended long enough; waiting for the back tag
+  turning,   // the front showing ended; waiting for the back tag (a short front no back
+             // follows within max_turn_s was a glimpse: back to idle, nothing refused)
   back,      // the operator shows the back tag
   cooldown,  // an attempt ended; the rest of its showing and turn is ignored
 };
@@ -52,7 +53,7 @@ enum class TriggerPhase : std::uint8_t {
 enum class TriggerRejection : std::uint8_t {
   too_near,           // the operator nearer than min_distance_m at a sighting
   too_far,            // farther than max_distance_m at a sighting
-  front_too_short,    // the front showing ended (silence or the turn) before front_min_s
+  front_too_short,    // the back followed a front shown for less than front_min_s
   front_too_long,     // the front showing went on past front_max_s
   turn_too_long,      // no back tag within max_turn_s of the last front sighting
   back_too_short,     // the back showing ended before back_min_s

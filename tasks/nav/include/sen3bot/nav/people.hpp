@@ -141,6 +141,8 @@ class PeopleFusion {
 struct PersonTrackerConfig {
   std::size_t max_tracks = msg::People::kMax;
   double gate_m = 0.8;             // a fix farther than this from every track starts a new one
+  // An unmatched fix nearer than this to a track is that person seen twice, not a new one.
+  double min_separation_m = 0.3;
   double expire_s = 2.0;           // a track (and its cage) without a fix for this long ends
   double dynamic_after_m = 1.0;    // moved farther than this from where first seen: dynamic
   double safety_radius_m = 0.5;    // the cage: half the person's width plus this
@@ -198,6 +200,8 @@ class PersonTracker {
   void publish(hal::Nanos now_ns, msg::People& out) const noexcept;
   [[nodiscard]] std::span<const Track> tracks() const noexcept { return tracks_.first(count_); }
   [[nodiscard]] std::uint32_t started() const noexcept { return next_id_ - 1; }
+  // Fixes dropped as a second sighting of a tracked person in the same frame.
+  [[nodiscard]] std::uint64_t duplicates() const noexcept { return duplicates_; }
 
  private:
   PersonTrackerConfig config_;
@@ -208,6 +212,7 @@ class PersonTracker {
   std::span<int> assignment_;
   std::span<std::uint8_t> fix_used_;
   std::uint32_t next_id_ = 1;
+  std::uint64_t duplicates_ = 0;
 
   void correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
   [[nodiscard]] Point2D predict(const Track& track, hal::Nanos stamp_ns) const noexcept;

@@ -30,6 +30,10 @@ class OperatorScript {
   [[nodiscard]] double end_facing() const noexcept { return facing_.empty() ? 0.0 : facing_.back(); }
   // The world's mover: a person of this width on the timed walk.
   [[nodiscard]] world::MoverScript mover(double size_m) const;
+  // The keyframes, for passing a script written as the run goes to the world.
+  [[nodiscard]] std::size_t keyframes() const noexcept { return times_.size(); }
+  [[nodiscard]] double keyframe_time(std::size_t i) const noexcept { return times_[i]; }
+  [[nodiscard]] nav::Point2D keyframe_at(std::size_t i) const noexcept { return points_[i]; }
 
  private:
   void add(double t_s, nav::Point2D at, double facing_rad);
@@ -40,8 +44,8 @@ class OperatorScript {
 
 enum class AttemptKind : std::uint8_t {
   valid,              // a known operator, the sequence as trained
-  too_far,            // stops 1.2-1.6 m away
-  too_short,          // the front tag for 0.8-1.6 s only
+  too_far,            // stops with their legs 1.3-1.6 m away
+  too_short,          // the front tag for about 1.1-1.7 s only
   wrong_order,        // the back tag first, then the front
   unknown_operator,   // tags of an id not on the robot's list
   person_in_the_way,  // a valid sequence with another person standing closer to the robot
@@ -55,7 +59,7 @@ struct AttemptPlan {
   std::uint32_t operator_id = 0;
   double start_s = 0;
   double end_s = 0;            // walked out of view again
-  double stand_distance_m = 0; // laser to the operator's centre while showing
+  double stand_distance_m = 0; // laser to the operator's centre while showing (legs ~0.2 m nearer)
   double front_s = 0;          // how long each tag was held towards the robot
   double back_s = 0;
   bool bystander = false;      // a second person stood in the way
@@ -64,9 +68,13 @@ struct AttemptPlan {
 
 struct AttemptOptions {
   double walk_speed_m_s = 0.9;
-  double approach_m = 2.6;       // where the operator comes from: this far out, to the side
+  double approach_m = 2.0;       // where the operator comes from: this far out, to the side
+  double approach_bearing_rad = 0.87;  // off the robot's axis (50 degrees)
   double turn_s = 0.8;           // turning round between the tags
   double facing_error_rad = 0.2; // how squarely they face the robot (uniform +-)
+  // After the sequence, turn back to the robot and show it again: a request and the request back.
+  bool twice = false;
+  bool leave = true;  // walk off to the other side at the end (false: stand there, back turned)
 };
 
 // Plans one attempt of `kind` by `operator_id`, in front of a robot whose laser is at `laser`
