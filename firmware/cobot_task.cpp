@@ -99,6 +99,7 @@ void CobotTask::look(const msg::People& people, const msg::Pose2D& laser, const 
       if (chosen == nullptr || front[k].range < chosen->range) chosen = &front[k];
   in.operator_present = chosen != nullptr;
   in.operator_distance_m = 0.0;
+  in.operator_speed_m_s = chosen != nullptr ? std::hypot(chosen->person->vx_m_s, chosen->person->vy_m_s) : 0.0;
   if (chosen != nullptr) {
     // To the nearest point of their body in this scan: the track's centre lags a walker and
     // is an estimate behind the legs the laser sees.
@@ -159,7 +160,7 @@ void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal:
   if (follow_cmd_.go) {
     const bool own_active = sent_any_ && sent_.active && sent_.id >= kOwnGoalIds;
     if (!own_active || distance({sent_.x_m, sent_.y_m}, follow_cmd_.target) > config_.goal_step_m) {
-      send({follow_cmd_.target.x_m, follow_cmd_.target.y_m, ++own_ids_, true}, now_ns);
+      send({follow_cmd_.target.x_m, follow_cmd_.target.y_m, ++own_ids_, true, true}, now_ns);
       ++counters_.follow_goals;
     }
   } else if (sent_any_ && sent_.active) {
@@ -253,7 +254,7 @@ void CobotTask::step(const tasks::StepContext& context) {
   if (m.resume) {
     operator_track_ = 0;
     returning_ = true;
-    send({post_.x_m, post_.y_m, ++own_ids_, true}, now);
+    send({post_.x_m, post_.y_m, ++own_ids_, true, true}, now);
   }
 
   if (m.mode == msg::CobotMode::collaborative) {

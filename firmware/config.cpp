@@ -419,7 +419,7 @@ void read_cobot(const Reader& r, FirmwareConfig& c) {
   if (r.has("trigger")) {
     const Reader q = r.child("trigger");
     q.allow_only({"min_distance_m", "max_distance_m", "front_min_s", "front_max_s", "back_min_s", "back_max_s",
-                  "max_turn_s", "max_sighting_gap_s", "max_frame_delay_s"});
+                  "max_turn_s", "max_sighting_gap_s", "max_frame_delay_s", "standing_speed_m_s"});
     cobot::TriggerConfig& g = t.trigger;
     if (q.has("min_distance_m")) g.min_distance_m = q.number("min_distance_m", 0.0, 5.0);
     if (q.has("max_distance_m")) g.max_distance_m = q.number("max_distance_m", 0.0, 5.0);
@@ -430,6 +430,7 @@ void read_cobot(const Reader& r, FirmwareConfig& c) {
     if (q.has("max_turn_s")) g.max_turn_s = q.number("max_turn_s", 0.0, 30.0);
     if (q.has("max_sighting_gap_s")) g.max_sighting_gap_s = q.number("max_sighting_gap_s", 0.01, 10.0);
     if (q.has("max_frame_delay_s")) g.max_frame_delay_s = q.number("max_frame_delay_s", 0.0, 10.0);
+    if (q.has("standing_speed_m_s")) g.standing_speed_m_s = q.number("standing_speed_m_s", 0.0, 5.0);
   }
   if (r.has("follow")) {
     const Reader q = r.child("follow");

@@ -531,7 +531,8 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
 
 constexpr const char* kSimUsage =
     "usage: sen3bot-sim sim --list\n"
-    "       sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n";
+    "       sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "       sen3bot-sim sim --scenario cobot [--attempts N] [--case NAME] [--config FILE] [--seed N] [--report DIR]\n";
 
 }  // namespace
 
@@ -539,6 +540,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   std::string scenario_name, report_dir, config_path = "config/sim.yaml";
   bool realtime = false, list = false, have_seed = false;
   std::uint64_t seed = 0;
+  std::uint64_t attempts = 3;
+  std::string only_case;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -552,6 +555,13 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       config_path = argv[++i];
     } else if (arg == "--report" && has_value) {
       report_dir = argv[++i];
+    } else if (arg == "--attempts" && has_value) {
+      if (!firmware::parse_u64(argv[++i], attempts) || attempts < 1 || attempts > 1000) {
+        std::fprintf(err, "sen3bot-sim sim: --attempts: expected 1 to 1000, got '%s'\n", argv[i]);
+        return 2;
+      }
+    } else if (arg == "--case" && has_value) {
+      only_case = argv[++i];
     } else if (arg == "--seed" && has_value) {
       if (!firmware::parse_u64(argv[++i], seed)) {
         std::fprintf(err, "sen3bot-sim sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
@@ -569,7 +579,27 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       std::fprintf(out, "%s: %s\n", s.name, s.description);
       for (const Case& c : s.cases) std::fprintf(out, "  %s: %s\n", c.name, c.description);
     }
+#ifdef SEN3BOT_HAS_COBOT_SIM
+    list_cobot_scenario(out);
+#endif
     return 0;
+  }
+#ifdef SEN3BOT_HAS_COBOT_SIM
+  if (scenario_name == "cobot") {
+    if (realtime) {
+      std::fprintf(err, "sen3bot-sim sim: the cobot scenario runs in lockstep time only (its camera renders between slices)\n");
+      return 2;
+    }
+    if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST) {
+      std::fprintf(err, "sen3bot-sim sim: cannot create %s: %s\n", report_dir.c_str(), std::strerror(errno));
+      return 1;
+    }
+    return cobot_scenario(config_path, report_dir, seed, have_seed, static_cast<std::size_t>(attempts), only_case, out, err);
+  }
+#endif
+  if (!only_case.empty() || attempts != 3) {
+    std::fprintf(err, "sen3bot-sim sim: --attempts and --case are the cobot scenario's\n%s", kSimUsage);
+    return 2;
   }
   const Scenario* scenario = nullptr;
   for (const Scenario& s : all)

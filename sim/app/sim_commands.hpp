@@ -3,7 +3,10 @@
 // command word and returns the exit status (0 success, 1 run-time failure, 2 bad command line,
 // 3 a mission or a scenario case failed). `experiment` returns 0 when its runs completed,
 // whatever they measured.
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
+#include <string>
 
 namespace sen3bot::sim {
 
@@ -13,9 +16,19 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err);
 int run_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]
 int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sim --scenario cobot [--attempts N] [--case NAME]: the collaborative mode's scenario (cmd_cobot.cpp).
+int cobot_scenario(const std::string& config_path, const std::string& report_dir, std::uint64_t seed, bool have_seed,
+                   std::size_t attempts, const std::string& only, std::FILE* out, std::FILE* err);
+void list_cobot_scenario(std::FILE* out);
 // sen3bot-sim experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]
 //   [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim experiment operations --runs N [--report DIR] [--seed S] [--model M] [--operations O]
+//   [--save-paths FILE] [--style NAME] [--no-baseline] [--baseline-per-class N]   (cmd_operations.cpp)
+int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim train operations --out MODEL [--per-class N] [--seed S] [--operations O] [--hidden N]
+//   [--encoding occupancy|occupancy_order] [--references FILE]
+int train_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE]
 int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S] [--x X --y Y --theta RAD]

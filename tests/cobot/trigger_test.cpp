@@ -36,6 +36,7 @@ struct View {
   bool present = true;
   double distance_m = 0.8;
   std::uint8_t others = 0;
+  double speed_m_s = 0.0;
 };
 
 // Frames by capture time (seconds after kStart), each with the tags read in it.
@@ -87,6 +88,7 @@ std::vector<TriggerEvent> run(CollaborationTrigger& trigger, const Script& scrip
     input.frame = frame;
     input.armed = armed(t_s);
     input.operator_present = v.present;
+    input.operator_speed_m_s = v.speed_m_s;
     input.operator_distance_m = v.distance_m;
     input.others_in_way = v.others;
     const TriggerOutput out = trigger.update(input);
@@ -366,6 +368,36 @@ TEST_F(TriggerTest, NoRequestWithoutBothPhases) {
   back_only.show(kAnna, TagSide::back, 0.0, 2.4);
   events = run(trigger, back_only, 10.0);
   EXPECT_EQ(requests(events), 0u);
+}
+
+TEST_F(TriggerTest, TheFrontIsTimedFromWhenTheOperatorStands) {
+  // Walking up in the window with the front towards the robot for 1.5 s, then 2.4 s standing:
+  // 3.9 s of front, but 2.4 s of it standing, which is what counts.
+  Script s;
+  s.show(kAnna, TagSide::front, 0.0, 3.9).show(kAnna, TagSide::back, 4.5, 6.9);
+  const auto walking_up = [](double t) { return View{true, t < 1.5 ? 1.0 - 0.1 * t : 0.8, 0, t < 1.5 ? 0.5 : 0.0}; };
+  auto events = run(trigger, s, 10.0, walking_up);
+  EXPECT_EQ(requests(events), 1u);
+  EXPECT_TRUE(rejections(events).empty());
+  // Standing all along, the same 3.9 s is too long.
+  ASSERT_TRUE(trigger.init(config()));
+  events = run(trigger, s, 10.0);
+  EXPECT_EQ(requests(events), 0u);
+  EXPECT_EQ(rejections(events), std::vector{TriggerRejection::front_too_long});
+}
+
+TEST_F(TriggerTest, WalkingOffWithTheBackShownAfterTheBackTimeIsTheRequest) {
+  // 2.2 s of back standing in the window, then walking away with it still shown.
+  Script s;
+  s.show(kAnna, TagSide::front, 0.0, 2.4).show(kAnna, TagSide::back, 3.0, 7.0);
+  auto events = run(trigger, s, 10.0, [](double t) { return View{true, t < 5.2 ? 0.8 : 0.8 + 0.5 * (t - 5.2), 0}; });
+  ASSERT_EQ(requests(events), 1u);
+  EXPECT_TRUE(rejections(events).empty());
+  // Leaving before the back time is up: refused as too far.
+  ASSERT_TRUE(trigger.init(config()));
+  events = run(trigger, s, 10.0, [](double t) { return View{true, t < 4.2 ? 0.8 : 0.8 + 0.5 * (t - 4.2), 0}; });
+  EXPECT_EQ(requests(events), 0u);
+  EXPECT_EQ(rejections(events), std::vector{TriggerRejection::too_far});
 }
 
 TEST_F(TriggerTest, ASecondAttemptAfterARefusalWorks) {

@@ -214,6 +214,8 @@ void CollaborationTrigger::on_front(hal::Nanos c_ns, TriggerOutput& out) noexcep
     case TriggerPhase::front: {
       const PersonCheck check = check_person();
       last_front_ns_ = c_ns;
+      if (person_.operator_speed_m_s > config_.standing_speed_m_s) first_front_ns_ = c_ns;  // still walking up
+      else front_standing_ = true;
       if (check == PersonCheck::lost) reject(TriggerRejection::operator_lost, operator_, c_ns, out);
       else if (check == PersonCheck::in_the_way) reject(TriggerRejection::person_in_the_way, operator_, c_ns, out);
       else if (check == PersonCheck::too_near) reject(TriggerRejection::too_near, operator_, c_ns, out);
@@ -247,6 +249,14 @@ void CollaborationTrigger::on_front(hal::Nanos c_ns, TriggerOutput& out) noexcep
 }
 
 void CollaborationTrigger::on_back(hal::Nanos c_ns, TriggerOutput& out) noexcept {
+  if ((phase_ == TriggerPhase::front || phase_ == TriggerPhase::turning) && !front_standing_) {
+    // The front was only seen while they walked up: the back is where their showing starts.
+    const std::uint32_t id = operator_;
+    phase_ = TriggerPhase::idle;
+    operator_ = 0;
+    idle_sighting(id, msg::TagSide::back, c_ns, out);
+    return;
+  }
   switch (phase_) {
     case TriggerPhase::front:
       if (last_front_ns_ - first_front_ns_ < front_min_ns_) {
@@ -264,6 +274,12 @@ void CollaborationTrigger::on_back(hal::Nanos c_ns, TriggerOutput& out) noexcept
       break;
     case TriggerPhase::back: {
       const PersonCheck check = check_person();
+      if (check != PersonCheck::ok && last_back_ns_ - first_back_ns_ >= back_min_ns_) {
+        // Walking off with the back still towards the robot after showing it long enough: the
+        // showing ended where they left.
+        complete(last_back_ns_, out);
+        break;
+      }
       last_back_ns_ = c_ns;
       if (check == PersonCheck::lost) reject(TriggerRejection::operator_lost, operator_, c_ns, out);
       else if (check == PersonCheck::in_the_way) reject(TriggerRejection::person_in_the_way, operator_, c_ns, out);
@@ -297,6 +313,7 @@ void CollaborationTrigger::start_back(hal::Nanos c_ns, TriggerOutput& out) noexc
 
 void CollaborationTrigger::start_front(std::uint32_t id, hal::Nanos c_ns) noexcept {
   phase_ = TriggerPhase::front;
+  front_standing_ = person_.operator_speed_m_s <= config_.standing_speed_m_s;
   operator_ = id;
   first_front_ns_ = last_front_ns_ = seen_ns_ = c_ns;
   first_back_ns_ = last_back_ns_ = 0;

@@ -36,9 +36,10 @@ void OperatorScript::walk_to(Point2D to, double speed_m_s) {
 void OperatorScript::stand(double duration_s) { add(end_s() + duration_s, end_at(), end_facing()); }
 
 void OperatorScript::turn_to(double facing_rad, double duration_s) {
-  // Unwrapped, so interpolation turns the short way.
+  // Unwrapped, so interpolation turns the short way; a smaller turn takes less time.
   const double from = end_facing();
-  add(end_s() + duration_s, end_at(), from + normalize_angle(facing_rad - from));
+  const double angle = normalize_angle(facing_rad - from);
+  add(end_s() + std::max(0.2, duration_s * std::fabs(angle) / std::numbers::pi), end_at(), from + angle);
 }
 
 Point2D OperatorScript::at(double t_s) const noexcept {
@@ -108,7 +109,7 @@ AttemptPlan plan_attempt(OperatorScript& op, AttemptKind kind, std::uint32_t ope
   // Inside the trained window with a margin for the robot's measurement of where they stand;
   // the failure kinds clearly outside theirs.
   // Centre distances: the robot measures to the body's near side, 0.2 m nearer.
-  plan.stand_distance_m = kind == AttemptKind::too_far ? uniform(rng, 1.5, 1.8) : uniform(rng, 0.8, 1.1);
+  plan.stand_distance_m = kind == AttemptKind::too_far ? uniform(rng, 1.4, 1.6) : uniform(rng, 0.8, 1.1);
   // Standing still; the tag is also read during part of each turn (until it is turned about 70
   // degrees away), which the robot counts: 2.4-2.8 s shown in all.
   plan.front_s = kind == AttemptKind::too_short ? uniform(rng, 0.6, 1.2) : uniform(rng, 1.9, 2.2);
@@ -146,9 +147,10 @@ AttemptPlan plan_attempt(OperatorScript& op, AttemptKind kind, std::uint32_t ope
   plan.end_s = op.end_s();
   if (kind == AttemptKind::person_in_the_way) {
     plan.bystander = true;
-    // Shoulder to shoulder with the operator, a step nearer the robot, in the camera's view:
-    // in the robot's way, not in front of the tags.
-    plan.bystander_at = ahead(laser, plan.stand_distance_m - 0.1, side * uniform(rng, 0.42, 0.5));
+    // A step behind the operator and to the side, in the camera's view (it covers about 25
+    // degrees either way) and not hidden behind the operator from the laser: someone else
+    // within reach of the operator.
+    plan.bystander_at = ahead(laser, plan.stand_distance_m + uniform(rng, 0.6, 0.8), side * uniform(rng, 0.45, 0.5));
   }
   return plan;
 }

@@ -171,7 +171,7 @@ void PlannerTask::plan(const NavGoal& goal, const Pose2D& pose, hal::Nanos now_n
   // the map's, and steering through them would take the robot into the cage's edge.
   std::size_t open = 0;
   const Costmap2D& grid = costmap_.costmap();
-  for (const Point2D& w : waypoints.subspan(next_waypoint_)) {
+  for (const Point2D& w : waypoints.subspan(goal.direct ? waypoints.size() : next_waypoint_)) {
     int col = 0;
     int row = 0;
     if (grid.world_to_cell(w.x_m, w.y_m, col, row) && grid.at(col, row) >= kInscribedCost) continue;
@@ -257,7 +257,7 @@ void PlannerTask::step(const tasks::StepContext& context) {
   const bool blocked = !new_goal && !due && scan != nullptr && have_plan_ && !std::isfinite(remaining_cost(pose.value.pose));
   if (new_goal) {
     next_waypoint_ = 0;
-    if (config_.use_sgp) plan_safe_path(goal.value, pose.value.pose);
+    if (config_.use_sgp && !goal.value.direct) plan_safe_path(goal.value, pose.value.pose);
     osgp_.reset();
   }
   // Online SGP: a person pushed the robot off its safe path; the new one starts where it is.

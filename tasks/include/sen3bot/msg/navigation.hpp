@@ -41,6 +41,9 @@ struct NavGoal {
   double y_m = 0.0;
   std::uint32_t id = 0;  // a new id means a new goal: plan at once
   bool active = false;   // false: stop and drop the path
+  // Straight there, without the supervised safe path's waypoints: a goal near the robot that
+  // moves as it goes (follow-me).
+  bool direct = false;
 };
 static_assert(std::is_trivially_copyable_v<NavGoal>);
 

@@ -37,6 +37,9 @@ struct TriggerConfig {
   // clock only this long after it would be from the frames, so a frame still on its way does
   // not end a phase.
   double max_frame_delay_s = 0.2;
+  // T_f counts from when the operator stands: while they walk up with the front tag towards
+  // the robot (faster than this), the front phase keeps starting again.
+  double standing_speed_m_s = 0.25;
   mem::StaticVector<std::uint32_t, kMaxOperators> operators;  // the trained operators' tag ids
 };
 
@@ -83,6 +86,7 @@ struct TriggerInput {
   bool armed = false;                    // a request can be taken now; otherwise all is ignored
   bool operator_present = false;         // the nearest person in front of the robot
   double operator_distance_m = 0.0;      // their distance from the laser
+  double operator_speed_m_s = 0.0;       // as the people tracker has it
   std::uint8_t others_in_way = 0;        // other people nearer, or within reach of the operator
 };
 
@@ -140,6 +144,7 @@ class CollaborationTrigger {
   TriggerPhase phase_ = TriggerPhase::idle;
   std::uint32_t operator_ = 0;
   hal::Nanos first_front_ns_ = 0, last_front_ns_ = 0, first_back_ns_ = 0, last_back_ns_ = 0;
+  bool front_standing_ = false;  // the front was seen with the operator standing, not only walking up
   hal::Nanos seen_ns_ = 0;                   // the attempt operator's latest sighting, either side
   msg::TagSide seen_side_ = msg::TagSide::front;
   Watch watch_;

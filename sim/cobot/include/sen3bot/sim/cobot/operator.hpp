@@ -21,7 +21,7 @@ class OperatorScript {
   void start(double t_s, nav::Point2D at, double facing_rad);
   void walk_to(nav::Point2D to, double speed_m_s);  // facing along the walk
   void stand(double duration_s);
-  void turn_to(double facing_rad, double duration_s);
+  void turn_to(double facing_rad, double duration_s);  // duration_s for half a turn, less for less
 
   [[nodiscard]] nav::Point2D at(double t_s) const noexcept;
   [[nodiscard]] double facing(double t_s) const noexcept;
@@ -44,7 +44,7 @@ class OperatorScript {
 
 enum class AttemptKind : std::uint8_t {
   valid,              // a known operator, the sequence as trained
-  too_far,            // stops with their legs 1.3-1.6 m away
+  too_far,            // stops with their legs 1.2-1.4 m away (farther, the tags are not read reliably)
   too_short,          // the front tag for about 1.1-1.7 s only
   wrong_order,        // the back tag first, then the front
   unknown_operator,   // tags of an id not on the robot's list

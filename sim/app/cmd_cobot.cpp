@@ -1,0 +1,529 @@
+// `sen3bot-sim sim --scenario cobot`: the collaborative mode end to end. A robot waits at its
+// post in the lab's work area (a type-2 area of config/cobot/lab_site.yaml); scripted operators
+// walk up and show the tags of their leg bands to its camera, which the simulation renders; the
+// whole firmware (the QR row, the people's fusion, the trigger, the mode, follow-me, the
+// planner) answers. One case follows an operator through the area to its border and back;
+// the others repeat valid requests or each kind of failed attempt. Each case is its own
+// firmware run in lockstep time; the report gives per case the toggles, the false toggles, the
+// refusals by reason and the follow distances.
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "config.hpp"
+#include "firmware.hpp"
+#include "report_figure.hpp"
+#include "sen3bot/cobot/polygon.hpp"
+#include "sen3bot/sim/cobot/operator.hpp"
+#include "sen3bot/sim/cobot/sim_camera.hpp"
+#include "sen3bot/sim/sim_board.hpp"
+#include "sen3bot/sim/sim_config.hpp"
+#include "sim_commands.hpp"
+
+namespace sen3bot::sim {
+
+namespace {
+
+using ::sen3bot::cobot::TriggerRejection;
+using cobot::AttemptKind;
+using cobot::AttemptPlan;
+using cobot::OperatorScript;
+using firmware::Firmware;
+using firmware::FirmwareConfig;
+
+constexpr std::uint32_t kOperator = 42;
+constexpr std::uint32_t kSecondOperator = 7;
+constexpr std::uint32_t kUnknownOperator = 913;
+constexpr double kPersonSizeM = 0.45;
+const nav::Pose2D kPost{2.5, 2.2, 0.0};
+// Out of the laser's and the camera's view from the post: behind the robot.
+constexpr nav::Point2D kOperatorPark{1.8, 3.9};
+constexpr nav::Point2D kBystanderPark{1.8, 0.5};
+constexpr double kFirstAttemptS = 6.0;  // after the mission's goal (the post) and wait4col
+constexpr hal::Nanos kSliceNs = hal::millis(50);
+constexpr double kLeadingM_s = 0.45;
+// The work area of config/cobot/lab_site.yaml, which follow-me must not leave.
+const std::array<msg::Point2D, 4> kAssembly = {{{1.5, 0.2}, {7.8, 0.2}, {7.8, 4.6}, {1.5, 4.6}}};
+
+enum class CaseKind : std::uint8_t { collaborate, requests };
+
+struct CobotCase {
+  const char* name;
+  const char* description;
+  CaseKind kind;
+  AttemptKind attempt;
+};
+
+const std::array<CobotCase, 7> kCases = {{
+    {"collaborate",
+     "operator 42 switches the waiting robot to collaborative, walks through the work area and out of its door: the "
+     "robot follows 1 m behind and stops at the area's border; the operator comes back and switches it back: the "
+     "robot returns to its post and waits again",
+     CaseKind::collaborate, AttemptKind::valid},
+    {"valid", "operator 42 or 7 asks and asks back, again and again: every request toggles", CaseKind::requests,
+     AttemptKind::valid},
+    {"too-far", "the sequence shown with the legs 1.2-1.4 m from the laser: refused, never toggles", CaseKind::requests,
+     AttemptKind::too_far},
+    {"too-short", "the front tag shown for 0.8-1.5 s only: refused", CaseKind::requests, AttemptKind::too_short},
+    {"wrong-order", "the back tag first, then the front: refused", CaseKind::requests, AttemptKind::wrong_order},
+    {"unknown-operator", "tags of operator 913, not on the robot's list: refused", CaseKind::requests,
+     AttemptKind::unknown_operator},
+    {"person-in-the-way", "a valid sequence with a second person standing a step behind the operator: refused",
+     CaseKind::requests,
+     AttemptKind::person_in_the_way},
+}};
+
+struct FollowStats {
+  std::size_t samples = 0;
+  double min_m = 0, mean_m = 0, max_m = 0;
+  void add(double d) {
+    min_m = samples == 0 ? d : std::min(min_m, d);
+    max_m = samples == 0 ? d : std::max(max_m, d);
+    mean_m += (d - mean_m) / static_cast<double>(++samples);
+  }
+};
+
+struct CaseOutcome {
+  std::string name;
+  std::string description;
+  CaseKind kind = CaseKind::requests;
+  std::size_t attempts = 0;
+  std::uint32_t toggles_on = 0;
+  std::uint32_t toggles_off = 0;
+  std::uint32_t expected_toggles = 0;
+  std::uint32_t false_toggles = 0;
+  std::array<std::uint32_t, ::sen3bot::cobot::kTriggerRejectionCount> rejections{};
+  std::uint32_t not_the_operator = 0;
+  std::uint32_t wait4col_entries = 0;
+  FollowStats follow;            // robot to operator while following a walking operator (truth)
+  std::uint32_t border_holds = 0;
+  std::uint32_t follow_goals = 0;
+  double outside_area_s = 0;     // collaborative with the robot's centre outside the work area
+  double post_error_m = -1;      // at the end, from the post (-1: not checked)
+  bool waiting_at_end = false;
+  std::uint64_t contacts = 0;
+  std::uint64_t moving_contacts = 0;
+  std::uint64_t frames_rendered = 0;
+  std::uint64_t frames_searched = 0;
+  std::uint64_t tags_read = 0;
+  std::size_t worker_path_points = 0;
+  double sim_s = 0;
+  double wall_s = 0;
+  bool passed = false;
+  std::vector<tasks::TaskStats> stats;
+};
+
+// Passes a script's keyframes written since the last call to the world.
+struct ScriptFeed {
+  std::size_t mover = 0;
+  std::size_t pushed = 1;  // the first keyframe is the mover's own
+  void push(const OperatorScript& script, world::World& world) {
+    for (; pushed < script.keyframes(); ++pushed)
+      world.extend_timeline(mover, script.keyframe_at(pushed), script.keyframe_time(pushed));
+  }
+};
+
+nav::Pose2D laser_pose(const nav::Pose2D& robot, const nav::Pose2D& mount) {
+  const double c = std::cos(robot.theta_rad), s = std::sin(robot.theta_rad);
+  return {robot.x_m + c * mount.x_m - s * mount.y_m, robot.y_m + s * mount.x_m + c * mount.y_m,
+          nav::normalize_angle(robot.theta_rad + mount.theta_rad)};
+}
+
+bool check(const CaseOutcome& c) {
+  std::uint32_t refused = c.not_the_operator;
+  for (const std::uint32_t r : c.rejections) refused += r;
+  const bool toggles_right = c.toggles_on + c.toggles_off == c.expected_toggles && c.false_toggles == 0;
+  if (c.kind == CaseKind::collaborate)
+    return toggles_right && c.follow.samples > 0 && c.border_holds > 0 && c.outside_area_s == 0 && c.post_error_m >= 0 &&
+           c.post_error_m < 0.3 && c.waiting_at_end && c.moving_contacts == 0;
+  if (c.expected_toggles > 0) return toggles_right && c.moving_contacts == 0;
+  return toggles_right && refused >= c.attempts && c.moving_contacts == 0;
+}
+
+int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfig& base, const SimulationConfig& base_world,
+                   const std::string& folder, std::size_t attempts, std::uint64_t seed, const std::string& report_dir,
+                   CaseOutcome& result, std::FILE* out, std::FILE* err) {
+  result.name = spec.name;
+  result.description = spec.description;
+  result.kind = spec.kind;
+  FirmwareConfig config = base;
+  config.clock = firmware::ClockMode::lockstep;
+  config.navigation.mcl.initial_pose = kPost;
+  config.navigation.mission.goal_count = 1;
+  config.navigation.mission.goals[0] = {kPost.x_m, kPost.y_m};
+  config.navigation.people_enabled = true;
+  config.navigation.people_detector = "sim";
+  config.navigation.dynamic_obstacles.enabled = true;
+  config.tasks["detector"].arena_bytes = 4 * 1024;
+  config.tasks["people"].arena_bytes = 64 * 1024;
+  config.tasks["cobot"].arena_bytes = 64 * 1024;
+  config.tasks["qr"].arena_bytes = 1024;
+  if (!config.cobot.enabled) {
+    config.cobot.enabled = true;
+    config.cobot.site_path = folder + "cobot/lab_site.yaml";
+    config.cobot.task.trigger.operators.clear();
+    for (const std::uint32_t id : {kOperator, kSecondOperator}) (void)config.cobot.task.trigger.operators.push_back(id);
+  }
+
+  SimulationConfig world = base_world;
+  world.start_pose = kPost;
+  world.seed = seed + index;
+  world.detector.enabled = true;
+  OperatorScript op, bystander;
+  op.start(0.0, kOperatorPark, 0.0);
+  bystander.start(0.0, kBystanderPark, 0.0);
+  world.movers = {op.mover(kPersonSizeM), bystander.mover(kPersonSizeM)};
+
+  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
+  if (!created) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, created.error().c_str());
+    return 1;
+  }
+  SimBoard& board = **created;
+  cobot::SimCameraConfig camera_config;
+  camera_config.camera = nav::CameraCalibration{};
+  Result<std::unique_ptr<cobot::SimCamera>> camera = cobot::SimCamera::create(camera_config, seed * 7919 + index);
+  if (!camera) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, camera.error().c_str());
+    return 1;
+  }
+  std::FILE* quiet = std::fopen("/dev/null", "w");
+  if (quiet == nullptr) quiet = out;
+  Firmware fw(config, board, quiet);
+  fw.use_camera_frames(&(*camera)->frames());
+  board.referee().watch_estimate(&fw.pose_estimate());
+  board.referee().watch_people(&fw.people());
+  auto fail = [&](const Error& e) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, e.c_str());
+    fw.shutdown();
+    board.stop();
+    if (quiet != out) std::fclose(quiet);
+    return 1;
+  };
+  if (Status s = board.start(); !s) return fail(s.error());
+  if (Status s = fw.init(); !s) return fail(s.error());
+  tasks::Scheduler& scheduler = fw.scheduler();
+  hal::SimClock& clock = *board.lockstep_clock();
+  world::World& w = board.simulation().world();
+  ScriptFeed op_feed{0}, bystander_feed{1};
+  std::mt19937_64 rng(seed * 1000003 + index);
+  const nav::Pose2D mount = world.laser_mount;
+
+  // The director: attempts one after another, each planned where the robot is when it starts.
+  cobot::AttemptOptions options;
+  std::vector<AttemptPlan> plans;
+  std::vector<std::uint32_t> ids;  // whose tags each keyframe span shows: the newest plan's
+  std::uint32_t wearing = kOperator;
+  enum class Stage : std::uint8_t { asking, following, coming_back, returning, done };
+  Stage stage = Stage::asking;
+  double standing_since_s = -1;
+  double end_s = 0;
+  const double limit_s = 60.0 + 40.0 * static_cast<double>(attempts);
+  const auto wall_start = std::chrono::steady_clock::now();
+  double sim_s = 0, next_progress_s = 0;
+  const std::size_t planned_attempts = spec.kind == CaseKind::collaborate ? 1 : attempts;
+
+  auto plan_next = [&](double t0_s) {
+    const nav::Pose2D laser = laser_pose(board.simulation().truth().pose, mount);
+    AttemptKind kind = spec.attempt;
+    std::uint32_t id = plans.size() % 2 == 0 ? kOperator : kSecondOperator;
+    if (kind == AttemptKind::unknown_operator) id = kUnknownOperator;
+    cobot::AttemptOptions o = options;
+    o.twice = spec.kind == CaseKind::requests && kind == AttemptKind::valid;
+    o.leave = spec.kind != CaseKind::collaborate;
+    const AttemptPlan plan = cobot::plan_attempt(op, kind, id, laser, t0_s, o, rng);
+    wearing = id;
+    if (plan.bystander) {
+      // In place when the operator arrives, gone when they leave.
+      const nav::Point2D side{plan.bystander_at.x_m, plan.bystander_at.y_m + (plan.bystander_at.y_m > laser.y_m ? 1.2 : -1.2)};
+      bystander.stand(std::max(0.0, plan.start_s - bystander.end_s()));
+      bystander.walk_to(side, 2.0);
+      bystander.walk_to(plan.bystander_at, 0.8);
+      bystander.stand(std::max(0.0, plan.end_s - bystander.end_s() - 1.5));
+      bystander.walk_to(side, 0.8);
+      bystander.walk_to(kBystanderPark, 2.0);
+      bystander_feed.push(bystander, w);
+    }
+    op_feed.push(op, w);
+    plans.push_back(plan);
+  };
+
+  while (sim_s < limit_s && stage != Stage::done) {
+    if (Status s = scheduler.run_lockstep(clock, kSliceNs); !s) return fail(s.error());
+    sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+    const GroundTruth& truth = board.simulation().truth();
+    const nav::Pose2D laser = laser_pose(truth.pose, mount);
+    // The camera sees the operator's leg band.
+    const cobot::TagWearer wearer{w.mover_position(0), op.facing(sim_s), wearing};
+    (*camera)->step(clock.now(), laser, std::span(&wearer, 1));
+
+    tasks::Sample<msg::CobotState> state;
+    const bool have_state = fw.cobot_state().read(state);
+    const bool collaborative = have_state && state.value.mode == msg::CobotMode::collaborative;
+    const bool standing = std::fabs(truth.speed_m_s) < 0.01;
+    standing_since_s = standing ? (standing_since_s < 0 ? sim_s : standing_since_s) : -1;
+    if (collaborative) {
+      if (!::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
+        result.outside_area_s += hal::to_seconds(kSliceNs);
+      // The operator walking: how far behind the robot keeps.
+      const nav::Point2D a = op.at(sim_s - 0.05), b = op.at(sim_s + 0.05);
+      if (std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) / 0.1 > 0.3) {
+        const nav::Point2D o = w.mover_position(0);
+        result.follow.add(std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m));
+        if (std::getenv("COBOT_DEBUG") != nullptr && std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m) < 0.6)
+          std::fprintf(out, "CLOSE t=%.2f robot (%.2f,%.2f,%.2f) op (%.2f,%.2f)\n", sim_s, truth.pose.x_m, truth.pose.y_m, truth.pose.theta_rad, o.x_m, o.y_m);
+      }
+    }
+
+    if (std::getenv("COBOT_DEBUG") != nullptr) {
+      tasks::Sample<msg::People> people;
+      if (fw.people().read(people)) {
+        std::fprintf(out, "t=%.2f op=(%.2f,%.2f) by=(%.2f,%.2f) f=%.2f people:", sim_s, w.mover_position(0).x_m, w.mover_position(0).y_m, w.mover_position(1).x_m, w.mover_position(1).y_m, op.facing(sim_s));
+        for (std::size_t k = 0; k < people.value.count; ++k)
+          std::fprintf(out, " [%u %.2f,%.2f w%.2f v%.2f]", people.value.items[k].id, people.value.items[k].x_m, people.value.items[k].y_m, people.value.items[k].width_m, std::hypot(people.value.items[k].vx_m_s, people.value.items[k].vy_m_s));
+        std::fprintf(out, " phase=%s", ::sen3bot::cobot::to_string(fw.cobot()->trigger().phase()));
+        for (std::size_t r = 0; r < ::sen3bot::cobot::kTriggerRejectionCount; ++r)
+          if (fw.cobot()->trigger().rejections(static_cast<TriggerRejection>(r)))
+            std::fprintf(out, " %s=%u", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)), fw.cobot()->trigger().rejections(static_cast<TriggerRejection>(r)));
+        const auto& fc = fw.cobot()->last_follow();
+        std::fprintf(out, " req=%u robot=(%.2f,%.2f) follow go=%d target=(%.2f,%.2f) %s gap=%.2f\n", fw.cobot()->trigger().requests(),
+                     truth.pose.x_m, truth.pose.y_m, fc.go ? 1 : 0, fc.target.x_m, fc.target.y_m, ::sen3bot::cobot::to_string(fc.reason), fc.gap_m);
+      }
+    }
+    switch (stage) {
+      case Stage::asking:
+        if (plans.size() < planned_attempts) {
+          const double t0 = plans.empty() ? kFirstAttemptS : op.end_s() + 1.0;
+          if (sim_s + 0.5 >= t0) plan_next(std::max(t0, sim_s + 0.5));
+        } else if (spec.kind == CaseKind::collaborate) {
+          // Through the work area and out of its door into the storage area.
+          // Leading the robot: at a pace it can keep (config/sim.yaml: 0.5 m/s at most).
+          op.walk_to({4.3, 2.9}, kLeadingM_s);
+          op.walk_to({4.3, 3.9}, kLeadingM_s);
+          op.walk_to({2.9, 4.1}, kLeadingM_s);
+          op.walk_to({2.9, 5.6}, kLeadingM_s);
+          op.walk_to({2.9, 6.4}, kLeadingM_s);
+          op.stand(2.0);
+          op_feed.push(op, w);
+          stage = Stage::following;
+        } else if (sim_s > op.end_s() + 3.0) {
+          end_s = sim_s;
+          stage = Stage::done;
+        }
+        break;
+      case Stage::following:
+        // Back once the robot has stood at the border a while: face it and ask back.
+        if (sim_s > op.end_s() && standing_since_s >= 0 && sim_s - standing_since_s > 1.5) {
+          const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
+          const nav::Point2D stand{laser.x_m + 0.95 * c, laser.y_m + 0.95 * s};
+          op.walk_to(stand, 0.5);
+          const double face = std::atan2(laser.y_m - stand.y_m, laser.x_m - stand.x_m);
+          op.turn_to(face, 0.8);
+          op.stand(2.1);
+          op.turn_to(face + std::numbers::pi, 0.8);
+          op.stand(2.1);
+          op.walk_to({2.9, 6.6}, 0.9);
+          op_feed.push(op, w);
+          stage = Stage::coming_back;
+        }
+        break;
+      case Stage::coming_back:
+        if (sim_s > op.end_s()) stage = Stage::returning;
+        break;
+      case Stage::returning:
+        if (have_state && state.value.mode == msg::CobotMode::wait4col && standing) {
+          end_s = sim_s;
+          stage = Stage::done;
+        }
+        break;
+      case Stage::done: break;
+    }
+    if (sim_s >= next_progress_s) {
+      std::fprintf(out, "  %-18s t=%6.1f s  robot (%5.2f, %5.2f) m  %-13s toggles %u  refusals %u  attempts %zu/%zu\n",
+                   spec.name, sim_s, truth.pose.x_m, truth.pose.y_m,
+                   have_state ? msg::to_string(state.value.mode) : "-", have_state ? state.value.toggles : 0,
+                   have_state ? state.value.rejections : 0, plans.size(), planned_attempts);
+      std::fflush(out);
+      next_progress_s += 10.0;
+    }
+  }
+  fw.shutdown();
+  board.stop();
+  result.sim_s = sim_s;
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.attempts = plans.size();
+  const firmware::CobotTask& task = *fw.cobot();
+  result.toggles_on = task.counters().toggles_on;
+  result.toggles_off = task.counters().toggles_off;
+  result.wait4col_entries = task.counters().wait4col_entries;
+  result.border_holds = task.counters().border_holds;
+  result.follow_goals = task.counters().follow_goals;
+  for (std::size_t r = 0; r < result.rejections.size(); ++r)
+    result.rejections[r] = task.trigger().rejections(static_cast<TriggerRejection>(r));
+  result.not_the_operator = task.mode().refusals(::sen3bot::cobot::ModeRefusal::not_the_operator);
+  const bool asks = spec.attempt == AttemptKind::valid;
+  result.expected_toggles = !asks ? 0 : spec.kind == CaseKind::collaborate ? 2 : 2 * static_cast<std::uint32_t>(plans.size());
+  const std::uint32_t toggles = result.toggles_on + result.toggles_off;
+  result.false_toggles = toggles > result.expected_toggles ? toggles - result.expected_toggles : 0;
+  const GroundTruth& truth = board.simulation().truth();
+  result.post_error_m = std::hypot(truth.pose.x_m - kPost.x_m, truth.pose.y_m - kPost.y_m);
+  tasks::Sample<msg::CobotState> state;
+  result.waiting_at_end = fw.cobot_state().read(state) && state.value.mode == msg::CobotMode::wait4col;
+  result.contacts = board.referee().report().contacts;
+  result.moving_contacts = board.referee().report().moving_contacts;
+  result.frames_rendered = (*camera)->frames_rendered();
+#ifdef SEN3BOT_HAS_QR
+  if (fw.qr() != nullptr) {
+    result.frames_searched = fw.qr()->frames_searched();
+    result.tags_read = fw.qr()->reader().tags_read();
+  }
+#endif
+  result.worker_path_points = task.recorder().size();
+  for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
+  result.passed = check(result);
+  (void)end_s;
+
+  std::uint32_t refused = result.not_the_operator;
+  for (const std::uint32_t r : result.rejections) refused += r;
+  std::fprintf(out, "  %s: %zu attempt%s, %u toggle%s (%u expected, %u false), %u refused", spec.name, result.attempts,
+               result.attempts == 1 ? "" : "s", toggles, toggles == 1 ? "" : "s", result.expected_toggles,
+               result.false_toggles, refused);
+  for (std::size_t r = 0; r < result.rejections.size(); ++r)
+    if (result.rejections[r] > 0)
+      std::fprintf(out, " %s=%u", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)), result.rejections[r]);
+  std::fprintf(out, "\n");
+  if (result.follow.samples > 0)
+    std::fprintf(out, "  following: %zu samples, robot to operator %.2f / %.2f / %.2f m (min / mean / max), %u goals, "
+                 "%u cycles held at the border, %.1f s outside the area\n",
+                 result.follow.samples, result.follow.min_m, result.follow.mean_m, result.follow.max_m, result.follow_goals,
+                 result.border_holds, result.outside_area_s);
+  std::fprintf(out, "  qr: %llu frames rendered, %llu searched, %llu tags read; %s (%.0f s simulated in %.1f s)\n",
+               static_cast<unsigned long long>(result.frames_rendered),
+               static_cast<unsigned long long>(result.frames_searched), static_cast<unsigned long long>(result.tags_read),
+               result.passed ? "passed" : "FAILED", result.sim_s, result.wall_s);
+  if (!report_dir.empty()) {
+    const std::string png = report_dir + "/" + result.name + ".png";
+    report::CaseFigure figure =
+        case_figure("case " + std::to_string(index + 1) + "/" + std::to_string(kCases.size()) + ": " + result.name,
+                    std::string("cobot: ") + spec.description, config, fw, board);
+    figure.goals = {{kPost.x_m, kPost.y_m}};
+    figure.result = std::to_string(toggles) + " toggles (" + std::to_string(result.expected_toggles) + " expected), " +
+                    std::to_string(refused) + " refused, " + std::to_string(result.moving_contacts) + " contacts";
+    figure.passed = result.passed;
+    if (!draw_case_figure(figure).write_png(png)) std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
+  }
+  if (quiet != out) std::fclose(quiet);
+  return 0;
+}
+
+bool write_report(const std::string& path, std::uint64_t seed, std::size_t attempts, const std::vector<CaseOutcome>& cases) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  std::fprintf(f, "{\n  \"scenario\": \"cobot\",\n  \"seed\": %llu,\n  \"attempts_per_case\": %zu,\n  \"cases\": [",
+               static_cast<unsigned long long>(seed), attempts);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const CaseOutcome& c = cases[i];
+    std::fprintf(f,
+                 "%s\n    {\"name\": \"%s\", \"passed\": %s, \"attempts\": %zu, \"toggles\": %u, \"expected_toggles\": %u, "
+                 "\"false_toggles\": %u,\n     \"rejections\": {",
+                 i ? "," : "", c.name.c_str(), c.passed ? "true" : "false", c.attempts, c.toggles_on + c.toggles_off,
+                 c.expected_toggles, c.false_toggles);
+    for (std::size_t r = 0; r < c.rejections.size(); ++r)
+      std::fprintf(f, "%s\"%s\": %u", r ? ", " : "", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)),
+                   c.rejections[r]);
+    std::fprintf(f, ", \"not_the_operator\": %u},\n", c.not_the_operator);
+    std::fprintf(f,
+                 "     \"follow\": {\"samples\": %zu, \"min_m\": %.3f, \"mean_m\": %.3f, \"max_m\": %.3f, \"goals\": %u, "
+                 "\"border_holds\": %u, \"outside_area_s\": %.2f},\n",
+                 c.follow.samples, c.follow.min_m, c.follow.mean_m, c.follow.max_m, c.follow_goals, c.border_holds,
+                 c.outside_area_s);
+    std::fprintf(f,
+                 "     \"wait4col_entries\": %u, \"post_error_m\": %.3f, \"waiting_at_end\": %s, \"contacts\": %llu, "
+                 "\"moving_contacts\": %llu, \"worker_path_points\": %zu,\n",
+                 c.wait4col_entries, c.post_error_m, c.waiting_at_end ? "true" : "false",
+                 static_cast<unsigned long long>(c.contacts), static_cast<unsigned long long>(c.moving_contacts),
+                 c.worker_path_points);
+    std::fprintf(f, "     \"qr\": {\"frames_rendered\": %llu, \"frames_searched\": %llu, \"tags_read\": %llu},\n",
+                 static_cast<unsigned long long>(c.frames_rendered), static_cast<unsigned long long>(c.frames_searched),
+                 static_cast<unsigned long long>(c.tags_read));
+    std::fprintf(f, "     \"simulated_s\": %.1f, \"wall_s\": %.2f, \"tasks\": [", c.sim_s, c.wall_s);
+    for (std::size_t t = 0; t < c.stats.size(); ++t) {
+      const tasks::TaskStats& s = c.stats[t];
+      std::fprintf(f, "%s{\"name\": \"%.*s\", \"runs\": %llu, \"cpu_mean_us\": %.1f, \"cpu_max_us\": %.1f}", t ? ", " : "",
+                   static_cast<int>(s.name.size()), s.name.data(), static_cast<unsigned long long>(s.runs),
+                   static_cast<double>(s.cpu_mean_ns) / 1e3, static_cast<double>(s.cpu_max_ns) / 1e3);
+    }
+    std::fprintf(f, "]}");
+  }
+  std::fprintf(f, "\n  ]\n}\n");
+  return std::fclose(f) == 0;
+}
+
+}  // namespace
+
+void list_cobot_scenario(std::FILE* out) {
+  std::fprintf(out, "cobot: the collaborative mode: operators ask a robot waiting in the lab's work area to follow them, "
+                    "and fail to in each way it must refuse (--attempts N per case)\n");
+  for (const CobotCase& c : kCases) std::fprintf(out, "  %s: %s\n", c.name, c.description);
+}
+
+int cobot_scenario(const std::string& config_path, const std::string& report_dir, std::uint64_t seed, bool have_seed,
+                   std::size_t attempts, const std::string& only, std::FILE* out, std::FILE* err) {
+  Result<SimulatedRobot> loaded = load_simulated_robot(config_path);
+  if (!loaded) {
+    std::fprintf(err, "sen3bot-sim sim: %s\n", loaded.error().c_str());
+    return 2;
+  }
+  if (!loaded->firmware.navigation.enabled || loaded->firmware.has_fleet) {
+    std::fprintf(err, "sen3bot-sim sim: %s: the cobot scenario needs a navigation section and no fleet section\n",
+                 config_path.c_str());
+    return 2;
+  }
+  const std::size_t slash = config_path.find_last_of('/');
+  const std::string folder = slash == std::string::npos ? "" : config_path.substr(0, slash + 1);
+  if (!have_seed) seed = loaded->world.seed;
+  std::fprintf(out, "scenario cobot (%zu cases, %zu attempt%s each, lockstep simulated time, seed %llu)\n", kCases.size(),
+               attempts, attempts == 1 ? "" : "s", static_cast<unsigned long long>(seed));
+  std::vector<CaseOutcome> results;
+  int rc = 0;
+  for (std::size_t i = 0; i < kCases.size(); ++i) {
+    if (!only.empty() && only != kCases[i].name) continue;
+    std::fprintf(out, "\ncase %zu/%zu %s: %s\n", i + 1, kCases.size(), kCases[i].name, kCases[i].description);
+    CaseOutcome& result = results.emplace_back();
+    if (run_cobot_case(kCases[i], i, loaded->firmware, loaded->world, folder, attempts, seed, report_dir, result, out, err) != 0)
+      return 1;
+    if (!result.passed) rc = 3;
+  }
+  if (results.empty()) {
+    std::fprintf(err, "sen3bot-sim sim: the cobot scenario has no case named '%s'\n", only.c_str());
+    return 2;
+  }
+  std::fprintf(out, "\nsummary of cobot:\n");
+  for (const CaseOutcome& r : results) {
+    std::uint32_t refused = r.not_the_operator;
+    for (const std::uint32_t x : r.rejections) refused += x;
+    std::fprintf(out, "  %-18s %-7s attempts %2zu  toggles %2u/%-2u  false %u  refused %2u\n", r.name.c_str(),
+                 r.passed ? "passed" : "FAILED", r.attempts, r.toggles_on + r.toggles_off, r.expected_toggles,
+                 r.false_toggles, refused);
+  }
+  if (!report_dir.empty()) {
+    const std::string json = report_dir + "/report.json";
+    if (!write_report(json, seed, attempts, results)) {
+      std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", json.c_str());
+      return 1;
+    }
+    std::fprintf(out, "report: %s (report.json and one PNG per case)\n", report_dir.c_str());
+  }
+  return rc;
+}
+
+}  // namespace sen3bot::sim
