@@ -113,6 +113,14 @@ constexpr const char* kUsage =
     "        line of counters goes to standard output. --client-id: default ssc. A\n"
     "        restarted centre learns the robots and AGVs again from the retained\n"
     "        connection messages and their next states.\n"
+    "  recognize --paths FILE [--progressive] [--model M] [--operations O]\n"
+    "        The operation recognizer on recorded worker paths (one JSON object per\n"
+    "        line: name, operation (the truth, optional), points [[x, y], ...]): per\n"
+    "        path the probability of each operation of O (config/cobot/operations.yaml)\n"
+    "        by the model M (config/cobot/operations-model.yaml.gz); --progressive adds\n"
+    "        the most probable operation and the right one's probability at every 10 %\n"
+    "        of the path. A bad line is an error naming it. (Where OpenCV's ml module is\n"
+    "        built in.)\n"
     "  cobot tags --operator ID --out DIR [--module-px N]\n"
     "        Write an operator's leg band tags, DIR/operator-ID-front.png and -back.png\n"
     "        (ID 1..999999): each QR code with its quiet zone and a caption. At 300 dpi\n"
@@ -183,6 +191,9 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"can", "dump", can_dump_command},
       {"can", "io", can_io_command},
       {"ssc", "", ssc_command},
+#ifdef SEN3BOT_HAS_RECOGNIZER
+      {"recognize", "", recognize_command},
+#endif
 #ifdef SEN3BOT_HAS_COBOT_TAGS
       {"cobot", "", cobot_command},
 #endif

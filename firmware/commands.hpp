@@ -38,6 +38,9 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 //             [--duration S] [--client-id ID]
 int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+// sen3bot recognize --paths FILE [--progressive] [--model M] [--operations O]
+int recognize_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+
 // sen3bot cobot tags --operator ID --out DIR [--module-px N]
 int cobot_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 

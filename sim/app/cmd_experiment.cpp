@@ -533,8 +533,8 @@ int bad(std::FILE* err, const std::string& message) {
 }
 
 int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
-  if (argc < 1) return bad(err, "which experiment? (there is one: dol)");
-  if (std::string_view(argv[0]) != "dol") return bad(err, "no experiment named '" + std::string(argv[0]) + "' (there is one: dol)");
+  if (argc < 1) return bad(err, "which experiment? (dol, operations)");
+  if (std::string_view(argv[0]) != "dol") return bad(err, "no experiment named '" + std::string(argv[0]) + "' (dol, operations)");
   bool have_speed = false, have_runs = false;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -681,6 +681,9 @@ bool write_report_json(const std::string& path, const Options& o, const std::vec
 }  // namespace
 
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+#ifdef SEN3BOT_HAS_RECOGNIZER
+  if (argc >= 1 && std::string_view(argv[0]) == "operations") return operations_experiment_command(argc - 1, argv + 1, out, err);
+#endif
   Plan plan;
   Options& o = plan.options;
   if (int rc = parse_options(argc, argv, o, err); rc != 0) return rc;

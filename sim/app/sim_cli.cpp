@@ -79,6 +79,29 @@ constexpr const char* kUsage =
     "        runs' travel times; with --report writes DIR/report.json, a box plot\n"
     "        DIR/travel_times.png and DIR/sample_run.png (the first seed's run at its\n"
     "        closest approach to a box). Exit status 0 when the runs completed.\n"
+#ifdef SEN3BOT_HAS_RECOGNIZER
+    "  experiment operations --runs N [--report DIR] [--seed S] [--model M]\n"
+    "                        [--operations O] [--save-paths FILE] [--style NAME]\n"
+    "                        [--no-baseline] [--baseline-per-class N]\n"
+    "        Operation recognition on simulated workers (docs/cobot/recognition.md): N\n"
+    "        walks per operation of config/cobot/operations.yaml (default --operations)\n"
+    "        in the held-out walking style (default rushed; --style another), recorded\n"
+    "        as the robot records them, classified whole and at every 10 % of the path\n"
+    "        by the model M (default config/cobot/operations-model.yaml.gz). Unless\n"
+    "        --no-baseline, the same classifier is trained on the occupancy image alone\n"
+    "        (the thesis' input) and compared. Prints the progressive table, the\n"
+    "        confusion and whether the targets are met; --report writes DIR/report.json,\n"
+    "        confusion.png, progressive.png and paths.png; --save-paths the walks as a\n"
+    "        paths file for `sen3bot recognize`. Exit status 0 when it ran.\n"
+    "  train operations --out MODEL [--per-class N] [--seed S] [--operations O]\n"
+    "                   [--hidden N] [--encoding occupancy|occupancy_order]\n"
+    "                   [--references FILE]\n"
+    "        Train the operation recognizer on N (default 480) simulated walks per\n"
+    "        operation in the four training styles (seed S, default 1), print the\n"
+    "        validation accuracy and write MODEL (OpenCV's format, gzip for .gz).\n"
+    "        --references FILE writes the robot's reference route per operation as\n"
+    "        the operations file's references block (tools/train_operations.sh).\n"
+#endif
     "  p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]\n"
     "        Run the Pioneer 3-DX (ARCOS) emulator until SIGINT: on a pseudo-terminal\n"
     "        whose slave is symlinked at LINK, or on a TCP port (MobileSim style).\n"
@@ -135,6 +158,9 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"run", "", run_command},
       {"sim", "", sim_command},
       {"experiment", "", experiment_command},
+#ifdef SEN3BOT_HAS_RECOGNIZER
+      {"train", "", train_command},
+#endif
       {"fleet-sim", "", fleet_command},
       {"agv", "", agv_command},
       {"p2os-emulator", "", p2os_emulator_command},
