@@ -13,7 +13,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <string>
@@ -223,7 +222,7 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
   std::vector<AttemptPlan> plans;
   std::vector<std::uint32_t> ids;  // whose tags each keyframe span shows: the newest plan's
   std::uint32_t wearing = kOperator;
-  enum class Stage : std::uint8_t { asking, following, coming_back, returning, done };
+  enum class Stage : std::uint8_t { asking, following, stepping_in, coming_back, returning, done };
   Stage stage = Stage::asking;
   double standing_since_s = -1;
   double end_s = 0;
@@ -271,34 +270,17 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     const bool collaborative = have_state && state.value.mode == msg::CobotMode::collaborative;
     const bool standing = std::fabs(truth.speed_m_s) < 0.01;
     standing_since_s = standing ? (standing_since_s < 0 ? sim_s : standing_since_s) : -1;
-    if (collaborative) {
-      if (!::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
-        result.outside_area_s += hal::to_seconds(kSliceNs);
-      // The operator walking: how far behind the robot keeps.
+    if (collaborative && !::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
+      result.outside_area_s += hal::to_seconds(kSliceNs);
+    if (collaborative && stage == Stage::following) {
+      // The operator leading the robot: how far behind it keeps.
       const nav::Point2D a = op.at(sim_s - 0.05), b = op.at(sim_s + 0.05);
       if (std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) / 0.1 > 0.3) {
         const nav::Point2D o = w.mover_position(0);
         result.follow.add(std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m));
-        if (std::getenv("COBOT_DEBUG") != nullptr && std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m) < 0.6)
-          std::fprintf(out, "CLOSE t=%.2f robot (%.2f,%.2f,%.2f) op (%.2f,%.2f)\n", sim_s, truth.pose.x_m, truth.pose.y_m, truth.pose.theta_rad, o.x_m, o.y_m);
       }
     }
 
-    if (std::getenv("COBOT_DEBUG") != nullptr) {
-      tasks::Sample<msg::People> people;
-      if (fw.people().read(people)) {
-        std::fprintf(out, "t=%.2f op=(%.2f,%.2f) by=(%.2f,%.2f) f=%.2f people:", sim_s, w.mover_position(0).x_m, w.mover_position(0).y_m, w.mover_position(1).x_m, w.mover_position(1).y_m, op.facing(sim_s));
-        for (std::size_t k = 0; k < people.value.count; ++k)
-          std::fprintf(out, " [%u %.2f,%.2f w%.2f v%.2f]", people.value.items[k].id, people.value.items[k].x_m, people.value.items[k].y_m, people.value.items[k].width_m, std::hypot(people.value.items[k].vx_m_s, people.value.items[k].vy_m_s));
-        std::fprintf(out, " phase=%s", ::sen3bot::cobot::to_string(fw.cobot()->trigger().phase()));
-        for (std::size_t r = 0; r < ::sen3bot::cobot::kTriggerRejectionCount; ++r)
-          if (fw.cobot()->trigger().rejections(static_cast<TriggerRejection>(r)))
-            std::fprintf(out, " %s=%u", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)), fw.cobot()->trigger().rejections(static_cast<TriggerRejection>(r)));
-        const auto& fc = fw.cobot()->last_follow();
-        std::fprintf(out, " req=%u robot=(%.2f,%.2f) follow go=%d target=(%.2f,%.2f) %s gap=%.2f\n", fw.cobot()->trigger().requests(),
-                     truth.pose.x_m, truth.pose.y_m, fc.go ? 1 : 0, fc.target.x_m, fc.target.y_m, ::sen3bot::cobot::to_string(fc.reason), fc.gap_m);
-      }
-    }
     switch (stage) {
       case Stage::asking:
         if (plans.size() < planned_attempts) {
@@ -321,11 +303,21 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
         }
         break;
       case Stage::following:
-        // Back once the robot has stood at the border a while: face it and ask back.
+        // Back once the robot has stood at the border a while: up to it first, then, once it
+        // stands again, into its camera's view to ask back.
         if (sim_s > op.end_s() && standing_since_s >= 0 && sim_s - standing_since_s > 1.5) {
           const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
+          op.walk_to({laser.x_m + 1.4 * c, laser.y_m + 1.4 * s}, 0.6);
+          op.stand(0.5);
+          op_feed.push(op, w);
+          stage = Stage::stepping_in;
+        }
+        break;
+      case Stage::stepping_in:
+        if (sim_s > op.end_s() && standing_since_s >= 0 && sim_s - standing_since_s > 1.0) {
+          const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
           const nav::Point2D stand{laser.x_m + 0.95 * c, laser.y_m + 0.95 * s};
-          op.walk_to(stand, 0.5);
+          op.walk_to(stand, 0.4);
           const double face = std::atan2(laser.y_m - stand.y_m, laser.x_m - stand.x_m);
           op.turn_to(face, 0.8);
           op.stand(2.1);

@@ -393,6 +393,11 @@ TEST_F(TriggerTest, WalkingOffWithTheBackShownAfterTheBackTimeIsTheRequest) {
   auto events = run(trigger, s, 10.0, [](double t) { return View{true, t < 5.2 ? 0.8 : 0.8 + 0.5 * (t - 5.2), 0}; });
   ASSERT_EQ(requests(events), 1u);
   EXPECT_TRUE(rejections(events).empty());
+  // The same, judged by their pace: setting off after 2.2 s of back, still in the window.
+  ASSERT_TRUE(trigger.init(config()));
+  events = run(trigger, s, 10.0, [](double t) { return View{true, 0.8, 0, t < 5.2 ? 0.0 : 0.5}; });
+  ASSERT_EQ(requests(events), 1u);
+  EXPECT_TRUE(rejections(events).empty());
   // Leaving before the back time is up: refused as too far.
   ASSERT_TRUE(trigger.init(config()));
   events = run(trigger, s, 10.0, [](double t) { return View{true, t < 4.2 ? 0.8 : 0.8 + 0.5 * (t - 4.2), 0}; });

@@ -274,9 +274,10 @@ void CollaborationTrigger::on_back(hal::Nanos c_ns, TriggerOutput& out) noexcept
       break;
     case TriggerPhase::back: {
       const PersonCheck check = check_person();
-      if (check != PersonCheck::ok && last_back_ns_ - first_back_ns_ >= back_min_ns_) {
-        // Walking off with the back still towards the robot after showing it long enough: the
-        // showing ended where they left.
+      const bool walking_off = person_.operator_speed_m_s > config_.standing_speed_m_s;
+      if ((check != PersonCheck::ok || walking_off) && last_back_ns_ - first_back_ns_ >= back_min_ns_) {
+        // Walking off (or out of the window) with the back still towards the robot after
+        // showing it long enough: the showing ended where they set off.
         complete(last_back_ns_, out);
         break;
       }

@@ -39,6 +39,7 @@ class SimCamera {
 
   [[nodiscard]] camera::FramePool& frames() noexcept { return *pool_; }
   // Renders and publishes a frame when one is due at now_ns; `laser` is the laser's true pose.
+  // A frame with no tag facing the camera is skipped: the tag reader would find nothing in it.
   // Returns whether a frame was published.
   bool step(hal::Nanos now_ns, const nav::Pose2D& laser, std::span<const TagWearer> wearers);
   [[nodiscard]] std::uint64_t frames_rendered() const noexcept { return rendered_; }
