@@ -36,6 +36,9 @@ tasks::Task* Firmware::task_named(std::string_view name) {
 #ifdef SEN3BOT_HAS_QR
   if (name == "qr") return qr_task_.get();
 #endif
+#ifdef SEN3BOT_HAS_RECOGNITION
+  if (name == "recognition") return recognition_task_.get();
+#endif
 #ifdef SEN3BOT_HAS_HOG
   if (name == "vision") return vision_task_.get();
 #endif
@@ -205,6 +208,21 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
     return Error::format(Errc::config,
                          "%s: cobot: this build has no QR tag reader (it needs OpenCV's objdetect module, "
                          "libopencv-objdetect-dev)",
+                         file);
+#endif
+  }
+  if (k.recognition) {
+#ifdef SEN3BOT_HAS_RECOGNITION
+    RecognitionTaskConfig recognition;
+    recognition.operations_path = k.operations_path;
+    recognition.model_path = k.model_path;
+    recognition.rate_hz = k.recognition_rate_hz;
+    recognition_task_ = std::make_unique<RecognitionTask>(
+        recognition, RecognitionTopics{nav_worker_path_, nav_operation_, nav_operation_reference_});
+#else
+    return Error::format(Errc::config,
+                         "%s: cobot.recognition: this build has no operation recognizer (it needs OpenCV's ml module, "
+                         "libopencv-ml-dev)",
                          file);
 #endif
   }

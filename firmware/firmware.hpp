@@ -30,6 +30,9 @@
 #ifdef SEN3BOT_HAS_QR
 #include "qr_task.hpp"
 #endif
+#ifdef SEN3BOT_HAS_RECOGNITION
+#include "recognition_task.hpp"
+#endif
 #include "laser_task.hpp"
 #include "mission.hpp"
 
@@ -96,8 +99,14 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<msg::WorkerPath>& worker_path() const { return nav_worker_path_; }
   [[nodiscard]] const tasks::Topic<msg::OperationEstimate>& operation() const { return nav_operation_; }
   [[nodiscard]] const tasks::Topic<msg::NavGoal>& goal() const { return nav_goal_; }
+  [[nodiscard]] const tasks::Topic<msg::PathMessage>& operation_reference() const { return nav_operation_reference_; }
+  // For a test standing in for the QR row.
+  [[nodiscard]] tasks::Topic<msg::TagFrame>& tags_topic() { return nav_tags_; }
 #ifdef SEN3BOT_HAS_QR
   [[nodiscard]] const QrTask* qr() const { return qr_task_.get(); }
+#endif
+#ifdef SEN3BOT_HAS_RECOGNITION
+  [[nodiscard]] const RecognitionTask* recognition() const { return recognition_task_.get(); }
 #endif
   // The waypoints the global planner follows: the file's, or the supervisory planner's path
   // for the newest goal. The planner task, for its supervisory planner. Null or empty without
@@ -142,6 +151,7 @@ class Firmware {
   tasks::Topic<msg::CobotState> nav_cobot_;
   tasks::Topic<msg::WorkerPath> nav_worker_path_;
   tasks::Topic<msg::OperationEstimate> nav_operation_;
+  tasks::Topic<msg::PathMessage> nav_operation_reference_;
   camera::FramePool* external_frames_ = nullptr;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
@@ -168,6 +178,9 @@ class Firmware {
   std::unique_ptr<CobotTask> cobot_task_;
 #ifdef SEN3BOT_HAS_QR
   std::unique_ptr<QrTask> qr_task_;
+#endif
+#ifdef SEN3BOT_HAS_RECOGNITION
+  std::unique_ptr<RecognitionTask> recognition_task_;
 #endif
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;

@@ -115,6 +115,10 @@ struct CaseOutcome {
   std::uint64_t frames_searched = 0;
   std::uint64_t tags_read = 0;
   std::size_t worker_path_points = 0;
+  // The operation recognised from the path recorded while following (the last estimate).
+  std::string operation;
+  double operation_probability = 0;
+  std::uint16_t operation_points = 0;
   double sim_s = 0;
   double wall_s = 0;
   bool passed = false;
@@ -166,11 +170,15 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
   config.tasks["people"].arena_bytes = 64 * 1024;
   config.tasks["cobot"].arena_bytes = 64 * 1024;
   config.tasks["qr"].arena_bytes = 1024;
+  config.tasks["recognition"].arena_bytes = 1024;
   if (!config.cobot.enabled) {
     config.cobot.enabled = true;
     config.cobot.site_path = folder + "cobot/lab_site.yaml";
     config.cobot.task.trigger.operators.clear();
     for (const std::uint32_t id : {kOperator, kSecondOperator}) (void)config.cobot.task.trigger.operators.push_back(id);
+    config.cobot.recognition = true;
+    config.cobot.operations_path = folder + "cobot/operations.yaml";
+    config.cobot.model_path = folder + "cobot/operations-model.yaml.gz";
   }
 
   SimulationConfig world = base_world;
@@ -272,6 +280,16 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     standing_since_s = standing ? (standing_since_s < 0 ? sim_s : standing_since_s) : -1;
     if (collaborative && !::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
       result.outside_area_s += hal::to_seconds(kSliceNs);
+    tasks::Sample<msg::OperationEstimate> estimate;
+    if (collaborative && stage == Stage::following && fw.operation().read(estimate) && estimate.value.best >= 0) {
+      const auto best = static_cast<std::size_t>(estimate.value.best);
+#ifdef SEN3BOT_HAS_RECOGNITION
+      if (fw.recognition() != nullptr && best < fw.recognition()->operations().operations.size())
+        result.operation = fw.recognition()->operations().operations[best].name;
+#endif
+      result.operation_probability = estimate.value.probability[best];
+      result.operation_points = estimate.value.points;
+    }
     if (collaborative && stage == Stage::following) {
       // The operator leading the robot: how far behind it keeps.
       const nav::Point2D a = op.at(sim_s - 0.05), b = op.at(sim_s + 0.05);
@@ -288,7 +306,8 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
           if (sim_s + 0.5 >= t0) plan_next(std::max(t0, sim_s + 0.5));
         } else if (spec.kind == CaseKind::collaborate) {
           // Through the work area and out of its door into the storage area.
-          // Leading the robot: at a pace it can keep (config/sim.yaml: 0.5 m/s at most).
+          // Leading the robot at a pace it can keep (config/sim.yaml: 0.5 m/s at most): round
+          // the workstation's north side, west under the pillar, through the door.
           op.walk_to({4.3, 2.9}, kLeadingM_s);
           op.walk_to({4.3, 3.9}, kLeadingM_s);
           op.walk_to({2.9, 4.1}, kLeadingM_s);
@@ -398,6 +417,10 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
                  "%u cycles held at the border, %.1f s outside the area\n",
                  result.follow.samples, result.follow.min_m, result.follow.mean_m, result.follow.max_m, result.follow_goals,
                  result.border_holds, result.outside_area_s);
+  if (!result.operation.empty())
+    std::fprintf(out, "  operation estimate from the %u path points recorded while following (this walk is none of the "
+                 "configured operations): %s (p = %.3f)\n",
+                 result.operation_points, result.operation.c_str(), result.operation_probability);
   std::fprintf(out, "  qr: %llu frames rendered, %llu searched, %llu tags read; %s (%.0f s simulated in %.1f s)\n",
                static_cast<unsigned long long>(result.frames_rendered),
                static_cast<unsigned long long>(result.frames_searched), static_cast<unsigned long long>(result.tags_read),
@@ -444,6 +467,8 @@ bool write_report(const std::string& path, std::uint64_t seed, std::size_t attem
                  c.wait4col_entries, c.post_error_m, c.waiting_at_end ? "true" : "false",
                  static_cast<unsigned long long>(c.contacts), static_cast<unsigned long long>(c.moving_contacts),
                  c.worker_path_points);
+    std::fprintf(f, "     \"operation\": {\"recognised\": \"%s\", \"probability\": %.4f, \"points\": %u},\n",
+                 c.operation.c_str(), c.operation_probability, c.operation_points);
     std::fprintf(f, "     \"qr\": {\"frames_rendered\": %llu, \"frames_searched\": %llu, \"tags_read\": %llu},\n",
                  static_cast<unsigned long long>(c.frames_rendered), static_cast<unsigned long long>(c.frames_searched),
                  static_cast<unsigned long long>(c.tags_read));

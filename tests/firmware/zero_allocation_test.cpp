@@ -6,6 +6,7 @@
 // simulated robot cannot run yet (it has no camera).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -353,6 +354,87 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
   EXPECT_EQ(master.bad, 0u);
   EXPECT_EQ(master.send_failures, 0u);
   EXPECT_TRUE(master.state().node_states.empty());
+  fw.shutdown();
+  std::fclose(sink);
+}
+
+// The collaborative mode's control row: a waiting robot, an operator's request (the tags a QR
+// row would read, published here: the reader itself is OpenCV's, on its own thread), follow-me
+// goals to the planner and the worker's path recorded, all inside the counted window.
+TEST(ZeroAllocation, TheCollaborativeModeTakesARequestFollowsAndRecordsWithoutAllocating) {
+  testing::SimRig rig = testing::load_sim_rig();
+  ASSERT_NE(rig.board, nullptr);
+  FirmwareConfig* config = &rig.config;
+  config->telemetry_status_period_ms = 1'000;  // the status lines' first-use buffers in the warm-up
+  // An operator standing 0.9 m in front of the waiting robot (start (2.5, 2.0) facing north),
+  // who sets off at t = 16 s along the work area and turns east.
+  world::MoverScript op;
+  op.timeline = {{2.5, 3.05}, {2.5, 3.05}, {2.5, 3.9}, {4.0, 3.9}};
+  op.times_s = {0.0, 16.0, 18.5, 22.5};
+  op.path = {op.timeline.front()};
+  op.size_m = 0.45;
+  op.person = true;
+  rig.world.movers = {op};
+  rig.world.detector.enabled = true;
+  rig.make_board();
+  config->navigation.people_enabled = true;
+  config->navigation.people_detector = "sim";
+  config->navigation.dynamic_obstacles.enabled = true;
+  config->tasks["detector"].arena_bytes = 4 * 1024;
+  config->tasks["people"].arena_bytes = 64 * 1024;
+  config->navigation.mission.goal_count = 1;  // its post: where it starts
+  config->navigation.mission.goals[0] = {2.5, 2.0};
+  config->cobot.enabled = true;
+  config->cobot.site_path = SEN3BOT_SOURCE_DIR "/config/cobot/lab_site.yaml";
+  ASSERT_TRUE(config->cobot.task.trigger.operators.push_back(42));
+  config->tasks["cobot"].arena_bytes = 64 * 1024;
+  hal::SimClock& clock = rig.clock();
+
+  std::FILE* sink = std::fopen("/dev/null", "w");
+  ASSERT_NE(sink, nullptr);
+  Firmware fw(*config, *rig.board, sink);
+  ASSERT_TRUE(fw.init());
+  tasks::Scheduler& scheduler = fw.scheduler();
+  ASSERT_NE(fw.cobot(), nullptr);
+  ASSERT_TRUE(scheduler.run_lockstep(clock, hal::seconds(5)));  // warm-up: waiting, the operator tracked
+
+  // The tags as the QR row publishes them, 5 frames a second: the front 8.0-10.4 s, the back
+  // 11.0-13.4 s. The frames are written before the window.
+  struct Shown {
+    double from_s, to_s;
+    msg::TagSide side;
+  };
+  const std::array<Shown, 2> shown = {{{8.0, 10.4, msg::TagSide::front}, {11.0, 13.4, msg::TagSide::back}}};
+  msg::TagFrame frame;
+  mem::testing::AllocationScope scope;
+  bool ran = true;
+  for (int k = 0; k < 5 * 20 && ran; ++k) {  // 5 s .. 25 s
+    ran = static_cast<bool>(scheduler.run_lockstep(clock, hal::millis(200)));
+    const double t_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+    frame.count = 0;
+    for (const Shown& sh : shown)
+      if (t_s >= sh.from_s && t_s <= sh.to_s) {
+        frame.tags[0] = msg::TagSighting{42, sh.side, 727.0f, 300.0f, 120.0f};
+        frame.count = 1;
+      }
+    ++frame.frame_sequence;
+    frame.capture_ns = clock.now();
+    fw.tags_topic().publish(frame, clock.now());
+  }
+  const std::uint64_t allocations = scope.allocations();
+  const std::uint64_t malloc_calls = scope.malloc_calls();
+  ASSERT_TRUE(ran);
+  EXPECT_EQ(allocations, 0u) << "operator new called in steady state";
+  EXPECT_EQ(malloc_calls, 0u) << "malloc called in steady state";
+  // The window covered the request, following and recording, not an idle robot.
+  const CobotTask& cobot = *fw.cobot();
+  EXPECT_EQ(cobot.counters().toggles_on, 1u);
+  EXPECT_EQ(cobot.trigger().rejections_total(), 0u);
+  EXPECT_GT(cobot.counters().follow_goals, 0u);
+  EXPECT_GT(cobot.recorder().size(), 10u);
+  tasks::Sample<msg::CobotState> state;
+  ASSERT_TRUE(fw.cobot_state().read(state));
+  EXPECT_EQ(state.value.mode, msg::CobotMode::collaborative);
   fw.shutdown();
   std::fclose(sink);
 }
