@@ -21,7 +21,8 @@ namespace sen3bot::firmware {
 // same cycle (the CAN I/O node's e-stop chain too), and a person detector's datagrams are taken in; on "control" localization feeds
 // the people's fusion and the controller. A row runs when its task is configured: the
 // devices under `devices`, localization, planners, safety and the mission under `navigation`,
-// the detector and the people under `navigation.people`; the rest always. Budgets are for the Pi 3; the camera's allows one
+// the detector and the people under `navigation.people`, the collaborative mode's under
+// `cobot` (qr with a camera, recognition with cobot.recognition); the rest always. Budgets are for the Pi 3; the camera's allows one
 // 15 fps stream decoded at up to 1280 x 720; the controller's a worst DWA cycle among movers
 // (docs/navigation.md, benchmarks).
 inline constexpr std::array kTaskTable = {
