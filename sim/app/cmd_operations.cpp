@@ -268,6 +268,7 @@ struct ExperimentOptions {
   std::string save_paths;
   std::string style = cobot::held_out_style().name;
   bool baseline = true;
+  bool first_task = false;  // record from the first task on (cobot::Observer::records_first_task)
   TrainingPlan baseline_plan{.encoding = FeatureEncoding::occupancy};
 };
 
@@ -329,12 +330,47 @@ void print_confusion(std::FILE* out, const Evaluation& e) {
   }
 }
 
+// The reversal test: each held-out walk of an operation whose stations, reversed, are another
+// operation's, played backwards, should be taken for that other operation. A drawn path is the
+// same both ways, so a classifier of the drawing alone answers a walk and its reverse alike and
+// gets at most half of the walk-and-reverse pairs right.
+struct Reversal {
+  std::size_t paths = 0;
+  std::size_t right = 0;
+  [[nodiscard]] double accuracy() const { return paths ? static_cast<double>(right) / static_cast<double>(paths) : 0.0; }
+};
+
+Result<Reversal> reversal_test(cobot::OperationRecognizer& recognizer, const cobot::OperationsConfig& config,
+                               const std::vector<LabelledPath>& paths) {
+  Reversal r;
+  std::vector<float> p(recognizer.operations());
+  for (const LabelledPath& path : paths) {
+    const std::vector<std::size_t>& stations = config.operations[path.operation].stations;
+    int reverse = -1;
+    for (std::size_t k = 0; k < config.operations.size(); ++k)
+      if (std::equal(stations.begin(), stations.end(), config.operations[k].stations.rbegin(),
+                     config.operations[k].stations.rend()))
+        reverse = static_cast<int>(k);
+    if (reverse < 0) continue;
+    std::vector<float> backwards;
+    for (std::size_t i = path.points(); i-- > 0;) backwards.insert(backwards.end(), {path.xy[2 * i], path.xy[2 * i + 1]});
+    if (Status s = recognizer.classify(backwards, path.points(), p); !s) return s.error();
+    ++r.paths;
+    r.right += static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin()) == reverse;
+  }
+  return r;
+}
+
 int parse_experiment(int argc, char** argv, ExperimentOptions& o, std::FILE* err) {
   bool have_runs = false;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     if (arg == "--no-baseline") {
       o.baseline = false;
+      continue;
+    }
+    if (arg == "--first-task") {
+      o.first_task = true;
       continue;
     }
     if (i + 1 >= argc) return bad(err, kExperimentName, std::string(arg) + ": needs a value");
@@ -390,9 +426,10 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
   const cobot::WorkerStyle& style = *cobot::find_style(o.style);
   const bool held_out = style.name == cobot::held_out_style().name;
 
-  std::fprintf(out, "experiment operations: %zu operations, %zu %s workers each (seed %llu%s), model %s\n",
+  std::fprintf(out, "experiment operations: %zu operations, %zu %s workers each (seed %llu%s%s), model %s\n",
                site->config.operations.size(), o.runs, style.name.c_str(), static_cast<unsigned long long>(o.seed),
-               held_out ? ", a style not used in training" : ", a TRAINING style", o.model_path.c_str());
+               held_out ? ", a style not used in training" : ", a TRAINING style",
+               o.first_task ? ", recorded from their first task" : "", o.model_path.c_str());
   std::fflush(out);
 
   // The held-out workers: their own seed stream, so none of them was seen in training.
@@ -402,6 +439,7 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
   spec.per_operation = o.runs;
   spec.seed = o.seed;
   spec.purpose = cobot::kTestSeeds;
+  spec.records_first_task = o.first_task;
   Result<std::vector<LabelledPath>> test = cobot::generate_paths(*site->workers, spec);
   if (!test) return bad(err, kExperimentName, test.error().c_str());
   std::fprintf(out, "  generated %zu walks (%.0f points on average) in %.1f s\n", test->size(), mean_points(*test),
@@ -416,6 +454,12 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
 
   // The thesis' input (the drawn path, no order) with the same classifier and training.
   std::vector<operations::Labelled> results{{"order-encoded", *ours}};
+  std::vector<Reversal> reversals;
+  {
+    Result<Reversal> r = reversal_test(**model, site->config, *test);
+    if (!r) return bad(err, kExperimentName, r.error().c_str());
+    reversals.push_back(*r);
+  }
   cobot::TrainingReport baseline_report;
   double baseline_generate_s = 0;
   if (o.baseline) {
@@ -433,6 +477,9 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
     if (!b) return bad(err, kExperimentName, b.error().c_str());
     std::fprintf(out, "  occupancy-only model: accuracy %.3f\n", b->accuracy);
     results.push_back({"occupancy only (thesis input)", std::move(*b)});
+    Result<Reversal> r = reversal_test(*baseline->recognizer, site->config, *test);
+    if (!r) return bad(err, kExperimentName, r.error().c_str());
+    reversals.push_back(*r);
   }
 
   std::fprintf(out, "\nprogressive test (%zu %s walks; prefixes of each recorded path):\n", test->size(), style.name.c_str());
@@ -442,6 +489,13 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
   if (results.size() > 1) {
     std::fprintf(out, "confusion, whole paths (occupancy only):\n");
     print_confusion(out, results[1].evaluation);
+  }
+
+  if (reversals.front().paths > 0) {
+    std::fprintf(out, "reversal test (%zu walks of operations with a reversed twin, played backwards):", reversals.front().paths);
+    for (std::size_t k = 0; k < reversals.size(); ++k)
+      std::fprintf(out, "%s %s %.3f", k ? "," : "", results[k].label.c_str(), reversals[k].accuracy());
+    std::fprintf(out, "\n");
   }
 
   const bool accuracy_met = ours->accuracy >= kTargetAccuracy;
@@ -470,6 +524,7 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
     std::fprintf(f, "  \"style\": %s,\n  \"held_out_style\": %s,\n  \"runs_per_operation\": %zu,\n  \"seed\": %llu,\n",
                  json_string(style.name).c_str(), held_out ? "true" : "false", o.runs,
                  static_cast<unsigned long long>(o.seed));
+    std::fprintf(f, "  \"recorded_from_first_task\": %s,\n", o.first_task ? "true" : "false");
     write_evaluation(f, *ours, "  ");
     std::fprintf(f, ",\n  \"targets\": {\"accuracy\": %.2f, \"accuracy_met\": %s, \"confident_at_60_percent\": %.2f, "
                     "\"confident_met\": %s},\n",
@@ -481,12 +536,17 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
       write_evaluation(f, results[1].evaluation, "    ");
       std::fprintf(f, "\n  },\n");
     }
+    std::fprintf(f, "  \"reversal\": {\"paths\": %zu, \"order_encoded_accuracy\": %.6f", reversals.front().paths,
+                 reversals.front().accuracy());
+    if (reversals.size() > 1) std::fprintf(f, ", \"occupancy_only_accuracy\": %.6f", reversals[1].accuracy());
+    std::fprintf(f, "},\n");
     std::fprintf(f, "  \"timing\": {\"classify_us_median\": %.3f, \"points_mean\": %.1f}\n}\n", ours->median_us,
                  mean_points(*test));
     std::fclose(f);
 
     const std::string subtitle = std::to_string(o.runs) + " " + style.name + " workers per operation (" +
-                                 (held_out ? "a walking style not used in training" : "a training style") + "), seed " +
+                                 (held_out ? "a walking style not used in training" : "a training style") +
+                                 (o.first_task ? ", recorded from their first task" : "") + "), seed " +
                                  std::to_string(o.seed);
     bool ok = operations::draw_confusion("Operation recognition: whole paths", subtitle, results)
                   .write_png(o.report_dir + "/confusion.png");
@@ -496,8 +556,9 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
     for (std::size_t op = 0; op < site->config.operations.size(); ++op) {
       for (const LabelledPath& p : *test) {
         if (p.operation != op) continue;
-        std::string label = site->config.operations[op].name + ":";
-        for (const std::size_t s : site->config.operations[op].stations) label += " " + site->config.stations[s].name;
+        std::string label = site->config.operations[op].name + "\n";
+        for (const std::size_t s : site->config.operations[op].stations)
+          label += (label.back() == '\n' ? "" : " > ") + site->config.stations[s].name;
         examples.push_back({label, p.xy});
         break;
       }

@@ -225,8 +225,14 @@ Canvas draw_example_paths(const std::string& title, const std::string& subtitle,
   for (std::size_t k = 0; k < paths.size(); ++k) {
     const Rgb colour = kPathColours[k % std::size(kPathColours)];
     canvas.line({lx, ly - 4}, {lx + 30, ly - 4}, colour, 3);
-    canvas.text({lx + 38, ly}, paths[k].label, kInk, 0.42, 1);
-    ly += 22;
+    // "name\nwhat it visits": the name, and under it in grey what it visits.
+    const std::size_t cut = paths[k].label.find('\n');
+    canvas.text({lx + 38, ly}, paths[k].label.substr(0, cut), kInk, 0.45, 1);
+    if (cut != std::string::npos) {
+      ly += 18;
+      canvas.text({lx + 38, ly}, paths[k].label.substr(cut + 1), kGrey, 0.36);
+    }
+    ly += 26;
   }
   ly += 10;
   canvas.ring({lx + 6, ly - 4}, 6, kInk, 2);

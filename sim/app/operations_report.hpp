@@ -30,7 +30,7 @@ struct Labelled {
 
 // The map in metres with the stations and one path per operation.
 struct ExamplePath {
-  std::string label;
+  std::string label;  // "name", or "name\nwhat it visits" (a second, grey line)
   std::vector<float> xy;
 };
 [[nodiscard]] report::Canvas draw_example_paths(const std::string& title, const std::string& subtitle,

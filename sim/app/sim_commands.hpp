@@ -24,7 +24,7 @@ void list_cobot_scenario(std::FILE* out);
 //   [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim experiment operations --runs N [--report DIR] [--seed S] [--model M] [--operations O]
-//   [--save-paths FILE] [--style NAME] [--no-baseline] [--baseline-per-class N]   (cmd_operations.cpp)
+//   [--save-paths FILE] [--style NAME] [--first-task] [--no-baseline] [--baseline-per-class N]
 int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim train operations --out MODEL [--per-class N] [--seed S] [--operations O] [--hidden N]
 //   [--encoding occupancy|occupancy_order] [--references FILE]

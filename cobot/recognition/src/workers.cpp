@@ -404,7 +404,8 @@ Result<WorkerWalk> WorkerSimulator::walk(std::size_t operation, const WorkerStyl
   double walked_s = 0;  // walking time so far: the sway's clock
   // The recording starts when the worker engages the robot at the first station (shows it
   // their tag): a few seconds there, then the walk. Later stations get the style's dwell.
-  stand(spots.front(), uniform(rng, kEngageMinS, kEngageMaxS));
+  const double engage_s = uniform(rng, kEngageMinS, kEngageMaxS);
+  stand(spots.front(), observer.records_first_task ? dwell() : engage_s);
   for (std::size_t k = 1; k < spots.size(); ++k) {
     Result<std::vector<Point2D>> leg = w.route(spots[k - 1], spots[k], clearance);
     if (!leg) return leg.error();
@@ -570,6 +571,7 @@ Result<std::vector<LabelledPath>> generate_paths(WorkerSimulator& workers, const
       Observer observer;
       observer.follow_distance_m = uniform(rng, spec.follow_min_m, spec.follow_max_m);
       observer.range_noise_m = uniform(rng, spec.noise_min_m, spec.noise_max_m);
+      observer.records_first_task = spec.records_first_task;
       Result<WorkerWalk> walk = workers.walk(o, spec.styles[i % spec.styles.size()], observer, seed);
       if (!walk) return walk.error();
       if (walk->points() == 0) continue;  // never seen: nothing the robot could classify

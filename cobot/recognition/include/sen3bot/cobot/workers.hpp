@@ -73,6 +73,9 @@ struct Observer {
   double max_range_m = 8.0;        // the cm mode's 8 m range
   double scan_hz = 5.0;            // the rate the path recorder samples at
   double min_step_m = 0.05;        // the recorder's spacing (PathConfig::min_spacing_m)
+  // false: recording starts when the worker engages the robot at the first station (a few
+  // seconds there); true: it starts with their first task there (a full dwell, as at the others).
+  bool records_first_task = false;
 };
 
 struct WorkerWalk {
@@ -137,6 +140,7 @@ struct DatasetSpec {
   double follow_max_m = 1.6;
   double noise_min_m = 0.01;
   double noise_max_m = 0.02;
+  bool records_first_task = false;  // Observer::records_first_task
 };
 Result<std::vector<LabelledPath>> generate_paths(WorkerSimulator& workers, const DatasetSpec& spec);
 
