@@ -42,8 +42,10 @@ class CameraTask final : public tasks::Task {
 // init() ran (it runs first: the readers' rows come after it in the table), or a pool given
 // outright (a simulated camera).
 struct FrameSource {
-  camera::FramePool* pool = nullptr;
-  CameraTask* camera = nullptr;
+  // From a pool alone, or from the camera row's when pool is null.
+  FrameSource(camera::FramePool* frames = nullptr, CameraTask* row = nullptr) noexcept : pool(frames), camera(row) {}  // NOLINT(google-explicit-constructor)
+  camera::FramePool* pool;
+  CameraTask* camera;
   [[nodiscard]] camera::FramePool* get() const noexcept {
     if (pool != nullptr) return pool;
     return camera != nullptr && camera->camera() != nullptr ? &camera->camera()->frames() : nullptr;

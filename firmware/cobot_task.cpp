@@ -12,6 +12,7 @@ constexpr std::uint32_t kOwnGoalIds = 0x40000000;
 // A follow-me target's reached within the controller's tolerance; the operator's track may
 // end and start again (they turned, someone crossed): a track this near where they were is them.
 constexpr double kReassociateM = 0.8;
+constexpr std::int8_t kOccupied = 65;  // the fusion's background threshold (nav::FusionConfig)
 
 bool is_critical(cobot::AreaType t) noexcept {
   return t == cobot::AreaType::critical_1_1 || t == cobot::AreaType::critical_1_2;
@@ -119,6 +120,41 @@ void CobotTask::look(const msg::People& people, const msg::Pose2D& laser, const 
     const msg::Point2D other{front[k].person->x_m, front[k].person->y_m};
     if (front[k].range < chosen->range || distance(other, at) < config_.in_way_m) ++in.others_in_way;
   }
+  if (in.others_in_way == 0 && foreign_returns(laser, at) >= config_.foreign_returns) {
+    ++in.others_in_way;
+    ++counters_.laser_in_way;
+  }
+}
+
+bool CobotTask::on_map(double x_m, double y_m) const noexcept {
+  if (map_ == nullptr) return false;
+  int col = 0, row = 0;
+  if (!map_->world_to_cell(x_m, y_m, col, row)) return true;  // off the map: a wall's far side
+  const int reach = static_cast<int>(std::ceil(config_.map_margin_m / map_->resolution_m()));
+  for (int dr = -reach; dr <= reach; ++dr)
+    for (int dc = -reach; dc <= reach; ++dc) {
+      const int c = col + dc, r = row + dr;
+      if (dr * dr + dc * dc <= reach * reach && c >= 0 && r >= 0 && c < map_->width() && r < map_->height() &&
+          map_->at(c, r) >= kOccupied)
+        return true;
+    }
+  return false;
+}
+
+std::size_t CobotTask::foreign_returns(const msg::Pose2D& laser, msg::Point2D operator_at) const noexcept {
+  if (scan_ == nullptr) return 0;
+  const msg::ScanView scan = scan_->view();
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    if (!(r > scan.range_min_m && r < scan.range_max_m)) continue;
+    const double a = laser.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
+    const msg::Point2D p{laser.x_m + r * std::cos(a), laser.y_m + r * std::sin(a)};
+    const double d = distance(p, operator_at);
+    if (d <= config_.operator_body_m || d > config_.in_way_m || on_map(p.x_m, p.y_m)) continue;
+    ++count;
+  }
+  return count;
 }
 
 void CobotTask::send(const msg::NavGoal& goal, hal::Nanos now_ns) noexcept {

@@ -21,6 +21,7 @@
 #include "sen3bot/cobot/path_recorder.hpp"
 #include "sen3bot/cobot/trigger.hpp"
 #include "sen3bot/msg/messages.hpp"
+#include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav/people.hpp"
 #include "sen3bot/tasks/task.hpp"
 #include "sen3bot/tasks/topic.hpp"
@@ -46,6 +47,11 @@ struct CobotTaskConfig {
   double reach_m = 2.5;              // people farther from the laser are not the operator
   double front_half_angle_rad = 0.6; // nor people further off the laser's axis
   double in_way_m = 1.0;             // another person this near the operator is in the way
+  // So is anything the laser sees there that is neither the operator nor the map (someone the
+  // camera has not made a person of yet, half hidden behind the operator): this many returns.
+  double operator_body_m = 0.35;     // returns this near the operator's centre are theirs
+  double map_margin_m = 0.15;        // returns this near an occupied map cell are the map's
+  std::size_t foreign_returns = 3;
   // The operator's distance (the trigger's D_f window) is from the laser to the nearest point
   // of their body in the newest scan.
   double idle_speed_m_s = 0.02;      // slower: standing
@@ -80,11 +86,14 @@ struct CobotCounters {
   std::uint32_t follow_goals = 0;   // follow-me targets sent to the planner
   std::uint32_t border_holds = 0;   // cycles held at the area's border
   std::uint32_t reassociations = 0; // the operator's track ended and a new one near them was taken
+  std::uint32_t laser_in_way = 0;   // cycles something unmapped stood by the would-be operator
 };
 
 class CobotTask final : public tasks::Task {
  public:
-  CobotTask(const CobotTaskConfig& config, const CobotTopics& topics) : config_(config), topics_(topics) {}
+  // map: the static map (kept by reference), or null to take every return for something.
+  CobotTask(const CobotTaskConfig& config, const CobotTopics& topics, const nav::OccupancyMap* map = nullptr)
+      : config_(config), topics_(topics), map_(map) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
 
@@ -102,11 +111,15 @@ class CobotTask final : public tasks::Task {
   void look(const msg::People& people, const msg::Pose2D& laser, const msg::TagFrame* tags,
             cobot::TriggerInput& in) noexcept;
   const msg::TrackedPerson* find(const msg::People& people, std::uint32_t id) const noexcept;
+  // Returns of the newest scan within in_way_m of the operator that are neither theirs nor the map's.
+  [[nodiscard]] std::size_t foreign_returns(const msg::Pose2D& laser, msg::Point2D operator_at) const noexcept;
+  [[nodiscard]] bool on_map(double x_m, double y_m) const noexcept;
   void send(const msg::NavGoal& goal, hal::Nanos now_ns) noexcept;
   void follow(const msg::People& people, const msg::Pose2D& robot, hal::Nanos now_ns) noexcept;
 
   CobotTaskConfig config_;
   CobotTopics topics_;
+  const nav::OccupancyMap* map_;
   cobot::CollaborationTrigger trigger_;
   cobot::CollaborationMode mode_;
   cobot::FollowMe follow_;

@@ -191,7 +191,8 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
   }
   cobot_task_ = std::make_unique<CobotTask>(
       task, CobotTopics{nav_people_, nav_pose_, nav_odometry_, nav_scan_, nav_tags_, nav_coop_goal_, nav_path_,
-                        nav_controller_, nav_goal_, nav_cobot_, nav_mode_, nav_worker_path_});
+                        nav_controller_, nav_goal_, nav_cobot_, nav_mode_, nav_worker_path_},
+      &map_);
   if (external_frames_ != nullptr || config_.devices.has_camera) {
 #ifdef SEN3BOT_HAS_QR
     QrTaskConfig qr;

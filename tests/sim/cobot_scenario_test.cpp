@@ -27,11 +27,7 @@ std::string case_json(const std::string& json, const std::string& name) {
   return json.substr(at, next == std::string::npos ? std::string::npos : next - at);
 }
 
-double field(const std::string& json, const std::string& key) {
-  const std::size_t at = json.find("\"" + key + "\": ");
-  if (at == std::string::npos) return -1e9;
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
-}
+double field(const std::string& json, const std::string& key) { return sen3bot::testing::json_number(json, key); }
 
 TEST(CobotScenario, RequestsToggleFailedAttemptsAreRefusedByReasonAndTheOperatorIsFollowed) {
   char dir_template[] = "/tmp/sen3bot-cobot-XXXXXX";

@@ -22,14 +22,7 @@ namespace {
 using sen3bot::testing::read_file;
 
 // The value of `key` in the n-th case of the report.
-double field(const std::string& json, const std::string& key, int n) {
-  std::size_t at = 0;
-  for (int i = 0; i <= n; ++i) {
-    at = json.find("\"" + key + "\": ", at + 1);
-    if (at == std::string::npos) return -1e9;
-  }
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
-}
+double field(const std::string& json, const std::string& key, int n) { return sen3bot::testing::json_number(json, key, n); }
 
 TEST(EstopScenario, EveryCaseStopsTheRobotAndTheMissionCompletesAfterTheReset) {
   char dir_template[] = "/tmp/sen3bot-estop-XXXXXX";
