@@ -72,7 +72,7 @@ const std::array<CobotCase, 7> kCases = {{
      AttemptKind::valid},
     {"too-far", "the sequence shown with the legs 1.2-1.4 m from the laser: refused, never toggles", CaseKind::requests,
      AttemptKind::too_far},
-    {"too-short", "the front tag shown for 0.8-1.5 s only: refused", CaseKind::requests, AttemptKind::too_short},
+    {"too-short", "the front tag shown for about 1.1-1.7 s only (0.6-1.2 s standing): refused", CaseKind::requests, AttemptKind::too_short},
     {"wrong-order", "the back tag first, then the front: refused", CaseKind::requests, AttemptKind::wrong_order},
     {"unknown-operator", "tags of operator 913, not on the robot's list: refused", CaseKind::requests,
      AttemptKind::unknown_operator},
