@@ -322,12 +322,15 @@ bool TagSceneRenderer::render(std::span<const SceneTag> tags, std::span<std::uin
   try {
     m.background.copyTo(m.frame);
     // Farthest first, so nearer operators cover them.
+    // An insertion sort of at most kMaxTags: std::sort on part of the array trips GCC 12's
+    // bounds warning under the sanitizers.
+    const std::size_t n = std::min(tags.size(), kMaxTags);
     std::array<std::size_t, kMaxTags> order{};
-    for (std::size_t i = 0; i < tags.size(); ++i) order[i] = i;
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
     const auto range = [&](std::size_t i) { return std::hypot(tags[i].forward_m, tags[i].left_m); };
-    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(tags.size()),
-              [&](std::size_t a, std::size_t b) { return range(a) > range(b); });
-    for (std::size_t k = 0; k < tags.size(); ++k) {
+    for (std::size_t i = 1; i < n; ++i)
+      for (std::size_t j = i; j > 0 && range(order[j - 1]) < range(order[j]); --j) std::swap(order[j - 1], order[j]);
+    for (std::size_t k = 0; k < n; ++k) {
       if (!m.draw_tag(tags[order[k]])) return false;
     }
     const SceneOptions& o = m.options;
