@@ -230,6 +230,41 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
   EXPECT_NE(m.find("navigation.approach.margin: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, TheCollaborativeMode) {
+  const std::string people = std::string(kNavigation) + "  people: { detector: sim }\n";
+  Result<FirmwareConfig> r = parse_config(
+      people +
+          "cobot:\n  site: cobot/lab_site.yaml\n  operators: [42, 7]\n  operator_safety_radius_m: 0.3\n"
+          "  trigger: { front_min_s: 1.5, max_distance_m: 1.2 }\n  follow: { distance_m: 0.8, goal_step_m: 0.3 }\n"
+          "  recognition: { operations: cobot/operations.yaml, model: cobot/m.yaml.gz, rate_hz: 2 }\n",
+      "/etc/sen3bot/robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const CobotSection& c = r->cobot;
+  EXPECT_TRUE(c.enabled);
+  EXPECT_EQ(c.site_path, "/etc/sen3bot/cobot/lab_site.yaml");
+  ASSERT_EQ(c.task.trigger.operators.size(), 2u);
+  EXPECT_EQ(c.task.trigger.operators[1], 7u);
+  EXPECT_DOUBLE_EQ(c.operator_safety_radius_m, 0.3);
+  EXPECT_DOUBLE_EQ(c.task.trigger.front_min_s, 1.5);
+  EXPECT_DOUBLE_EQ(c.task.trigger.max_distance_m, 1.2);
+  EXPECT_DOUBLE_EQ(c.task.follow.distance_m, 0.8);
+  EXPECT_DOUBLE_EQ(c.task.goal_step_m, 0.3);
+  EXPECT_TRUE(c.recognition);
+  EXPECT_EQ(c.model_path, "/etc/sen3bot/cobot/m.yaml.gz");
+  EXPECT_DOUBLE_EQ(c.recognition_rate_hz, 2.0);
+
+  std::string m = message_of(people + "cobot: { site: s.yaml, operators: [] }\n");
+  EXPECT_NE(m.find("cobot.operators: expected at least one"), std::string::npos) << m;
+  m = message_of(people + "cobot: { site: s.yaml, operators: [0] }\n");
+  EXPECT_NE(m.find("cobot"), std::string::npos) << m;
+  m = message_of(people + "cobot: { site: s.yaml, operators: [1], trigger: { min_distance_m: 1.5 } }\n");
+  EXPECT_NE(m.find("cobot.trigger: each window"), std::string::npos) << m;
+  m = message_of(people + "cobot: { site: s.yaml, operators: [1], follow: { speed: 1 } }\n");
+  EXPECT_NE(m.find("cobot.follow.speed: unknown key"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "cobot: { site: s.yaml, operators: [1] }\n");
+  EXPECT_NE(m.find("needs navigation with navigation.people"), std::string::npos) << m;
+}
+
 TEST(Config, TheSafetyFiltersCageCheck) {
   Result<FirmwareConfig> defaults = parse_config(std::string(kNavigation) + "  people: { detector: sim }\n", "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
