@@ -1,5 +1,7 @@
 #include "operations_report.hpp"
 
+#include "sen3bot/sim/report/case_figure.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,12 +14,12 @@ using report::Canvas;
 using report::Px;
 using report::Rgb;
 
-constexpr Rgb kPaper{255, 255, 255};
-constexpr Rgb kInk{40, 40, 40};
+using report::colours::kInk;
+using report::colours::kPaper;
 constexpr Rgb kGrey{90, 90, 90};
 constexpr Rgb kGuide{160, 160, 160};
 constexpr Rgb kGrid{225, 225, 225};
-constexpr Rgb kWall{0, 0, 0};
+using report::colours::kWall;
 constexpr Rgb kStation{0, 130, 110};
 constexpr Rgb kCellFull{30, 80, 170};
 // Classifiers in the progressive plot; operations on the map.
