@@ -357,6 +357,73 @@ TEST_F(Codec, ConnectionAndVisualization) {
   EXPECT_EQ(text->find("velocity"), std::string_view::npos);
 }
 
+// The centre reads the robots' poses from their visualization messages.
+TEST_F(Codec, VisualizationRoundTripsAndIsChecked) {
+  Visualization v;
+  v.header.header_id = 42;
+  (void)v.header.timestamp.assign("2017-04-15T11:40:03.12Z");
+  (void)v.header.manufacturer.assign("Sen3Bot");
+  (void)v.header.serial_number.assign("r1");
+  v.agv_position = AgvPosition{true, 0.75, 0.05, 3.25, -1.5, -2.5, {}};
+  (void)v.agv_position->map_id.assign("plant");
+  v.velocity = Velocity{0.4, 0.0, -0.25};
+  Visualization back;
+  for (Version version : {Version::v2_0_0, Version::v2_1_0}) {
+    auto text = encode_visualization(v, version, buffer);
+    ASSERT_TRUE(text) << text.error().c_str();
+    const std::string first(*text);
+    auto d = decode_visualization(first, version, back, *scratch);
+    ASSERT_TRUE(d) << d.error().description.view();
+    EXPECT_EQ(back.header.header_id, 42u);
+    EXPECT_EQ(back.header.version, to_string(version));
+    EXPECT_EQ(back.header.serial_number, "r1");
+    ASSERT_TRUE(back.agv_position.has_value());
+    EXPECT_TRUE(back.agv_position->position_initialized);
+    EXPECT_EQ(back.agv_position->x, 3.25);
+    EXPECT_EQ(back.agv_position->y, -1.5);
+    EXPECT_EQ(back.agv_position->theta, -2.5);
+    EXPECT_EQ(*back.agv_position->localization_score, 0.75);
+    EXPECT_EQ(*back.agv_position->deviation_range, 0.05);
+    EXPECT_EQ(back.agv_position->map_id, "plant");
+    ASSERT_TRUE(back.velocity.has_value());
+    EXPECT_EQ(back.velocity->vx, 0.4);
+    EXPECT_EQ(back.velocity->omega, -0.25);
+    auto again = encode_visualization(back, version, buffer);
+    ASSERT_TRUE(again);
+    EXPECT_EQ(*again, first);
+  }
+  // Position and velocity are optional; a decode forgets the previous message's.
+  Visualization bare;
+  bare.header = v.header;
+  std::string text(*encode_visualization(bare, Version::v2_1_0, buffer));
+  ASSERT_TRUE(decode_visualization(text, Version::v2_1_0, back, *scratch));
+  EXPECT_FALSE(back.agv_position.has_value());
+  EXPECT_FALSE(back.velocity.has_value());
+
+  const std::string full(*encode_visualization(v, Version::v2_1_0, buffer));
+  expect_rejected(decode_visualization(full, Version::v2_0_0, back, *scratch), kValidationError, "version");
+  std::string bad = full;
+  bad.replace(bad.find("\"headerId\":42,"), 14, "");
+  expect_rejected(decode_visualization(bad, Version::v2_1_0, back, *scratch), kValidationError, "headerId");
+  bad = full;
+  bad.replace(bad.find("\"mapId\":\"plant\","), 16, "");
+  expect_rejected(decode_visualization(bad, Version::v2_1_0, back, *scratch), kValidationError, "agvPosition.mapId");
+  bad = full;
+  bad.replace(bad.find("\"x\":3.25"), 8, "\"x\":\"3\"");
+  expect_rejected(decode_visualization(bad, Version::v2_1_0, back, *scratch), kValidationError, "agvPosition.x");
+  bad = full;
+  bad.replace(bad.find("\"localizationScore\":0.75"), 24, "\"localizationScore\":2");
+  expect_rejected(decode_visualization(bad, Version::v2_1_0, back, *scratch), kValidationError,
+                  "agvPosition.localizationScore");
+  bad = full;
+  bad.replace(bad.find("\"omega\":-0.25"), 13, "\"omega\":true");
+  expect_rejected(decode_visualization(bad, Version::v2_1_0, back, *scratch), kValidationError, "velocity.omega");
+  bad = full;
+  bad.replace(bad.find("{\"vx\""), 1, "[");
+  EXPECT_FALSE(decode_visualization(bad, Version::v2_1_0, back, *scratch));
+  expect_rejected(decode_visualization("[1]", Version::v2_1_0, back, *scratch), kValidationError, "");
+}
+
 TEST_F(Codec, VersionMustMatchTheSite) {
   EXPECT_TRUE(order_of(figure5("2.1.0"), Version::v2_1_0));
   EXPECT_TRUE(order_of(figure5("2.1.7"), Version::v2_1_0));

@@ -1,7 +1,9 @@
-// Sen3Bot's own fleet messages: the people report and the advisory, round trips and refusals.
+// Sen3Bot's own fleet messages: the people report, the advisory and the formation command,
+// round trips and refusals.
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -101,6 +103,115 @@ TEST(AdvisoryMessage, RoundTripsAndChecksTheAdviceAndFactor) {
   EXPECT_FALSE(decode_advisory(factor, back, *scratch).ok());
   EXPECT_EQ(advisory_topic("PlantAGV", "agv1"), "sen3bot/v1/advisory/PlantAGV/agv1");
   EXPECT_EQ(people_topic("Sen3Bot", "r1"), "sen3bot/v1/people/Sen3Bot/r1");
+}
+
+FormationCommand formation_sample() {
+  FormationCommand m;
+  m.header_id = 12;
+  (void)m.timestamp.assign("2026-12-03T15:04:13.25Z");
+  (void)m.manufacturer.assign("Sen3Bot");
+  (void)m.serial_number.assign("r2");
+  m.v = 0.35;
+  m.omega = -0.125;
+  m.hold_s = 0.5;
+  return m;
+}
+
+TEST(FormationCommand, RoundTripsEveryFieldAndNamesItsTopic) {
+  auto scratch = std::make_unique<DecodeScratch>();
+  const FormationCommand m = formation_sample();
+  std::array<char, 512> out{};
+  auto text = encode_formation(m, out);
+  ASSERT_TRUE(text.ok()) << text.error().c_str();
+  EXPECT_EQ(*text,
+            R"({"schemaVersion":"1.0.0","headerId":12,"timestamp":"2026-12-03T15:04:13.25Z","manufacturer":"Sen3Bot",)"
+            R"("serialNumber":"r2","v":0.35,"omega":-0.125,"holdS":0.5})");
+  FormationCommand back;
+  ASSERT_TRUE(decode_formation(*text, back, *scratch).ok());
+  EXPECT_EQ(back.header_id, 12u);
+  EXPECT_EQ(back.timestamp, m.timestamp.view());
+  EXPECT_EQ(back.manufacturer, "Sen3Bot");
+  EXPECT_EQ(back.serial_number, "r2");
+  EXPECT_EQ(back.v, 0.35);
+  EXPECT_EQ(back.omega, -0.125);
+  EXPECT_EQ(back.hold_s, 0.5);
+  std::array<char, 512> again{};
+  EXPECT_EQ(*encode_formation(back, again), *text);
+  // The hold's ends: 2 s is allowed, members in any order, unknown ones ignored.
+  ASSERT_TRUE(decode_formation(R"({"holdS":2,"omega":0,"v":-0.1,"serialNumber":"r","manufacturer":"m","timestamp":"t",)"
+                               R"("headerId":0,"schemaVersion":"1.4.0","note":"later minor"})",
+                               back, *scratch)
+                  .ok());
+  EXPECT_EQ(back.hold_s, 2.0);
+  EXPECT_EQ(back.v, -0.1);
+  EXPECT_EQ(formation_topic("Sen3Bot", "r2"), "sen3bot/v1/formation/Sen3Bot/r2");
+  std::array<char, 16> small{};
+  EXPECT_EQ(encode_formation(m, small).error().code(), Errc::capacity);
+}
+
+// Every member missing, of the wrong type or out of range is refused with its name.
+TEST(FormationCommand, RefusesEachMissingOrInvalidMemberNamingIt) {
+  auto scratch = std::make_unique<DecodeScratch>();
+  FormationCommand back;
+  const std::string members[][2] = {
+      {"schemaVersion", R"("1.0.0")"}, {"headerId", "3"}, {"timestamp", R"("2026-12-03T15:04:13.25Z")"},
+      {"manufacturer", R"("Sen3Bot")"}, {"serialNumber", R"("r1")"}, {"v", "0.2"}, {"omega", "0.1"}, {"holdS", "0.5"}};
+  const auto message = [&](std::string_view skip, std::string_view replace_with) {
+    std::string text = "{";
+    for (const auto& [key, value] : members) {
+      if (key == skip && replace_with.empty()) continue;
+      text += (text.size() > 1 ? "," : "") + std::string("\"") + key + "\":" + (key == skip ? std::string(replace_with) : value);
+    }
+    return text + "}";
+  };
+  ASSERT_TRUE(decode_formation(message("", ""), back, *scratch).ok());
+  const auto refused = [&](const std::string& text, std::string_view field) {
+    const Status s = decode_formation(text, back, *scratch);
+    ASSERT_FALSE(s.ok()) << text;
+    EXPECT_NE(std::string(s.error().c_str()).find(field), std::string::npos) << s.error().c_str() << "\n" << text;
+  };
+  for (const auto& [key, value] : members) {
+    SCOPED_TRACE(key);
+    refused(message(key, ""), key);  // missing
+    // Of the wrong type: a string for a number, a number for a string.
+    refused(message(key, key == "v" || key == "omega" || key == "holdS" || key == "headerId" ? R"("1")" : "1"), key);
+    refused(message(key, "null"), key);
+  }
+  refused(message("headerId", "-1"), "headerId");
+  refused(message("headerId", "4294967296"), "headerId");
+  refused(message("headerId", "1.5"), "headerId");
+  refused(message("holdS", "0"), "holdS");
+  refused(message("holdS", "-0.5"), "holdS");
+  refused(message("holdS", "2.0001"), "holdS");
+  refused(message("schemaVersion", R"("2.0.0")"), "schemaVersion");
+  EXPECT_EQ(decode_formation(message("schemaVersion", R"("2.0.0")"), back, *scratch).error().code(), Errc::not_supported);
+  // Numbers beyond a double's range have no finite value: the reader refuses them.
+  EXPECT_FALSE(decode_formation(message("v", "1e999"), back, *scratch).ok());
+  EXPECT_FALSE(decode_formation(message("omega", "-1e400"), back, *scratch).ok());
+  EXPECT_FALSE(decode_formation(message("v", "NaN"), back, *scratch).ok());
+  EXPECT_FALSE(decode_formation(message("v", "Infinity"), back, *scratch).ok());
+  std::string long_serial(kIdCapacity + 1, 's');
+  refused(message("serialNumber", "\"" + long_serial + "\""), "serialNumber");
+  EXPECT_FALSE(decode_formation("[]", back, *scratch).ok());
+  EXPECT_FALSE(decode_formation("{\"v\":", back, *scratch).ok());
+  EXPECT_FALSE(decode_formation("", back, *scratch).ok());
+}
+
+TEST(FormationCommand, TheEncoderRefusesWhatARobotWould) {
+  std::array<char, 512> out{};
+  FormationCommand m = formation_sample();
+  m.v = std::nan("");
+  EXPECT_EQ(encode_formation(m, out).error().code(), Errc::invalid_argument);
+  m = formation_sample();
+  m.omega = HUGE_VAL;
+  EXPECT_NE(std::string(encode_formation(m, out).error().c_str()).find("omega"), std::string::npos);
+  for (double hold : {0.0, -1.0, 2.5, std::nan("")}) {
+    m = formation_sample();
+    m.hold_s = hold;
+    auto text = encode_formation(m, out);
+    ASSERT_FALSE(text.ok()) << hold;
+    EXPECT_NE(std::string(text.error().c_str()).find("holdS"), std::string::npos);
+  }
 }
 
 }  // namespace

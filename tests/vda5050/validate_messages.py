@@ -5,7 +5,7 @@ usage: validate_messages.py DIR VERSION SCHEMA_ROOT SEN3BOT_SCHEMAS
 
 DIR holds one file per message, named TOPIC.N.json, TOPIC being the last level of the MQTT
 topic (state, connection, visualization, factsheet, order, instantActions) or one of Sen3Bot's
-own ("people", "advisory"). VDA 5050 messages are checked against SCHEMA_ROOT/VERSION (or
+own ("people", "advisory", "formation"). VDA 5050 messages are checked against SCHEMA_ROOT/VERSION (or
 2.1.0's schemas when VERSION has none shipped, plus a check that no member added in 2.1
 appears), Sen3Bot's against SEN3BOT_SCHEMAS/TOPIC.schema.json. Exits non-zero when any message
 fails, listing every failure.
@@ -17,7 +17,7 @@ import sys
 import jsonschema
 
 ADDED_IN_2_1 = {"corridor", "maps", "vehicleConfig", "blockingTypes"}
-SEN3BOT_TOPICS = {"people", "advisory"}
+SEN3BOT_TOPICS = {"people", "advisory", "formation"}
 
 
 def keys(value):

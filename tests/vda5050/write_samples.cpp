@@ -1,10 +1,13 @@
 // write_samples DIR: writes one representative message of every encoded type, for 2.0.0 and
-// 2.1.0, as DIR/<version>/<topic>.json, for validate_schemas.py to check against the schemas.
+// 2.1.0, as DIR/<version>/<topic>.json, and Sen3Bot's own messages as DIR/sen3bot/<topic>.json
+// (when that folder exists), for validate_schemas.py to check against the schemas.
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "sen3bot/vda5050/codec.hpp"
+#include "sen3bot/vda5050/extensions.hpp"
 
 namespace {
 
@@ -157,7 +160,7 @@ bool save(const std::string& path, sen3bot::Result<std::string_view> text) {
 
 int main(int argc, char** argv) {
   if (argc != 2) {
-    std::fprintf(stderr, "usage: write_samples DIR (DIR/2.0.0 and DIR/2.1.0 must exist)\n");
+    std::fprintf(stderr, "usage: write_samples DIR (DIR/2.0.0 and DIR/2.1.0 must exist; DIR/sen3bot may)\n");
     return 2;
   }
   static Order order;
@@ -187,6 +190,43 @@ int main(int argc, char** argv) {
     ok = save(dir + "connection.json", encode_connection(connection, v, buf)) && ok;
     ok = save(dir + "visualization.json", encode_visualization(visualization, v, buf)) && ok;
     ok = save(dir + "factsheet.json", encode_factsheet(factsheet, v, buf)) && ok;
+  }
+  const std::string own = std::string(argv[1]) + "/sen3bot/";
+  if (std::filesystem::is_directory(own)) {
+    PeopleMessage people;
+    people.header_id = 8;
+    people.timestamp = header(0).timestamp;
+    (void)people.manufacturer.assign("Sen3Bot");
+    (void)people.serial_number.assign("r1");
+    (void)people.map_id.assign("lab");
+    people.robot_valid = true;
+    people.robot_x = 2.5;
+    people.robot_y = 2.0;
+    people.robot_theta = 1.5;
+    (void)people.people.push_back(PersonReport{3, 4.0, 5.5, 0.4, -0.2, 0.5, 1.0, true, 0.1, 14});
+    AdvisoryMessage advisory;
+    advisory.header_id = 9;
+    advisory.timestamp = header(0).timestamp;
+    (void)advisory.agv_manufacturer.assign("PlantAGV");
+    (void)advisory.agv_serial_number.assign("agv1");
+    advisory.advice = AdviceKind::slow;
+    advisory.speed_factor = 0.3;
+    (void)advisory.area_id.assign("cross-1");
+    (void)advisory.area_type.assign("1.1");
+    advisory.people = 1;
+    advisory.distance_to_area_m = 7.5;
+    (void)advisory.reason.assign("1 person in 1.1 area cross-1");
+    FormationCommand formation;
+    formation.header_id = 10;
+    formation.timestamp = header(0).timestamp;
+    (void)formation.manufacturer.assign("Sen3Bot");
+    (void)formation.serial_number.assign("r2");
+    formation.v = 0.3;
+    formation.omega = -0.2;
+    formation.hold_s = 0.5;
+    ok = save(own + "people.json", encode_people(people, buf)) && ok;
+    ok = save(own + "advisory.json", encode_advisory(advisory, buf)) && ok;
+    ok = save(own + "formation.json", encode_formation(formation, buf)) && ok;
   }
   return ok ? 0 : 1;
 }

@@ -268,6 +268,27 @@ class Decoder {
     return string(root, "manufacturer", h.manufacturer, true) && string(root, "serialNumber", h.serial_number, true);
   }
 
+  // The optional agvPosition and velocity members of a state or a visualization.
+  bool agv_position(Value root, std::optional<AgvPosition>& out) noexcept {
+    Value obj;
+    if (!object(root, "agvPosition", obj, false)) return false;
+    if (!obj.valid()) return true;
+    auto at = field("agvPosition");
+    AgvPosition& p = out.emplace();
+    return number(obj, "x", p.x, true) && number(obj, "y", p.y, true) && number(obj, "theta", p.theta, true) &&
+           string(obj, "mapId", p.map_id, true) && string_type(obj, "mapDescription") &&
+           boolean(obj, "positionInitialized", p.position_initialized, true) &&
+           number(obj, "localizationScore", p.localization_score, 0.0, 1.0) && number(obj, "deviationRange", p.deviation_range);
+  }
+  bool velocity(Value root, std::optional<Velocity>& out) noexcept {
+    Value obj;
+    if (!object(root, "velocity", obj, false)) return false;
+    if (!obj.valid()) return true;
+    auto at = field("velocity");
+    Velocity& v = out.emplace();
+    return number(obj, "vx", v.vx, false) && number(obj, "vy", v.vy, false) && number(obj, "omega", v.omega, false);
+  }
+
   bool parse(json::Document& doc, std::string_view text, Value& root) noexcept {
     if (Status st = doc.parse(text); !st) {
       if (st.error().code() == Errc::capacity)
@@ -643,6 +664,18 @@ Decoded decode_connection(std::string_view text, Version version, Connection& ou
   return ok ? Decoded() : Decoded(error);
 }
 
+Decoded decode_visualization(std::string_view text, Version version, Visualization& out, DecodeScratch& scratch) noexcept {
+  VehicleError error;
+  Decoder d(version, error, "visualization");
+  clear(out.header);
+  out.agv_position.reset();
+  out.velocity.reset();
+  Value root;
+  const bool ok = d.parse(scratch.document(), text, root) && d.header(root, out.header) &&
+                  d.agv_position(root, out.agv_position) && d.velocity(root, out.velocity);
+  return ok ? Decoded() : Decoded(error);
+}
+
 namespace {
 
 bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
@@ -707,27 +740,8 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
       }
     }
   }
+  if (!d.agv_position(root, s.agv_position) || !d.velocity(root, s.velocity)) return false;
   Value obj;
-  if (!d.object(root, "agvPosition", obj, false)) return false;
-  if (obj.valid()) {
-    auto at = d.field("agvPosition");
-    s.agv_position.emplace();
-    AgvPosition& p = *s.agv_position;
-    if (!d.number(obj, "x", p.x, true) || !d.number(obj, "y", p.y, true) || !d.number(obj, "theta", p.theta, true) ||
-        !d.string(obj, "mapId", p.map_id, true) || !d.string_type(obj, "mapDescription") ||
-        !d.boolean(obj, "positionInitialized", p.position_initialized, true) ||
-        !d.number(obj, "localizationScore", p.localization_score, 0.0, 1.0) ||
-        !d.number(obj, "deviationRange", p.deviation_range))
-      return false;
-  }
-  if (!d.object(root, "velocity", obj, false)) return false;
-  if (obj.valid()) {
-    auto at = d.field("velocity");
-    s.velocity.emplace();
-    if (!d.number(obj, "vx", s.velocity->vx, false) || !d.number(obj, "vy", s.velocity->vy, false) ||
-        !d.number(obj, "omega", s.velocity->omega, false))
-      return false;
-  }
   if (!d.array(root, "loads", list, false, SIZE_MAX)) return false;
   if (list.valid()) {
     auto at = d.field("loads");

@@ -86,6 +86,10 @@ std::string advisory_topic(std::string_view manufacturer, std::string_view seria
   return "sen3bot/v1/advisory/" + std::string(manufacturer) + "/" + std::string(serial_number);
 }
 
+std::string formation_topic(std::string_view manufacturer, std::string_view serial_number) {
+  return "sen3bot/v1/formation/" + std::string(manufacturer) + "/" + std::string(serial_number);
+}
+
 Result<std::string_view> encode_people(const PeopleMessage& m, std::span<char> out) noexcept {
   json::Writer w(out);
   w.begin_object();
@@ -218,6 +222,44 @@ Status decode_advisory(std::string_view text, AdvisoryMessage& out, DecodeScratc
   SEN3BOT_TRY(r.uint32("dynamicPeople", out.dynamic_people));
   SEN3BOT_TRY(r.number("distanceToAreaM", out.distance_to_area_m));
   SEN3BOT_TRY(r.text("reason", out.reason));
+  return {};
+}
+
+Result<std::string_view> encode_formation(const FormationCommand& m, std::span<char> out) noexcept {
+  if (!std::isfinite(m.v)) return Error(Errc::invalid_argument, "formation.v: not a finite number");
+  if (!std::isfinite(m.omega)) return Error(Errc::invalid_argument, "formation.omega: not a finite number");
+  if (!(m.hold_s > 0 && m.hold_s <= kMaxFormationHoldS)) return Error(Errc::invalid_argument, "formation.holdS: in (0, 2]");
+  json::Writer w(out);
+  w.begin_object();
+  w.member("schemaVersion", kFormationSchemaVersion);
+  w.member_uint32("headerId", m.header_id);
+  w.member("timestamp", m.timestamp.view());
+  w.member("manufacturer", m.manufacturer.view());
+  w.member("serialNumber", m.serial_number.view());
+  w.member_number("v", m.v);
+  w.member_number("omega", m.omega);
+  w.member_number("holdS", m.hold_s);
+  w.end_object();
+  return w.finish();
+}
+
+Status decode_formation(std::string_view text, FormationCommand& out, DecodeScratch& scratch) noexcept {
+  json::Document& doc = scratch.document();
+  SEN3BOT_TRY(doc.parse(text));
+  const Reader r{doc.root(), "formation"};
+  if (!r.object.is(json::Type::object)) return Error(Errc::protocol, "formation: not a JSON object");
+  SEN3BOT_TRY(check_schema_version(r, kFormationSchemaVersion));
+  SEN3BOT_TRY(r.uint32("headerId", out.header_id));
+  SEN3BOT_TRY(r.text("timestamp", out.timestamp));
+  SEN3BOT_TRY(r.text("manufacturer", out.manufacturer));
+  SEN3BOT_TRY(r.text("serialNumber", out.serial_number));
+  SEN3BOT_TRY(r.number("v", out.v));
+  SEN3BOT_TRY(r.number("omega", out.omega));
+  SEN3BOT_TRY(r.number("holdS", out.hold_s));
+  // The reader refuses numbers beyond a double's range; this is the robot's last word on it.
+  if (!std::isfinite(out.v)) return Error(Errc::protocol, "formation.v: not a finite number");
+  if (!std::isfinite(out.omega)) return Error(Errc::protocol, "formation.omega: not a finite number");
+  if (!(out.hold_s > 0 && out.hold_s <= kMaxFormationHoldS)) return Error(Errc::protocol, "formation.holdS: in (0, 2]");
   return {};
 }
 

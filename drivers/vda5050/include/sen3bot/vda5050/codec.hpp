@@ -84,6 +84,10 @@ Decoded decode_instant_actions(std::string_view text, Version version, InstantAc
                                DecodeScratch& scratch) noexcept;
 Decoded decode_state(std::string_view text, Version version, State& out, DecodeScratch& scratch) noexcept;
 Decoded decode_connection(std::string_view text, Version version, Connection& out, DecodeScratch& scratch) noexcept;
+// The schema makes every member optional; the header is required here as in every other
+// message (a reader needs the vehicle's name and the version).
+Decoded decode_visualization(std::string_view text, Version version, Visualization& out,
+                             DecodeScratch& scratch) noexcept;
 
 // The factsheet (section 6.15): what the vehicle tells master control about itself. The
 // text fields are views of constants the caller keeps alive.

@@ -6,6 +6,8 @@
 //   people    sen3bot/v1/people/MANUFACTURER/SERIAL     a robot's tracked people, to the centre
 //   advisory  sen3bot/v1/advisory/MANUFACTURER/SERIAL   the centre's advice about an AGV, to
 //                                                       the plant's AGV coordination centre
+//   formation sen3bot/v1/formation/MANUFACTURER/SERIAL  the centre's formation controller's
+//                                                       velocity for one robot
 // Fixed memory, like the codec: encoders write into the caller's buffer, decoders into fixed
 // structs through a DecodeScratch.
 #include <cstdint>
@@ -21,6 +23,7 @@ namespace sen3bot::vda5050 {
 
 inline constexpr std::string_view kPeopleSchemaVersion = "1.0.0";
 inline constexpr std::string_view kAdvisorySchemaVersion = "1.0.0";
+inline constexpr std::string_view kFormationSchemaVersion = "1.0.0";
 inline constexpr std::size_t kMaxReportedPeople = 16;
 
 struct PersonReport {
@@ -64,6 +67,18 @@ struct AdvisoryMessage {
   Text reason;
 };
 
+// A velocity for one robot from the centre's formation controller.
+inline constexpr double kMaxFormationHoldS = 2.0;
+struct FormationCommand {
+  std::uint32_t header_id = 0;
+  Id timestamp;  // ISO 8601, as every other message
+  Id manufacturer;
+  Id serial_number;
+  double v = 0;       // m/s, forward
+  double omega = 0;   // rad/s
+  double hold_s = 0;  // the robot drives this at most this long after it arrives (0 < hold_s <= 2)
+};
+
 Result<std::string_view> encode_people(const PeopleMessage& message, std::span<char> out) noexcept;
 // Errc::protocol naming the field for a message that does not follow the schema, Errc::capacity
 // for more people than kMaxReportedPeople, Errc::not_supported for another major version.
@@ -72,7 +87,13 @@ Status decode_people(std::string_view text, PeopleMessage& out, DecodeScratch& s
 Result<std::string_view> encode_advisory(const AdvisoryMessage& message, std::span<char> out) noexcept;
 Status decode_advisory(std::string_view text, AdvisoryMessage& out, DecodeScratch& scratch) noexcept;
 
+// Errc::invalid_argument for a number that is not finite or a hold outside (0, 2].
+Result<std::string_view> encode_formation(const FormationCommand& message, std::span<char> out) noexcept;
+// Errc::protocol naming the field for a missing member, a wrong type or a hold outside (0, 2].
+Status decode_formation(std::string_view text, FormationCommand& out, DecodeScratch& scratch) noexcept;
+
 std::string people_topic(std::string_view manufacturer, std::string_view serial_number);
 std::string advisory_topic(std::string_view manufacturer, std::string_view serial_number);
+std::string formation_topic(std::string_view manufacturer, std::string_view serial_number);
 
 }  // namespace sen3bot::vda5050
