@@ -100,20 +100,25 @@ Status Controller::configure(const ControllerConfig& config) {
   // Where a P may stand: its circle (radius + offset, which holds the body circle about the
   // axle wherever the robot points) clear of the walls and obstacles by the margin.
   const double keep = config.radius_m + config.offset_m + config.margin_m;
-  const auto inside = [&](Vec2 p) {
-    if (p.x - w.x0_m < keep || w.x1_m - p.x < keep || p.y - w.y0_m < keep || w.y1_m - p.y < keep) return false;
+  // The task's set lies beyond every barrier's reach: there the field is the task's alone, so
+  // the set stays an equilibrium (docs/formation.md).
+  const double reach = config.influence_m;
+  const auto clear = [&](Vec2 p) {
+    const Workspace grown{w.x0_m + reach, w.y0_m + reach, w.x1_m - reach, w.y1_m - reach};
+    if (p.x - grown.x0_m < keep || grown.x1_m - p.x < keep || p.y - grown.y0_m < keep || grown.y1_m - p.y < keep)
+      return false;
     for (std::size_t i = 0; i < config.obstacle_count; ++i)
-      if (norm(p - config.obstacles[i].centre) < config.obstacles[i].radius_m + keep) return false;
+      if (norm(p - config.obstacles[i].centre) < config.obstacles[i].radius_m + keep + reach) return false;
     return true;
   };
-  const double apart = 2.0 * (config.radius_m + config.offset_m) + config.margin_m;
+  const double apart = 2.0 * (config.radius_m + config.offset_m) + config.margin_m + reach;
 
   curve_count_ = 0;
   curve_length_ = 0.0;
   if (config.task == TaskKind::targets) {
     for (std::size_t i = 0; i < config.robots; ++i) {
-      if (!finite(config.targets[i].x) || !finite(config.targets[i].y) || !inside(config.targets[i]))
-        return config_error("targets[" + std::to_string(i) + "]: within the workspace, " + std::to_string(keep) +
+      if (!finite(config.targets[i].x) || !finite(config.targets[i].y) || !clear(config.targets[i]))
+        return config_error("targets[" + std::to_string(i) + "]: within the workspace, " + std::to_string(keep + reach) +
                             " m clear of its walls and obstacles");
       for (std::size_t j = 0; j < i; ++j)
         if (norm(config.targets[i] - config.targets[j]) < apart)
@@ -125,8 +130,8 @@ Status Controller::configure(const ControllerConfig& config) {
       return config_error("along_speed_m_s must be finite and not 0");
     if (Status s = trace_curve(); !s) return s;
     for (std::size_t k = 0; k < curve_count_; ++k)
-      if (!inside(curve_[k]))
-        return config_error("curve: passes within " + std::to_string(keep) + " m of a wall or obstacle near (" +
+      if (!clear(curve_[k]))
+        return config_error("curve: passes within " + std::to_string(keep + reach) + " m of a wall or obstacle near (" +
                             std::to_string(curve_[k].x) + ", " + std::to_string(curve_[k].y) + ")");
     if (config.task == TaskKind::leader) {
       for (std::size_t i = 1; i < config.robots; ++i) {
@@ -139,7 +144,7 @@ Status Controller::configure(const ControllerConfig& config) {
             return config_error("offsets[" + std::to_string(j) + "] and [" + std::to_string(i) + "] closer than " +
                                 std::to_string(apart) + " m");
         for (std::size_t k = 0; k < curve_count_; ++k)
-          if (!inside(curve_[k] + o))
+          if (!clear(curve_[k] + o))
             return config_error("offsets[" + std::to_string(i) + "]: the follower's path leaves the workspace near (" +
                                 std::to_string(curve_[k].x + o.x) + ", " + std::to_string(curve_[k].y + o.y) + ")");
       }

@@ -39,8 +39,8 @@ Example example(int number) noexcept {
       e.number = 3;
       e.title = "a leader patrols a circle, two followers keep 1.25 m from it";
       e.config = base(TaskKind::leader, 3);
-      e.config.curve = nav::SafeCurve::circle({0.3 * s, 0.0}, 0.32 * s);
-      e.config.curve_start = {0.62 * s, 0.0};
+      e.config.curve = nav::SafeCurve::circle({0.3 * s, 0.0}, 0.26 * s);
+      e.config.curve_start = {0.56 * s, 0.0};
       // Behind the leader at 30 degrees either side, 0.5 m (scaled) from it.
       e.config.offsets[1] = {-0.5 * s * 0.8660254037844386, -0.5 * s * 0.5};
       e.config.offsets[2] = {-0.5 * s * 0.8660254037844386, 0.5 * s * 0.5};

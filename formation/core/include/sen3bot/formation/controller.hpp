@@ -60,7 +60,7 @@ struct ControllerConfig {
   double offset_m = 0.1;        // L, the axle to P
   double radius_m = 0.3;        // a robot's body circle about its axle
   double margin_m = 0.05;       // the barriers' zero lies this far outside contact
-  double influence_m = 0.5;     // a barrier acts within this of its zero
+  double influence_m = 0.25;    // a barrier acts within this of its zero; the task's set lies beyond
   Workspace workspace;
   std::array<Obstacle, kMaxObstacles> obstacles{};
   std::size_t obstacle_count = 0;
