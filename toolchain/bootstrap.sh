@@ -21,6 +21,7 @@ NATIVE_PACKAGES=(
   g++
   cmake                      # >= 3.25 (bookworm: 3.25.1)
   ninja-build
+  ccache                     # the test command's four builds reuse objects from earlier runs
   pkgconf                    # pkg-config, for dependencies without CMake packages
   libgtest-dev
   libgmock-dev

@@ -25,12 +25,22 @@ configure_and_build() {  # <build-dir> <cmake options...>: every target
   cmake --build "$1" -j "$jobs"
 }
 
-section() { printf '\n==== %s ====\n' "$*"; }
+section() { printf '\n==== %s (%d s in) ====\n' "$*" "$((SECONDS - ${start:-SECONDS}))"; }
+
+# A compiler cache outside the tree: a clean clone built again (CI) reuses the objects of the
+# last run. Keyed on the preprocessed source and the flags, so it never serves a stale object.
+use_ccache() {
+  if command -v ccache >/dev/null 2>&1; then
+    export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
+    export CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-20G}
+  fi
+}
 
 case "${1:-}" in
   mission)
     section "installing missing packages"
     toolchain/bootstrap.sh
+    use_ccache
     section "building the simulator"
     # Only what the mission runs: the tests and benchmarks are the test command's. The build
     # directory is configured as for the test command, so either can follow the other.
@@ -43,6 +53,7 @@ case "${1:-}" in
     start=$SECONDS
     section "installing missing packages"
     if [[ "${SEN3BOT_SKIP_CROSS:-0}" == 1 ]]; then toolchain/bootstrap.sh; else toolchain/bootstrap.sh --cross; fi
+    use_ccache
     section "native build and tests"
     configure_and_build build
     ctest --test-dir build --output-on-failure -j "$jobs"
