@@ -60,6 +60,19 @@ constexpr const char* kUsage =
     "        master control and an observer run here. The report (no PNGs) comes from the\n"
     "        centre's event log and the AGVs' states and advisories, with \"mode\":\n"
     "        \"realtime\"; the programs' logs go to DIR.\n"
+#ifdef SEN3BOT_HAS_FORMATION
+    "  formation --example 1|2|3 [--report DIR] [--runs N] [--seed S] [--duration S]\n"
+    "      [--config FILE]\n"
+    "        Formation and patrolling of several robots with the centre's vector-field\n"
+    "        controller (docs/formation/examples.md): 1 four robots to targets, 2 three\n"
+    "        patrolling an ellipse, 3 a leader on a circle and two followers; each robot a\n"
+    "        whole firmware (config/sim.yaml in config/maps/formation.yaml), the centre's\n"
+    "        formation service on the same in-process broker, lockstep. Run 0 starts from\n"
+    "        the example's poses, runs 1..N-1 from seeded perturbations (+-0.15 m, +-0.3\n"
+    "        rad). --report writes DIR/formation.json (per run and over the runs: closest\n"
+    "        robots, wall contacts, targets, formation error, convergence), trajectories.png,\n"
+    "        distances.png and distances.csv. Exit status 0 when every run meets the bounds.\n"
+#endif
     "  agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S]\n"
     "      [--x X --y Y --theta RAD] [--duration S] [--username U --password-file F\n"
     "      --ca-file F] [--client-id ID]\n"
@@ -169,6 +182,9 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"train", "", train_command},
 #endif
       {"fleet-sim", "", fleet_command},
+#ifdef SEN3BOT_HAS_FORMATION
+      {"formation", "", formation_command},
+#endif
       {"agv", "", agv_command},
       {"p2os-emulator", "", p2os_emulator_command},
       {"lms200-emulator", "", lms200_emulator_command},

@@ -31,6 +31,8 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
 int train_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim fleet-sim --scenario net-1|net-2|net-3 [--report DIR] [--site FILE] [--config FILE]
 int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim formation --example 1|2|3 [--report DIR] [--runs N] [--seed S] [--duration S] [--config FILE]
+int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S] [--x X --y Y --theta RAD]
 //   [--duration S] [--username U --password-file F --ca-file F] [--client-id ID]
 int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err);
