@@ -130,7 +130,8 @@ Status Firmware::create_navigation() {
   controller.use_people = n.people_enabled;
   controller.people_layer = n.cages;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
-                                                           nav_request_, nav_controller_, nav_movers_, people);
+                                                           nav_request_, nav_controller_, nav_movers_, people,
+                                                           config_.has_fleet ? &nav_formation_ : nullptr);
 
   nav::SafetyTaskConfig safety;
   safety.safety = n.safety;
@@ -155,9 +156,13 @@ Status Firmware::create_navigation() {
   // the cobot row passes them on.
   tasks::Topic<msg::NavGoal>& goals = config_.cobot.enabled ? nav_coop_goal_ : nav_goal_;
   if (config_.has_fleet) {
-    fleet_task_ = std::make_unique<FleetTask>(config_.fleet, board_,
+    // The centre's formation commands are refused beyond what the DWA may ask of the robot.
+    FleetConfig fleet = config_.fleet;
+    fleet.formation_max_v_m_s = n.dwa.max_v_m_s;
+    fleet.formation_max_w_rad_s = n.dwa.max_w_rad_s;
+    fleet_task_ = std::make_unique<FleetTask>(fleet, board_,
                                               FleetTopics{nav_pose_, nav_odometry_, nav_base_flags_, nav_controller_, nav_path_,
-                                                          nav_safety_, nav_people_, goals});
+                                                          nav_safety_, nav_people_, goals, &nav_formation_});
   } else {
     mission_task_ = std::make_unique<MissionTask>(
         n.mission, MissionTopics{goals, nav_controller_, nav_path_, nav_pose_, nav_safety_});

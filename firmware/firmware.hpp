@@ -88,6 +88,9 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<msg::PoseEstimate>& pose_estimate() const { return nav_pose_; }
   [[nodiscard]] const tasks::Topic<msg::MovingObstacles>& movers() const { return nav_movers_; }
   [[nodiscard]] const tasks::Topic<msg::People>& people() const { return nav_people_; }
+  // The centre's formation commands as the fleet task took them (never published without a
+  // `fleet` section).
+  [[nodiscard]] const tasks::Topic<msg::FormationCommand>& formation() const { return nav_formation_; }
   // Null without navigation.people.
   [[nodiscard]] const DetectorTask* detector() const { return detector_task_.get(); }
   [[nodiscard]] const nav::PeopleTask* people_task() const { return people_task_.get(); }
@@ -143,6 +146,7 @@ class Firmware {
   tasks::Topic<msg::MovingObstacles> nav_movers_;
   tasks::Topic<msg::PersonDetections> nav_detections_;
   tasks::Topic<msg::People> nav_people_;
+  tasks::Topic<msg::FormationCommand> nav_formation_;  // fleet -> controller
   tasks::Topic<msg::SafetyIo> nav_io_;
   tasks::Topic<msg::OperatingMode> nav_mode_;
   // The collaborative mode's: the mission's or fleet's goals pass through it.

@@ -17,6 +17,7 @@ struct FleetTask::Buffers {
   vda5050::State state;
   vda5050::DecodeScratch scratch;
   vda5050::PeopleMessage people;
+  vda5050::FormationCommand formation;
   std::array<char, 256> topic{};
   std::array<std::uint8_t, 64 * 1024> payload{};
   std::array<char, kOutBytes> out{};
@@ -33,6 +34,8 @@ Status check(const FleetConfig& c) {
     return Error(Errc::config, "state_period_s: must be in (0, 30] (VDA 5050 sends a state at least every 30 s)");
   if (c.visualization_period_s < 0) return Error(Errc::config, "visualization_period_s: must be 0 (off) or positive");
   if (c.people_period_s < 0) return Error(Errc::config, "people_period_s: must be 0 (off) or positive");
+  if (!(c.formation_max_v_m_s > 0) || !(c.formation_max_w_rad_s > 0))
+    return Error(Errc::config, "formation_max_v_m_s and formation_max_w_rad_s: must be positive");
   if (!(c.battery_full_v > c.battery_empty_v)) return Error(Errc::config, "battery_full_v: must be above battery_empty_v");
   if (c.broker.starts_with("mqtts://") && c.ca_file.empty()) return Error(Errc::config, "ca_file: an mqtts:// broker needs the site CA");
   if (c.cert_file.empty() != c.key_file.empty()) return Error(Errc::config, "cert_file and key_file: give both or neither");
@@ -76,6 +79,7 @@ Status FleetTask::init(std::pmr::memory_resource& arena) {
   topic_visualization_ = topic("visualization");
   topic_factsheet_ = topic("factsheet");
   topic_people_ = vda5050::people_topic(config_.manufacturer, config_.serial_number);
+  topic_formation_ = vda5050::formation_topic(config_.manufacturer, config_.serial_number);
 
   std::pmr::polymorphic_allocator<std::byte> alloc(&arena);
   buffers_ = alloc.new_object<Buffers>();
@@ -104,6 +108,8 @@ Status FleetTask::init(std::pmr::memory_resource& arena) {
   options.outbound_slots = 16;
   // VDA 5050 section 6.2: QoS 0 for orders and instant actions.
   options.subscriptions = {{topic_order_, 0}, {topic_instant_, 0}};
+  // A late velocity is worth no more than a lost one: QoS 0, and the hold time ends it.
+  if (topics_.formation != nullptr) options.subscriptions.push_back({topic_formation_, 0});
   vda5050::Connection will;
   stamp(will.header, connection_header_);
   will.state = vda5050::ConnectionState::connection_broken;
@@ -184,8 +190,33 @@ bool FleetTask::check_header(const vda5050::Header& header, std::uint32_t& last_
   return true;
 }
 
-void FleetTask::handle(std::string_view topic, std::string_view payload, const vda5050::Pose& pose) {
+void FleetTask::handle_formation(std::string_view payload, hal::Nanos now) {
+  ++counters_.formation_received;
+  vda5050::FormationCommand& m = buffers_->formation;
+  if (!vda5050::decode_formation(payload, m, buffers_->scratch)) {
+    ++counters_.formation_rejected;
+    return;
+  }
+  const bool ours = m.manufacturer.view() == config_.manufacturer && m.serial_number.view() == config_.serial_number;
+  // As for orders: at or below the last headerId is late, 0 is a centre that restarted.
+  const bool in_order = !seen_formation_header_ || m.header_id > last_formation_header_ || m.header_id == 0;
+  // Refused rather than clipped: a clipped velocity is not the formation's.
+  const bool within = std::abs(m.v) <= config_.formation_max_v_m_s && std::abs(m.omega) <= config_.formation_max_w_rad_s;
+  if (!ours || !in_order || !within) {
+    ++counters_.formation_rejected;
+    return;
+  }
+  last_formation_header_ = m.header_id;
+  seen_formation_header_ = true;
+  topics_.formation->publish(msg::FormationCommand{m.v, m.omega, m.hold_s, now, m.header_id}, now);
+}
+
+void FleetTask::handle(std::string_view topic, std::string_view payload, const vda5050::Pose& pose, hal::Nanos now) {
   Buffers& b = *buffers_;
+  if (topics_.formation != nullptr && topic == topic_formation_) {
+    handle_formation(payload, now);
+    return;
+  }
   if (topic == topic_order_) {
     ++counters_.orders_received;
     const vda5050::Decoded decoded = vda5050::decode_order(payload, config_.version, b.order, b.scratch);
@@ -222,13 +253,13 @@ void FleetTask::handle(std::string_view topic, std::string_view payload, const v
   ++counters_.messages_ignored;
 }
 
-void FleetTask::take_messages(const vda5050::Pose& pose) {
+void FleetTask::take_messages(const vda5050::Pose& pose, hal::Nanos now) {
   Buffers& b = *buffers_;
   for (std::size_t i = 0; i < kMaxMessagesPerStep; ++i) {
     auto message = link_->receive(b.topic, b.payload);
     if (!message || !message.value()) return;
     const hal::PubSubMessage& m = *message.value();
-    handle({b.topic.data(), m.topic_size}, {reinterpret_cast<const char*>(b.payload.data()), m.payload_size}, pose);
+    handle({b.topic.data(), m.topic_size}, {reinterpret_cast<const char*>(b.payload.data()), m.payload_size}, pose, now);
   }
 }
 
@@ -369,7 +400,7 @@ void FleetTask::step(const tasks::StepContext& context) {
   const hal::Nanos now = context.start_ns;
   if (link_->session() != session_) on_session(now);
   const vda5050::Pose pose = current_pose();
-  take_messages(pose);
+  take_messages(pose, now);
 
   tasks::Sample<msg::SafetyOutput> safety;
   if (topics_.safety.read(safety)) safety_ = safety.value;

@@ -5,7 +5,9 @@
 // navigation to the vehicle's next released node (msg::NavGoal), and publish the state on
 // every event and at least every state_period_s, the visualization and the robot's people at
 // their rates, and on every new broker session the retained ONLINE connection message and the
-// factsheet. The broker's last will says CONNECTIONBROKEN.
+// factsheet. The broker's last will says CONNECTIONBROKEN. The centre's formation commands
+// (sen3bot/v1/formation/MANUFACTURER/SERIAL) are checked and handed to the controller as
+// msg::FormationCommand, stamped with the time they were taken.
 //
 // The link is the board's publish/subscribe link: MQTT on the robot, the site's in-process
 // broker in simulation. Its network side runs on a thread of its own, so nothing here blocks;
@@ -47,6 +49,10 @@ struct FleetConfig {
   double deviation_xy_m = 0.5;           // a node counts as traversed within this, when it sets 0
   double battery_empty_v = 11.0;         // the base's voltage read as 0 % and 100 %
   double battery_full_v = 12.7;
+  // A formation command faster than these is refused: the robot's own limits (the firmware
+  // sets them from navigation.dwa).
+  double formation_max_v_m_s = 0.5;
+  double formation_max_w_rad_s = 1.2;
 };
 
 // Errc::config naming the key.
@@ -61,6 +67,8 @@ struct FleetTopics {
   const tasks::Topic<msg::SafetyOutput>& safety;
   const tasks::Topic<msg::People>& people;
   tasks::Topic<msg::NavGoal>& goal;
+  // Null: the formation topic is not subscribed.
+  tasks::Topic<msg::FormationCommand>* formation = nullptr;
 };
 
 // What the task has done, for reports and tests; readable after the scheduler stopped.
@@ -76,6 +84,8 @@ struct FleetCounters {
   std::uint64_t people_published = 0;
   std::uint64_t publish_failures = 0;     // the link's queue was full or refused
   std::uint64_t sessions = 0;             // broker sessions seen
+  std::uint64_t formation_received = 0;
+  std::uint64_t formation_rejected = 0;   // malformed, another robot's, out of order, beyond the limits
   std::uint32_t goals_sent = 0;
 };
 
@@ -87,8 +97,9 @@ class FleetTask final : public tasks::Task {
   FleetTask(const FleetConfig& config, hal::Board& board, const FleetTopics& topics);
   ~FleetTask() override;
 
-  // Opens the link (its last will set, its two topics subscribed) and builds the vehicle and
-  // the message buffers in the arena.
+  // Opens the link (its last will set, its order and instant-action topics and, with a
+  // formation topic on the bus, its formation topic subscribed) and builds the vehicle and the
+  // message buffers in the arena.
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   // Publishes OFFLINE and closes the link cleanly (no last will).
@@ -104,8 +115,9 @@ class FleetTask final : public tasks::Task {
   struct Buffers;
 
   void on_session(hal::Nanos now);
-  void take_messages(const vda5050::Pose& pose);
-  void handle(std::string_view topic, std::string_view payload, const vda5050::Pose& pose);
+  void take_messages(const vda5050::Pose& pose, hal::Nanos now);
+  void handle(std::string_view topic, std::string_view payload, const vda5050::Pose& pose, hal::Nanos now);
+  void handle_formation(std::string_view payload, hal::Nanos now);
   bool check_header(const vda5050::Header& header, std::uint32_t& last_header_id, std::string_view topic_name);
   void drive();
   void publish_state(hal::Nanos now);
@@ -126,12 +138,14 @@ class FleetTask final : public tasks::Task {
   vda5050::Vehicle* vehicle_ = nullptr;  // in the arena
   Buffers* buffers_ = nullptr;           // in the arena
   std::string topic_order_, topic_instant_, topic_state_, topic_connection_, topic_visualization_,
-      topic_factsheet_, topic_people_;
+      topic_factsheet_, topic_people_, topic_formation_;
   std::uint32_t session_ = 0;
   std::uint32_t state_header_ = 0, connection_header_ = 0, visualization_header_ = 0, factsheet_header_ = 0,
       people_header_ = 0;
   std::uint32_t last_order_header_ = 0, last_instant_header_ = 0;
   bool seen_order_header_ = false, seen_instant_header_ = false;
+  std::uint32_t last_formation_header_ = 0;
+  bool seen_formation_header_ = false;
   hal::Nanos last_state_ns_ = -1;
   hal::Nanos last_visualization_ns_ = -1;
   hal::Nanos last_people_ns_ = -1;

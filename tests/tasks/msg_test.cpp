@@ -17,7 +17,7 @@ constexpr bool kBusValue = std::is_trivially_copyable_v<T> && std::is_standard_l
 static_assert(kBusValue<Point2D> && kBusValue<Pose2D> && kBusValue<SensorMount>);
 static_assert(kBusValue<ScanMessage> && kBusValue<Odometry> && kBusValue<BaseFlags>);
 static_assert(kBusValue<PoseEstimate> && kBusValue<NavGoal> && kBusValue<PathPoint> && kBusValue<PathMessage>);
-static_assert(kBusValue<RecoveryCounts> && kBusValue<ControllerStatus> && kBusValue<VelocityCommand>);
+static_assert(kBusValue<RecoveryCounts> && kBusValue<ControllerStatus> && kBusValue<VelocityCommand> && kBusValue<FormationCommand>);
 static_assert(kBusValue<SafetyOutput>);
 
 TEST(Messages, CopyByBytesKeepsEveryField) {

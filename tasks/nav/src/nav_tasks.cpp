@@ -301,7 +301,13 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
   });
 }
 
+bool ControllerTask::formation_fresh(hal::Nanos now) const noexcept {
+  return formation_ != nullptr && formation_sample_.sequence != 0 &&
+         static_cast<double>(now - formation_sample_.value.received_ns) <= formation_sample_.value.hold_s * 1e9;
+}
+
 void ControllerTask::step(const tasks::StepContext& context) {
+  if (formation_ != nullptr) (void)formation_->read(formation_sample_);
   VelocityCommand command{0.0, 0.0, context.start_ns};
   movers_message_.count = 0;
   movers_message_.stamp_ns = context.start_ns;
@@ -336,14 +342,26 @@ void ControllerTask::step(const tasks::StepContext& context) {
     }
     costmap_.update({pose.value.pose, at_scan, scan, context.start_ns});
     if (config_.dynamic_obstacles.enabled) dynamic_layer_.movers(context.start_ns, movers_message_);
-    const DwaCommand c =
-        dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap(),
-                     std::span<const msg::MovingObstacle>(movers_message_.items.data(), movers_message_.count));
-    command.v_m_s = c.v_m_s;
-    command.w_rad_s = c.w_rad_s;
-    status.status = c.status;
-    status.distance_to_goal_m = c.distance_to_goal_m;
-    status.admissible = c.admissible;
+    // Under a formation command the DWA rests: its recoveries would count the robot not
+    // following a path it is not asked to follow.
+    if (!formation_fresh(context.start_ns)) {
+      const DwaCommand c =
+          dwa_.compute(pose.value.pose, odom.value.v_m_s, odom.value.w_rad_s, costmap_.costmap(),
+                       std::span<const msg::MovingObstacle>(movers_message_.items.data(), movers_message_.count));
+      command.v_m_s = c.v_m_s;
+      command.w_rad_s = c.w_rad_s;
+      status.status = c.status;
+      status.distance_to_goal_m = c.distance_to_goal_m;
+      status.admissible = c.admissible;
+    }
+  }
+  // The centre's velocity replaces whatever the DWA or localization would ask for; the safety
+  // filter after this row still stops for obstacles, cages, a lost pose and stale sensors.
+  if (formation_fresh(context.start_ns)) {
+    command.v_m_s = formation_sample_.value.v_m_s;
+    command.w_rad_s = formation_sample_.value.w_rad_s;
+    status.status = DwaStatus::idle;
+    status.formation = true;
   }
   status.recoveries = dwa_.recoveries();
   status.plan_id = plan_id_;

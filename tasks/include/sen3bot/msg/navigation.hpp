@@ -138,6 +138,9 @@ struct ControllerStatus {
   double distance_to_goal_m = 0.0;
   std::uint32_t admissible = 0;
   std::uint32_t plan_id = 0;  // the path being followed
+  // The request is the centre's formation command, not the DWA's (which did not run: status is
+  // idle); the safety filter still applies.
+  bool formation = false;
 };
 static_assert(std::is_trivially_copyable_v<ControllerStatus>);
 
@@ -147,6 +150,18 @@ struct VelocityCommand {
   hal::Nanos stamp_ns = 0;
 };
 static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+
+// A velocity from the centre's formation controller, as the fleet task took it: the controller
+// requests it instead of its own for hold_s after received_ns, then falls back (the safety
+// filter after it still applies).
+struct FormationCommand {
+  double v_m_s = 0.0;
+  double w_rad_s = 0.0;
+  double hold_s = 0.0;
+  hal::Nanos received_ns = 0;  // the robot's clock when the fleet task took it
+  std::uint32_t header_id = 0;
+};
+static_assert(std::is_trivially_copyable_v<FormationCommand>);
 
 // Why the safety filter lowered a command (bits of SafetyOutput::reasons).
 enum SafetyReason : std::uint32_t {

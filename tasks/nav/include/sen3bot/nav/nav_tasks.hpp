@@ -7,7 +7,8 @@
 //   base driver  [Odometry]   ----+                                       |
 //   mission      [NavGoal] ------> PlannerTask (global costmap + A*) <----+--[PathMessage]
 //   PathMessage + PoseEstimate + Odometry + ScanMessage --> ControllerTask (local costmap with
-//        the dynamic obstacle layer + DWA) --[VelocityCommand requested, MovingObstacles]-->
+//        the dynamic obstacle layer + DWA, or a fresh FormationCommand from the fleet)
+//        --[VelocityCommand requested, MovingObstacles]-->
 //        SafetyTask (+ ScanMessage, Odometry, BaseFlags, PoseEstimate) --[VelocityCommand]-->
 //        base driver
 //
@@ -153,6 +154,9 @@ class PlannerTask final : public tasks::Task {
   const tasks::Topic<ScanMessage>& scan_;
   tasks::Topic<PathMessage>& path_;
   const tasks::Topic<msg::People>* people_;
+  // The centre's formation commands (null: none): while one is fresh it is the request.
+  const tasks::Topic<msg::FormationCommand>* formation_;
+  tasks::Sample<msg::FormationCommand> formation_sample_;
   msg::People people_copy_;  // the layer paints from this, copied before each update
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
@@ -205,9 +209,10 @@ class ControllerTask final : public tasks::Task {
                  const tasks::Topic<Odometry>& odom, const tasks::Topic<ScanMessage>& scan,
                  const tasks::Topic<PathMessage>& path, tasks::Topic<VelocityCommand>& command,
                  tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers,
-                 const tasks::Topic<msg::People>* people = nullptr) noexcept
+                 const tasks::Topic<msg::People>* people = nullptr,
+                 const tasks::Topic<msg::FormationCommand>* formation = nullptr) noexcept
       : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
-        movers_(movers), people_(people), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+        movers_(movers), people_(people), formation_(formation), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
         dynamic_layer_(config.dynamic_obstacles, &map, &obstacle_layer_), people_layer_(people_copy_, config.people_layer),
         inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
@@ -220,6 +225,9 @@ class ControllerTask final : public tasks::Task {
   }
 
  private:
+  // A formation command was read and is within its hold time at now.
+  [[nodiscard]] bool formation_fresh(hal::Nanos now) const noexcept;
+
   ControllerTaskConfig config_;
   const OccupancyMap& map_;
   const tasks::Topic<PoseEstimate>& pose_;
@@ -230,6 +238,9 @@ class ControllerTask final : public tasks::Task {
   tasks::Topic<ControllerStatus>& status_;
   tasks::Topic<msg::MovingObstacles>& movers_;
   const tasks::Topic<msg::People>* people_;
+  // The centre's formation commands (null: none): while one is fresh it is the request.
+  const tasks::Topic<msg::FormationCommand>* formation_;
+  tasks::Sample<msg::FormationCommand> formation_sample_;
   msg::People people_copy_;  // the layer paints from this, copied before each update
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
