@@ -221,6 +221,37 @@ TEST_F(MqttSite, ARobotPublishesOnlyItsOwnTopicsAndOnlyTheCentreSendsOrders) {
   EXPECT_TRUE(at_r2.payloads.empty());
 }
 
+// Formation commands: only the centre writes them, and a robot reads only its own.
+TEST_F(MqttSite, OnlyTheCentreSendsFormationCommandsAndARobotReadsOnlyItsOwn) {
+  auto centre = open_mqtt(tls("ssc", "centre-secret"));
+  auto r1 = open_mqtt(tls("r1", "robot1-secret", {{"sen3bot/v1/formation/+/r1", 1}}));
+  auto r2 = open_mqtt(tls("r2", "robot2-secret", {{"sen3bot/v1/formation/+/r2", 1}, {"sen3bot/v1/formation/+/r1", 1}}));
+  ASSERT_TRUE(centre.ok() && r1.ok() && r2.ok());
+  ASSERT_TRUE(wait_for([&] {
+    return (*centre)->state() == PubSubState::connected && (*r1)->state() == PubSubState::connected &&
+           (*r2)->state() == PubSubState::connected;
+  })) << broker_.log();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the subscriptions are in place
+
+  ASSERT_TRUE((*r2)->publish("sen3bot/v1/formation/S3B/r1", bytes("forged by r2"), 1, false).ok());
+  ASSERT_TRUE((*r1)->publish("sen3bot/v1/formation/S3B/r1", bytes("own"), 1, false).ok());
+  ASSERT_TRUE((*centre)->publish("sen3bot/v1/formation/S3B/r1", bytes("for r1"), 1, false).ok());
+  ASSERT_TRUE((*centre)->publish("sen3bot/v1/formation/S3B/r2", bytes("for r2"), 1, false).ok());
+
+  Inbox at_r1, at_r2;
+  ASSERT_TRUE(wait_for([&] {
+    at_r1.poll(**r1);
+    at_r2.poll(**r2);
+    return !at_r1.payloads.empty() && !at_r2.payloads.empty();
+  }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  at_r1.poll(**r1);
+  at_r2.poll(**r2);
+  EXPECT_EQ(at_r1.payloads, (std::vector<std::string>{"for r1"}));
+  // r2 asked for r1's commands too: it gets only its own.
+  EXPECT_EQ(at_r2.payloads, (std::vector<std::string>{"for r2"}));
+}
+
 TEST_F(MqttSite, WrongCredentialsAreRefusedAndPlainTextIsNotSpoken) {
   auto intruder = open_mqtt(tls("r1", "guess"));
   ASSERT_TRUE(intruder.ok());
