@@ -37,6 +37,7 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F] [--event-log FILE]
 //             [--duration S] [--client-id ID]
 int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 // sen3bot recognize --paths FILE [--progressive] [--model M] [--operations O]
 int recognize_command(int argc, char** argv, std::FILE* out, std::FILE* err);

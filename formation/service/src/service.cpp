@@ -256,4 +256,9 @@ StepOutcome FormationService::step(hal::Nanos now, std::int64_t unix_ns) {
   return StepOutcome::commanded;
 }
 
+void FormationService::stop_team(std::int64_t unix_ns) {
+  running_ = false;
+  for (std::size_t i = 0; i < robots_.size(); ++i) send(i, Unicycle{}, unix_ns);
+}
+
 }  // namespace sen3bot::formation

@@ -78,6 +78,9 @@ class FormationService {
   // `now` and publishes. unix_ns: the site's wall clock, for the freshness of the poses and
   // the commands' timestamps. Never allocates.
   StepOutcome step(hal::Nanos now, std::int64_t unix_ns);
+  // Tells every robot to stop now (a program on its way out: the team stands at once rather
+  // than at the end of its hold). The next step() starts the controller afresh.
+  void stop_team(std::int64_t unix_ns);
   // Sends what is queued (up to timeout_s) and disconnects cleanly.
   void close(double timeout_s) noexcept { link_->close(timeout_s); }
 

@@ -1,0 +1,223 @@
+// `sen3bot formation`: the centre's formation controller as a host program on the site's
+// broker (docs/formation.md). The decisions are formation::FormationService's; this is its
+// real-time loop: the MQTT link, the example's task, the team, the clock, a step log and the
+// stop signals. On the way out the team is told to stop at once rather than left to its hold.
+#include <time.h>
+
+#include <cerrno>
+#include <cinttypes>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "cli_util.hpp"
+#include "commands.hpp"
+#include "sen3bot/formation/examples.hpp"
+#include "sen3bot/formation/service.hpp"
+#include "sen3bot/hal/pubsub.hpp"
+
+namespace sen3bot::firmware {
+
+namespace {
+
+constexpr const char* kFormationUsage =
+    "usage: sen3bot formation --broker URL --example 1|2|3 --team SERIAL,SERIAL,...\n"
+    "                         [--username U --password-file F --ca-file F] [--client-id ID]\n"
+    "                         [--manufacturer M] [--interface NAME] [--v-max M_S] [--w-max RAD_S]\n"
+    "                         [--period S] [--hold S] [--pose-timeout S] [--log FILE.csv]\n"
+    "                         [--duration S]\n";
+
+bool split_team(std::string_view text, std::vector<formation::TeamMember>& team, const std::string& manufacturer) {
+  team.clear();
+  while (!text.empty()) {
+    const std::size_t comma = text.find(',');
+    const std::string_view serial = text.substr(0, comma);
+    if (serial.empty()) return false;
+    team.push_back({manufacturer, std::string(serial)});
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+    if (text.empty()) return false;  // a trailing comma
+  }
+  return !team.empty();
+}
+
+}  // namespace
+
+int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  BrokerArgs args;
+  args.client_id = "ssc";
+  std::string team_text, log_path, manufacturer = "Sen3Bot", interface_name = "uagv";
+  int example_number = 0;
+  double duration_s = 0;
+  double v_max = -1, w_max = -1;
+  formation::FormationServiceConfig config;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(err, "sen3bot formation: %s needs a value\n%s", argv[i], kFormationUsage);
+      return 2;
+    }
+    const std::string value = argv[++i];
+    bool ok = !value.empty();
+    double number = 0;
+    if (args.take(arg, value)) {
+    } else if (arg == "--example") {
+      ok = value == "1" || value == "2" || value == "3";
+      if (ok) example_number = value[0] - '0';
+    } else if (arg == "--team") {
+      team_text = value;
+    } else if (arg == "--manufacturer") {
+      manufacturer = value;
+    } else if (arg == "--interface") {
+      interface_name = value;
+    } else if (arg == "--v-max") {
+      ok = parse_double(value, v_max) && v_max > 0;
+    } else if (arg == "--w-max") {
+      ok = parse_double(value, w_max) && w_max > 0;
+    } else if (arg == "--period") {
+      ok = parse_double(value, number) && number > 0;
+      config.period_s = number;
+    } else if (arg == "--hold") {
+      ok = parse_double(value, number) && number > 0 && number <= 2.0;
+      config.hold_s = number;
+    } else if (arg == "--pose-timeout") {
+      ok = parse_double(value, number) && number > 0;
+      config.pose_timeout_s = number;
+    } else if (arg == "--log") {
+      log_path = value;
+    } else if (arg == "--duration") {
+      ok = parse_double(value, duration_s) && duration_s >= 0;
+    } else {
+      std::fprintf(err, "sen3bot formation: unknown option '%s'\n%s", argv[i - 1], kFormationUsage);
+      return 2;
+    }
+    if (!ok) {
+      std::fprintf(err, "sen3bot formation: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kFormationUsage);
+      return 2;
+    }
+  }
+  const char* missing = args.broker.empty() ? "--broker" : example_number == 0 ? "--example" : team_text.empty() ? "--team" : nullptr;
+  if (missing != nullptr) {
+    std::fprintf(err, "sen3bot formation: %s is required\n%s", missing, kFormationUsage);
+    return 2;
+  }
+
+  const formation::Example example = formation::example(example_number);
+  config.interface_name = interface_name;
+  config.controller = example.config;
+  if (v_max > 0) config.controller.v_max_m_s = v_max;
+  if (w_max > 0) config.controller.w_max_rad_s = w_max;
+  if (!split_team(team_text, config.team, manufacturer)) {
+    std::fprintf(err, "sen3bot formation: --team: serial numbers separated by commas, got '%s'\n", team_text.c_str());
+    return 2;
+  }
+  if (config.team.size() != example.config.robots) {
+    std::fprintf(err, "sen3bot formation: --team: example %d drives %zu robots, got %zu serial numbers\n", example_number,
+                 example.config.robots, config.team.size());
+    return 2;
+  }
+
+  Result<hal::PubSubOptions> options = args.options();
+  if (!options) {
+    std::fprintf(err, "sen3bot formation: %s\n", options.error().c_str());
+    return 2;
+  }
+  Result<std::vector<hal::PubSubSubscription>> subscriptions = formation::FormationService::subscriptions(config);
+  if (!subscriptions) {
+    std::fprintf(err, "sen3bot formation: %s\n", subscriptions.error().c_str());
+    return 2;
+  }
+  hal::PubSubOptions& link = *options;
+  link.subscriptions = std::move(*subscriptions);
+  // Ten robots' visualizations at 10 Hz are ten messages a step; room for a second's burst.
+  link.inbound_slots = 128;
+  link.outbound_slots = 64;
+  config.max_payload = link.max_payload;
+  Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
+  if (!opened) {
+    std::fprintf(err, "sen3bot formation: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
+    return opened.error().code() == Errc::config ? 2 : 1;
+  }
+  Result<std::unique_ptr<formation::FormationService>> created = formation::FormationService::create(config, std::move(opened.value()));
+  if (!created) {
+    std::fprintf(err, "sen3bot formation: %s\n", created.error().c_str());
+    return 2;
+  }
+  formation::FormationService& service = **created;
+
+  std::FILE* log = nullptr;
+  if (!log_path.empty()) {
+    log = std::fopen(log_path.c_str(), "w");
+    if (log == nullptr) {
+      std::fprintf(err, "sen3bot formation: --log %s: %s\n", log_path.c_str(), std::strerror(errno));
+      return 2;
+    }
+    std::fprintf(log, "t_s,outcome,scale,lyapunov,gain_set,switched,formation_error_m,min_barrier_m\n");
+  }
+  std::fprintf(err, "sen3bot formation: example %d (%s), %zu robots, on %s as %s\n", example_number, example.title,
+               config.team.size(), args.broker.c_str(), args.client_id.c_str());
+
+  const StopOnSignal stop;
+  const auto period = static_cast<std::int64_t>(config.period_s * 1e9 / 4.0);  // messages are taken between steps too
+  const std::int64_t start = clock_ns(CLOCK_MONOTONIC);
+  const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
+  std::int64_t next = start;
+  std::uint64_t switches_seen = 0, connects_seen = 0, stale_seen = 0;
+  while (StopOnSignal::requested() == 0) {
+    const std::int64_t now = clock_ns(CLOCK_MONOTONIC);
+    if (now >= end) break;
+    const formation::StepOutcome outcome = service.step(now, clock_ns(CLOCK_REALTIME));
+    if (outcome != formation::StepOutcome::idle && log != nullptr) {
+      const formation::StepInfo& s = service.controller().last();
+      std::fprintf(log, "%.3f,%s,%.4f,%.6g,%zu,%d,%.4f,%.4f\n", static_cast<double>(now - start) * 1e-9,
+                   outcome == formation::StepOutcome::commanded ? "commanded" : "stopped", s.scale, s.lyapunov, s.gain_set,
+                   s.switched ? 1 : 0, s.formation_error_m, s.min_barrier_m);
+    }
+    // The operator hears of what changes the team's motion, once each time.
+    const formation::FormationCounters& c = service.counters();
+    if (c.stale_steps > stale_seen && outcome == formation::StepOutcome::stopped && stale_seen == c.stale_steps - 1)
+      std::fprintf(err, "sen3bot formation: a robot's pose is missing or stale: the team is told to stop\n");
+    stale_seen = c.stale_steps;
+    if (service.controller().switches() != switches_seen) {
+      switches_seen = service.controller().switches();
+      std::fprintf(err, "sen3bot formation: gains switched to set %zu (switch %" PRIu64 ")\n", service.controller().gain_set(),
+                   switches_seen);
+    }
+    const hal::PubSubStats stats = service.link().stats();
+    if (stats.connects != connects_seen) {
+      connects_seen = stats.connects;
+      std::fprintf(err, "sen3bot formation: connected to the broker (connection %" PRIu64 ")\n", connects_seen);
+    }
+    next += period;
+    if (clock_ns(CLOCK_MONOTONIC) > next) {
+      next = clock_ns(CLOCK_MONOTONIC);
+      continue;
+    }
+    const timespec wake{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR && StopOnSignal::requested() == 0) {
+    }
+  }
+
+  service.stop_team(clock_ns(CLOCK_REALTIME));
+  const formation::FormationCounters& c = service.counters();
+  const hal::PubSubStats link_stats = service.link().stats();
+  const int signal = StopOnSignal::requested();
+  std::fprintf(out,
+               "{\"stopped_by\":\"%s\",\"run_s\":%.1f,\"poses\":%" PRIu64 ",\"rejected\":%" PRIu64 ",\"controller_steps\":%" PRIu64
+               ",\"stale_steps\":%" PRIu64 ",\"commands_sent\":%" PRIu64 ",\"switches\":%" PRIu64
+               ",\"formation_error_m\":%.4f,\"connects\":%" PRIu64 ",\"publish_dropped\":%" PRIu64 "}\n",
+               signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration",
+               static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, c.poses, c.rejected, c.controller_steps,
+               c.stale_steps, c.commands_sent, service.controller().switches(), service.controller().last().formation_error_m,
+               link_stats.connects, link_stats.publish_dropped);
+  std::fflush(out);
+  service.close(1.0);  // the stop goes out, then a clean disconnect
+  created.value().reset();
+  if (log != nullptr) std::fclose(log);
+  return 0;
+}
+
+}  // namespace sen3bot::firmware
