@@ -4,6 +4,7 @@
 // instant actions as JSON text of its own and reads the robot's messages back.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -14,6 +15,7 @@
 
 #include "firmware.hpp"
 #include "sen3bot/vda5050/codec.hpp"
+#include "sen3bot/vda5050/extensions.hpp"
 #include "sim_rig.hpp"
 
 namespace sen3bot {
@@ -99,7 +101,10 @@ class FleetRig {
     fw_ = std::make_unique<firmware::Firmware>(c, *rig_.board, sink_);
     hal::PubSubOptions master;
     master.client_id = "master";
-    master.subscriptions = {{std::string(kPrefix) + "#", 1}, {"sen3bot/v1/people/Sen3Bot/r1", 0}};
+    // The people the robot sends, and the formation commands the master sends as the centre.
+    master.subscriptions = {{std::string(kPrefix) + "#", 1},
+                            {"sen3bot/v1/people/Sen3Bot/r1", 0},
+                            {"sen3bot/v1/formation/Sen3Bot/r1", 0}};
     master.inbound_slots = 4096;
     auto client = rig_.board->site_broker().connect(master);
     EXPECT_TRUE(client.ok());
@@ -134,6 +139,21 @@ class FleetRig {
   void send(const std::string& topic, const std::string& json) {
     ASSERT_TRUE(master_->publish(std::string(kPrefix) + topic, bytes(json), 0, false).ok());
   }
+  // A formation command as the centre encodes it.
+  void send_formation(std::uint32_t header_id, double v, double w, double hold_s) {
+    vda5050::FormationCommand m;
+    m.header_id = header_id;
+    m.timestamp = vda5050::iso8601(rig_.clock().now());
+    (void)m.manufacturer.assign("Sen3Bot");
+    (void)m.serial_number.assign("r1");
+    m.v = v;
+    m.omega = w;
+    m.hold_s = hold_s;
+    std::array<char, 512> out{};
+    auto text = vda5050::encode_formation(m, out);
+    ASSERT_TRUE(text.ok()) << text.error().c_str();
+    ASSERT_TRUE(master_->publish(vda5050::formation_topic("Sen3Bot", "r1"), bytes(*text), 0, false).ok());
+  }
 
   [[nodiscard]] const vda5050::State& state() const { return state_; }
   [[nodiscard]] std::size_t count(const std::string& topic) const {
@@ -156,13 +176,15 @@ class FleetRig {
       if (!message.value()) return;
       const std::string name(topic.data(), message.value()->topic_size);
       const std::string text(reinterpret_cast<const char*>(payload.data()), message.value()->payload_size);
-      const std::string leaf = name.substr(name.rfind('/') + 1);
+      // VDA 5050's topics by their last level, Sen3Bot's (sen3bot/v1/KIND/...) by their kind.
+      constexpr std::string_view kOwn = "sen3bot/v1/";
+      const std::string leaf = name.starts_with(kOwn) ? name.substr(kOwn.size(), name.find('/', kOwn.size()) - kOwn.size())
+                                                      : name.substr(name.rfind('/') + 1);
       ++counts_[leaf];
-      // The master hears its own orders too (it reads the robot's whole topic tree): only what
-      // the robot sent is captured.
+      // The master hears its own orders too (it reads the robot's whole topic tree): what the
+      // robot sent is captured, and the formation commands as the codec wrote them.
       if (!capture_.empty() && leaf != "order" && leaf != "instantActions") {
-        const std::string file = capture_ + "/" + (leaf == "r1" ? std::string("people") : leaf) + "." +
-                                 std::to_string(counts_[leaf]) + ".json";
+        const std::string file = capture_ + "/" + leaf + "." + std::to_string(counts_[leaf]) + ".json";
         std::FILE* f = std::fopen(file.c_str(), "w");
         ASSERT_NE(f, nullptr) << file;
         std::fwrite(text.data(), 1, text.size(), f);
@@ -218,8 +240,8 @@ TEST(Fleet, TheRobotComesOnlineWithItsFactsheetAndReportsStateVisualizationAndPe
   EXPECT_EQ(rig.count("factsheet"), 1u);
   EXPECT_GE(rig.count("state"), 3u);  // at least once a second
   EXPECT_GE(rig.count("visualization"), 5u);
-  EXPECT_GE(rig.count("r1"), 10u);  // people, every 0.2 s
-  EXPECT_NE(rig.last("r1").find("\"schemaVersion\":\"1.0.0\""), std::string::npos);
+  EXPECT_GE(rig.count("people"), 10u);  // every 0.2 s
+  EXPECT_NE(rig.last("people").find("\"schemaVersion\":\"1.0.0\""), std::string::npos);
   EXPECT_EQ(rig.bad_messages(), 0);
   const vda5050::State& s = rig.state();
   ASSERT_TRUE(s.agv_position.has_value());
@@ -334,7 +356,7 @@ TEST(Fleet, ARobotCutOffFromTheBrokerKeepsDrivingItsOrderAndComesBackOnline) {
 
 // Every message the robot sends in an eventful run (an order, a pause, a cancel, a refused
 // message, an unknown action, a lost broker) validates against the shipped schemas of the
-// site's version: VDA 5050's and the people schema.
+// site's version: VDA 5050's and the people schema; the formation commands sent to it too.
 class FleetSchemas : public ::testing::TestWithParam<vda5050::Version> {};
 
 TEST_P(FleetSchemas, EveryMessageTheRobotSendsValidates) {
@@ -358,6 +380,14 @@ TEST_P(FleetSchemas, EveryMessageTheRobotSendsValidates) {
     rig.board().site_broker().set_reachable("r1", true);
     rig.send("instantActions", instant_json(5, "c1", "cancelOrder"));
     rig.run_for(2.0);
+    for (std::uint32_t i = 1; i <= 3; ++i) {
+      rig.send_formation(i, 0.1, -0.1 * i, 0.3);
+      rig.run_for(0.1);
+    }
+    rig.run_for(1.0);
+    EXPECT_EQ(rig.firmware().fleet()->counters().formation_received, 3u);
+    EXPECT_EQ(rig.firmware().fleet()->counters().formation_rejected, 0u);
+    EXPECT_EQ(rig.count("formation"), 3u);
     EXPECT_EQ(rig.bad_messages(), 0);
   }
   const std::string version(vda5050::to_string(GetParam()));
