@@ -16,6 +16,7 @@
 #include "config.hpp"
 #include "firmware.hpp"
 #include "sen3bot/vda5050/codec.hpp"
+#include "sen3bot/vda5050/extensions.hpp"
 #include "sim_rig.hpp"
 #include "task_table.hpp"
 
@@ -151,6 +152,22 @@ std::string fleet_instant(int header_id, const char* action_id, const char* type
          "\",\"blockingType\":\"HARD\"}]}";
 }
 
+// A formation command as the centre's codec writes it.
+std::string fleet_formation(std::uint32_t header_id, const char* serial, double v, double w) {
+  vda5050::FormationCommand m;
+  m.header_id = header_id;
+  (void)m.timestamp.assign("2026-12-03T10:00:00.00Z");
+  (void)m.manufacturer.assign("Sen3Bot");
+  (void)m.serial_number.assign(serial);
+  m.v = v;
+  m.omega = w;
+  m.hold_s = 0.5;
+  std::array<char, 512> out{};
+  auto text = vda5050::encode_formation(m, out);
+  EXPECT_TRUE(text.ok());
+  return text.ok() ? std::string(*text) : std::string();
+}
+
 // A master control on the site's broker. Everything it uses in the counted window (topics,
 // message texts, receive buffers, the state it decodes into) is made beforehand.
 class Master {
@@ -214,7 +231,7 @@ class Master {
   std::unique_ptr<vda5050::State> state_ = std::make_unique<vda5050::State>();
 };
 
-TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWithoutAllocating) {
+TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderInstantActionsAndFormationCommandsWithoutAllocating) {
   testing::SimRig rig = testing::load_sim_rig();
   ASSERT_NE(rig.board, nullptr);
   FirmwareConfig* config = &rig.config;
@@ -256,6 +273,11 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
   const std::string pause = fleet_instant(1, "pause-1", "startPause");
   const std::string resume = fleet_instant(2, "pause-2", "stopPause");
   const std::string cancel = fleet_instant(3, "cancel-1", "cancelOrder");
+  // Then the centre's formation controller drives the robot for 2 s at 10 Hz; one of its
+  // commands is for another robot.
+  const std::string formation_topic = vda5050::formation_topic("Sen3Bot", "r1");
+  std::vector<std::string> formation_texts;
+  for (std::uint32_t i = 1; i <= 20; ++i) formation_texts.push_back(fleet_formation(i, i == 10 ? "r2" : "r1", 0.1, 0.2));
 
   // Warm-up: the robot comes online (connection, factsheet, states) and master control reads it.
   const hal::Nanos chunk = hal::millis(10);
@@ -273,10 +295,13 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
   for (const auto& row : kTaskTable) longest_period_us = std::max(longest_period_us, row.period_us);
   const hal::Nanos window = hal::micros(longest_period_us) * static_cast<hal::Nanos>(kSlowestTaskRuns);
 
-  enum class Step { order, driving, paused, resumed, past_n1, cancelled, done };
+  enum class Step { order, driving, paused, resumed, past_n1, cancelled, formation, done };
   Step step = Step::order;
   bool was_paused_standing = false;
   hal::Nanos paused_at = 0;
+  std::size_t formation_sent = 0;
+  hal::Nanos formation_at = 0;
+  bool formation_drove = false;
   bool ran = true;
 
   mem::testing::AllocationScope scope;
@@ -316,8 +341,18 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
         }
         break;
       case Step::cancelled:
-        if (master.action_finished("cancel-1")) step = Step::done;
+        if (master.action_finished("cancel-1")) step = Step::formation;
         break;
+      case Step::formation: {
+        if (formation_sent < formation_texts.size() && t - formation_at >= hal::millis(100)) {
+          master.send(formation_topic, formation_texts[formation_sent++]);
+          formation_at = t;
+        }
+        tasks::Sample<msg::ControllerStatus> status;
+        if (fw.controller_status().read(status) && status.value.formation) formation_drove = true;
+        if (formation_sent == formation_texts.size() && t - formation_at >= hal::seconds(1)) step = Step::done;
+        break;
+      }
       case Step::done:
         break;
     }
@@ -335,14 +370,17 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderAndInstantActionsWit
     total_runs += s.runs - runs_before[i];
   }
   EXPECT_GE(total_runs, kSteadyStateTicks);
-  // The whole exchange happened inside the window: order, pause, resume, cancel.
+  // The whole exchange happened inside the window: order, pause, resume, cancel, formation.
   EXPECT_EQ(step, Step::done);
+  EXPECT_TRUE(formation_drove);
   EXPECT_TRUE(was_paused_standing);
   const FleetCounters& after = fw.fleet()->counters();
   EXPECT_EQ(after.orders_received - before.orders_received, 2u);
   EXPECT_EQ(after.orders_accepted - before.orders_accepted, 1u);
   EXPECT_EQ(after.orders_rejected - before.orders_rejected, 1u);
   EXPECT_EQ(after.instant_actions_received - before.instant_actions_received, 3u);
+  EXPECT_EQ(after.formation_received - before.formation_received, 20u);
+  EXPECT_EQ(after.formation_rejected - before.formation_rejected, 1u);
   EXPECT_GT(after.goals_sent, before.goals_sent);
   // A state at least every second, and on the events.
   EXPECT_GE(after.states_published - before.states_published,
