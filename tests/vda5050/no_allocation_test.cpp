@@ -2,7 +2,8 @@
 // decoders and the encoders allocate nothing. Many rounds of what the fleet task does with
 // the messages a master control sends (orders, order updates, instant actions, refused and
 // malformed messages) and with what it sends back (state, visualization, connection,
-// factsheet), after one warm-up round, with no operator new and no malloc in between.
+// factsheet), and the formation link (the centre's commands, the visualization read back),
+// after one warm-up round, with no operator new and no malloc in between.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -13,6 +14,7 @@
 
 #include "alloc_counter.hpp"
 #include "sen3bot/vda5050/codec.hpp"
+#include "sen3bot/vda5050/extensions.hpp"
 #include "sen3bot/vda5050/json.hpp"
 #include "sen3bot/vda5050/vehicle.hpp"
 
@@ -206,6 +208,25 @@ void other_messages(Rig& rig, Vehicle& vehicle, Tally& tally) {
   visualization.velocity = Velocity{0.3, 0.0, 0.01};
   auto text = encode_visualization(visualization, kVersion, rig.out);
   text ? ++tally.encoded : ++tally.encode_failures;
+  // The centre reads the robots' poses from these.
+  if (text && decode_visualization(*text, kVersion, visualization, rig.scratch)) ++tally.decoded;
+
+  // The centre's formation command, written, read, and one refused (a hold beyond 2 s).
+  FormationCommand formation;
+  formation.header_id = 4;
+  (void)formation.timestamp.assign("2026-12-03T10:00:01.25Z");
+  (void)formation.manufacturer.assign("Sen3Bot");
+  (void)formation.serial_number.assign("r1");
+  formation.v = 0.2;
+  formation.omega = -0.1;
+  formation.hold_s = 0.5;
+  text = encode_formation(formation, rig.out);
+  text ? ++tally.encoded : ++tally.encode_failures;
+  if (text && decode_formation(*text, formation, rig.scratch)) ++tally.decoded;
+  if (!decode_formation(R"({"schemaVersion":"1.0.0","headerId":5,"timestamp":"t","manufacturer":"Sen3Bot",)"
+                        R"("serialNumber":"r1","v":0.2,"omega":0,"holdS":2.5})",
+                        formation, rig.scratch))
+    ++tally.refused_by_codec;
 
   rig.connection = Connection{};
   rig.connection.header.header_id = 3;
@@ -296,7 +317,8 @@ TEST(Vda5050NoAllocation, VehicleDecodersAndEncodersInSteadyState) {
   // The warm-up round went the way it is meant to.
   EXPECT_EQ(warm.accepted, 3u);  // A, its update, D
   EXPECT_EQ(warm.refused_by_vehicle, 3u);  // B while A runs, A's stale update, C out of reach
-  EXPECT_EQ(warm.refused_by_codec, 5u);     // malformed, 2.0, a type, 33 nodes, an instant action
+  // malformed, 2.0, a type, 33 nodes, an instant action, and a formation command twice
+  EXPECT_EQ(warm.refused_by_codec, 7u);
   EXPECT_EQ(warm.encode_failures, 2u);      // only the 64-byte buffer, twice
   EXPECT_GE(warm.states_encoded, 10u);
   EXPECT_EQ(warm.states_read, warm.states_encoded) << "every state encoded reads back";
