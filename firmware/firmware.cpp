@@ -1,5 +1,7 @@
 #include "firmware.hpp"
 
+#include <algorithm>
+
 #include "safe_curve.hpp"
 #include "sen3bot/ssc/service.hpp"
 #include "task_table.hpp"
@@ -156,10 +158,15 @@ Status Firmware::create_navigation() {
   // the cobot row passes them on.
   tasks::Topic<msg::NavGoal>& goals = config_.cobot.enabled ? nav_coop_goal_ : nav_goal_;
   if (config_.has_fleet) {
-    // The centre's formation commands are refused beyond what the DWA may ask of the robot.
+    // The centre's formation commands are refused beyond what the DWA may ask of the robot
+    // (and beyond what the base driver would clip it to).
     FleetConfig fleet = config_.fleet;
     fleet.formation_max_v_m_s = n.dwa.max_v_m_s;
     fleet.formation_max_w_rad_s = n.dwa.max_w_rad_s;
+    if (config_.devices.has_base && config_.devices.base.max_v_m_s > 0 && config_.devices.base.max_omega_rad_s > 0) {
+      fleet.formation_max_v_m_s = std::min(fleet.formation_max_v_m_s, config_.devices.base.max_v_m_s);
+      fleet.formation_max_w_rad_s = std::min(fleet.formation_max_w_rad_s, config_.devices.base.max_omega_rad_s);
+    }
     fleet_task_ = std::make_unique<FleetTask>(fleet, board_,
                                               FleetTopics{nav_pose_, nav_odometry_, nav_base_flags_, nav_controller_, nav_path_,
                                                           nav_safety_, nav_people_, goals, &nav_formation_});

@@ -50,7 +50,7 @@ struct FleetConfig {
   double battery_empty_v = 11.0;         // the base's voltage read as 0 % and 100 %
   double battery_full_v = 12.7;
   // A formation command faster than these is refused: the robot's own limits (the firmware
-  // sets them from navigation.dwa).
+  // sets them from the DWA's and the base driver's).
   double formation_max_v_m_s = 0.5;
   double formation_max_w_rad_s = 1.2;
 };
