@@ -289,7 +289,7 @@ std::string distances_csv(const FormationExample& ex, const Record& rec) {
   std::string csv = "t_s";
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 1; j < n; ++j) csv += ",d_" + pair_name(i, j) + "_m";
-  csv += ",F,switched\n";
+  csv += ",F,switched,formation_error_m,centre_error_m\n";
   char cell[64];
   for (const FormationSample& s : rec.samples) {
     std::snprintf(cell, sizeof cell, "%.2f", s.t_s);
@@ -299,7 +299,7 @@ std::string distances_csv(const FormationExample& ex, const Record& rec) {
         std::snprintf(cell, sizeof cell, ",%.4f", std::hypot(s.truth[i].x_m - s.truth[j].x_m, s.truth[i].y_m - s.truth[j].y_m));
         csv += cell;
       }
-    std::snprintf(cell, sizeof cell, ",%.4f,%d\n", s.scale, s.switched ? 1 : 0);
+    std::snprintf(cell, sizeof cell, ",%.4f,%d,%.4f,%.4f\n", s.scale, s.switched ? 1 : 0, s.formation_error_m, s.centre_error_m);
     csv += cell;
   }
   return csv;
@@ -316,10 +316,11 @@ std::string run_json(std::size_t index, const RunResult& r) {
   char line[512];
   std::snprintf(line, sizeof line,
                 "], \"min_robot_distance_m\": %.4f, \"obstacle_contacts\": %llu, \"targets_reached\": %zu, "
-                "\"formation_error_m\": %.4f, \"final_formation_error_m\": %.4f, \"converge_s\": %.1f, \"min_scale\": %.4f, "
+                "\"formation_error_m\": %.4f, \"final_formation_error_m\": %.4f, \"converge_s\": %.1f, \"centre_converge_s\": %.1f, "
+                "\"min_scale\": %.4f, "
                 "\"commands_sent\": %llu, \"stale_steps\": %llu, \"switch_count\": %zu, \"switches_s\": [",
                 m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
-                m.final_formation_error_m, m.converge_s, m.min_scale, static_cast<unsigned long long>(m.commands_sent),
+                m.final_formation_error_m, m.converge_s, m.centre_converge_s, m.min_scale, static_cast<unsigned long long>(m.commands_sent),
                 static_cast<unsigned long long>(m.stale_steps), m.switches_s.size());
   json += line;
   for (std::size_t i = 0; i < m.switches_s.size(); ++i) json += (i ? ", " : "") + fmt("%.1f", m.switches_s[i]);
@@ -408,11 +409,12 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     g.shutdown();
     r.metrics = g.metrics();
     const FormationMetrics& m = r.metrics;
-    std::fprintf(out, "run %llu/%llu: %s  min distance %.3f m, %llu contacts, targets %zu, formation error %.3f m, converged %s, "
-                      "%zu switches, min F %.2f\n",
+    std::fprintf(out, "run %llu/%llu: %s  min distance %.3f m, %llu contacts, targets %zu, formation error %.3f m, converged %s "
+                      "(on the centre's estimates %s), %zu switches, min F %.3f\n",
                  static_cast<unsigned long long>(run + 1), static_cast<unsigned long long>(runs), m.passed ? "ok" : "FAILED",
                  m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
-                 m.converge_s < 0 ? "never" : fmt("at %.1f s", m.converge_s).c_str(), m.switches_s.size(), m.min_scale);
+                 m.converge_s < 0 ? "never" : fmt("at %.1f s", m.converge_s).c_str(),
+                 m.centre_converge_s < 0 ? "never" : fmt("at %.1f s", m.centre_converge_s).c_str(), m.switches_s.size(), m.min_scale);
     for (const std::string& f : m.failures) std::fprintf(out, "  %s\n", f.c_str());
     std::fflush(out);
     if (run == 0) {
@@ -426,7 +428,7 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
 
   // Over the runs.
-  double worst_distance = 1e9, worst_error = 0, worst_converge = 0;
+  double worst_distance = 1e9, worst_error = 0, worst_converge = 0, worst_centre_converge = 0, least_scale = 1;
   std::uint64_t contacts = 0;
   std::size_t min_targets = ex.targets.size(), passed = 0;
   bool all_converged = true;
@@ -438,6 +440,8 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     min_targets = std::min(min_targets, m.targets_reached);
     if (m.converge_s < 0) all_converged = false;
     worst_converge = std::max(worst_converge, m.converge_s);
+    worst_centre_converge = m.centre_converge_s < 0 || worst_centre_converge < 0 ? -1.0 : std::max(worst_centre_converge, m.centre_converge_s);
+    least_scale = std::min(least_scale, m.min_scale);
     passed += m.passed ? 1 : 0;
   }
   std::fprintf(out, "\nexample %d over %zu run%s: %zu passed; worst min distance %.3f m (bound %.2f), %llu contacts, ", ex.number,
@@ -460,10 +464,11 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     char line[512];
     std::snprintf(line, sizeof line,
                   "\"runs\": %zu, \"runs_passed\": %zu, \"min_robot_distance_m\": %.4f, \"obstacle_contacts\": %llu, "
-                  "\"targets_reached\": %zu, \"formation_error_m\": %.4f, \"converge_s\": %.1f}\n}\n",
+                  "\"targets_reached\": %zu, \"formation_error_m\": %.4f, \"converge_s\": %.1f, \"centre_converge_s\": %.1f, "
+                  "\"min_scale\": %.4f}\n}\n",
                   results.size(), passed, worst_distance, static_cast<unsigned long long>(contacts),
                   ex.config.task == formation::TaskKind::targets ? min_targets : std::size_t{0}, worst_error,
-                  all_converged ? worst_converge : -1.0);
+                  all_converged ? worst_converge : -1.0, worst_centre_converge, least_scale);
     json += line;
     const std::string base = report_dir + "/";
     if (!write_text(base + "formation.json", json)) return fail(err, "cannot write " + base + "formation.json", 1);

@@ -219,6 +219,7 @@ void FormationRig::record() {
   }
   s.formation_error_m = service_->controller().formation_error(p_);
   s.scale = last_scale_;
+  s.centre_error_m = last_scale_ > 0 ? service_->controller().last().formation_error_m : -1.0;
   s.switched = switched_since_sample_;
   switched_since_sample_ = false;
 }
@@ -255,6 +256,10 @@ FormationMetrics FormationRig::metrics() const {
     for (std::size_t k = 0; k < samples_.size(); ++k)
       if (samples_[k].formation_error_m > kFormationErrorBoundM) from = k + 1;
     if (from < samples_.size()) m.converge_s = samples_[from].t_s;
+    std::size_t centre_from = 0;
+    for (std::size_t k = 0; k < samples_.size(); ++k)
+      if (samples_[k].centre_error_m < 0 || samples_[k].centre_error_m > kFormationErrorBoundM) centre_from = k + 1;
+    if (centre_from < samples_.size()) m.centre_converge_s = samples_[centre_from].t_s;
     const double window_from = m.converge_s >= 0 ? m.converge_s : last.t_s - kUnconvergedWindowS;
     m.formation_error_m = 0;
     for (const FormationSample& s : samples_)

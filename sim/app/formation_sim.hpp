@@ -77,6 +77,7 @@ struct FormationSample {
   double t_s = 0;
   std::vector<nav::Pose2D> truth;  // axle poses
   double formation_error_m = 0;    // the controller's, on the true P points
+  double centre_error_m = -1;      // the centre's own, on the poses it stepped on (-1: not stepping)
   double scale = 0;                // F of the centre's last step (0 while it stops the team)
   bool switched = false;           // the hybrid rule jumped since the last sample
 };
@@ -88,6 +89,7 @@ struct FormationMetrics {
   double formation_error_m = -1;       // max after convergence (never converged: over the last 10 s)
   double final_formation_error_m = -1;
   double converge_s = -1;              // from then on the error stays <= 0.05 m; -1: never
+  double centre_converge_s = -1;       // the same for the centre's own error (its estimates, not the truth)
   std::vector<double> switches_s;
   double min_scale = 1;                // the least F the controller used
   std::uint64_t commands_sent = 0;
