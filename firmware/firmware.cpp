@@ -128,6 +128,8 @@ Status Firmware::create_navigation() {
   controller.dynamic_obstacles = n.dynamic_obstacles;
   controller.local_costmap.width_m = n.local_costmap_size_m;
   controller.local_costmap.height_m = n.local_costmap_size_m;
+  // The rolling window shares the static layer's cells: a map of any resolution works.
+  controller.local_costmap.resolution_m = map_.resolution_m();
   controller.obstacle = n.local_obstacles;
   controller.use_people = n.people_enabled;
   controller.people_layer = n.cages;

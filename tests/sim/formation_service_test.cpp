@@ -221,7 +221,9 @@ TEST(FormationService, MalformedAndForeignVisualizationsAreCountedAndIgnored) {
 }
 
 TEST(FormationService, PosesArePredictedToTheStepByTheirReportedVelocity) {
-  Site site;
+  FormationServiceConfig config = two_robots();
+  config.lookahead_s = 0.0;  // the report's own prediction alone; the next test adds the command's
+  Site site(config);
   site.run_until(hal::seconds(1));
   // Stamped 0.3 s before the step that uses them, driving at 0.5 m/s straight.
   const hal::Nanos step_at = hal::millis(1410);
@@ -236,6 +238,35 @@ TEST(FormationService, PosesArePredictedToTheStepByTheirReportedVelocity) {
   EXPECT_NEAR(poses[0].y, 0.0, 1e-6);
   EXPECT_NEAR(poses[1].x, 1.0, 1e-6);  // turning on the spot
   EXPECT_NEAR(std::remainder(poses[1].theta - (3.14159265358979 + 0.15), 2 * 3.14159265358979), 0.0, 1e-6);
+}
+
+TEST(FormationService, PosesAreCarriedOnToWhenTheCommandActsByTheLastCommand) {
+  FormationServiceConfig config = two_robots();
+  config.lookahead_s = 0.2;
+  Site site(config);
+  site.run_until(hal::seconds(1));
+  // Fresh reports, standing: between steps only the last commands move the poses, by 0.2 s.
+  for (int k = 0; k < 5; ++k) {
+    const hal::Nanos step_at = site.now_ + hal::millis(100);
+    site.report(0, -1.0, 0.2, 0.3, step_at);
+    site.report(1, 1.0, -0.2, 2.8, step_at);
+    const std::array<Unicycle, 2> last = {site.service_->commands()[0], site.service_->commands()[1]};
+    while (site.now_ < step_at) {
+      site.now_ += hal::millis(10);
+      site.service_->step(site.now_, kEpoch + site.now_);
+    }
+    const std::array<Pose, 2> reported = {Pose{-1.0, 0.2, 0.3}, Pose{1.0, -0.2, 2.8}};
+    for (std::size_t i = 0; i < 2; ++i) {
+      const Pose& got = site.service_->poses()[i];
+      // The closed form of a unicycle's arc over 0.2 s.
+      const double th = reported[i].theta + last[i].w * 0.2;
+      const double x = std::abs(last[i].w) < 1e-6 ? reported[i].x + last[i].v * 0.2 * std::cos(reported[i].theta)
+                                                  : reported[i].x + last[i].v / last[i].w * (std::sin(th) - std::sin(reported[i].theta));
+      EXPECT_NEAR(got.x, x, 1e-6) << "step " << k << " robot " << i;
+      EXPECT_NEAR(std::remainder(got.theta - th, 2 * 3.14159265358979), 0.0, 1e-6);
+    }
+  }
+  EXPECT_GT(std::abs(site.service_->commands()[0].v) + std::abs(site.service_->commands()[0].w), 0.0);
 }
 
 TEST(FormationService, OlderPosesDoNotReplaceNewerOnes) {

@@ -39,12 +39,12 @@ double wrap(double d, double period) noexcept {
 }
 
 constexpr std::array<Gains, 6> kDefaultGains = {{
-    {0.6, 0.6, 0.02, 0.0},
-    {0.6, 0.6, 0.02, kPi / 3.0},
-    {0.6, 0.6, 0.02, -kPi / 3.0},
-    {1.0, 0.6, 0.02, kPi / 3.0},
-    {1.0, 0.6, 0.02, -kPi / 3.0},
-    {0.3, 0.3, 0.04, 0.0},
+    {0.6, 0.6, 0.08, 0.0},
+    {0.6, 0.6, 0.08, kPi / 3.0},
+    {0.6, 0.6, 0.08, -kPi / 3.0},
+    {1.0, 0.6, 0.08, kPi / 3.0},
+    {1.0, 0.6, 0.08, -kPi / 3.0},
+    {0.3, 0.3, 0.16, 0.0},
 }};
 
 Status config_error(const std::string& what) { return Error(Errc::config, "formation: " + what); }

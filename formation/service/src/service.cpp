@@ -114,6 +114,7 @@ Result<std::unique_ptr<FormationService>> FormationService::create(const Formati
   if (!(config.pose_timeout_s > 0 && config.pose_timeout_s <= 10.0)) return Error(Errc::config, "pose_timeout_s: above 0, at most 10 s");
   if (!(config.hold_s > 0 && config.hold_s <= vda5050::kMaxFormationHoldS))
     return Error(Errc::config, "hold_s: above 0, at most 2 s (the formation command's bound)");
+  if (!(config.lookahead_s >= 0 && config.lookahead_s <= 1.0)) return Error(Errc::config, "lookahead_s: 0 to 1 s");
   if (config.max_payload < 1024 || config.max_payload > vda5050::kMaxMessageBytes)
     return Error(Errc::config, "max_payload: 1 KiB to 256 KiB");
   auto topics = subscriptions(config);
@@ -236,6 +237,8 @@ StepOutcome FormationService::step(hal::Nanos now, std::int64_t unix_ns) {
       continue;
     }
     poses_[i] = predict(r.pose, r.v, r.omega, static_cast<double>(std::clamp<std::int64_t>(age, 0, timeout_ns)) * 1e-9);
+    // And on to when this step's command will act: until then the robot drives the last one.
+    poses_[i] = predict(poses_[i], commands_[i].v, commands_[i].w, config_.lookahead_s);
   }
   if (!whole) {
     running_ = false;

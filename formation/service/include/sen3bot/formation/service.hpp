@@ -11,7 +11,7 @@
 // missing or older than the pose timeout, every robot is told to stop until all are fresh
 // again (and the controller restarts from there). Each pose is predicted forward from its
 // timestamp to the step by the velocity the robot reported with it, to make up for the
-// link's latency.
+// link's latency, and on by the command's own latency (lookahead_s) with the last commands.
 //
 // Fixed memory: every buffer is sized in create(); step() allocates nothing.
 #include <array>
@@ -43,6 +43,10 @@ struct FormationServiceConfig {
   double period_s = 0.1;          // a controller step and a command per robot this often
   double pose_timeout_s = 0.5;    // an older pose (by its message's timestamp) is stale
   double hold_s = 0.5;            // the commands' hold (0 < hold <= 2 s)
+  // The link's latency from a command leaving to the robot acting on it (the robot's fleet and
+  // controller rows, 0.1 s each, half a period each on average, and the base's cycle): the
+  // poses are predicted this far ahead with the last commands, so the barriers act in time.
+  double lookahead_s = 0.15;
   std::size_t max_payload = 64 * 1024;  // the link's max_payload: a receive needs room for its largest message
 };
 
