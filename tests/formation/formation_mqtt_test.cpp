@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "mosquitto_broker.hpp"
 #include "sen3bot/formation/controller.hpp"
 #include "sen3bot/formation/examples.hpp"
@@ -46,61 +47,13 @@ std::int64_t unix_now_ns() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using sen3bot::testing::read_text_file;
 
 std::span<const std::uint8_t> bytes(std::string_view text) {
   return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
 }
 
-class Process {
- public:
-  Process(std::vector<std::string> args, const std::string& out_path, const std::string& err_path) : out_(out_path), err_(err_path) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Process() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  Process(const Process&) = delete;
-  Process& operator=(const Process&) = delete;
-  void signal(int sig) const {
-    if (pid_ > 0) ::kill(pid_, sig);
-  }
-  int wait(double timeout_s) {
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-    while (pid_ > 0) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      if (Clock::now() > deadline) return -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return -1;
-  }
-  [[nodiscard]] std::string out() const { return read_file(out_); }
-  [[nodiscard]] std::string err() const { return read_file(err_); }
-
- private:
-  pid_t pid_ = -1;
-  std::string out_, err_;
-};
+using Process = sen3bot::testing::ChildProcess;
 
 // One robot as the centre sees it: its visualization out at 10 Hz, its formation commands in,
 // and an ideal unicycle that drives the newest command until its hold runs out.
@@ -298,7 +251,7 @@ TEST_F(FormationSite, DrivesTheTeamStopsItOnASilentRobotAndOnTheWayOut) {
   const std::string out = centre.out();
   EXPECT_NE(out.find("\"stopped_by\":\"SIGTERM\""), std::string::npos) << out;
   EXPECT_NE(out.find("\"stale_steps\":"), std::string::npos) << out;
-  const std::string log = read_file(dir() + "/steps.csv");
+  const std::string log = read_text_file(dir() + "/steps.csv");
   EXPECT_NE(log.find("commanded"), std::string::npos);
   EXPECT_NE(log.find("stopped"), std::string::npos);
 }

@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "mosquitto_broker.hpp"
 #include "sen3bot/hal/pubsub.hpp"
 #include "sen3bot/sim/agv.hpp"
@@ -54,63 +55,11 @@ std::span<const std::uint8_t> bytes(std::string_view text) {
   return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string read_file(const std::string& path) { return sen3bot::testing::read_text_file(path); }
 
 void write_file(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
-// A child process (one of the programs under test), its output in files.
-class Process {
- public:
-  Process(std::vector<std::string> args, const std::string& out_path, const std::string& err_path) : out_(out_path), err_(err_path) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Process() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  Process(const Process&) = delete;
-  Process& operator=(const Process&) = delete;
-
-  [[nodiscard]] bool started() const noexcept { return pid_ > 0; }
-  void signal(int sig) const {
-    if (pid_ > 0) ::kill(pid_, sig);
-  }
-  // The exit status (128 + signal when killed), or -1 when it did not end within timeout_s.
-  int wait(double timeout_s = 10.0) {
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-    while (pid_ > 0) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      if (Clock::now() > deadline) return -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return -1;
-  }
-  [[nodiscard]] std::string out() const { return read_file(out_); }
-  [[nodiscard]] std::string err() const { return read_file(err_); }
-
- private:
-  pid_t pid_ = -1;
-  std::string out_, err_;
-};
+using Process = sen3bot::testing::ChildProcess;
 
 // Runs a program to its end: exit status, standard output, standard error.
 struct Ran {
