@@ -134,7 +134,18 @@ Result<std::unique_ptr<FormationRig>> FormationRig::create(const FormationExampl
     SimulationConfig world = base->world;
     world.map_path = map_path;
     world.start_pose = {s.x, s.y, s.theta};
+    // The teammates, in this robot's world: its laser sees them and its safety filter stops
+    // for them, as on the floor. Each is a round body where the teammate truly is (moved on
+    // in advance()).
     world.movers.clear();
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+      if (k == i) continue;
+      world::MoverScript teammate;
+      teammate.size_m = kTeammateDiameterM;
+      teammate.timeline = {{starts[k].x, starts[k].y}};
+      teammate.times_s = {0.0};
+      world.movers.push_back(std::move(teammate));
+    }
     world.seed = options.seed + i;
     auto board = SimBoard::create(world, true);
     if (!board) return Error::format(board.error().code(), "%s: %s", run.serial.c_str(), board.error().c_str());
@@ -173,6 +184,16 @@ Status FormationRig::advance() {
     if (Status s = r.fw->scheduler().run_lockstep(*r.board->lockstep_clock(), kFormationSliceNs); !s)
       return Error::format(s.error().code(), "%s: %s", r.serial.c_str(), s.error().c_str());
   now_ += kFormationSliceNs;
+  if (now_ >= next_teammates_ns_) {
+    next_teammates_ns_ = now_ + kTeammateStepNs;
+    const std::size_t n = robots_.size();
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t k = 0; k < n; ++k) {
+        if (k == j) continue;
+        const nav::Pose2D& p = truth(k);
+        robots_[j].board->simulation().world().extend_timeline(k < j ? k : k - 1, {p.x_m, p.y_m}, t_s());
+      }
+  }
   if (centre_stepping_) {
     const formation::StepOutcome outcome = service_->step(now_, hal::SimClock::kEpochUnixNs + now_);
     if (outcome != formation::StepOutcome::idle) last_command_s_ = t_s();

@@ -32,6 +32,10 @@ inline constexpr double kFormationOffsetM = 0.1;   // L: the axle to the driven 
 inline constexpr double kFormationErrorBoundM = 0.05;
 inline constexpr double kFormationTargetToleranceM = 0.05;
 inline constexpr hal::Nanos kFormationSliceNs = hal::millis(10);
+// Each robot's teammates in its world: round bodies the Pioneer's length across, moved to
+// where the teammates truly are this often (the world moves them straight in between).
+inline constexpr double kTeammateDiameterM = 0.45;
+inline constexpr hal::Nanos kTeammateStepNs = hal::millis(50);
 inline constexpr double kFormationSampleS = 0.1;
 inline constexpr const char* kFormationCentreId = "formation-centre";
 
@@ -154,6 +158,7 @@ class FormationRig {
   bool shut_down_ = false;
   hal::Nanos now_ = 0;
   hal::Nanos next_sample_ns_ = 0;
+  hal::Nanos next_teammates_ns_ = 0;
   double min_distance_m_ = 1e9;
   double min_scale_ = 1.0;
   double last_scale_ = 0.0;

@@ -173,14 +173,14 @@ Point2D World::position_at(const Mover& mover, double time_s) noexcept {
   const auto& times = mover.script.times_s;
   if (!timeline.empty() && times.size() == timeline.size()) {
     if (time_s <= times.front()) return timeline.front();
-    for (std::size_t i = 1; i < times.size(); ++i) {
-      if (time_s > times[i]) continue;
-      const double span = times[i] - times[i - 1];
-      const double f = span > 0.0 ? (time_s - times[i - 1]) / span : 1.0;
-      return {timeline[i - 1].x_m + f * (timeline[i].x_m - timeline[i - 1].x_m),
-              timeline[i - 1].y_m + f * (timeline[i].y_m - timeline[i - 1].y_m)};
-    }
-    return timeline.back();
+    // A timeline grows as a run goes on (a teammate's every 50 ms): found by bisection.
+    const auto after = std::lower_bound(times.begin(), times.end(), time_s);
+    if (after == times.end()) return timeline.back();
+    const auto i = static_cast<std::size_t>(after - times.begin());
+    const double span = times[i] - times[i - 1];
+    const double f = span > 0.0 ? (time_s - times[i - 1]) / span : 1.0;
+    return {timeline[i - 1].x_m + f * (timeline[i].x_m - timeline[i - 1].x_m),
+            timeline[i - 1].y_m + f * (timeline[i].y_m - timeline[i - 1].y_m)};
   }
   const auto& path = mover.script.path;
   const double total = mover.cumulative_m.back();
