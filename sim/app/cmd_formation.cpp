@@ -318,10 +318,10 @@ std::string run_json(std::size_t index, const RunResult& r) {
                 "], \"min_robot_distance_m\": %.4f, \"obstacle_contacts\": %llu, \"targets_reached\": %zu, "
                 "\"formation_error_m\": %.4f, \"final_formation_error_m\": %.4f, \"converge_s\": %.1f, \"centre_converge_s\": %.1f, "
                 "\"min_scale\": %.4f, "
-                "\"commands_sent\": %llu, \"stale_steps\": %llu, \"switch_count\": %zu, \"switches_s\": [",
+                "\"commands_sent\": %llu, \"stale_steps\": %llu, \"safety_stops\": %llu, \"switch_count\": %zu, \"switches_s\": [",
                 m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
                 m.final_formation_error_m, m.converge_s, m.centre_converge_s, m.min_scale, static_cast<unsigned long long>(m.commands_sent),
-                static_cast<unsigned long long>(m.stale_steps), m.switches_s.size());
+                static_cast<unsigned long long>(m.stale_steps), static_cast<unsigned long long>(m.safety_stops), m.switches_s.size());
   json += line;
   for (std::size_t i = 0; i < m.switches_s.size(); ++i) json += (i ? ", " : "") + fmt("%.1f", m.switches_s[i]);
   json += "], \"failures\": [";

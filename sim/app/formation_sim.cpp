@@ -255,7 +255,10 @@ void FormationRig::shutdown() {
 FormationMetrics FormationRig::metrics() const {
   FormationMetrics m;
   m.min_robot_distance_m = min_distance_m_;
-  for (const RobotRun& r : robots_) m.obstacle_contacts += r.board->simulation().truth().contacts;
+  for (const RobotRun& r : robots_) {
+    m.obstacle_contacts += r.board->simulation().truth().contacts;
+    if (r.fw->safety() != nullptr) m.safety_stops += r.fw->safety()->stops();
+  }
   const formation::FormationCounters& c = service_->counters();
   m.commands_sent = c.commands_sent;
   m.stale_steps = c.stale_steps;

@@ -99,6 +99,7 @@ struct FormationMetrics {
   std::uint64_t commands_sent = 0;
   std::uint64_t stale_steps = 0;
   std::uint64_t rejected = 0;
+  std::uint64_t safety_stops = 0;      // safety-filter steps that cut a robot's request to zero
   bool passed = false;
   std::vector<std::string> failures;
 };
