@@ -30,10 +30,12 @@ section() { printf '\n==== %s (%d s in) ====\n' "$*" "$((SECONDS - ${start:-SECO
 # A compiler cache outside the tree: a clean clone built again (CI) reuses the objects of the
 # last run. Keyed on the preprocessed source and the flags, so it never serves a stale object.
 use_ccache() {
-  if command -v ccache >/dev/null 2>&1; then
-    export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
-    export CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-20G}
-  fi
+  command -v ccache >/dev/null 2>&1 || return 0
+  local dir=${CCACHE_DIR:-${XDG_CACHE_HOME:-${HOME:-/nonexistent}/.cache}/ccache}
+  # A cache it cannot write would fail every compile: then build without one.
+  mkdir -p "$dir" 2>/dev/null && [[ -w "$dir" ]] || return 0
+  export CCACHE_DIR=$dir CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-20G}
+  export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
 }
 
 case "${1:-}" in
