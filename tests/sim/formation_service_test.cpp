@@ -335,19 +335,5 @@ TEST(FormationService, CreateRefusesAMismatchedTeamAndBadTimes) {
   EXPECT_TRUE(FormationService::create(two_robots(), link()).ok());
 }
 
-TEST(FormationService, ReadsIso8601AsUnixTime) {
-  std::int64_t t = 0;
-  ASSERT_TRUE(parse_iso8601(vda5050::iso8601(kEpoch + hal::millis(12340)).view(), t));
-  EXPECT_EQ(t, kEpoch + hal::millis(12340));
-  ASSERT_TRUE(parse_iso8601("1970-01-01T00:00:01.5Z", t));
-  EXPECT_EQ(t, 1'500'000'000);
-  ASSERT_TRUE(parse_iso8601("2026-01-01T01:00:00+01:00", t));
-  EXPECT_EQ(t, kEpoch);
-  EXPECT_FALSE(parse_iso8601("2026-01-01 00:00:00Z", t));
-  EXPECT_FALSE(parse_iso8601("2026-01-01T00:00:00", t));
-  EXPECT_FALSE(parse_iso8601("2026-13-01T00:00:00Z", t));
-  EXPECT_FALSE(parse_iso8601("", t));
-}
-
 }  // namespace
 }  // namespace sen3bot::formation

@@ -73,6 +73,22 @@ void expect_rejected(const Decoded& d, std::string_view type, std::string_view f
   EXPECT_EQ(d.error().level, ErrorLevel::warning);
 }
 
+TEST(Timestamps, Iso8601ReadsAsUnixTime) {
+  constexpr std::int64_t kJan2026 = 1'767'225'600'000'000'000;  // 2026-01-01T00:00:00Z
+  std::int64_t t = 0;
+  ASSERT_TRUE(parse_iso8601(iso8601(kJan2026 + 12'340'000'000).view(), t));
+  EXPECT_EQ(t, kJan2026 + 12'340'000'000);
+  ASSERT_TRUE(parse_iso8601("1970-01-01T00:00:01.5Z", t));
+  EXPECT_EQ(t, 1'500'000'000);
+  ASSERT_TRUE(parse_iso8601("2026-01-01T01:00:00+01:00", t));
+  EXPECT_EQ(t, kJan2026);
+  EXPECT_FALSE(parse_iso8601("2026-01-01 00:00:00Z", t));
+  EXPECT_FALSE(parse_iso8601("2026-01-01T00:00:00", t));
+  EXPECT_FALSE(parse_iso8601("2026-13-01T00:00:00Z", t));
+  EXPECT_FALSE(parse_iso8601("", t));
+  EXPECT_FALSE(parse_iso8601("9999-12-31T23:59:59Z", t));  // beyond 64-bit nanoseconds
+}
+
 TEST_F(Codec, SpecFigure5OrderDecodes) {
   for (Version v : {Version::v2_0_0, Version::v2_1_0}) {
     auto d = order_of(figure5(v == Version::v2_0_0 ? "2.0.0" : "2.1.0"), v);

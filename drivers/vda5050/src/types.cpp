@@ -2,8 +2,33 @@
 
 #include <cstdio>
 #include <ctime>
+#include <limits>
 
 namespace sen3bot::vda5050 {
+
+namespace {
+
+bool digits(std::string_view text, std::size_t at, std::size_t count, int& value) noexcept {
+  if (at + count > text.size()) return false;
+  value = 0;
+  for (std::size_t i = at; i < at + count; ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+    value = value * 10 + (text[i] - '0');
+  }
+  return true;
+}
+
+// Days from 1970-01-01 to a proleptic Gregorian date (Howard Hinnant's days_from_civil).
+std::int64_t days_from_civil(int y, int m, int d) noexcept {
+  y -= m <= 2 ? 1 : 0;
+  const int era = (y >= 0 ? y : y - 399) / 400;
+  const int yoe = y - era * 400;
+  const int doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return static_cast<std::int64_t>(era) * 146097 + doe - 719468;
+}
+
+}  // namespace
 
 std::string_view to_string(Version version) noexcept {
   return version == Version::v2_0_0 ? "2.0.0" : "2.1.0";
@@ -26,6 +51,45 @@ Id iso8601(std::int64_t unix_ns) noexcept {
   Id id;
   (void)id.assign(std::string_view(text, n > 0 ? static_cast<std::size_t>(n) : 0));
   return id;
+}
+
+bool parse_iso8601(std::string_view text, std::int64_t& unix_ns) noexcept {
+  int year = 0, month = 0, day = 0, hour = 0, minute = 0, second = 0;
+  if (!digits(text, 0, 4, year) || text.size() < 20 || text[4] != '-' || !digits(text, 5, 2, month) || text[7] != '-' ||
+      !digits(text, 8, 2, day) || (text[10] != 'T' && text[10] != 't') || !digits(text, 11, 2, hour) || text[13] != ':' ||
+      !digits(text, 14, 2, minute) || text[16] != ':' || !digits(text, 17, 2, second))
+    return false;
+  if (month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 || minute > 59 || second > 60) return false;
+  std::size_t at = 19;
+  std::int64_t fraction_ns = 0;
+  if (at < text.size() && text[at] == '.') {
+    ++at;
+    std::int64_t scale = 100'000'000;
+    const std::size_t first = at;
+    for (; at < text.size() && text[at] >= '0' && text[at] <= '9'; ++at) {
+      fraction_ns += (text[at] - '0') * scale;
+      scale /= 10;
+    }
+    if (at == first) return false;
+  }
+  std::int64_t offset_s = 0;
+  if (at < text.size() && (text[at] == 'Z' || text[at] == 'z')) {
+    ++at;
+  } else if (at < text.size() && (text[at] == '+' || text[at] == '-')) {
+    int oh = 0, om = 0;
+    if (!digits(text, at + 1, 2, oh) || at + 3 >= text.size() || text[at + 3] != ':' || !digits(text, at + 4, 2, om)) return false;
+    offset_s = (text[at] == '+' ? 1 : -1) * static_cast<std::int64_t>(oh * 3600 + om * 60);
+    at += 6;
+  } else {
+    return false;
+  }
+  if (at != text.size()) return false;
+  const std::int64_t seconds = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second - offset_s;
+  // Unix nanoseconds in 64 bits span 1677 to 2262: a date outside is no time here.
+  constexpr std::int64_t kLimit = std::numeric_limits<std::int64_t>::max() / 1'000'000'000 - 1;
+  if (seconds > kLimit || seconds < -kLimit) return false;
+  unix_ns = seconds * 1'000'000'000 + fraction_ns;
+  return true;
 }
 
 std::string_view to_string(BlockingType value) noexcept {

@@ -199,18 +199,10 @@ void Service::on_people(std::string_view text, hal::Nanos now) {
   }
   centre_->add_people(report);
   // When the robot saw them, on the robots' clock (VDA 5050 timestamps are UTC).
-  if (!b.people.people.empty()) {
-    std::tm tm{};
-    int hundredths = 0;
-    const std::string stamp(b.people.timestamp.view());
-    if (std::sscanf(stamp.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d.%2dZ", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
-                    &tm.tm_sec, &hundredths) == 7) {
-      tm.tm_year -= 1900;
-      tm.tm_mon -= 1;
-      const std::int64_t seen = static_cast<std::int64_t>(timegm(&tm)) * 1'000'000'000 + std::int64_t{hundredths} * 10'000'000;
-      robot_people_stamp_[id] = seen;
-      newest_people_unix_ns_ = std::max(newest_people_unix_ns_, seen);
-    }
+  std::int64_t seen = 0;
+  if (!b.people.people.empty() && vda5050::parse_iso8601(b.people.timestamp.view(), seen)) {
+    robot_people_stamp_[id] = seen;
+    newest_people_unix_ns_ = std::max(newest_people_unix_ns_, seen);
   }
 }
 

@@ -62,6 +62,9 @@ std::optional<Version> parse_version(std::string_view text) noexcept;  // exact 
 
 // ISO 8601 UTC with hundredths, as VDA 5050 writes timestamps: "2026-12-03T15:04:13.25Z".
 Id iso8601(std::int64_t unix_ns) noexcept;
+// Such a timestamp as Unix nanoseconds: any fraction, "Z" or a "+hh:mm" / "-hh:mm" offset;
+// false for anything else.
+[[nodiscard]] bool parse_iso8601(std::string_view text, std::int64_t& unix_ns) noexcept;
 
 // The header every message starts with (section 6.4).
 struct Header {

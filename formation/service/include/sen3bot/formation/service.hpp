@@ -132,8 +132,4 @@ class FormationService {
   FormationCounters counters_;
 };
 
-// "2026-12-03T15:04:13.25Z" (VDA 5050's ISO 8601 UTC; fractions and "+hh:mm" offsets taken)
-// as Unix nanoseconds; false for anything else.
-[[nodiscard]] bool parse_iso8601(std::string_view text, std::int64_t& unix_ns) noexcept;
-
 }  // namespace sen3bot::formation
