@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
+#include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/vda5050/codec.hpp"
 #include "sen3bot/vda5050/extensions.hpp"
 
@@ -12,17 +14,9 @@ namespace {
 
 // Where a unicycle at `pose` gets to in dt_s at a constant (v, omega): along its arc.
 Pose predict(const Pose& pose, double v, double omega, double dt_s) noexcept {
-  Pose p = pose;
-  if (std::abs(omega) < 1e-6) {
-    p.x += v * dt_s * std::cos(pose.theta);
-    p.y += v * dt_s * std::sin(pose.theta);
-    return p;
-  }
-  const double theta = pose.theta + omega * dt_s;
-  p.x += v / omega * (std::sin(theta) - std::sin(pose.theta));
-  p.y -= v / omega * (std::cos(theta) - std::cos(pose.theta));
-  p.theta = std::remainder(theta, 2 * 3.14159265358979323846);
-  return p;
+  nav::Pose2D p{pose.x, pose.y, pose.theta};
+  nav::advance_arc(p, v, omega, dt_s);
+  return {p.x_m, p.y_m, std::remainder(p.theta_rad, 2.0 * std::numbers::pi)};
 }
 
 }  // namespace

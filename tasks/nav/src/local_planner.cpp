@@ -18,18 +18,6 @@ constexpr double kUnreachedPenaltyM = 10.0;  // a rollout ending where the targe
 // and its radius comes from what the laser saw of it): two cells.
 constexpr double kMoverCellSlackM = 0.1;
 
-// Exact arc for constant (v, w) over dt.
-void advance_arc(Pose2D& p, double v, double w, double dt) noexcept {
-  if (std::abs(w) < 1e-6) {
-    p.x_m += v * dt * std::cos(p.theta_rad);
-    p.y_m += v * dt * std::sin(p.theta_rad);
-  } else {
-    const double th = p.theta_rad + w * dt;
-    p.x_m += v / w * (std::sin(th) - std::sin(p.theta_rad));
-    p.y_m -= v / w * (std::cos(th) - std::cos(p.theta_rad));
-    p.theta_rad = th;
-  }
-}
 }  // namespace
 
 Status DwaPlanner::init(const DwaConfig& config, std::pmr::memory_resource& resource) {

@@ -32,6 +32,19 @@ inline Pose2D apply_motion(const Pose2D& a, const Pose2D& d) noexcept {
   return {a.x_m + c * d.x_m - s * d.y_m, a.y_m + s * d.x_m + c * d.y_m, normalize_angle(a.theta_rad + d.theta_rad)};
 }
 
+// Pose p driven at a constant (v, w) for dt: along the exact arc (straight for w near 0).
+inline void advance_arc(Pose2D& p, double v, double w, double dt) noexcept {
+  if (std::abs(w) < 1e-6) {
+    p.x_m += v * dt * std::cos(p.theta_rad);
+    p.y_m += v * dt * std::sin(p.theta_rad);
+  } else {
+    const double th = p.theta_rad + w * dt;
+    p.x_m += v / w * (std::sin(th) - std::sin(p.theta_rad));
+    p.y_m -= v / w * (std::cos(th) - std::cos(p.theta_rad));
+    p.theta_rad = th;
+  }
+}
+
 // The robot outline in the robot frame (x forward, y left): a convex polygon of up to
 // kMaxVertices corners, or a circle when vertex_count is 0.
 struct Footprint {
