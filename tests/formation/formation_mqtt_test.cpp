@@ -103,7 +103,8 @@ class FakeRobot {
     p.theta = std::remainder(pose_.theta, 2.0 * 3.14159265358979323846);
     (void)p.map_id.assign("map");
     v.agv_position = p;
-    v.velocity = vda5050::Velocity{command_.v * std::cos(pose_.theta), command_.v * std::sin(pose_.theta), command_.w};
+    // In the vehicle's frame (vx forward), as the robot's fleet task reports it.
+    v.velocity = vda5050::Velocity{command_.v, 0.0, command_.w};
     std::array<char, 2048> out{};
     auto text = vda5050::encode_visualization(v, kVersion, out);
     ASSERT_TRUE(text.ok()) << text.error().c_str();
