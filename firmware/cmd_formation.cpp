@@ -165,7 +165,8 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const std::int64_t start = clock_ns(CLOCK_MONOTONIC);
   const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
   std::int64_t next = start;
-  std::uint64_t switches_seen = 0, connects_seen = 0, stale_seen = 0;
+  std::uint64_t switches_seen = 0, connects_seen = 0;
+  bool stopped = false;  // the last step stopped the team
   while (StopOnSignal::requested() == 0) {
     const std::int64_t now = clock_ns(CLOCK_MONOTONIC);
     if (now >= end) break;
@@ -177,10 +178,9 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
                    s.switched ? 1 : 0, s.formation_error_m, s.min_barrier_m);
     }
     // The operator hears of what changes the team's motion, once each time.
-    const formation::FormationCounters& c = service.counters();
-    if (c.stale_steps > stale_seen && outcome == formation::StepOutcome::stopped && stale_seen == c.stale_steps - 1)
+    if (outcome == formation::StepOutcome::stopped && !stopped)
       std::fprintf(err, "sen3bot formation: a robot's pose is missing or stale: the team is told to stop\n");
-    stale_seen = c.stale_steps;
+    if (outcome != formation::StepOutcome::idle) stopped = outcome == formation::StepOutcome::stopped;
     if (service.controller().switches() != switches_seen) {
       switches_seen = service.controller().switches();
       std::fprintf(err, "sen3bot formation: gains switched to set %zu (switch %" PRIu64 ")\n", service.controller().gain_set(),
