@@ -721,6 +721,68 @@ Writer& Writer::uint32(std::uint32_t value) noexcept {
   return *this;
 }
 
+template <typename T>
+Writer& Writer::integer(T value) noexcept {
+  if (!before_value()) return *this;
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value);
+  put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
+Writer& Writer::int64(std::int64_t value) noexcept { return integer(value); }
+Writer& Writer::uint64(std::uint64_t value) noexcept { return integer(value); }
+
+Writer& Writer::float32(float value) noexcept {
+  if (!std::isfinite(value)) {
+    fail(Error(Errc::invalid_argument, "JSON writer: NaN or infinity has no JSON form"));
+    return *this;
+  }
+  if (!before_value()) return *this;
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value);
+  put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
+Writer& Writer::base64(std::span<const std::uint8_t> bytes) noexcept {
+  if (!before_value()) return *this;
+  static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const std::size_t n = bytes.size();
+  const std::size_t whole = n / 3 * 3;
+  // Checked once up front (the quotes included), so the loop writes without checks.
+  const std::size_t need = 2 + (n + 2) / 3 * 4;
+  if (need > buffer_.size() - size_) {
+    fail(Error::format(Errc::capacity, "JSON output exceeds the %zu-byte buffer", buffer_.size()));
+    return *this;
+  }
+  char* out = buffer_.data() + size_;
+  *out++ = '"';
+  const std::uint8_t* in = bytes.data();
+  for (std::size_t i = 0; i < whole; i += 3) {
+    const std::uint32_t v = (std::uint32_t{in[i]} << 16) | (std::uint32_t{in[i + 1]} << 8) | in[i + 2];
+    out[0] = kAlphabet[v >> 18];
+    out[1] = kAlphabet[(v >> 12) & 0x3F];
+    out[2] = kAlphabet[(v >> 6) & 0x3F];
+    out[3] = kAlphabet[v & 0x3F];
+    out += 4;
+  }
+  if (const std::size_t tail = n - whole; tail != 0) {
+    const std::uint32_t v = (std::uint32_t{in[whole]} << 16) | (tail == 2 ? std::uint32_t{in[whole + 1]} << 8 : 0u);
+    out[0] = kAlphabet[v >> 18];
+    out[1] = kAlphabet[(v >> 12) & 0x3F];
+    out[2] = tail == 2 ? kAlphabet[(v >> 6) & 0x3F] : '=';
+    out[3] = '=';
+    out += 4;
+  }
+  *out++ = '"';
+  size_ = static_cast<std::size_t>(out - buffer_.data());
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
 Writer& Writer::boolean(bool value) noexcept {
   if (!before_value()) return *this;
   put(value ? "true" : "false");

@@ -182,6 +182,12 @@ class Writer {
   Writer& string(std::string_view text) noexcept;  // escaped; invalid UTF-8 is an error
   Writer& number(double value) noexcept;  // shortest text that reads back the same double
   Writer& uint32(std::uint32_t value) noexcept;
+  Writer& int64(std::int64_t value) noexcept;
+  Writer& uint64(std::uint64_t value) noexcept;
+  // Shortest text that reads back the same float (fewer digits than the float as a double).
+  Writer& float32(float value) noexcept;
+  // A string of the bytes in standard base64 (RFC 4648 section 4, padded).
+  Writer& base64(std::span<const std::uint8_t> bytes) noexcept;
   Writer& boolean(bool value) noexcept;
   Writer& null() noexcept;
   Writer& raw(std::string_view json) noexcept;  // a complete JSON value, validated first
@@ -190,6 +196,8 @@ class Writer {
   Writer& member(std::string_view name, std::string_view text) noexcept { return key(name).string(text); }
   Writer& member_number(std::string_view name, double value) noexcept { return key(name).number(value); }
   Writer& member_uint32(std::string_view name, std::uint32_t value) noexcept { return key(name).uint32(value); }
+  Writer& member_int64(std::string_view name, std::int64_t value) noexcept { return key(name).int64(value); }
+  Writer& member_uint64(std::string_view name, std::uint64_t value) noexcept { return key(name).uint64(value); }
   Writer& member_bool(std::string_view name, bool value) noexcept { return key(name).boolean(value); }
 
   // The text written, or the first error (Errc::capacity on overflow, invalid_argument on
@@ -204,6 +212,8 @@ class Writer {
   void put(char c) noexcept;
   void fail(Error error) noexcept;
   void escaped(std::string_view text) noexcept;
+  template <typename T>
+  Writer& integer(T value) noexcept;
   Writer& open(char c, bool object) noexcept;
   Writer& close(char c, bool object) noexcept;
 
