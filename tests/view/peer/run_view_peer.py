@@ -30,7 +30,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 SKIP = 77
-VIEW_LINE = re.compile(r"^view: http://([0-9.]+):(\d+)/")
+VIEW_LINE = re.compile(r"^view: http://([^/\s]+):(\d+)/")
 
 
 def log(message):

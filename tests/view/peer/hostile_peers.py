@@ -1,0 +1,769 @@
+#!/usr/bin/env python3
+"""Hostile peers against the simulator's live view (docs/view.md), with Python's standard
+library only: a WebSocket client of its own (handshake, masked frames, a frame parser).
+
+  hostile_peers.py --sim BUILD/firmware/sen3bot-sim [--source-dir REPO] [--scenario NAME] [--keep]
+
+A simulator runs `sim --scenario thesis-sgp --view --view-port 0 --realtime`. One well-behaved
+client stays subscribed to /stats and /tf throughout; beside it, each case on its own
+connection:
+  a  garbage bytes instead of an HTTP request: a 4xx or a close, nothing else;
+  b  a valid handshake, then a frame with reserved bits set, an unmasked client frame, opcode
+     0x3, a fragmented ping, a truncated frame and a close: each a close 1002 (the truncated
+     one: the server lives on);
+  c  a 1 MiB text message: a close 1009 (or a refusal of the rest), never the server's death;
+  d  on one connection: an unknown op, a client advertise, a binary client message (opcode 0x01
+     with a channel id), getParameters, setParameters, subscribeConnectionGraph, malformed
+     JSON, JSON that is not an object, a subscribe to a channel that does not exist and one
+     with a subscription id already in use: each answered with a status (error, level 2;
+     warning or error for the two subscribes), nothing else answered, nothing changed (the
+     subscription whose id was reused still carries its channel), and a valid subscribe
+     afterwards still delivers;
+  e  the wrong subprotocol (and none): the upgrade refused;
+  f  a client that subscribes to every channel, then reads nothing for 10 s and closes.
+After them the well-behaved client must have received /tf at its rate with no gap over 1 s, and
+/stats must show no overrun, slip or skip of any task added while the attacks ran (the first
+and the last /stats compared, a new case's counters that start again from zero included).
+  g  tokens: a second simulator with `--view-address 0.0.0.0 --view-token S3cret`, reached on
+     the machine's non-loopback address (the case is skipped, saying why, without one): the
+     page and the upgrade without a token, with ?token=wrong or a wrong bearer refused (401,
+     no data), with ?token=S3cret or `Authorization: Bearer S3cret` served; from loopback no
+     token is needed. And `--view-address 0.0.0.0` without a token: the simulator refuses to
+     start, saying so.
+Exits 0 when every check passed, 1 otherwise, 77 (skipped) off Linux.
+"""
+import argparse
+import base64
+import hashlib
+import json
+import os
+import shutil
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from run_view_peer import Simulator  # noqa: E402  (the simulator's start, output and stop)
+
+SKIP = 77
+PROTOCOL = "foxglove.websocket.v1"
+GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
+TOKEN = "S3cret"
+
+failures = []
+
+
+def log(message):
+    print(f"hostile_peers: {message}", file=sys.stderr, flush=True)
+
+
+def check(ok, what):
+    """Records a check: `what` says what was expected and, on failure, what happened."""
+    print(f"  {'ok  ' if ok else 'FAIL'} {what}", flush=True)
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+# --- A minimal WebSocket client -------------------------------------------------------------------
+
+class Closed(Exception):
+    """The TCP connection ended (no close frame)."""
+
+
+class WebSocketClient:
+    def __init__(self, host, port, path="/", protocol=PROTOCOL, headers=(), timeout=5.0, rcvbuf=None):
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        if rcvbuf:
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        self.sock.settimeout(timeout)
+        self.sock.connect((host, port))
+        self.buffer = b""
+        self.status = None
+        self.response_headers = {}
+        self.close_code = None  # the server's close frame's code, once received
+        self.host, self.port, self.path = host, port, path
+        self.protocol = protocol
+        self.extra_headers = list(headers)
+
+    # The opening handshake (RFC 6455 section 4): returns the HTTP status code.
+    def handshake(self):
+        key = base64.b64encode(os.urandom(16)).decode()
+        lines = [f"GET {self.path} HTTP/1.1", f"Host: {self.host}:{self.port}", "Upgrade: websocket",
+                 "Connection: Upgrade", f"Sec-WebSocket-Key: {key}", "Sec-WebSocket-Version: 13"]
+        if self.protocol is not None:
+            lines.append(f"Sec-WebSocket-Protocol: {self.protocol}")
+        lines += self.extra_headers
+        self.sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        head = self._read_head()
+        status_line, *header_lines = head.split("\r\n")
+        parts = status_line.split(" ", 2)
+        self.status = int(parts[1]) if len(parts) > 1 and parts[1].isdigit() else None
+        for line in header_lines:
+            name, _, value = line.partition(":")
+            self.response_headers[name.strip().lower()] = value.strip()
+        if self.status == 101:
+            accept = base64.b64encode(hashlib.sha1((key + GUID).encode()).digest()).decode()
+            if self.response_headers.get("sec-websocket-accept") != accept:
+                raise ValueError(f"Sec-WebSocket-Accept {self.response_headers.get('sec-websocket-accept')!r}, "
+                                 f"expected {accept!r}")
+        return self.status
+
+    def _read_head(self):
+        while b"\r\n\r\n" not in self.buffer:
+            chunk = self.sock.recv(4096)
+            if not chunk:
+                raise Closed(f"the connection ended during the HTTP response ({self.buffer[:80]!r})")
+            self.buffer += chunk
+        head, _, self.buffer = self.buffer.partition(b"\r\n\r\n")
+        return head.decode(errors="replace")
+
+    def _fill(self):
+        chunk = self.sock.recv(65536)
+        if not chunk:
+            raise Closed("the connection ended")
+        self.buffer += chunk
+
+    @staticmethod
+    def frame(opcode, payload=b"", fin=True, rsv=0, mask=True, length_override=None):
+        first = (0x80 if fin else 0) | (rsv << 4) | opcode
+        n = len(payload) if length_override is None else length_override
+        if n < 126:
+            header = struct.pack("!BB", first, (0x80 if mask else 0) | n)
+        elif n < 65536:
+            header = struct.pack("!BBH", first, (0x80 if mask else 0) | 126, n)
+        else:
+            header = struct.pack("!BBQ", first, (0x80 if mask else 0) | 127, n)
+        if not mask:
+            return header + payload
+        key = os.urandom(4)
+        masked = bytes(b ^ key[i % 4] for i, b in enumerate(payload)) if len(payload) < 4096 else _mask_fast(payload, key)
+        return header + key + masked
+
+    def send_frame(self, opcode, payload=b"", **kwargs):
+        self.sock.sendall(self.frame(opcode, payload, **kwargs))
+
+    def send_text(self, text):
+        self.send_frame(0x1, text.encode() if isinstance(text, str) else text)
+
+    def send_json(self, value):
+        self.send_text(json.dumps(value))
+
+    def send_binary(self, data):
+        self.send_frame(0x2, data)
+
+    def send_close(self, code=1000):
+        try:
+            self.send_frame(0x8, struct.pack("!H", code))
+        except OSError:
+            pass
+
+    def read_frame(self):
+        """(fin, opcode, payload) of one frame; a server frame must not be masked. The frame is
+        taken from the buffer only once whole, so a timeout never loses part of it."""
+        while True:
+            frame = self._parse()
+            if frame is not None:
+                return frame
+            self._fill()
+
+    def _parse(self):
+        data = self.buffer
+        if len(data) < 2:
+            return None
+        b0, b1 = data[0], data[1]
+        if b1 & 0x80:
+            raise ValueError("a masked server frame")
+        if b0 & 0x70:
+            raise ValueError(f"a server frame with reserved bits {b0 & 0x70:#x}")
+        n, at = b1 & 0x7F, 2
+        if n == 126:
+            if len(data) < 4:
+                return None
+            n, at = struct.unpack_from("!H", data, 2)[0], 4
+        elif n == 127:
+            if len(data) < 10:
+                return None
+            n, at = struct.unpack_from("!Q", data, 2)[0], 10
+        if len(data) < at + n:
+            return None
+        self.buffer = data[at + n:]
+        return bool(b0 & 0x80), b0 & 0x0F, data[at:at + n]
+
+    def read_message(self):
+        """('text', str) | ('binary', bytes) | ('close', code, reason); pings answered. The
+        fragments of a message outlive a timeout."""
+        while True:
+            fin, opcode, payload = self.read_frame()
+            if opcode == 0x8:
+                code = struct.unpack("!H", payload[:2])[0] if len(payload) >= 2 else None
+                self.close_code = code
+                return ("close", code, payload[2:].decode(errors="replace"))
+            if opcode == 0x9:
+                self.send_frame(0xA, payload)
+                continue
+            if opcode == 0xA:
+                continue
+            if opcode in (0x1, 0x2):
+                self.fragments = (opcode, [payload])
+            elif opcode == 0x0 and getattr(self, "fragments", None):
+                self.fragments[1].append(payload)
+            else:
+                raise ValueError(f"a server frame of opcode {opcode:#x}")
+            if fin:
+                kind, parts = self.fragments
+                self.fragments = None
+                data = b"".join(parts)
+                return ("text", data.decode()) if kind == 0x1 else ("binary", data)
+
+    def close(self):
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+
+def _mask_fast(payload, key):
+    # XOR with the repeated key through Python's big integers: fast enough for 1 MiB.
+    repeated = (key * (len(payload) // 4 + 1))[:len(payload)]
+    return (int.from_bytes(payload, "little") ^ int.from_bytes(repeated, "little")).to_bytes(len(payload), "little")
+
+
+def open_session(port, host="127.0.0.1", **kwargs):
+    """A handshake, then serverInfo and advertise read: (client, serverInfo, {topic: channel id})."""
+    client = WebSocketClient(host, port, **kwargs)
+    status = client.handshake()
+    if status != 101:
+        client.close()
+        raise RuntimeError(f"the upgrade was answered {status}")
+    info, channels = None, None
+    while channels is None:
+        message = client.read_message()
+        if message[0] != "text":
+            raise RuntimeError(f"{message[0]} before the advertise")
+        op = json.loads(message[1])
+        if op.get("op") == "serverInfo":
+            info = op
+        elif op.get("op") == "advertise":
+            channels = {c["topic"]: c["id"] for c in op["channels"]}
+    return client, info, channels
+
+
+def message_data(payload):
+    """A server binary message: (opcode, subscription id, timestamp ns, JSON) or None."""
+    if len(payload) < 13 or payload[0] != 0x01:
+        return None
+    sub, stamp = struct.unpack_from("<IQ", payload, 1)
+    return 0x01, sub, stamp, payload[13:]
+
+
+def expect_close(client, code, what, timeout=5.0):
+    """Reads until a close frame or the end: the close code must be `code`."""
+    client.sock.settimeout(timeout)
+    got = "nothing"
+    try:
+        while True:
+            message = client.read_message()
+            if message[0] == "close":
+                got = f"close {message[1]} {message[2]!r}".strip()
+                break
+    except Closed:
+        got = "the connection ended without a close frame" if client.close_code is None else got
+    except ValueError as error:
+        got = f"a malformed server frame ({error})"
+    except (socket.timeout, TimeoutError):
+        got = f"nothing for {timeout} s, the connection still open"
+    except OSError as error:
+        got = f"{type(error).__name__} ({error})"
+    client.close()
+    return check(got.startswith(f"close {code}"), f"{what}: expected close {code}, got {got}")
+
+
+# --- The well-behaved client ------------------------------------------------------------------------
+
+class Watcher(threading.Thread):
+    """Subscribed to /stats and /tf throughout; records when each /tf message came and every
+    /stats payload."""
+
+    def __init__(self, port):
+        super().__init__(daemon=True)
+        self.client, self.info, self.channels = open_session(port)
+        self.tf_times = []
+        self.stats = []  # (arrival, payload)
+        self.error = None
+        self.stopping = threading.Event()
+        self.client.send_json({"op": "subscribe", "subscriptions": [
+            {"id": 1, "channelId": self.channels["/tf"]}, {"id": 2, "channelId": self.channels["/stats"]}]})
+        self.client.sock.settimeout(0.5)
+
+    def run(self):
+        while not self.stopping.is_set():
+            try:
+                message = self.client.read_message()
+            except (socket.timeout, TimeoutError):
+                continue
+            except (Closed, ValueError, OSError) as error:
+                self.error = f"{type(error).__name__}: {error}"
+                return
+            now = time.monotonic()
+            if message[0] == "close":
+                self.error = f"the server closed the well-behaved client: {message[1]} {message[2]!r}"
+                return
+            if message[0] == "binary":
+                data = message_data(message[1])
+                if data is None:
+                    continue
+                if data[1] == 1:
+                    self.tf_times.append(now)
+                elif data[1] == 2:
+                    self.stats.append((now, json.loads(data[3])))
+
+    def stop(self):
+        self.stopping.set()
+        self.join(timeout=3)
+        self.client.send_close()
+        self.client.close()
+
+
+# --- The cases --------------------------------------------------------------------------------------
+
+def case_garbage(port):
+    print("(a) garbage instead of an HTTP request", flush=True)
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(b"\x16\x03\x01\x00\xa5\x01\x00\x00\xa1 ZAP \xff\xfe\r\n" + bytes(range(256)) + b"\r\n\r\n")
+        got = b""
+        try:
+            while True:
+                chunk = s.recv(4096)
+                if not chunk:
+                    break
+                got += chunk
+        except (socket.timeout, TimeoutError):
+            check(False, f"garbage: expected a 4xx or a close within 5 s, the connection stays open ({got[:60]!r})")
+            return
+        except ConnectionResetError:
+            pass
+        status = got.split(b"\r\n", 1)[0]
+        check(not got or (status.startswith(b"HTTP/1.") and status[9:10] == b"4"),
+              f"garbage: answered {status.decode(errors='replace') or 'with a close'}")
+
+
+def case_frames(port):
+    print("(b) malformed frames", flush=True)
+    subscribe = json.dumps({"op": "subscribe", "subscriptions": [{"id": 9, "channelId": 1}]}).encode()
+    bad = [
+        ("reserved bits set", lambda c: c.send_frame(0x1, subscribe, rsv=0b111)),
+        ("an unmasked client frame", lambda c: c.send_frame(0x1, subscribe, mask=False)),
+        ("opcode 0x3", lambda c: c.send_frame(0x3, b"abc")),
+        ("a fragmented ping", lambda c: c.send_frame(0x9, b"ping", fin=False)),
+    ]
+    for what, send in bad:
+        client, _, _ = open_session(port)
+        send(client)
+        expect_close(client, 1002, f"{what}")
+    # A frame that claims 1000 bytes, 10 of them sent, then the connection closed.
+    client, _, _ = open_session(port)
+    frame = client.frame(0x1, b"x" * 1000)
+    client.sock.sendall(frame[:16])
+    client.close()
+    time.sleep(0.3)
+    probe, _, _ = open_session(port)
+    probe.send_close()
+    probe.close()
+    check(True, "a truncated frame, then the connection closed: the server still accepts a new one")
+
+
+def case_oversized(port):
+    print("(c) a 1 MiB text message", flush=True)
+    client, _, _ = open_session(port)
+    padding = "x" * (1 << 20)
+    text = json.dumps({"op": "subscribe", "subscriptions": [], "padding": padding})
+    try:
+        client.send_text(text)
+    except (BrokenPipeError, ConnectionResetError) as error:
+        client.close()
+        check(True, f"1 MiB message: refused while being sent ({type(error).__name__})")
+        return
+    expect_close(client, 1009, "1 MiB message")
+
+
+def collect(client, seconds):
+    """Every message for `seconds`: (statuses, other texts, {subscription id: [payload JSON]})."""
+    statuses, others, data = [], [], {}
+    end = time.monotonic() + seconds
+    while True:
+        left = end - time.monotonic()
+        if left <= 0:
+            break
+        client.sock.settimeout(left)
+        try:
+            message = client.read_message()
+        except (socket.timeout, TimeoutError):
+            break
+        if message[0] == "close":
+            raise Closed(f"closed by the server: {message[1]} {message[2]!r}")
+        if message[0] == "text":
+            op = json.loads(message[1])
+            (statuses if op.get("op") == "status" else others).append(op)
+        else:
+            parsed = message_data(message[1])
+            if parsed is None:
+                others.append({"binary": message[1][:20].hex()})
+            else:
+                data.setdefault(parsed[1], []).append(json.loads(parsed[3]))
+    return statuses, others, data
+
+
+def case_operations(port):
+    print("(d) operations the server does not accept, on one connection", flush=True)
+    client, _, channels = open_session(port)
+    # Subscription 7 carries /mission; reusing its id for /tf must change nothing.
+    client.send_json({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": channels["/mission"]}]})
+    statuses, others, data = collect(client, 1.2)
+    check(not statuses and len(data.get(7, [])) >= 1,
+          f"a valid subscribe to /mission: {len(data.get(7, []))} messages, statuses {statuses}")
+    error_only = [
+        ("an unknown op", lambda: client.send_json({"op": "frobnicate", "value": 1})),
+        ("a client advertise", lambda: client.send_json({"op": "advertise", "channels": [
+            {"id": 1, "topic": "/cmd_vel", "encoding": "json", "schemaName": "geometry_msgs/Twist", "schema": "{}"}]})),
+        ("a binary client message (opcode 0x01, channel 1)",
+         lambda: client.send_binary(b"\x01" + struct.pack("<I", 1) + b'{"linear":{"x":1.0}}')),
+        ("getParameters", lambda: client.send_json({"op": "getParameters", "parameterNames": ["max_speed"], "id": "g1"})),
+        ("setParameters", lambda: client.send_json({"op": "setParameters", "parameters": [{"name": "max_speed", "value": 5}],
+                                                    "id": "s1"})),
+        ("subscribeConnectionGraph", lambda: client.send_json({"op": "subscribeConnectionGraph"})),
+        ("malformed JSON", lambda: client.send_text('{"op":')),
+        ("JSON that is not an object", lambda: client.send_text('[1, 2, "subscribe"]')),
+    ]
+    warning_or_error = [
+        ("a subscribe to channel 999999", lambda: client.send_json(
+            {"op": "subscribe", "subscriptions": [{"id": 8, "channelId": 999999}]})),
+        ("a subscribe reusing subscription id 7 (for /tf)", lambda: client.send_json(
+            {"op": "subscribe", "subscriptions": [{"id": 7, "channelId": channels["/tf"]}]})),
+    ]
+    for levels, cases in (((2,), error_only), ((1, 2), warning_or_error)):
+        for what, send in cases:
+            send()
+            try:
+                statuses, others, data = collect(client, 1.0)
+            except (Closed, ValueError, OSError) as error:
+                check(False, f"{what}: the connection ended ({error})")
+                return
+            answered = [s for s in statuses if s.get("level") in levels and isinstance(s.get("message"), str)]
+            problems = []
+            if len(answered) != 1 or len(statuses) != 1:
+                problems.append(f"statuses {[(s.get('level'), s.get('message')) for s in statuses]}")
+            if others:
+                problems.append(f"also answered {others[:2]}")
+            if data.get(8):
+                problems.append(f"{len(data[8])} messages for the subscription to a missing channel")
+            reused = data.get(7, [])
+            if not all("state" in m and "child_frame_id" not in m for m in reused):
+                problems.append("subscription 7 carries something other than /mission")
+            if problems:
+                outcome = "; ".join(problems)
+            else:
+                outcome = f"level {statuses[0]['level']} {statuses[0]['message']!r}"
+            check(not problems, f"{what}: one status of level {' or '.join(map(str, levels))}, nothing else, "
+                                f"nothing changed: {outcome}")
+    # Still usable: a valid subscribe delivers.
+    client.send_json({"op": "subscribe", "subscriptions": [{"id": 20, "channelId": channels["/tf"]}]})
+    statuses, _, data = collect(client, 1.0)
+    check(len(data.get(20, [])) >= 5 and not statuses,
+          f"after all of them a valid subscribe to /tf delivers: {len(data.get(20, []))} messages in 1 s, statuses {statuses}")
+    client.send_close()
+    client.close()
+
+
+def case_subprotocol(port):
+    print("(e) the wrong subprotocol", flush=True)
+    for protocol, what in (("mqtt", "subprotocol mqtt"), ("foxglove.websocket.v2", "subprotocol foxglove.websocket.v2")):
+        client = WebSocketClient("127.0.0.1", port, protocol=protocol)
+        try:
+            status = client.handshake()
+        except Closed:
+            status = "a close"
+        chosen = client.response_headers.get("sec-websocket-protocol")
+        check(status != 101, f"{what}: refused (got {status}{f', protocol {chosen}' if chosen else ''})")
+        client.close()
+    client = WebSocketClient("127.0.0.1", port, protocol=None)
+    try:
+        status = client.handshake()
+    except Closed:
+        status = "a close"
+    print(f"  note no subprotocol at all: answered {status}", flush=True)
+    client.close()
+
+
+def case_slow_reader(port, seconds=10.0):
+    print(f"(f) a client subscribed to everything that reads nothing for {seconds:.0f} s", flush=True)
+    client, _, channels = open_session(port, rcvbuf=4096)
+    client.send_json({"op": "subscribe", "subscriptions": [
+        {"id": 100 + i, "channelId": cid} for i, cid in enumerate(channels.values())]})
+    time.sleep(seconds)
+    client.close()
+    check(True, "the stalled client closed")
+
+
+# --- After the attacks -------------------------------------------------------------------------------
+
+def check_watcher(watcher, attacks_from, attacks_to):
+    print("the well-behaved client", flush=True)
+    check(watcher.error is None, f"stayed connected ({watcher.error or 'no error'})")
+    times = [t for t in watcher.tf_times if attacks_from - 0.5 <= t <= attacks_to + 0.5]
+    span = attacks_to - attacks_from
+    rate = len(times) / span if span > 0 else 0
+    check(rate >= 20.0, f"/tf at {rate:.1f} messages/s during {span:.1f} s of attacks (documented 30)")
+    points = [attacks_from] + times + [attacks_to]
+    gaps = [b - a for a, b in zip(points, points[1:])]
+    worst = max(gaps) if gaps else span
+    check(worst <= 1.0, f"/tf's longest gap during the attacks {worst:.3f} s (at most 1 s)")
+
+    stats = [m for t, m in watcher.stats if attacks_from - 1.5 <= t <= attacks_to + 1.5]
+    if not check(len(stats) >= 2, f"{len(stats)} /stats messages around the attacks"):
+        return
+    # Counters per task, summed over the run's segments: a new case's task table starts at zero.
+    added = {}
+    previous = {}
+    for m in stats:
+        for task in m["tasks"]:
+            name = task["name"]
+            values = {k: task[k] for k in ("runs", "overruns", "slips", "skips")}
+            before = previous.get(name)
+            if before is not None:
+                restarted = values["runs"] < before["runs"]
+                total = added.setdefault(name, {"overruns": 0, "slips": 0, "skips": 0})
+                for k in total:
+                    total[k] += values[k] if restarted else values[k] - before[k]
+            previous[name] = values
+    first, last = stats[0], stats[-1]
+    print(f"  /stats from uptime {first.get('uptime_s')} s to {last.get('uptime_s')} s; view counters "
+          f"{first.get('view')} -> {last.get('view')}", flush=True)
+    for name, total in sorted(added.items()):
+        check(not any(total.values()), f"task {name}: {total['overruns']} overruns, {total['slips']} slips, "
+                                      f"{total['skips']} skips added during the attacks")
+    missing = {t["name"] for t in first["tasks"]} - set(added)
+    check(not missing, f"every task of the first /stats in the last ({sorted(missing) or 'all'})")
+
+
+# --- Tokens ------------------------------------------------------------------------------------------
+
+def outward_address():
+    """The machine's non-loopback IPv4 address: the source of a route outward, else hostname -I."""
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.connect(("192.0.2.1", 9))  # no packet is sent
+            address = s.getsockname()[0]
+            if not address.startswith("127.") and address != "0.0.0.0":
+                return address
+    except OSError:
+        pass
+    try:
+        out = subprocess.run(["hostname", "-I"], capture_output=True, text=True, timeout=5).stdout.split()
+    except (OSError, subprocess.SubprocessError):
+        out = []
+    return next((a for a in out if "." in a and not a.startswith("127.")), None)
+
+
+def http_get(host, port, target, headers=()):
+    """(status, headers text, body) of one GET."""
+    with socket.create_connection((host, port), timeout=5) as s:
+        request = [f"GET {target} HTTP/1.1", f"Host: {host}:{port}", "Connection: close", *headers]
+        s.sendall(("\r\n".join(request) + "\r\n\r\n").encode())
+        data = b""
+        try:
+            while True:
+                chunk = s.recv(65536)
+                if not chunk:
+                    break
+                data += chunk
+        except (socket.timeout, TimeoutError):
+            pass
+        except ConnectionResetError:
+            pass
+    head, _, body = data.partition(b"\r\n\r\n")
+    status_line = head.split(b"\r\n", 1)[0].split(b" ")
+    status = int(status_line[1]) if len(status_line) > 1 and status_line[1].isdigit() else None
+    return status, head.decode(errors="replace"), body
+
+
+def upgrade(host, port, path="/", headers=()):
+    """(status, first message or None, data after a refusal) of a WebSocket upgrade."""
+    client = WebSocketClient(host, port, path=path, headers=headers)
+    try:
+        status = client.handshake()
+    except Closed:
+        client.close()
+        return None, None, b""
+    first = None
+    extra = b""
+    if status == 101:
+        try:
+            first = client.read_message()
+        except (Closed, ValueError, OSError):
+            first = None
+        client.send_close()
+    else:
+        client.sock.settimeout(1.0)
+        extra = client.buffer
+        try:
+            while True:
+                chunk = client.sock.recv(65536)
+                if not chunk:
+                    break
+                extra += chunk
+        except (OSError, socket.timeout):
+            pass
+    client.close()
+    return status, first, extra
+
+
+def case_tokens(sim_path, source, work, scenario):
+    print("(g) tokens", flush=True)
+    address = outward_address()
+    if address is None:
+        print("  skipped: this machine has no non-loopback IPv4 address to connect from", flush=True)
+        return
+    sim = Simulator([sim_path, "sim", "--scenario", scenario, "--view", "--view-port", "0", "--view-address", "0.0.0.0",
+                     "--view-token", TOKEN, "--realtime", "--report", str(work / "report-token")],
+                    cwd=source, log_path=work / "sim-token.log")
+    try:
+        port = sim.wait_listening(30.0)
+        if not check(port is not None, f"the simulator with --view-address 0.0.0.0 --view-token serves "
+                                       f"({'a port' if port else sim.tail(10)})"):
+            return
+        print(f"  connecting from {address} to port {port}", flush=True)
+        page_cases = [
+            ("/", (), 401), (f"/?token=wrong", (), 401), ("/", ("Authorization: Bearer wrong",), 401),
+            (f"/?token={TOKEN}", (), 200), ("/", (f"Authorization: Bearer {TOKEN}",), 200),
+        ]
+        for target, headers, expected in page_cases:
+            status, head, body = http_get(address, port, target, headers)
+            label = f"page {target}{' ' + headers[0] if headers else ''}"
+            ok = status == expected
+            if expected == 200:
+                ok = ok and b"<" in body
+            else:
+                ok = ok and b"sen3botView" not in body
+            check(ok, f"{label}: expected {expected}, got {status} ({len(body)} bytes)")
+        ws_cases = [
+            ("/", (), 401), ("/?token=wrong", (), 401), ("/", ("Authorization: Bearer wrong",), 401),
+            (f"/?token={TOKEN}", (), 101), ("/", (f"Authorization: Bearer {TOKEN}",), 101),
+        ]
+        for path, headers, expected in ws_cases:
+            status, first, extra = upgrade(address, port, path, headers)
+            label = f"upgrade {path}{' ' + headers[0] if headers else ''}"
+            if expected == 101:
+                served = status == 101 and first is not None and first[0] == "text" and '"serverInfo"' in first[1]
+                check(served, f"{label}: expected 101 and serverInfo, got {status} {str(first)[:60]}")
+            else:
+                check(status == 401 and b"serverInfo" not in extra and b"\x81" not in extra[:1],
+                      f"{label}: expected 401 and no data, got {status} ({len(extra)} bytes after it)")
+        status, first, _ = upgrade("127.0.0.1", port)
+        check(status == 101 and first is not None and '"serverInfo"' in first[1],
+              f"upgrade from loopback without a token: expected 101, got {status}")
+        status, _, _ = http_get("127.0.0.1", port, "/")
+        check(status == 200, f"page from loopback without a token: expected 200, got {status}")
+    finally:
+        sim.stop()
+
+    # A non-loopback address without a token: the simulator must refuse to start.
+    log_path = work / "sim-no-token.log"
+    argv = [sim_path, "sim", "--scenario", scenario, "--view", "--view-port", "0", "--view-address", "0.0.0.0",
+            "--realtime", "--report", str(work / "report-no-token")]
+    sim = Simulator(argv, cwd=source, log_path=log_path)
+    try:
+        sim.process.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        pass
+    served = sim.port is not None
+    running = sim.running()
+    code = sim.stop()
+    output = log_path.read_text(errors="replace")
+    check(not served and not running and code != 0 and "token" in output.lower(),
+          f"--view-address 0.0.0.0 without a token: refused to start with a word on the token "
+          f"(exit {code}, {'served' if served else 'did not serve'}; said {output.strip()[-200:]!r})")
+
+
+# --- Main --------------------------------------------------------------------------------------------
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sim", required=True, help="the sen3bot-sim binary")
+    parser.add_argument("--source-dir", default=str(HERE.parents[2]), help="the repository (config/sim.yaml)")
+    parser.add_argument("--scenario", default="thesis-sgp")
+    parser.add_argument("--keep", action="store_true", help="keep the temporary folder (reports, logs)")
+    args = parser.parse_args()
+    if not sys.platform.startswith("linux"):
+        log(f"skipped: {sys.platform} is not Linux")
+        return SKIP
+
+    sim_path = str(Path(args.sim).resolve())
+    source = Path(args.source_dir).resolve()
+    work = Path(tempfile.mkdtemp(prefix="sen3bot-view-hostile-"))
+    sim = watcher = None
+    try:
+        sim = Simulator([sim_path, "sim", "--scenario", args.scenario, "--view", "--view-port", "0", "--realtime",
+                         "--report", str(work / "report")], cwd=source, log_path=work / "sim.log")
+        port = sim.wait_listening(30.0)
+        if port is None:
+            log(f"sen3bot-sim printed no 'view: http://...' line within 30 s:\n{sim.tail()}")
+            return 1
+        log(f"sen3bot-sim pid {sim.process.pid} serves port {port}; its output in {work / 'sim.log'}")
+        watcher = Watcher(port)
+        watcher.start()
+        time.sleep(2.5)  # a /stats or two before the attacks
+        attacks_from = time.monotonic()
+        for case in (case_garbage, case_frames, case_oversized, case_operations, case_subprotocol, case_slow_reader):
+            try:
+                case(port)
+            except Exception as error:  # a case that could not even run is a failure, the others go on
+                check(False, f"{case.__name__}: {type(error).__name__}: {error}")
+            if not check(sim.running(), f"the simulator is still running after {case.__name__}"):
+                break
+        attacks_to = time.monotonic()
+        time.sleep(1.5)  # the /stats after the attacks
+        probe = None
+        try:
+            probe, info, _ = open_session(port)
+            check(info is not None and info.get("name") == "sen3bot", "a new connection after the attacks is served")
+            probe.send_close()
+        except Exception as error:
+            check(False, f"a new connection after the attacks: {type(error).__name__}: {error}")
+        finally:
+            if probe is not None:
+                probe.close()
+        watcher.stop()
+        check_watcher(watcher, attacks_from, attacks_to)
+        if not sim.running():
+            log(f"sen3bot-sim ended (exit {sim.process.returncode}):\n{sim.tail()}")
+        sim.stop()
+        sim = None
+        case_tokens(sim_path, source, work, args.scenario)
+    finally:
+        if watcher is not None and watcher.is_alive():
+            watcher.stop()
+        if sim is not None:
+            sim.stop()
+    if failures:
+        log(f"{len(failures)} failed check(s):")
+        for failure in failures:
+            print(f"  {failure}", file=sys.stderr)
+        log(f"kept {work}")
+        return 1
+    if args.keep:
+        log(f"kept {work}")
+    else:
+        shutil.rmtree(work, ignore_errors=True)
+    log("every check passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
