@@ -467,10 +467,54 @@ void read_cobot(const Reader& r, FirmwareConfig& c) {
     r.fail("trigger", "each window's minimum must be below its maximum", YAML::Node());
 }
 
+// view: the live view's server (view_task.hpp, docs/view.md).
+void read_view(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"enabled", "address", "port", "token", "token_file", "max_clients", "channels", "camera"});
+  ViewSection& v = c.view;
+  v.enabled = r.has("enabled") ? r.boolean("enabled") : true;
+  view::ServerConfig& server = v.task.server;
+  if (r.has("address")) server.address = r.text("address");
+  if (r.has("port")) server.port = static_cast<int>(r.integer("port", 0, 65535));
+  if (r.has("token") && r.has("token_file")) r.fail("token_file", "give token or token_file, not both", YAML::Node());
+  if (r.has("token")) server.token = r.text("token");
+  if (r.has("token_file")) {
+    const std::string path = relative_to(r.file(), r.text("token_file"));
+    std::FILE* f = std::fopen(path.c_str(), "r");
+    if (f == nullptr) r.fail("token_file", "cannot read " + path, YAML::Node());
+    char line[256] = {};
+    const bool got = std::fgets(line, sizeof line, f) != nullptr;
+    std::fclose(f);
+    std::string token = got ? line : "";
+    while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
+    if (token.empty()) r.fail("token_file", path + " holds no token", YAML::Node());
+    server.token = token;
+  }
+  if (r.has("max_clients"))
+    server.max_clients = static_cast<std::size_t>(r.integer("max_clients", 1, static_cast<long long>(view::Server::kMaxClients)));
+  if (r.has("channels")) {
+    const Reader q = r.child("channels");
+    std::vector<std::string_view> names;
+    for (std::size_t i = 0; i < kViewChannels; ++i) names.push_back(channel_key(static_cast<ViewChannel>(i)));
+    q.allow_only(names);
+    for (std::size_t i = 0; i < kViewChannels; ++i) {
+      const std::string key(names[i]);
+      if (q.has(key)) v.task.period_s[i] = q.number(key, 0.0, 3600.0);
+    }
+  }
+  if (r.has("camera")) {
+    const Reader q = r.child("camera");
+    q.allow_only({"max_width_px", "quality"});
+    if (q.has("max_width_px")) v.task.camera_max_width_px = static_cast<std::uint32_t>(q.integer("max_width_px", 16, 4096));
+    if (q.has("quality")) v.task.camera_quality = static_cast<int>(q.integer("quality", 1, 100));
+  }
+  if (v.enabled && !view::is_loopback_address(server.address) && server.token.empty())
+    r.fail("address", server.address + " is reachable from other machines: set token or token_file", YAML::Node());
+}
+
 FirmwareConfig read(const Reader& top, const std::string& source, std::span<const std::string_view> board_sections) {
   FirmwareConfig c;
   c.source_path = source;
-  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet", "cobot"};
+  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet", "cobot", "view"};
   keys.insert(keys.end(), board_sections.begin(), board_sections.end());
   if (top.has("sim") && std::find(keys.begin(), keys.end(), "sim") == keys.end())
     top.fail("sim", "a simulated robot: run this configuration with sen3bot-sim", YAML::Node());
@@ -544,6 +588,7 @@ FirmwareConfig read(const Reader& top, const std::string& source, std::span<cons
   } else if (c.navigation.enabled && c.navigation.mission.goal_count == 0) {
     top.fail("navigation", "goals: missing (1 to " + std::to_string(MissionConfig::kMaxGoals) + " points, or a fleet section)", YAML::Node());
   }
+  if (top.has("view")) read_view(top.child("view"), c);
   if (top.has("cobot")) {
     read_cobot(top.child("cobot"), c);
     if (!c.navigation.enabled || !c.navigation.people_enabled)

@@ -22,6 +22,7 @@
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "can_io_task.hpp"
+#include "view_config.hpp"
 #include "cobot_task.hpp"
 #include "fleet_task.hpp"
 #include "mission.hpp"
@@ -114,6 +115,12 @@ struct CobotSection {
   double recognition_rate_hz = 1.0;
 };
 
+// view: the live view's server (docs/view.md); off without the section.
+struct ViewSection {
+  bool enabled = false;
+  ViewTaskConfig task;
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
@@ -135,6 +142,7 @@ struct FirmwareConfig {
   bool has_fleet = false;  // a `fleet` section: the goals come from VDA 5050 orders
   FleetConfig fleet;
   CobotSection cobot;
+  ViewSection view;
 };
 
 // `board_sections` are top-level sections that belong to the board the firmware runs on (the

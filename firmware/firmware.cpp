@@ -35,6 +35,7 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "detector") return detector_task_.get();
   if (name == "people") return people_task_.get();
   if (name == "cobot") return cobot_task_.get();
+  if (name == "view") return view_task_.get();
 #ifdef SEN3BOT_HAS_QR
   if (name == "qr") return qr_task_.get();
 #endif
@@ -256,9 +257,54 @@ Status Firmware::create_tasks() {
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
   }
+  if (config_.view.enabled) {
+    const ViewTaskConfig& view = config_.view.task;
+    const double local_s = view.period_s[static_cast<std::size_t>(ViewChannel::local_costmap)];
+    if (controller_task_ && local_s > 0)
+      controller_task_->publish_costmap(&nav_costmap_snapshot_,
+                                        static_cast<int>(std::lround(local_s * 1e6 / static_cast<double>(row("controller").period_us))));
+    view_task_ = std::make_unique<ViewTask>(view, view_sources(), external_view_);
+  }
   for (const tasks::TaskSpec& row : kTaskTable)
     if (task_named(row.name) != nullptr) rows_.push_back(&row);
   return Status::success();
+}
+
+ViewSources Firmware::view_sources() {
+  ViewSources s{.scheduler = scheduler_, .clock = board_.clock(), .laser_mount = {}};
+  s.frames = camera_frames();
+  s.laser_mount = {config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
+  if (config_.devices.has_laser || config_.navigation.enabled) s.scan = &nav_scan_;
+  if (!config_.navigation.enabled) return s;
+  s.map = &map_;
+  s.odometry = &nav_odometry_;
+  s.pose = &nav_pose_;
+  s.path = &nav_path_;
+  s.request = &nav_request_;
+  s.safety = &nav_safety_;
+  s.controller = &nav_controller_;
+  s.movers = &nav_movers_;
+  if (people_task_) s.people = &nav_people_;
+  if (controller_task_) s.local_costmap = &nav_costmap_snapshot_;
+  s.planner = planner_task_.get();
+  s.mission = mission_task_.get();
+  s.goal_count = config_.navigation.mission.goal_count;
+  s.rollout_s = config_.navigation.dwa.sim_time_s;
+  return s;
+}
+
+Result<std::size_t> Firmware::view_channels(const FirmwareConfig& config, bool external_frames,
+                                            std::span<view::ChannelSpec, kViewChannels> out) {
+  ViewTask::Shape shape;
+  shape.navigation = config.navigation.enabled;
+  shape.scan = config.devices.has_laser || config.navigation.enabled;
+  shape.camera = config.devices.has_camera || external_frames;
+  if (shape.navigation) {
+    Result<nav::OccupancyMap> map = nav::load_map(config.navigation.map_path);
+    if (!map) return map.error();
+    shape.map_cells = map->cell_count();
+  }
+  return ViewTask::channel_specs(config.view.task, shape, out);
 }
 
 Status Firmware::init() {
@@ -275,6 +321,9 @@ Status Firmware::init() {
 
   if (Status s = create_tasks(); !s) return s;
   for (const auto& [name, task_config] : config_.tasks) {
+    // The view's budget may stay in a configuration whose view is off (sen3bot-sim sim --view
+    // turns it on).
+    if (name == "view" && !config_.view.enabled) continue;
     if (task_named(name) == nullptr)
       return Error::format(Errc::config, "%s: tasks.%s: this task is not enabled by the configuration (%s)", file,
                            name.c_str(),

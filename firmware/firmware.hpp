@@ -35,6 +35,7 @@
 #endif
 #include "laser_task.hpp"
 #include "mission.hpp"
+#include "view_task.hpp"
 
 namespace sen3bot::firmware {
 
@@ -51,6 +52,15 @@ class Firmware {
   // Frames from elsewhere than the camera row (a simulated camera): the QR and vision rows
   // read these. Before init(); the pool must outlive the firmware.
   void use_camera_frames(camera::FramePool* frames) noexcept { external_frames_ = frames; }
+  // A live view server that outlives this firmware (a simulator's, across its cases): with a
+  // `view` section the view row publishes into it instead of starting its own. Before init().
+  void use_view_server(view::Server* server) noexcept { external_view_ = server; }
+  // The view row; null without a `view` section.
+  [[nodiscard]] ViewTask* view() { return view_task_.get(); }
+  // The channels a configuration serves (for a server made before the firmware); reads the
+  // map's size from its file.
+  static Result<std::size_t> view_channels(const FirmwareConfig& config, bool external_frames,
+                                           std::span<view::ChannelSpec, kViewChannels> out);
 
   [[nodiscard]] tasks::Scheduler& scheduler() { return scheduler_; }
   [[nodiscard]] tasks::Bus& bus() { return bus_; }
@@ -124,6 +134,7 @@ class Firmware {
   Status create_tasks();
   Status create_navigation();
   Status create_cobot(const msg::SensorMount& mount, const nav::CameraCalibration& camera);
+  ViewSources view_sources();
 
   const FirmwareConfig& config_;
   hal::Board& board_;
@@ -156,7 +167,9 @@ class Firmware {
   tasks::Topic<msg::WorkerPath> nav_worker_path_;
   tasks::Topic<msg::OperationEstimate> nav_operation_;
   tasks::Topic<msg::PathMessage> nav_operation_reference_;
+  tasks::Topic<msg::CostmapSnapshot> nav_costmap_snapshot_;  // controller -> view
   camera::FramePool* external_frames_ = nullptr;
+  view::Server* external_view_ = nullptr;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
@@ -180,6 +193,7 @@ class Firmware {
   std::unique_ptr<MissionTask> mission_task_;
   std::unique_ptr<FleetTask> fleet_task_;
   std::unique_ptr<CobotTask> cobot_task_;
+  std::unique_ptr<ViewTask> view_task_;
 #ifdef SEN3BOT_HAS_QR
   std::unique_ptr<QrTask> qr_task_;
 #endif

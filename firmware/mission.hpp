@@ -53,6 +53,11 @@ class MissionTask final : public tasks::Task {
   [[nodiscard]] bool finished() const noexcept { return finished_.load(std::memory_order_acquire); }
   // Call after the scheduler stopped.
   [[nodiscard]] const MissionReport& report() const noexcept { return report_; }
+  // The goal being driven to; null before the first and after the last. Same thread, or
+  // after the scheduler stopped.
+  [[nodiscard]] const msg::Point2D* current_goal() const noexcept {
+    return report_.state == MissionState::driving && goal_index_ < config_.goal_count ? &config_.goals[goal_index_] : nullptr;
+  }
   void print_report(std::FILE* out) const;
 
   // The first plan made for each goal: what a report draws.

@@ -22,7 +22,7 @@ namespace sen3bot::firmware {
 // the people's fusion and the controller. A row runs when its task is configured: the
 // devices under `devices`, localization, planners, safety and the mission under `navigation`,
 // the detector and the people under `navigation.people`, the collaborative mode's under
-// `cobot` (qr with a camera, recognition with cobot.recognition); the rest always. Budgets are for the Pi 3; the camera's allows one
+// `cobot` (qr with a camera, recognition with cobot.recognition), the view under `view`; the rest always. Budgets are for the Pi 3; the camera's allows one
 // 15 fps stream decoded at up to 1280 x 720; the controller's a worst DWA cycle among movers
 // (docs/navigation.md, benchmarks).
 inline constexpr std::array kTaskTable = {
@@ -44,6 +44,9 @@ inline constexpr std::array kTaskTable = {
     // Decoding a full order takes ~1 ms on a Pi 3 (benchmarks); the network is the link's thread.
     tasks::TaskSpec{"fleet",        100'000,   5'000,     4,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
+    // The live view (docs/view.md): after the planner and the mission, whose state it reads on
+    // this thread; encoding the map for a new viewer is its longest step.
+    tasks::TaskSpec{"view",         50'000,    5'000,     0,        "background"},
     tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
     // After the camera: its init() reads the camera's frame pool.
     tasks::TaskSpec{"vision",       500'000,   300'000,   0,        "vision"},

@@ -1,9 +1,14 @@
 // `sen3bot-sim sim`: named scenarios on the simulated robot, each case a whole firmware run in
 // lockstep (or real) time, with a report folder: a figure per case (report_figure.hpp) and a
 // JSON summary with per-task statistics.
+#include <pthread.h>
+#include <signal.h>
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <array>
+#include <memory>
+#include <memory_resource>
 #include <cerrno>
 #include <cmath>
 #include <chrono>
@@ -23,6 +28,7 @@
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
+#include "sen3bot/view/server.hpp"
 
 namespace sen3bot::sim {
 
@@ -230,6 +236,7 @@ struct CaseResult {
   RefereeReport truth;
   double sim_time_s = 0;
   double wall_time_s = 0;
+  msg::Pose2D final_pose;  // the estimate when the case ended
   bool kidnapped = false;
   std::vector<tasks::TaskStats> stats;
   // The safe path: the supervisory planner's (its runs and last result) or a file's.
@@ -291,6 +298,8 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                  r.plan_failures, static_cast<unsigned long long>(r.safety_limited_steps),
                  truth.localization_error_max_m, c.sim_time_s,
                  c.wall_time_s);
+    std::fprintf(f, " \"final_pose\": {\"x\": %.4f, \"y\": %.4f, \"theta\": %.4f},", c.final_pose.x_m, c.final_pose.y_m,
+                 c.final_pose.theta_rad);
     if (c.kidnapped) {
       if (truth.relocalization_s >= 0) std::fprintf(f, " \"relocalization_s\": %.2f,", truth.relocalization_s);
       else std::fprintf(f, " \"relocalization_s\": null,");
@@ -342,7 +351,7 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
 
 // One case: a whole firmware over the simulated robot, until the mission ends or times out.
 int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool realtime, const std::string& label,
-             const std::string& report_dir, CaseResult& result, std::FILE* out, std::FILE* err) {
+             const std::string& report_dir, CaseResult& result, view::Server* view, std::FILE* out, std::FILE* err) {
   Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, !realtime);
   if (!created) {
     std::fprintf(err, "sen3bot-sim sim: %s: %s\n", label.c_str(), created.error().c_str());
@@ -352,6 +361,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   std::FILE* quiet = std::fopen("/dev/null", "w");  // the per-task status lines of `run`
   if (quiet == nullptr) quiet = out;
   Firmware fw(config, board, quiet);
+  fw.use_view_server(view);
   board.referee().watch_estimate(&fw.pose_estimate());
   board.referee().watch_people(&fw.people());
   auto fail = [&](const Error& e) {
@@ -455,6 +465,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   }
   fw.shutdown();
   board.stop();
+  if (tasks::Sample<msg::PoseEstimate> estimate; fw.pose_estimate().read(estimate)) result.final_pose = estimate.value.pose;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   result.sim_time_s = sim_s;
   result.report = mission.report();
@@ -531,8 +542,58 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
 
 constexpr const char* kSimUsage =
     "usage: sen3bot-sim sim --list\n"
-    "       sen3bot-sim sim --scenario NAME [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "       sen3bot-sim sim --scenario NAME [--case NAME] [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "                       [--view [--view-port P] [--view-address A] [--view-token T] [--view-hold S]]\n"
     "       sen3bot-sim sim --scenario cobot [--attempts N] [--case NAME] [--config FILE] [--seed N] [--report DIR]\n";
+
+// Creates and starts the view's server for a configuration's channels, and says where it is.
+Status start_view(const FirmwareConfig& config, std::unique_ptr<view::Server>& server, std::FILE* out, std::FILE* err) {
+  std::array<view::ChannelSpec, firmware::kViewChannels> specs{};
+  Result<std::size_t> n = Firmware::view_channels(config, false, specs);
+  if (!n) {
+    std::fprintf(err, "sen3bot-sim sim: --view: %s\n", n.error().c_str());
+    return n.error();
+  }
+  auto created = view::Server::create(config.view.task.server, std::span(specs).first(*n), *std::pmr::new_delete_resource());
+  if (!created) {
+    std::fprintf(err, "sen3bot-sim sim: --view: %s\n", created.error().c_str());
+    return created.error();
+  }
+  server = std::move(*created);
+  if (Status s = server->start(); !s) {
+    std::fprintf(err, "sen3bot-sim sim: --view: %s\n", s.error().c_str());
+    return s;
+  }
+  const std::string& a = server->config().address;
+  const std::string host = a.find(':') != std::string::npos ? "[" + a + "]" : a;
+  std::fprintf(out, "view: http://%s:%d/ (foxglove.websocket.v1 on ws://%s:%d/)\n", host.c_str(), server->port(), host.c_str(),
+               server->port());
+  std::fflush(out);
+  return Status::success();
+}
+
+// After the run: the last state stays served for hold_s seconds (< 0: until SIGINT/SIGTERM).
+void hold_view(view::Server& server, double hold_s, std::FILE* out) {
+  if (hold_s == 0) return;
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  sigset_t previous;
+  pthread_sigmask(SIG_BLOCK, &stop_signals, &previous);
+  if (hold_s < 0) std::fprintf(out, "view: serving the final state until SIGINT or SIGTERM\n");
+  else std::fprintf(out, "view: serving the final state for %.0f s\n", hold_s);
+  std::fflush(out);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(hold_s < 0 ? 1e9 : hold_s);
+  while (std::chrono::steady_clock::now() < until) {
+    const double left_s = std::chrono::duration<double>(until - std::chrono::steady_clock::now()).count();
+    const double wait_s = std::clamp(left_s, 0.0, 0.5);
+    timespec wait{static_cast<time_t>(wait_s), static_cast<long>((wait_s - std::floor(wait_s)) * 1e9)};
+    if (sigtimedwait(&stop_signals, nullptr, &wait) > 0) break;
+  }
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  server.stop();
+}
 
 }  // namespace
 
@@ -542,6 +603,9 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   std::uint64_t seed = 0;
   std::uint64_t attempts = 3;
   std::string only_case;
+  bool view = false;
+  view::ServerConfig view_server;
+  double view_hold_s = 0;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -562,6 +626,26 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       }
     } else if (arg == "--case" && has_value) {
       only_case = argv[++i];
+    } else if (arg == "--view") {
+      view = true;
+    } else if (arg == "--view-port" && has_value) {
+      std::uint64_t port = 0;
+      if (!firmware::parse_u64(argv[++i], port) || port > 65535) {
+        std::fprintf(err, "sen3bot-sim sim: --view-port: expected 0 to 65535, got '%s'\n", argv[i]);
+        return 2;
+      }
+      view_server.port = static_cast<int>(port);
+    } else if (arg == "--view-address" && has_value) {
+      view_server.address = argv[++i];
+    } else if (arg == "--view-token" && has_value) {
+      view_server.token = argv[++i];
+    } else if (arg == "--view-hold" && has_value) {
+      char* end = nullptr;
+      view_hold_s = std::strtod(argv[++i], &end);
+      if (end == argv[i] || *end != '\0' || !(view_hold_s >= -1)) {
+        std::fprintf(err, "sen3bot-sim sim: --view-hold: expected seconds (-1: until SIGINT), got '%s'\n", argv[i]);
+        return 2;
+      }
     } else if (arg == "--seed" && has_value) {
       if (!firmware::parse_u64(argv[++i], seed)) {
         std::fprintf(err, "sen3bot-sim sim: --seed: expected a non-negative integer, got '%s'\n", argv[i]);
@@ -597,8 +681,8 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     return cobot_scenario(config_path, report_dir, seed, have_seed, static_cast<std::size_t>(attempts), only_case, out, err);
   }
 #endif
-  if (!only_case.empty() || attempts != 3) {
-    std::fprintf(err, "sen3bot-sim sim: --attempts and --case are the cobot scenario's\n%s", kSimUsage);
+  if (attempts != 3) {
+    std::fprintf(err, "sen3bot-sim sim: --attempts is the cobot scenario's\n%s", kSimUsage);
     return 2;
   }
   const Scenario* scenario = nullptr;
@@ -627,13 +711,32 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     return 1;
   }
 
+  if (!only_case.empty() && std::none_of(scenario->cases.begin(), scenario->cases.end(),
+                                         [&](const Case& c) { return only_case == c.name; })) {
+    std::fprintf(err, "sen3bot-sim sim: scenario %s has no case '%s' (sen3bot-sim sim --list shows them)\n", scenario->name,
+                 only_case.c_str());
+    return 2;
+  }
+  // The live view: one server for every case, so a viewer stays connected from one to the next.
+  std::unique_ptr<view::Server> view_server_owned;
+  if (view) {
+    FirmwareConfig shaped = base;
+    shaped.view.enabled = true;
+    shaped.view.task.server = view_server;
+    if (Status s = start_view(shaped, view_server_owned, out, err); !s) return 2;
+  }
   std::fprintf(out, "scenario %s (%zu cases, %s time%s)\n", scenario->name, scenario->cases.size(),
                realtime ? "real" : "lockstep simulated", have_seed ? "" : ", seed from the configuration");
   std::vector<CaseResult> results;
   int rc = 0;
   for (std::size_t i = 0; i < scenario->cases.size(); ++i) {
     const Case& c = scenario->cases[i];
+    if (!only_case.empty() && only_case != c.name) continue;
     FirmwareConfig config = base;
+    if (view) {
+      config.view.enabled = true;
+      config.view.task.server = view_server;
+    }
     config.clock = realtime ? firmware::ClockMode::realtime : firmware::ClockMode::lockstep;
     SimulationConfig world = base_world;
     world.start_pose = scenario->start;
@@ -703,7 +806,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     result.title = "case " + std::to_string(i + 1) + "/" + std::to_string(scenario->cases.size()) + ": " + c.name;
     result.description = std::string(scenario->name) + ": " + c.description;
     result.kidnapped = c.kidnap.time_s >= 0;
-    if (run_case(config, world, realtime, c.name, report_dir, result, out, err) != 0) return 1;
+    if (run_case(config, world, realtime, c.name, report_dir, result, view_server_owned.get(), out, err) != 0) return 1;
     if (result.report.state != MissionState::complete || result.truth.moving_contacts != 0 || result.cage_entries != 0)
       rc = 3;
   }
@@ -725,6 +828,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     std::fprintf(out, "report: %s (report.json and one PNG per case)\n", report_dir.c_str());
   }
+  if (view_server_owned) hold_view(*view_server_owned, view_hold_s, out);
   return rc;
 }
 

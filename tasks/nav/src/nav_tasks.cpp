@@ -368,6 +368,38 @@ void ControllerTask::step(const tasks::StepContext& context) {
   command_.publish(command, context.start_ns);
   status_.publish(status, context.start_ns);
   movers_.publish(movers_message_, context.start_ns);
+  if (snapshot_topic_ != nullptr && ++snapshot_count_ >= snapshot_every_) {
+    snapshot_count_ = 0;
+    snapshot_costmap(costmap_.costmap(), snapshot_);
+    snapshot_topic_->publish(snapshot_, context.start_ns);
+  }
+}
+
+void snapshot_costmap(const Costmap2D& costmap, msg::CostmapSnapshot& out) noexcept {
+  const int width = costmap.width(), height = costmap.height();
+  int factor = 1;
+  while (static_cast<std::size_t>((width + factor - 1) / factor) * static_cast<std::size_t>((height + factor - 1) / factor) >
+         msg::CostmapSnapshot::kMaxCells)
+    ++factor;
+  const int columns = (width + factor - 1) / factor, rows = (height + factor - 1) / factor;
+  out.columns = static_cast<std::uint16_t>(columns);
+  out.rows = static_cast<std::uint16_t>(rows);
+  out.resolution_m = costmap.resolution_m() * factor;
+  out.origin_x_m = costmap.origin_x_m();
+  out.origin_y_m = costmap.origin_y_m();
+  const std::span<const std::uint8_t> cells = costmap.cells();
+  if (factor == 1) {
+    std::copy(cells.begin(), cells.begin() + static_cast<std::ptrdiff_t>(columns * rows), out.cells.begin());
+    return;
+  }
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c) {
+      std::uint8_t worst = 0;
+      for (int y = r * factor; y < std::min(height, (r + 1) * factor); ++y)
+        for (int x = c * factor; x < std::min(width, (c + 1) * factor); ++x)
+          worst = std::max(worst, cells[costmap.index(x, y)]);
+      out.cells[static_cast<std::size_t>(r * columns + c)] = worst;
+    }
 }
 
 // --- SafetyTask ---------------------------------------------------------------------------------

@@ -221,4 +221,18 @@ struct MovingObstacles {
 };
 static_assert(std::is_trivially_copyable_v<MovingObstacles>);
 
+// The local planner's costmap for the live view, published by the controller row only when a
+// view reads it. A costmap with more cells is coarsened by an integer factor, keeping each
+// block's highest cost. Row 0 is the lowest y; origin is the corner of cell (0, 0).
+struct CostmapSnapshot {
+  static constexpr std::size_t kMaxCells = 160 * 160;  // 8 x 8 m at 0.05 m
+  std::array<std::uint8_t, kMaxCells> cells{};
+  std::uint16_t columns = 0;
+  std::uint16_t rows = 0;
+  double resolution_m = 0.0;
+  double origin_x_m = 0.0;
+  double origin_y_m = 0.0;
+};
+static_assert(std::is_trivially_copyable_v<CostmapSnapshot>);
+
 }  // namespace sen3bot::msg

@@ -219,6 +219,11 @@ class ControllerTask final : public tasks::Task {
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
   [[nodiscard]] const DwaPlanner& planner() const noexcept { return dwa_; }
+  // Before init: every `every_cycles` cycles the costmap goes out on `topic` (the live view's).
+  void publish_costmap(tasks::Topic<msg::CostmapSnapshot>* topic, int every_cycles) noexcept {
+    snapshot_topic_ = topic;
+    snapshot_every_ = every_cycles < 1 ? 1 : every_cycles;
+  }
   // Null when the configuration turns the layer off.
   [[nodiscard]] const DynamicObstacleLayer* dynamic_layer() const noexcept {
     return config_.dynamic_obstacles.enabled ? &dynamic_layer_ : nullptr;
@@ -255,7 +260,14 @@ class ControllerTask final : public tasks::Task {
   tasks::Sample<ScanMessage> scan_sample_;
   ProjectedScan projected_;
   tasks::Sample<PathMessage> path_sample_;
+  tasks::Topic<msg::CostmapSnapshot>* snapshot_topic_ = nullptr;
+  int snapshot_every_ = 1;
+  int snapshot_count_ = 0;
+  msg::CostmapSnapshot snapshot_;
 };
+
+// The costmap into a snapshot, coarsened to fit (the view's, and its tests').
+void snapshot_costmap(const Costmap2D& costmap, msg::CostmapSnapshot& out) noexcept;
 
 // --- People -----------------------------------------------------------------------------------
 
