@@ -58,9 +58,12 @@ NATIVE_PACKAGES=(
   libmosquitto-dev           # fleet: the MQTT client (Eclipse Mosquitto's libmosquitto)
   mosquitto                  # fleet tests: the real broker, with the shipped TLS + ACL configuration
   openssl                    # fleet tests: toolchain/broker-pki.sh makes the test CA
+  libwebsockets-dev          # view: the live view's WebSocket + HTTP server
+  chromium                   # view tests: the built-in page in a headless browser
 )
 
-# vda5050 peer test (tests/peers/vda5050): Node.js and npm run the independent master control.
+# vda5050 peer test (tests/peers/vda5050) and the view's tests (tests/view): Node.js and npm run
+# the independent master control, the Foxglove client and the browser driver.
 # Debian's (nodejs 18, npm 9) only when none is on PATH: a Node.js installed otherwise is kept.
 if ! command -v node >/dev/null; then NATIVE_PACKAGES+=(nodejs); fi
 if ! command -v npm >/dev/null; then NATIVE_PACKAGES+=(npm); fi

@@ -46,6 +46,7 @@ SYSROOT_PACKAGES=(
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding
   libpugixml-dev libcurl4-openssl-dev          # camera: ONVIF
   libmosquitto-dev             # fleet: MQTT
+  libwebsockets-dev            # view: the live view's server
   libopencv-ml-dev             # operation recognition (cv::ml)
 )
 # Unpacked without their dependencies: libopencv-objdetect-dev (the header and the .so link)
