@@ -7,12 +7,15 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "ws_client.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "sen3bot/vda5050/codec.hpp"
@@ -52,6 +55,11 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   config->navigation.people_detector = "sim";
   config->tasks["detector"].arena_bytes = 4 * 1024;
   config->tasks["people"].arena_bytes = 64 * 1024;
+  // The live view with its own server in its arena, and a viewer subscribed to every channel
+  // that reads all the while: encoding, the hand-off and the sending allocate nothing either.
+  config->view.enabled = true;
+  config->view.task.server.port = 0;
+  config->tasks["view"].arena_bytes = 4 * 1024 * 1024;
   hal::SimClock& clock = rig.clock();
 
   std::FILE* sink = std::fopen("/dev/null", "w");
@@ -59,6 +67,22 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   Firmware fw(*config, *rig.board, sink);
   ASSERT_TRUE(fw.init());
   tasks::Scheduler& scheduler = fw.scheduler();
+  ASSERT_NE(fw.view(), nullptr);
+  view::Server& server = *fw.view()->server();
+  auto viewer = std::make_unique<testing::WsClient>();
+  ASSERT_NE(viewer->connect("127.0.0.1", server.port()).find(" 101 "), std::string::npos);
+  ASSERT_NE(viewer->read().payload.find("serverInfo"), std::string_view::npos);
+  ASSERT_NE(viewer->read().payload.find("advertise"), std::string_view::npos);
+  std::string subscribe = R"({"op":"subscribe","subscriptions":[)";
+  for (std::size_t i = 0; i < server.board().channel_count(); ++i)
+    subscribe += (i ? "," : "") + std::string(R"({"id":)") + std::to_string(i) + R"(,"channelId":)" + std::to_string(i) + "}";
+  viewer->send_text(subscribe + "]}");
+  std::atomic<bool> stop_viewer{false};
+  std::atomic<std::uint64_t> viewer_frames{0};
+  std::thread viewing([&] {
+    while (!stop_viewer.load())
+      if (viewer->read(100).opcode == 2) ++viewer_frames;
+  });
   // Every row but the camera's and the on-board detector's (the simulated robot has no camera
   // yet, and OpenCV's search, on its own thread, allocates; docs/people.md) and the fleet's,
   // which takes the mission's place when the robot has one (counted in the test below), and the
@@ -78,14 +102,19 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   for (const auto& row : kTaskTable) longest_period_us = std::max(longest_period_us, row.period_us);
   const hal::Nanos window = hal::micros(longest_period_us) * static_cast<hal::Nanos>(kSlowestTaskRuns);
 
+  const std::uint64_t sent_before = server.counters().sent;
   mem::testing::AllocationScope scope;
   const Status ran = scheduler.run_lockstep(clock, window);
   const std::uint64_t allocations = scope.allocations();
   const std::uint64_t malloc_calls = scope.malloc_calls();
+  stop_viewer = true;
+  viewing.join();
   ASSERT_TRUE(ran);
 
   EXPECT_EQ(allocations, 0u) << "operator new called in steady state";
   EXPECT_EQ(malloc_calls, 0u) << "malloc called in steady state";
+  EXPECT_GT(server.counters().sent, sent_before) << "the viewer was sent nothing in the window";
+  EXPECT_GT(viewer_frames.load(), 0u);
   std::uint64_t total_runs = 0;
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) {
     const tasks::TaskStats s = scheduler.stats(i);
@@ -264,7 +293,7 @@ TEST(ZeroAllocation, TheFirmwareWithTheFleetTaskTakesAnOrderInstantActionsAndFor
   tasks::Scheduler& scheduler = fw.scheduler();
   // Every row but the camera's, the on-board detector's, the mission's and the collaborative
   // mode's three.
-  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 6);
+  ASSERT_EQ(scheduler.task_count(), kTaskTable.size() - 7);  // and no view
   ASSERT_NE(fw.fleet(), nullptr);
 
   // What master control sends in the window, written now.

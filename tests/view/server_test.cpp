@@ -423,9 +423,10 @@ TEST(Server, AStalledViewerNeverHoldsUpThePublisherNorTheOtherViewers) {
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   stop = true;
   reading.join();
-  // The reading viewer kept up; the stalled one only missed messages (counted as dropped).
+  // The reading viewer kept up; the stalled one was sent only what its socket took, then
+  // nothing: it misses messages, and nothing waits for it.
   EXPECT_GT(read_count.load(), publishes / 4u);
-  EXPECT_GT(r.server->counters().dropped, 0u);
+  EXPECT_LT(r.server->counters().sent, read_count.load() + publishes / 4u);
   // Publishing is a copy and an index swap whatever the viewers do: far below a task's period.
   EXPECT_LT(slowest_ns, 50'000'000) << "a publish waited for the server";
   EXPECT_EQ(r.server->counters().clients, 2u);

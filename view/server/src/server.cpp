@@ -3,6 +3,8 @@
 #include <arpa/inet.h>
 #include <libwebsockets.h>
 #include <netinet/in.h>
+#include <linux/sockios.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 
 #include <algorithm>
@@ -184,6 +186,11 @@ Status Server::start() {
   p.callback = callback;
   p.per_session_data_size = sizeof(Connection);
   p.rx_buffer_size = 4096;  // longer client messages arrive in pieces, gathered up to the limit
+  // libwebsockets hands the socket at most this much per write and keeps the rest in memory it
+  // allocates: a whole message at once, so only the kernel's room decides.
+  std::size_t largest = kControlBytes;
+  for (std::size_t ch = 0; ch < board_->channel_count(); ++ch) largest = std::max(largest, board_->spec(ch).capacity_bytes);
+  p.tx_packet_size = largest + kHeadroom;
   impl.protocols[1] = {};
   lws_context_creation_info info{};
   info.port = config_.port;
@@ -265,6 +272,20 @@ bool offers_subprotocol(lws* wsi) noexcept {
     offered.remove_prefix(comma + 1);
   }
   return false;
+}
+
+// Whether the socket takes `size` more bytes whole. libwebsockets keeps what a send leaves over in
+// memory it allocates, so the server writes only what the kernel has room for (its queue
+// counted twice over, for the kernel's own overhead) and otherwise tries again shortly.
+constexpr std::int64_t kRetryUs = 5'000;
+bool socket_has_room(lws* wsi, std::size_t size) noexcept {
+  const int fd = lws_get_socket_fd(wsi);
+  int queued = 0, buffer = 0;
+  socklen_t length = sizeof buffer;
+  if (fd < 0 || ioctl(fd, SIOCOUTQ, &queued) != 0 || getsockopt(fd, SOL_SOCKET, SO_SNDBUF, &buffer, &length) != 0)
+    return true;
+  // An empty queue always takes a message: one larger than the buffer is then the library's to finish.
+  return queued == 0 || static_cast<std::size_t>(queued) + 2 * (size + 16) <= static_cast<std::size_t>(buffer);
 }
 
 int refuse(lws* wsi, unsigned status, const char* why) {
@@ -355,6 +376,13 @@ int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t
       c.rx_size = 0;
       c.refused_seen = 0;
       connection->client = static_cast<int>(slot) + 1;
+      // Room for a few of the largest messages, so they seldom wait (the kernel caps this).
+      if (const int fd = lws_get_socket_fd(wsi); fd >= 0) {
+        std::size_t largest = 0;
+        for (std::size_t ch = 0; ch < board_->channel_count(); ++ch) largest = std::max(largest, board_->spec(ch).capacity_bytes);
+        const int bytes = static_cast<int>(std::min<std::size_t>(4 * largest + kControlBytes, 8u << 20));
+        setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bytes, sizeof bytes);
+      }
       ++impl.clients_now;
       ++impl.connections;
       lws_callback_on_writable(wsi);
@@ -404,6 +432,7 @@ int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t
         const bool info = client->need_info;
         char* text = (info ? impl.server_info.data() : impl.advertise.data()) + LWS_PRE;
         const std::size_t size = info ? impl.server_info_size : impl.advertise_size;
+        if (!socket_has_room(wsi, size)) return lws_set_timer_usecs(wsi, kRetryUs), 0;
         if (lws_write(wsi, reinterpret_cast<unsigned char*>(text), size, LWS_WRITE_TEXT) < 0) return -1;
         (info ? client->need_info : client->need_advertise) = false;
         lws_callback_on_writable(wsi);
@@ -411,6 +440,7 @@ int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t
       }
       if (client->session.has_reply()) {
         const std::string_view reply = client->session.reply();
+        if (!socket_has_room(wsi, reply.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
         std::memcpy(impl.status.data() + LWS_PRE, reply.data(), reply.size());
         client->session.pop_reply();
         if (lws_write(wsi, reinterpret_cast<unsigned char*>(impl.status.data() + LWS_PRE), reply.size(), LWS_WRITE_TEXT) < 0)
@@ -432,6 +462,7 @@ int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t
           client->next_record[ch] = 0;
         }
         const std::span<char> payload = pub.payload(client->next_record[ch]);
+        if (!socket_has_room(wsi, kFrameHeader + payload.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
         char* frame = payload.data() - kFrameHeader;
         write_frame_header(std::span<char, kFrameHeader>(frame, kFrameHeader), subscription,
                            pub.records[client->next_record[ch]].stamp_ns);
@@ -448,6 +479,9 @@ int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t
       }
       return 0;
     }
+    case LWS_CALLBACK_TIMER:
+      lws_callback_on_writable(wsi);
+      return 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED: {
       for (std::size_t i = 0; i < client_slots_; ++i) {
         Client& c = clients_[i];
