@@ -236,6 +236,7 @@ const tfHistory = { "map>odom": [], "odom>base_link": [] }; // [stamp ns, x, y, 
 let laserMount = null;
 const missions = [];
 let lastStats = null;
+let statsSeen = 0;
 
 function checkGrid(topic, m) {
   const field = topic === "/map" ? "occupancy" : "cost";
@@ -325,10 +326,14 @@ function checkPoses(topic, m) {
 function checkScene(topic, m) {
   const ids = m.entities.map((e) => e.id);
   if (topic === "/safe_path") {
-    const curve = m.entities.find((e) => e.id === "safe_curve");
-    const waypoints = m.entities.find((e) => e.id === "waypoints");
-    if (!curve || !curve.lines.some((l) => l.type === 1)) fail(`/safe_path: no entity safe_curve with a line loop (ids ${ids})`);
-    if (!waypoints || !waypoints.lines.some((l) => l.type === 0)) fail(`/safe_path: no entity waypoints with a line strip (ids ${ids})`);
+    // Before the first plan of a case an entity may have no line yet; once drawn, the safe
+    // curve is a loop and the waypoints a strip (checked to have come at the end).
+    for (const e of m.entities) {
+      const want = e.id === "safe_curve" ? 1 : e.id === "waypoints" ? 0 : null;
+      if (want === null) fail(`/safe_path: entity "${e.id}"`);
+      else if (e.lines.some((l) => l.type !== want)) fail(`/safe_path: ${e.id} with a line of type ${e.lines.map((l) => l.type)}, not ${want === 1 ? "a loop (1)" : "a strip (0)"}`);
+      else if (e.lines.some((l) => l.points.length >= 2)) sceneSeen.add(e.id);
+    }
   } else {
     if (m.deletions.length < 1 || m.deletions[0].type !== 1) fail(`/people: does not start with a delete-all (${JSON.stringify(m.deletions)})`);
     for (const e of m.entities) {
@@ -341,6 +346,8 @@ function checkScene(topic, m) {
   }
   for (const e of m.entities) if (e.frame_id !== "map") fail(`${topic}: entity ${e.id} in frame "${e.frame_id}"`);
 }
+
+const sceneSeen = new Set(); // /safe_path entities drawn at least once
 
 function checkImage(m) {
   if (m.format !== "jpeg") fail(`/camera/image: format "${m.format}", not "jpeg"`);
@@ -358,9 +365,15 @@ function checkStats(m) {
     const missing = keys.filter((k) => !(k in t));
     if (missing.length) fail(`/stats: task ${t.name} without ${missing}`);
   }
-  if (!(m.view?.clients >= 1)) fail(`/stats: view.clients ${m.view?.clients} while this client is connected`);
+  // The first /stats may have been counted before this client was.
+  statsSeen += 1;
+  if (statsSeen > 1 && !(m.view?.clients >= 1)) fail(`/stats: view.clients ${m.view?.clients} while this client is connected`);
   if (lastStats) {
-    if (m.uptime_s < lastStats.uptime_s) fail(`/stats: uptime_s went back from ${lastStats.uptime_s} to ${m.uptime_s}`);
+    // A simulated run starts each case's firmware afresh: its uptime and task counters too.
+    const runs = new Map(lastStats.tasks.map((t) => [t.name, t.runs]));
+    const restarted = m.tasks.every((t) => runs.has(t.name) && t.runs < runs.get(t.name));
+    if (m.uptime_s < lastStats.uptime_s && !restarted) fail(`/stats: uptime_s went back from ${lastStats.uptime_s} to ${m.uptime_s}, the tasks' runs did not`);
+    if (restarted) note(`/stats: the task table started again (uptime ${lastStats.uptime_s} s -> ${m.uptime_s} s): a new case`);
     if (m.view.sent < lastStats.view.sent) fail(`/stats: view.sent went back from ${lastStats.view.sent} to ${m.view.sent}`);
   }
   lastStats = m;
@@ -374,7 +387,7 @@ function checkMission(m) {
   if (!(m.goals_reached >= 0 && m.goals_reached <= m.goals_total)) fail(`/mission: goals ${m.goals_reached} of ${m.goals_total}`);
   if (!finite(m.pose?.x, m.pose?.y, m.pose?.theta)) fail(`/mission: pose ${JSON.stringify(m.pose)}`);
   if (!Array.isArray(m.safety)) fail("/mission: safety is not a list");
-  missions.push([stampNs(m.timestamp), m.pose.x, m.pose.y, m.pose.theta]);
+  if (m.localized) missions.push([stampNs(m.timestamp), m.pose.x, m.pose.y, m.pose.theta]);
 }
 
 // --- The client -------------------------------------------------------------------------------
@@ -450,13 +463,17 @@ function onMessage(event) {
   let key = topic;
   if (topic === "/tf" && message.child_frame_id) key = `/tf ${message.child_frame_id}`;
   const previous = s.lastByChild.get(key);
-  const strict = topic === "/tf" || (DOCUMENTED[topic]?.period ?? 10) <= 1 && topic !== "/camera/image";
+  // Channels that re-send a state (a plan, a costmap, the newest scan) may repeat its stamp;
+  // the transforms, the statistics and the mission are new each time.
+  const strict = ["/tf", "/stats", "/mission"].includes(topic);
   if (previous !== undefined) {
     if (header < previous || (strict && header === previous)) {
       fail(`${key}: header timestamp ${header} after ${previous}: not ${strict ? "increasing" : "non-decreasing"}`);
     }
   }
   s.lastByChild.set(key, header);
+  if (!s.window) (s.stamps ??= []).push(header);
+  if (previous !== undefined && header === previous) s.repeatedStamps = (s.repeatedStamps ?? 0) + 1;
   if (message.timestamp && finite(message.timestamp.sec, message.timestamp.nsec)) {
     const payload = stampNs(message.timestamp);
     if (payload !== header) s.stampDiffers = (s.stampDiffers ?? 0) + 1;
@@ -571,8 +588,8 @@ async function main() {
   const input = capabilities.filter((c) => INPUT_CAPABILITIES.includes(c));
   if (input.length) fail(`serverInfo capabilities that accept input: ${input}`);
   if (capabilities.length) fail(`serverInfo capabilities ${JSON.stringify(capabilities)}: the documented server has none`);
-  if (serverInfo.supportedEncodings && !serverInfo.supportedEncodings.includes("json")) {
-    note(`serverInfo supportedEncodings ${JSON.stringify(serverInfo.supportedEncodings)} without json`);
+  if (serverInfo.supportedEncodings?.length) {
+    note(`serverInfo supportedEncodings ${JSON.stringify(serverInfo.supportedEncodings)}: encodings for client publishing, which this server does not accept`);
   }
   log(`serverInfo ${JSON.stringify(serverInfo)}`);
   log(`advertised: ${[...byTopic.keys()].join(" ")}`);
@@ -594,13 +611,25 @@ async function main() {
   for (const topic of required) {
     if (statsOf(topic).count < 2) fail(`${topic}: ${statsOf(topic).count} messages in ${(windowMs / 1000).toFixed(1)} s`);
   }
-  // Rates of the channels of 1 s and faster: within half and twice the documented rate.
+  // Rates of the channels of 1 s and faster: within half and twice the documented rate (a
+  // state not new since the last period may be skipped; the periods are checked below).
   for (const topic of required) {
     const d = DOCUMENTED[topic];
     if (!d || d.period > 1) continue;
     const expected = (d.perPeriod ?? 1) / d.period;
     const rate = statsOf(topic).window.count / (windowMs / 1000);
     if (rate < expected / 2 || rate > expected * 2) fail(`${topic}: ${rate.toFixed(2)} messages/s, documented ${expected.toFixed(2)}`);
+  }
+  // The channels new at each period: the median step between their distinct header stamps is
+  // the documented period (within -20 % .. +25 %), robust to a late tick now and then.
+  for (const topic of ["/tf", "/stats", "/mission"]) {
+    const stamps = [...new Set(statsOf(topic).stamps ?? [])].sort((a, b) => (a < b ? -1 : a > b ? 1 : 0));
+    const steps = stamps.slice(1).map((t, i) => Number(t - stamps[i]) / 1e6).sort((a, b) => a - b);
+    if (steps.length < 3) continue;
+    const median = steps[Math.floor(steps.length / 2)];
+    const period = DOCUMENTED[topic].period * 1000;
+    log(`${topic}: median step between stamps ${median.toFixed(1)} ms (documented ${period} ms), ${steps.length} steps`);
+    if (median < period * 0.8 || median > period * 1.25) fail(`${topic}: the median step between its stamps is ${median.toFixed(1)} ms, the documented period ${period} ms`);
   }
   const tf = statsOf("/tf");
   for (const edge of TF_EDGES) if (!tf.edges?.has(edge)) fail(`/tf: no ${edge.replace(">", " -> ")} transform`);
@@ -611,31 +640,36 @@ async function main() {
   }
   comparePoses();
 
-  // Unsubscribe: /tf and /mission stop (after a grace for messages already on the way) while
-  // /scan goes on; new subscriptions resume them, and /map comes at once on subscribe.
-  const stopped = ["/tf", "/mission"];
+  // Unsubscribe: /tf, /mission and /map stop (after a grace for messages already on the way)
+  // while /scan goes on; new subscriptions resume /tf and /map, the map at once.
+  const stopped = ["/tf", "/mission", "/map"];
+  // Messages of the dropped subscriptions, counted from 0.5 s after the unsubscribe (those
+  // already on the way may still come before).
+  const goneIds = new Map();
+  const late = new Map();
+  let graceOver = false;
+  client.off("message", onMessage);
+  client.on("message", (event) => {
+    const topic = goneIds.get(event.subscriptionId);
+    if (topic === undefined) onMessage(event);
+    else if (graceOver) late.set(topic, (late.get(topic) ?? 0) + 1);
+  });
   for (const [id, c] of [...subscriptions]) {
     if (stopped.includes(c.topic)) {
       client.unsubscribe(id);
       subscriptions.delete(id);
-      statsOf(c.topic).gone = id;
+      goneIds.set(id, c.topic);
     }
   }
   await sleep(500);
+  graceOver = true;
   const scanBefore = statsOf("/scan").count;
-  // Messages of the dropped subscriptions now arrive with an unknown id: count them apart.
-  const goneIds = new Map(stopped.map((t) => [statsOf(t).gone, t]));
-  const late = new Map();
-  client.off("message", onMessage);
-  const guard = (event) => {
-    const topic = goneIds.get(event.subscriptionId);
-    if (topic !== undefined) late.set(topic, (late.get(topic) ?? 0) + 1);
-    else onMessage(event);
-  };
-  client.on("message", guard);
   await sleep(2500);
   for (const topic of stopped) {
     if (late.get(topic)) fail(`${topic}: ${late.get(topic)} messages in the 2.5 s from 0.5 s after its unsubscribe`);
+  }
+  for (const topic of ["/safe_path"]) {
+    if (byTopic.has(topic)) for (const id of ["safe_curve", "waypoints"]) if (!sceneSeen.has(id)) fail(`${topic}: entity ${id} never drawn (no message with a line of two points or more)`);
   }
   if (statsOf("/scan").count - scanBefore < 5) fail(`/scan: ${statsOf("/scan").count - scanBefore} messages in 2.5 s while /tf was unsubscribed`);
   const resumed = ["/tf", "/map"];
@@ -654,6 +688,7 @@ async function main() {
   else log(`/map came ${mapDelay} ms after a new subscription`);
 
   for (const [topic, s] of stats) {
+    if (s.repeatedStamps) note(`${topic}: ${s.repeatedStamps} messages with the timestamp of the one before (a state sent again)`);
     if (s.stampDiffers) note(`${topic}: ${s.stampDiffers} messages whose header timestamp is not their payload's timestamp`);
   }
   table(Date.now() - subscribedAt);
