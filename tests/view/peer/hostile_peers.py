@@ -49,6 +49,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 from run_view_peer import Simulator  # noqa: E402  (the simulator's start, output and stop)
 
 SKIP = 77
