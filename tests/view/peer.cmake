@@ -20,7 +20,8 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
   # Hostile peers (Python's standard library only): garbage, malformed frames, an oversized
   # message, operations the server does not accept, the wrong subprotocol, a client that stops
   # reading, and the token of a non-loopback address; a well-behaved client beside them must
-  # keep its rate and the tasks their deadlines.
+  # keep its rate and the tasks their deadlines: run alone, as another test's load would
+  # cost the tasks deadlines too.
   add_test(NAME view.peer.hostile
     COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/peer/hostile_peers.py
             --sim $<TARGET_FILE:sen3bot-sim>
@@ -28,5 +29,6 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
   set_tests_properties(view.peer.hostile PROPERTIES
     LABELS "view;peer"
     TIMEOUT 300
-    SKIP_RETURN_CODE 77)
+    SKIP_RETURN_CODE 77
+    RUN_SERIAL TRUE)
 endif()
