@@ -6,6 +6,7 @@
 #include <new>
 
 #include "sen3bot/nav/geometry.hpp"
+#include "sen3bot/nav/sgp.hpp"
 
 namespace sen3bot::firmware {
 
@@ -24,6 +25,7 @@ constexpr std::array<Schema, kViewChannels> kSchemas = {
 
 constexpr std::size_t kMaxPlanPoses = 256;      // the plan is thinned to this many
 constexpr std::size_t kMaxSafePathPoints = 512;
+constexpr std::size_t kMaxCurveSegments = 2048;  // the safe curve's outline, as a line list
 constexpr std::size_t kDrivenPoses = 512;
 constexpr std::size_t kRolloutPoses = 16;
 constexpr std::size_t kCagePoints = 24;
@@ -64,6 +66,48 @@ void write_time(json::Writer& w, std::string_view key, hal::Nanos ns) {
   w.member_uint32("nsec", static_cast<std::uint32_t>(t % 1'000'000'000u)).end_object();
 }
 
+// The safe curve's zero set {p = 0} inside its bounds and the map, as line segments (marching
+// squares on a grid of twice the map's resolution). Start-up only: it allocates.
+void trace_curve(const nav::SupervisoryPlanner& sgp, const nav::OccupancyMap& map, std::pmr::vector<view::Point2>& out) {
+  const nav::CurveBounds& b = sgp.bounds();
+  const double step = 2.0 * map.resolution_m();
+  const double x0 = std::max(b.x0_m, map.origin_x_m()), y0 = std::max(b.y0_m, map.origin_y_m());
+  const double x1 = std::min(b.x1_m, map.origin_x_m() + map.width() * map.resolution_m());
+  const double y1 = std::min(b.y1_m, map.origin_y_m() + map.height() * map.resolution_m());
+  if (!(x1 > x0 && y1 > y0)) return;
+  const int nx = static_cast<int>((x1 - x0) / step), ny = static_cast<int>((y1 - y0) / step);
+  const nav::SafeCurve& curve = sgp.curve();
+  std::pmr::vector<double> row_below(static_cast<std::size_t>(nx + 1), out.get_allocator().resource());
+  std::pmr::vector<double> row_above(static_cast<std::size_t>(nx + 1), out.get_allocator().resource());
+  for (int i = 0; i <= nx; ++i) row_below[static_cast<std::size_t>(i)] = curve.value(x0 + i * step, y0);
+  for (int j = 0; j < ny && out.size() + 2 <= 2 * kMaxCurveSegments; ++j) {
+    const double ya = y0 + j * step, yb = ya + step;
+    for (int i = 0; i <= nx; ++i) row_above[static_cast<std::size_t>(i)] = curve.value(x0 + i * step, yb);
+    for (int i = 0; i < nx; ++i) {
+      const double xa = x0 + i * step, xb = xa + step;
+      // Corners counter-clockwise from (xa, ya); an edge whose ends differ in sign holds a crossing.
+      const double v[4] = {row_below[static_cast<std::size_t>(i)], row_below[static_cast<std::size_t>(i + 1)],
+                           row_above[static_cast<std::size_t>(i + 1)], row_above[static_cast<std::size_t>(i)]};
+      const view::Point2 c[4] = {{xa, ya}, {xb, ya}, {xb, yb}, {xa, yb}};
+      view::Point2 crossings[4];
+      int n = 0;
+      for (int e = 0; e < 4; ++e) {
+        const double va = v[e], vb = v[(e + 1) % 4];
+        if ((va < 0) == (vb < 0)) continue;
+        const double t = va / (va - vb);
+        const view::Point2& pa = c[e];
+        const view::Point2& pb = c[(e + 1) % 4];
+        crossings[n++] = {mm(pa.x_m + t * (pb.x_m - pa.x_m)), mm(pa.y_m + t * (pb.y_m - pa.y_m))};
+      }
+      for (int k = 0; k + 1 < n && out.size() + 2 <= 2 * kMaxCurveSegments; k += 2) {
+        out.push_back(crossings[k]);
+        out.push_back(crossings[k + 1]);
+      }
+    }
+    std::swap(row_below, row_above);
+  }
+}
+
 }  // namespace
 
 std::string_view topic_of(ViewChannel channel) noexcept { return kTopics[static_cast<std::size_t>(channel)]; }
@@ -85,6 +129,7 @@ struct ViewTask::Scratch {
   tasks::Sample<msg::CostmapSnapshot> local_costmap;
   std::array<view::Pose2, kMaxPlanPoses> plan{};
   std::array<view::Point2, kMaxSafePathPoints> safe_path{};
+  std::pmr::vector<view::Point2> curve;  // pairs: the safe curve's zero set, traced once
   std::array<view::Pose2, kDrivenPoses> driven{};  // a ring
   std::size_t driven_head = 0;
   std::size_t driven_count = 0;
@@ -105,7 +150,7 @@ struct ViewTask::Scratch {
   hal::Nanos unix_offset_ns = 0;
 
   Scratch(std::pmr::memory_resource& arena, view::JpegOptions jpeg_options)
-      : map_cells(&arena), jpeg(&arena), encoder(jpeg_options) {}
+      : map_cells(&arena), curve(&arena), jpeg(&arena), encoder(jpeg_options) {}
 };
 
 ViewTask::ViewTask(const ViewTaskConfig& config, const ViewSources& sources, view::Server* server) noexcept
@@ -137,7 +182,7 @@ std::size_t ViewTask::channel_specs(const ViewTaskConfig& config, const Shape& s
       case ViewChannel::scan: bytes = shape.scan ? msg::ScanMessage::kMaxBeams * 12 + 1024 : 0; break;
       case ViewChannel::tf: bytes = nav ? 3 * 1024 : 0; break;
       case ViewChannel::plan: bytes = nav ? kMaxPlanPoses * 120 + 1024 : 0; break;
-      case ViewChannel::safe_path: bytes = nav ? kMaxSafePathPoints * 40 + 2048 : 0; break;
+      case ViewChannel::safe_path: bytes = nav ? (kMaxSafePathPoints + 2 * kMaxCurveSegments) * 40 + 2048 : 0; break;
       case ViewChannel::driven_path: bytes = nav ? kDrivenPoses * 120 + 1024 : 0; break;
       case ViewChannel::dwa: bytes = nav ? kRolloutPoses * 120 + 1024 : 0; break;
       case ViewChannel::people: bytes = nav ? kMaxSceneEntities * 2600 + 1024 : 0; break;
@@ -178,6 +223,8 @@ Status ViewTask::init(std::pmr::memory_resource& arena) {
       s.map_cells[i] = cells[i] < 0 ? 255 : static_cast<std::uint8_t>(std::min<int>(cells[i], 100));
   }
   if (sources_.frames != nullptr) s.jpeg.resize(kJpegBytes);
+  if (sources_.planner != nullptr && sources_.planner->sgp() != nullptr && sources_.map != nullptr)
+    trace_curve(*sources_.planner->sgp(), *sources_.map, s.curve);
   s.unix_offset_ns = sources_.clock.unix_now_ns() - sources_.clock.now();
   start_ns_ = sources_.clock.now();
   next_ns_.fill(0);
@@ -208,7 +255,9 @@ bool ViewTask::write(std::size_t board_channel, hal::Nanos stamp, auto&& body) {
 
 void ViewTask::step(const tasks::StepContext& context) {
   if (server_ == nullptr || scratch_ == nullptr) return;
-  const hal::Nanos now = context.start_ns;
+  // Channels are due on the release grid, so a step that starts a little late does not push a
+  // channel to the step after.
+  const hal::Nanos now = context.release_ns;
   // The driven path grows every step, whether or not anyone watches.
   tasks::Sample<msg::PoseEstimate> pose;
   if (sources_.pose != nullptr && sources_.pose->read(pose) && pose.value.valid) {
@@ -224,7 +273,8 @@ void ViewTask::step(const tasks::StepContext& context) {
   bool any = false;
   for (std::size_t i = 0; i < kViewChannels; ++i) {
     if (board_channel_[i] < 0 || now < next_ns_[i]) continue;
-    next_ns_[i] = now + static_cast<hal::Nanos>(config_.period_s[i] * 1e9);
+    const auto period = static_cast<hal::Nanos>(config_.period_s[i] * 1e9);
+    next_ns_[i] = next_ns_[i] == 0 || next_ns_[i] + period <= now ? now + period : next_ns_[i] + period;
     if (encode(static_cast<ViewChannel>(i), now)) {
       server_->board().publish(static_cast<std::size_t>(board_channel_[i]));
       any = true;
@@ -318,8 +368,11 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
       for (std::size_t i = 0; i < points.size() && n < kMaxSafePathPoints; i += step)
         s.safe_path[n++] = {mm(points[i].x_m), mm(points[i].y_m)};
       const view::Line line{view::LineType::strip, std::span(s.safe_path).first(n), 0.04, {0.1, 0.6, 0.2, 0.9}};
-      const view::Entity entity{"waypoints", "map", 0, std::span(&line, n > 1 ? 1 : 0), {}, {}, {}};
-      return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(&entity, 1)); });
+      const view::Line curve{view::LineType::list, s.curve, 0.02, {0.2, 0.4, 0.9, 0.8}};
+      const view::Entity entities[] = {{"waypoints", "map", 0, std::span(&line, n > 1 ? 1 : 0), {}, {}, {}},
+                                       {"safe_curve", "map", 0, std::span(&curve, 1), {}, {}, {}}};
+      const std::size_t count = s.curve.empty() ? 1 : 2;
+      return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(entities).first(count)); });
     }
     case ViewChannel::driven_path: {
       for (std::size_t i = 0; i < s.driven_count; ++i)

@@ -162,6 +162,8 @@ class WsClient {
   }
 
   [[nodiscard]] bool connected() const { return fd_ >= 0; }
+  // The server closed the connection (a read saw its end).
+  [[nodiscard]] bool peer_closed() const { return peer_closed_; }
   void close() {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
@@ -179,7 +181,10 @@ class WsClient {
     if (::poll(&p, 1, timeout_ms) <= 0) return false;
     if (end_ == buffer_.size()) return false;
     const ssize_t n = ::recv(fd_, buffer_.data() + end_, buffer_.size() - end_, 0);
-    if (n <= 0) return false;
+    if (n <= 0) {
+      peer_closed_ = true;
+      return false;
+    }
     end_ += static_cast<std::size_t>(n);
     return true;
   }
@@ -193,6 +198,7 @@ class WsClient {
   }
 
   int fd_ = -1;
+  bool peer_closed_ = false;
   std::array<char, 1 << 20> buffer_{};
   std::size_t begin_ = 0;
   std::size_t end_ = 0;

@@ -1,6 +1,7 @@
 #include "sen3bot/view/server.hpp"
 
 #include <arpa/inet.h>
+#include <pthread.h>
 #include <libwebsockets.h>
 #include <netinet/in.h>
 #include <linux/sockios.h>
@@ -233,6 +234,14 @@ void Server::stop() {
 
 void Server::notify() noexcept {
   if (running()) lws_cancel_service(context_);
+}
+
+std::int64_t Server::thread_cpu_ns() noexcept {
+  if (!running() || !thread_.joinable()) return 0;
+  clockid_t clock{};
+  timespec t{};
+  if (pthread_getcpuclockid(thread_.native_handle(), &clock) != 0 || clock_gettime(clock, &t) != 0) return 0;
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
 }
 
 ServerCounters Server::counters() const noexcept {

@@ -74,6 +74,8 @@ class Server {
   // After publishing: wakes the service thread (thread-safe, no allocation).
   void notify() noexcept;
   [[nodiscard]] ServerCounters counters() const noexcept;
+  // CPU time the service thread has used (0 when not running), for the benchmark.
+  [[nodiscard]] std::int64_t thread_cpu_ns() noexcept;
   // The memory taken at create(), for the budget.
   [[nodiscard]] std::size_t bytes() const noexcept;
 
