@@ -93,7 +93,7 @@ def tail(path: Path, lines=40):
 
 def start_simulator(args, run_dir: Path, sim_log: Path):
     """Starts the lockstep run with the view; returns (process, url) once report.json exists."""
-    command = [args.sim, "sim", "--scenario", args.scenario, "--view", "--view-port", "0",
+    command = [str(Path(args.sim).resolve()), "sim", "--scenario", args.scenario, "--view", "--view-port", "0",
                "--view-hold", str(args.hold), "--report", str(run_dir)]
     log(" ".join(command))
     sim = subprocess.Popen(command, cwd=args.source_dir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
