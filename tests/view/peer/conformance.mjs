@@ -326,19 +326,22 @@ function checkPoses(topic, m) {
 function checkScene(topic, m) {
   const ids = m.entities.map((e) => e.id);
   if (topic === "/safe_path") {
-    // Before the first plan of a case an entity may have no line yet; once drawn, the safe
-    // curve is a loop and the waypoints a strip (checked to have come at the end).
+    // Before the first plan of a case the waypoints may have no line yet; once drawn, the safe
+    // curve's zero set is a line list (segments: an even count of points) and the waypoints a
+    // strip (checked to have come at the end).
     for (const e of m.entities) {
-      const want = e.id === "safe_curve" ? 1 : e.id === "waypoints" ? 0 : null;
+      const want = e.id === "safe_curve" ? 2 : e.id === "waypoints" ? 0 : null;
       if (want === null) fail(`/safe_path: entity "${e.id}"`);
-      else if (e.lines.some((l) => l.type !== want)) fail(`/safe_path: ${e.id} with a line of type ${e.lines.map((l) => l.type)}, not ${want === 1 ? "a loop (1)" : "a strip (0)"}`);
+      else if (e.lines.some((l) => l.type !== want)) fail(`/safe_path: ${e.id} with a line of type ${e.lines.map((l) => l.type)}, not ${want === 2 ? "a list (2)" : "a strip (0)"}`);
+      else if (want === 2 && e.lines.some((l) => l.points.length % 2 !== 0)) fail(`/safe_path: safe_curve with an odd count of segment ends`);
       else if (e.lines.some((l) => l.points.length >= 2)) sceneSeen.add(e.id);
     }
   } else {
     if (m.deletions.length < 1 || m.deletions[0].type !== 1) fail(`/people: does not start with a delete-all (${JSON.stringify(m.deletions)})`);
     for (const e of m.entities) {
       if (!/^(person|mover)\/\S+$/.test(e.id)) fail(`/people: entity id "${e.id}"`);
-      if (e.cylinders.length < 1 || e.arrows.length < 1) fail(`/people: entity ${e.id} without its cylinder and velocity arrow`);
+      // A velocity arrow only for one that moves (over 5 cm/s).
+      if (e.cylinders.length < 1 || e.arrows.length > 1) fail(`/people: entity ${e.id} without its cylinder, or with more than one arrow`);
       if (e.id.startsWith("person/") && (e.texts.length < 1 || !e.lines.some((l) => l.type === 1))) {
         fail(`/people: ${e.id} without its label and cage (line loop)`);
       }
