@@ -38,6 +38,8 @@ class StopSignalsBlocked {
   ~StopSignalsBlocked();
   StopSignalsBlocked(const StopSignalsBlocked&) = delete;
   StopSignalsBlocked& operator=(const StopSignalsBlocked&) = delete;
+  // SIGINT and SIGTERM, for sigtimedwait().
+  [[nodiscard]] const sigset_t& signals() const noexcept { return set_; }
 
  private:
   sigset_t set_;

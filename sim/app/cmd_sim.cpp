@@ -1,7 +1,6 @@
 // `sen3bot-sim sim`: named scenarios on the simulated robot, each case a whole firmware run in
 // lockstep (or real) time, with a report folder: a figure per case (report_figure.hpp) and a
 // JSON summary with per-task statistics.
-#include <pthread.h>
 #include <signal.h>
 #include <sys/stat.h>
 
@@ -25,6 +24,7 @@
 #include "config.hpp"
 #include "firmware.hpp"
 #include "report_figure.hpp"
+#include "runner.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -575,12 +575,7 @@ Status start_view(const FirmwareConfig& config, std::unique_ptr<view::Server>& s
 // After the run: the last state stays served for hold_s seconds (< 0: until SIGINT/SIGTERM).
 void hold_view(view::Server& server, double hold_s, std::FILE* out) {
   if (hold_s == 0) return;
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  sigset_t previous;
-  pthread_sigmask(SIG_BLOCK, &stop_signals, &previous);
+  const firmware::StopSignalsBlocked blocked;
   if (hold_s < 0) std::fprintf(out, "view: serving the final state until SIGINT or SIGTERM\n");
   else std::fprintf(out, "view: serving the final state for %.0f s\n", hold_s);
   std::fflush(out);
@@ -589,9 +584,8 @@ void hold_view(view::Server& server, double hold_s, std::FILE* out) {
     const double left_s = std::chrono::duration<double>(until - std::chrono::steady_clock::now()).count();
     const double wait_s = std::clamp(left_s, 0.0, 0.5);
     timespec wait{static_cast<time_t>(wait_s), static_cast<long>((wait_s - std::floor(wait_s)) * 1e9)};
-    if (sigtimedwait(&stop_signals, nullptr, &wait) > 0) break;
+    if (sigtimedwait(&blocked.signals(), nullptr, &wait) > 0) break;
   }
-  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   server.stop();
 }
 

@@ -21,9 +21,6 @@ the proof that a message of the robot's failing validation fails the test.
    set-up failed, 77 (skipped) when node, npm or mosquitto are not installed.
 """
 import argparse
-import fcntl
-import hashlib
-import os
 import re
 import shutil
 import signal
@@ -35,6 +32,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[1] / "support"))
+import npm_packages  # noqa: E402  (tests/support)
 SKIP = 77
 SERIAL = "r1"
 
@@ -57,30 +56,7 @@ def port_accepts(port):
 
 def install_packages(cache: Path):
     """npm ci into `cache`, keyed by the hash of package.json and package-lock.json."""
-    cache.mkdir(parents=True, exist_ok=True)
-    digest = hashlib.sha256()
-    for name in ("package.json", "package-lock.json"):
-        digest.update((HERE / name).read_bytes())
-    key = digest.hexdigest()
-    stamp = cache / "installed.sha256"
-    with open(cache / ".lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # two builds sharing the folder install once
-        if (stamp.exists() and stamp.read_text().strip() == key
-                and (cache / "node_modules" / "vda-5050-lib" / "package.json").exists()):
-            log(f"npm packages up to date in {cache}")
-            return
-        for name in ("package.json", "package-lock.json"):
-            shutil.copyfile(HERE / name, cache / name)
-        stamp.unlink(missing_ok=True)
-        log(f"npm ci in {cache}")
-        started = time.monotonic()
-        result = subprocess.run(
-            ["npm", "ci", "--ignore-scripts", "--no-audit", "--no-fund", "--loglevel=error"],
-            cwd=cache, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        if result.returncode != 0:
-            raise RuntimeError(f"npm ci failed (exit {result.returncode}):\n{result.stdout}")
-        stamp.write_text(key + "\n")
-        log(f"npm ci took {time.monotonic() - started:.1f} s")
+    npm_packages.install_packages(HERE, cache, "vda-5050-lib", log)
 
 
 def fleet_config(source: Path, broker_port: int) -> str:

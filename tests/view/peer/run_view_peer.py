@@ -15,9 +15,6 @@
    passed, 1 when they or the set-up failed, 77 (skipped) when node or npm is not installed.
 """
 import argparse
-import fcntl
-import hashlib
-import os
 import re
 import shutil
 import signal
@@ -29,6 +26,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[1] / "support"))
+import npm_packages  # noqa: E402  (tests/support)
 SKIP = 77
 VIEW_LINE = re.compile(r"^view: http://([^/\s]+):(\d+)/")
 
@@ -39,30 +38,7 @@ def log(message):
 
 def install_packages(cache: Path):
     """npm ci into `cache`, keyed by the hash of package.json and package-lock.json."""
-    cache.mkdir(parents=True, exist_ok=True)
-    digest = hashlib.sha256()
-    for name in ("package.json", "package-lock.json"):
-        digest.update((HERE / name).read_bytes())
-    key = digest.hexdigest()
-    stamp = cache / "installed.sha256"
-    with open(cache / ".lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # one install when two runs share the folder
-        marker = cache / "node_modules" / "@foxglove" / "ws-protocol" / "package.json"
-        if stamp.exists() and stamp.read_text().strip() == key and marker.exists():
-            log(f"npm packages up to date in {cache}")
-            return
-        for name in ("package.json", "package-lock.json"):
-            shutil.copyfile(HERE / name, cache / name)
-        stamp.unlink(missing_ok=True)
-        log(f"npm ci in {cache}")
-        started = time.monotonic()
-        result = subprocess.run(
-            ["npm", "ci", "--ignore-scripts", "--no-audit", "--no-fund", "--loglevel=error"],
-            cwd=cache, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        if result.returncode != 0:
-            raise RuntimeError(f"npm ci failed (exit {result.returncode}):\n{result.stdout}")
-        stamp.write_text(key + "\n")
-        log(f"npm ci took {time.monotonic() - started:.1f} s")
+    npm_packages.install_packages(HERE, cache, "@foxglove/ws-protocol", log)
 
 
 class Simulator:

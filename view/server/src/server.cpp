@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <pthread.h>
+#include <signal.h>
 #include <libwebsockets.h>
 #include <netinet/in.h>
 #include <linux/sockios.h>
@@ -211,7 +212,12 @@ Status Server::start() {
   port_ = vhost != nullptr ? lws_get_vhost_listen_port(vhost) : config_.port;
   stopping_.store(false);
   running_.store(true, std::memory_order_release);
+  // The service thread takes no signals: SIGINT and SIGTERM stay for the thread that waits for them.
+  sigset_t all, previous;
+  sigfillset(&all);
+  pthread_sigmask(SIG_BLOCK, &all, &previous);
   thread_ = std::thread([this] { run(); });
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   return {};
 }
 
