@@ -271,8 +271,8 @@ Status Firmware::create_tasks() {
 }
 
 ViewSources Firmware::view_sources() {
-  ViewSources s{.scheduler = scheduler_, .clock = board_.clock(), .laser_mount = {}};
-  s.frames = camera_frames();
+  ViewSources s{.scheduler = scheduler_, .clock = board_.clock()};
+  s.frames = FrameSource{external_frames_, camera_task_.get()};
   s.laser_mount = {config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
   if (config_.devices.has_laser || config_.navigation.enabled) s.scan = &nav_scan_;
   if (!config_.navigation.enabled) return s;

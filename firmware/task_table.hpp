@@ -44,9 +44,6 @@ inline constexpr std::array kTaskTable = {
     // Decoding a full order takes ~1 ms on a Pi 3 (benchmarks); the network is the link's thread.
     tasks::TaskSpec{"fleet",        100'000,   5'000,     4,        "background"},
     tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
-    // The live view (docs/view.md): after the planner and the mission, whose state it reads on
-    // this thread; encoding the map for a new viewer is its longest step.
-    tasks::TaskSpec{"view",         50'000,    5'000,     0,        "background"},
     tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
     // After the camera: its init() reads the camera's frame pool.
     tasks::TaskSpec{"vision",       500'000,   300'000,   0,        "vision"},
@@ -54,6 +51,10 @@ inline constexpr std::array kTaskTable = {
     // tags near the people within reach, and recognising a worker's operation from their path.
     tasks::TaskSpec{"qr",           200'000,   120'000,   1,        "cobot"},
     tasks::TaskSpec{"recognition",  1'000'000, 50'000,    0,        "cobot"},
+    // The live view (docs/view.md), on the planner's and the mission's thread, whose state it
+    // reads; last, so that its init() finds the camera row's frames. A step with the map and the
+    // global costmap is its longest.
+    tasks::TaskSpec{"view",         50'000,    5'000,     0,        "background"},
 };
 static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 

@@ -165,7 +165,7 @@ ViewTask::~ViewTask() {
 
 ViewTask::Shape ViewTask::shape_of(const ViewSources& s) noexcept {
   return {s.map != nullptr ? s.map->cell_count() : 0, s.map != nullptr && s.pose != nullptr && s.planner != nullptr,
-          s.scan != nullptr, s.frames != nullptr};
+          s.scan != nullptr, s.frames.pool != nullptr || s.frames.camera != nullptr};
 }
 
 std::size_t ViewTask::channel_specs(const ViewTaskConfig& config, const Shape& shape,
@@ -222,7 +222,8 @@ Status ViewTask::init(std::pmr::memory_resource& arena) {
     for (std::size_t i = 0; i < cells.size(); ++i)
       s.map_cells[i] = cells[i] < 0 ? 255 : static_cast<std::uint8_t>(std::min<int>(cells[i], 100));
   }
-  if (sources_.frames != nullptr) s.jpeg.resize(kJpegBytes);
+  frames_ = sources_.frames.get();
+  if (frames_ != nullptr) s.jpeg.resize(kJpegBytes);
   if (sources_.planner != nullptr && sources_.planner->sgp() != nullptr && sources_.map != nullptr)
     trace_curve(*sources_.planner->sgp(), *sources_.map, s.curve);
   s.unix_offset_ns = sources_.clock.unix_now_ns() - sources_.clock.now();
@@ -440,7 +441,8 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
       return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(s.entities).first(e)); });
     }
     case ViewChannel::camera: {
-      camera::FramePool& frames = *sources_.frames;
+      if (frames_ == nullptr) return false;
+      camera::FramePool& frames = *frames_;
       if (frames.latest_sequence() == s.camera_sequence) return false;
       camera::FrameHandle frame = frames.acquire_latest();
       if (!frame) return false;

@@ -42,8 +42,8 @@ struct ViewSources {
   const nav::PlannerTask* planner = nullptr;  // same thread: its costmap and safe path
   const MissionTask* mission = nullptr;       // same thread
   std::size_t goal_count = 0;
-  camera::FramePool* frames = nullptr;
-  msg::SensorMount laser_mount;
+  FrameSource frames{};  // the camera row's (found at init) or a given pool
+  msg::SensorMount laser_mount{};
   double rollout_s = 1.5;  // the DWA's simulated time
 };
 
@@ -86,6 +86,7 @@ class ViewTask final : public tasks::Task {
   std::array<int, kViewChannels> board_channel_{};  // -1: not served
   std::array<hal::Nanos, kViewChannels> next_ns_{};
   Scratch* scratch_ = nullptr;
+  camera::FramePool* frames_ = nullptr;
   std::uint64_t oversized_ = 0;
   hal::Nanos start_ns_ = 0;
 };

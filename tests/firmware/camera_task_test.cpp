@@ -36,14 +36,19 @@ TEST(CameraTask, TheCameraRowDecodesFramesOnItsOwnThread) {
   camera::testing::PeerProcess peer("/usr/bin/python3", {SEN3BOT_SOURCE_DIR "/tests/camera/peers/rtsp_server.py"});
   ASSERT_TRUE(peer.ready()) << peer.error();
   const std::string url = "rtsp://127.0.0.1:" + std::to_string(peer.port()) + "/h264";
-  Result<FirmwareConfig> config = parse_config(camera_config(url), "camera.yaml");
+  // With the live view: the camera's frames go out as JPEG on /camera/image.
+  Result<FirmwareConfig> config = parse_config(camera_config(url) +
+                                                   "view: { port: 0, channels: { camera: 0.2 } }\n",
+                                               "camera.yaml");
   ASSERT_TRUE(config) << config.error().c_str();
   ASSERT_TRUE(config->devices.has_camera);
+  config->tasks["view"].arena_bytes = 2 * 1024 * 1024;
 
   hal::PosixBoard board;
   std::FILE* sink = std::fopen("/dev/null", "w");
   Firmware fw(*config, board, sink);
-  ASSERT_TRUE(fw.init());
+  const Status started = fw.init();
+  ASSERT_TRUE(started) << started.error().c_str();
   ASSERT_NE(fw.camera_frames(), nullptr);
   ASSERT_TRUE(fw.scheduler().start());
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
@@ -59,6 +64,19 @@ TEST(CameraTask, TheCameraRowDecodesFramesOnItsOwnThread) {
   EXPECT_EQ(frame.ref().height_px, 360u);
   const camera::CameraStatus status = fw.camera()->camera()->status();
   EXPECT_EQ(status.decoder.decode_errors, 0u);
+
+  // The view row found the camera row's frames and sent them as JPEG, shrunk to 320 wide.
+  ASSERT_NE(fw.view(), nullptr);
+  view::ChannelBoard& channels = fw.view()->server()->board();
+  std::size_t image = channels.channel_count();
+  for (std::size_t i = 0; i < channels.channel_count(); ++i)
+    if (channels.spec(i).topic == "/camera/image") image = i;
+  ASSERT_LT(image, channels.channel_count());
+  EXPECT_GE(channels.published(image), 3u);
+  const view::Publication& jpeg = channels.take(image);
+  const std::string_view message(jpeg.payload(0).data(), jpeg.payload(0).size());
+  EXPECT_NE(message.find(R"("format":"jpeg")"), std::string_view::npos);
+  EXPECT_NE(message.find(R"("data":"/9j/)"), std::string_view::npos) << "base64 of a JPEG's FF D8 FF";
 
   // The row ran on its own thread at its period, and its cost was measured.
   std::size_t row = fw.scheduler().task_count();

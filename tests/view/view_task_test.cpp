@@ -72,7 +72,7 @@ TEST(ViewTask, SendsTheCamerasNewestFrameAsJpegOncePerFrame) {
   tasks::Scheduler scheduler(clock);
   ViewTaskConfig config;
   config.server.port = 0;
-  ViewSources sources{.scheduler = scheduler, .clock = clock, .frames = pool->get(), .laser_mount = {}};
+  ViewSources sources{.scheduler = scheduler, .clock = clock, .frames = FrameSource{pool->get()}};
   mem::BudgetArena arena("view", 2 * 1024 * 1024);  // outlives the task, as the firmware's arenas do
   ViewTask task(config, sources);
   ASSERT_TRUE(mem::try_init(arena, [&] { return task.init(arena); }));
