@@ -42,3 +42,37 @@ def install_packages(source: Path, cache: Path, marker: str, log, env=None):
             raise RuntimeError(f"npm ci failed (exit {result.returncode}):\n{result.stdout}")
         stamp.write_text(key + "\n")
         log(f"npm ci took {time.monotonic() - started:.1f} s")
+
+
+SKIP = 77
+
+
+def prepare(source: Path, cache: Path, marker: str, log, env=None, missing=()):
+    """Node.js, npm and the packages: None when ready, SKIP (77) when node, npm or anything in
+    `missing` is absent, 1 when the install failed."""
+    node, npm = shutil.which("node"), shutil.which("npm")
+    absent = [n for n, p in (("node", node), ("npm", npm)) if p is None] + list(missing)
+    if absent:
+        log(f"skipped: {', '.join(absent)} not installed (toolchain/bootstrap.sh)")
+        return SKIP
+    version = subprocess.run([node, "--version"], capture_output=True, text=True).stdout.strip()
+    log(f"node {version} ({node})")
+    try:
+        install_packages(source, cache, marker, log, env)
+    except (RuntimeError, OSError) as error:
+        log(str(error))
+        return 1
+    return None
+
+
+def stop_process(process, name, log, grace=5.0):
+    """SIGTERM, then SIGKILL after `grace` seconds."""
+    if process is None or process.poll() is not None:
+        return
+    process.terminate()
+    try:
+        process.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        log(f"{name} ignored SIGTERM for {grace} s: killing it")
+        process.kill()
+        process.wait()

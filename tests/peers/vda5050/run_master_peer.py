@@ -23,7 +23,6 @@ the proof that a message of the robot's failing validation fails the test.
 import argparse
 import re
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -158,15 +157,7 @@ def self_check(node, cache, port, timeout):
 
 
 def stop(process, name, grace=5.0):
-    if process is None or process.poll() is not None:
-        return
-    process.send_signal(signal.SIGTERM)
-    try:
-        process.wait(timeout=grace)
-    except subprocess.TimeoutExpired:
-        log(f"{name} ignored SIGTERM for {grace} s: killing it")
-        process.kill()
-        process.wait()
+    npm_packages.stop_process(process, name, log, grace)
 
 
 def tail(path: Path, lines=60):

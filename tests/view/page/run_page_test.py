@@ -23,7 +23,6 @@ import os
 import queue
 import re
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -43,21 +42,8 @@ def log(message):
     print(f"run_page_test: {message}", file=sys.stderr, flush=True)
 
 
-def install_packages(cache: Path):
-    """npm ci into `cache`, keyed by the hash of package.json and package-lock.json."""
-    npm_packages.install_packages(HERE, cache, "playwright-core", log, env={"PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD": "1"})
-
-
 def stop(process, name, grace=5.0):
-    if process is None or process.poll() is not None:
-        return
-    process.send_signal(signal.SIGTERM)
-    try:
-        process.wait(timeout=grace)
-    except subprocess.TimeoutExpired:
-        log(f"{name} ignored SIGTERM for {grace} s: killing it")
-        process.kill()
-        process.wait()
+    npm_packages.stop_process(process, name, log, grace)
 
 
 def tail(path: Path, lines=40):
@@ -125,22 +111,12 @@ def main():
     if not args.sim and not (args.url and args.report):
         parser.error("--sim is required (or --url with --report)")
 
-    node, npm = shutil.which("node"), shutil.which("npm")
-    missing = [n for n, p in (("node", node), ("npm", npm)) if p is None]
-    if not os.access(CHROMIUM, os.X_OK):
-        missing.append(f"chromium ({CHROMIUM})")
-    if missing:
-        log(f"skipped: {', '.join(missing)} not installed (toolchain/bootstrap.sh)")
-        return SKIP
-    version = subprocess.run([node, "--version"], capture_output=True, text=True).stdout.strip()
-    log(f"node {version} ({node})")
-
+    missing = [] if os.access(CHROMIUM, os.X_OK) else [f"chromium ({CHROMIUM})"]
     cache = Path(args.cache).resolve()
-    try:
-        install_packages(cache)
-    except (RuntimeError, OSError) as error:
-        log(str(error))
-        return 1
+    ready = npm_packages.prepare(HERE, cache, "playwright-core", log, {"PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD": "1"}, missing)
+    if ready is not None:
+        return ready
+    node = shutil.which("node")
 
     temporary = args.out is None
     out = Path(tempfile.mkdtemp(prefix="sen3bot-view-page-")) if temporary else Path(args.out).resolve()

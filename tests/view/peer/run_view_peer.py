@@ -36,11 +36,6 @@ def log(message):
     print(f"run_view_peer: {message}", file=sys.stderr, flush=True)
 
 
-def install_packages(cache: Path):
-    """npm ci into `cache`, keyed by the hash of package.json and package-lock.json."""
-    npm_packages.install_packages(HERE, cache, "@foxglove/ws-protocol", log)
-
-
 class Simulator:
     """sen3bot-sim with its output copied to a log file by a thread (so a full pipe never
     blocks it); `port` is set once the view line was printed."""
@@ -102,19 +97,11 @@ def main():
     parser.add_argument("--keep", action="store_true", help="keep the temporary folder (report, log)")
     args = parser.parse_args()
 
-    node, npm = shutil.which("node"), shutil.which("npm")
-    missing = [n for n, p in (("node", node), ("npm", npm)) if p is None]
-    if missing:
-        log(f"skipped: {', '.join(missing)} not installed (toolchain/bootstrap.sh)")
-        return SKIP
-    version = subprocess.run([node, "--version"], capture_output=True, text=True).stdout.strip()
-    log(f"node {version} ({node})")
     cache = Path(args.cache).resolve()
-    try:
-        install_packages(cache)
-    except (RuntimeError, OSError) as error:
-        log(str(error))
-        return 1
+    ready = npm_packages.prepare(HERE, cache, "@foxglove/ws-protocol", log)
+    if ready is not None:
+        return ready
+    node = shutil.which("node")
 
     source = Path(args.source_dir).resolve()
     work = Path(tempfile.mkdtemp(prefix="sen3bot-view-peer-"))
