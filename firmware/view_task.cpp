@@ -60,54 +60,6 @@ const char* safety_reason(std::uint32_t bit) {
   }
 }
 
-void write_time(json::Writer& w, std::string_view key, hal::Nanos ns) {
-  const std::uint64_t t = ns > 0 ? static_cast<std::uint64_t>(ns) : 0;
-  w.key(key).begin_object().member_uint32("sec", static_cast<std::uint32_t>(t / 1'000'000'000u));
-  w.member_uint32("nsec", static_cast<std::uint32_t>(t % 1'000'000'000u)).end_object();
-}
-
-// The safe curve's zero set {p = 0} inside its bounds and the map, as line segments (marching
-// squares on a grid of twice the map's resolution). Start-up only: it allocates.
-void trace_curve(const nav::SupervisoryPlanner& sgp, const nav::OccupancyMap& map, std::pmr::vector<view::Point2>& out) {
-  const nav::CurveBounds& b = sgp.bounds();
-  const double step = 2.0 * map.resolution_m();
-  const double x0 = std::max(b.x0_m, map.origin_x_m()), y0 = std::max(b.y0_m, map.origin_y_m());
-  const double x1 = std::min(b.x1_m, map.origin_x_m() + map.width() * map.resolution_m());
-  const double y1 = std::min(b.y1_m, map.origin_y_m() + map.height() * map.resolution_m());
-  if (!(x1 > x0 && y1 > y0)) return;
-  const int nx = static_cast<int>((x1 - x0) / step), ny = static_cast<int>((y1 - y0) / step);
-  const nav::SafeCurve& curve = sgp.curve();
-  std::pmr::vector<double> row_below(static_cast<std::size_t>(nx + 1), out.get_allocator().resource());
-  std::pmr::vector<double> row_above(static_cast<std::size_t>(nx + 1), out.get_allocator().resource());
-  for (int i = 0; i <= nx; ++i) row_below[static_cast<std::size_t>(i)] = curve.value(x0 + i * step, y0);
-  for (int j = 0; j < ny && out.size() + 2 <= 2 * kMaxCurveSegments; ++j) {
-    const double ya = y0 + j * step, yb = ya + step;
-    for (int i = 0; i <= nx; ++i) row_above[static_cast<std::size_t>(i)] = curve.value(x0 + i * step, yb);
-    for (int i = 0; i < nx; ++i) {
-      const double xa = x0 + i * step, xb = xa + step;
-      // Corners counter-clockwise from (xa, ya); an edge whose ends differ in sign holds a crossing.
-      const double v[4] = {row_below[static_cast<std::size_t>(i)], row_below[static_cast<std::size_t>(i + 1)],
-                           row_above[static_cast<std::size_t>(i + 1)], row_above[static_cast<std::size_t>(i)]};
-      const view::Point2 c[4] = {{xa, ya}, {xb, ya}, {xb, yb}, {xa, yb}};
-      view::Point2 crossings[4];
-      int n = 0;
-      for (int e = 0; e < 4; ++e) {
-        const double va = v[e], vb = v[(e + 1) % 4];
-        if ((va < 0) == (vb < 0)) continue;
-        const double t = va / (va - vb);
-        const view::Point2& pa = c[e];
-        const view::Point2& pb = c[(e + 1) % 4];
-        crossings[n++] = {mm(pa.x_m + t * (pb.x_m - pa.x_m)), mm(pa.y_m + t * (pb.y_m - pa.y_m))};
-      }
-      for (int k = 0; k + 1 < n && out.size() + 2 <= 2 * kMaxCurveSegments; k += 2) {
-        out.push_back(crossings[k]);
-        out.push_back(crossings[k + 1]);
-      }
-    }
-    std::swap(row_below, row_above);
-  }
-}
-
 }  // namespace
 
 std::string_view topic_of(ViewChannel channel) noexcept { return kTopics[static_cast<std::size_t>(channel)]; }
@@ -224,8 +176,15 @@ Status ViewTask::init(std::pmr::memory_resource& arena) {
   }
   frames_ = sources_.frames.get();
   if (frames_ != nullptr) s.jpeg.resize(kJpegBytes);
-  if (sources_.planner != nullptr && sources_.planner->sgp() != nullptr && sources_.map != nullptr)
-    trace_curve(*sources_.planner->sgp(), *sources_.map, s.curve);
+  if (sources_.planner != nullptr && sources_.planner->sgp() != nullptr && sources_.map != nullptr) {
+    // The safe curve's zero set inside its bounds and the map, on twice the map's grid.
+    const nav::SupervisoryPlanner& sgp = *sources_.planner->sgp();
+    const auto segments = nav::trace_curve(sgp.curve(), nav::intersect(sgp.bounds(), nav::map_extent(*sources_.map)),
+                                           2.0 * sources_.map->resolution_m());
+    s.curve.reserve(2 * std::min(segments.size(), kMaxCurveSegments));
+    for (std::size_t k = 0; k < segments.size() && k < kMaxCurveSegments; ++k)
+      for (const msg::Point2D& end : segments[k]) s.curve.push_back({mm(end.x_m), mm(end.y_m)});
+  }
   s.unix_offset_ns = sources_.clock.unix_now_ns() - sources_.clock.now();
   start_ns_ = sources_.clock.now();
   next_ns_.fill(0);
@@ -465,7 +424,7 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
       const view::ServerCounters counters = server_->counters();
       return write(ch, stamp, [&](json::Writer& w) {
         w.begin_object();
-        write_time(w, "timestamp", stamp);
+        view::write_time(w, "timestamp", stamp);
         w.member_number("uptime_s", std::round(hal::to_seconds(now - start_ns_) * 10.0) / 10.0);
         w.key("tasks").begin_array();
         for (std::size_t i = 0; i < n; ++i) {
@@ -497,7 +456,7 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
       const MissionTask* mission = sources_.mission;
       return write(ch, stamp, [&](json::Writer& w) {
         w.begin_object();
-        write_time(w, "timestamp", stamp);
+        view::write_time(w, "timestamp", stamp);
         w.member("state", mission != nullptr ? to_string(mission->report().state) : "fleet");
         w.member_uint32("goals_reached", mission != nullptr ? static_cast<std::uint32_t>(mission->report().goals_reached) : 0);
         w.member_uint32("goals_total", static_cast<std::uint32_t>(sources_.goal_count));

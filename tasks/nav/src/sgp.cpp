@@ -120,6 +120,46 @@ bool project_onto_curve(const SafeCurve& curve, Point2D from, Point2D& on) noexc
   return false;
 }
 
+CurveBounds intersect(const CurveBounds& a, const CurveBounds& b) noexcept {
+  return {std::max(a.x0_m, b.x0_m), std::max(a.y0_m, b.y0_m), std::min(a.x1_m, b.x1_m), std::min(a.y1_m, b.y1_m)};
+}
+
+std::vector<std::array<Point2D, 2>> trace_curve(const SafeCurve& curve, const CurveBounds& box, double step_m) {
+  std::vector<std::array<Point2D, 2>> segments;
+  const int nx = static_cast<int>(std::ceil((box.x1_m - box.x0_m) / step_m));
+  const int ny = static_cast<int>(std::ceil((box.y1_m - box.y0_m) / step_m));
+  if (nx < 1 || ny < 1) return segments;
+  const auto x_at = [&](int i) { return std::min(box.x0_m + i * step_m, box.x1_m); };
+  const auto y_at = [&](int j) { return std::min(box.y0_m + j * step_m, box.y1_m); };
+  std::vector<double> below(static_cast<std::size_t>(nx + 1));
+  std::vector<double> above(below.size());
+  for (int i = 0; i <= nx; ++i) below[static_cast<std::size_t>(i)] = curve.value(x_at(i), y_at(0));
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i <= nx; ++i) above[static_cast<std::size_t>(i)] = curve.value(x_at(i), y_at(j + 1));
+    for (int i = 0; i < nx; ++i) {
+      // The cell's corners counter-clockwise; a sign change on an edge puts V's crossing there.
+      const double x0 = x_at(i), x1 = x_at(i + 1), y0 = y_at(j), y1 = y_at(j + 1);
+      const double v[4] = {below[static_cast<std::size_t>(i)], below[static_cast<std::size_t>(i + 1)],
+                           above[static_cast<std::size_t>(i + 1)], above[static_cast<std::size_t>(i)]};
+      const Point2D c[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+      Point2D cross[4];
+      int n = 0;
+      for (int e = 0; e < 4; ++e) {
+        const double a = v[e], b = v[(e + 1) % 4];
+        if ((a < 0) == (b < 0)) continue;
+        const double t = a / (a - b);
+        const Point2D& p = c[e];
+        const Point2D& q = c[(e + 1) % 4];
+        cross[n++] = {p.x_m + t * (q.x_m - p.x_m), p.y_m + t * (q.y_m - p.y_m)};
+      }
+      // Two crossings: one segment; four (a saddle): pair them in order round the cell.
+      for (int k = 0; k + 1 < n; k += 2) segments.push_back({cross[k], cross[k + 1]});
+    }
+    std::swap(below, above);
+  }
+  return segments;
+}
+
 CurveBounds map_extent(const OccupancyMap& map) noexcept {
   const double w = map.width() * map.resolution_m();
   const double h = map.height() * map.resolution_m();

@@ -33,7 +33,6 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1] / "support"))
 import npm_packages  # noqa: E402  (tests/support)
-SKIP = 77
 SERIAL = "r1"
 
 
@@ -51,11 +50,6 @@ def port_accepts(port):
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.settimeout(0.5)
         return s.connect_ex(("127.0.0.1", port)) == 0
-
-
-def install_packages(cache: Path):
-    """npm ci into `cache`, keyed by the hash of package.json and package-lock.json."""
-    npm_packages.install_packages(HERE, cache, "vda-5050-lib", log)
 
 
 def fleet_config(source: Path, broker_port: int) -> str:
@@ -181,21 +175,14 @@ def main():
     if not args.sim and not args.self_check:
         parser.error("--sim is required (or --self-check)")
 
-    node, npm, mosquitto = shutil.which("node"), shutil.which("npm"), shutil.which("mosquitto")
+    mosquitto = shutil.which("mosquitto")
     if mosquitto is None and Path("/usr/sbin/mosquitto").exists():
         mosquitto = "/usr/sbin/mosquitto"
-    missing = [n for n, p in (("node", node), ("npm", npm), ("mosquitto", mosquitto)) if p is None]
-    if missing:
-        log(f"skipped: {', '.join(missing)} not installed (toolchain/bootstrap.sh)")
-        return SKIP
-    version = subprocess.run([node, "--version"], capture_output=True, text=True).stdout.strip()
-    log(f"node {version} ({node})")
-
-    try:
-        install_packages(Path(args.cache).resolve())
-    except (RuntimeError, OSError) as error:
-        log(str(error))
-        return 1
+    ready = npm_packages.prepare(HERE, Path(args.cache).resolve(), "vda-5050-lib", log,
+                                 missing=[] if mosquitto else ["mosquitto"])
+    if ready is not None:
+        return ready
+    node = shutil.which("node")
 
     work = Path(tempfile.mkdtemp(prefix="sen3bot-vda5050-peer-"))
     broker = sim = master = None

@@ -33,7 +33,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1] / "support"))
 import npm_packages  # noqa: E402  (tests/support)
-SKIP = 77
+SKIP = npm_packages.SKIP
 CHROMIUM = "/usr/bin/chromium"
 VIEW_LINE = re.compile(r"view: (http://[^\s/]+:(\d+)/)")
 

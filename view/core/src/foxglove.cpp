@@ -9,19 +9,6 @@ namespace {
 
 constexpr hal::Nanos kNanosPerSecond = 1'000'000'000;
 
-// {sec, nsec} of a time or a duration: negative clamps to 0, beyond the u32 seconds to the last one.
-void write_time(json::Writer& out, std::string_view name, hal::Nanos ns) noexcept {
-  ns = std::max<hal::Nanos>(ns, 0);
-  constexpr hal::Nanos kMaxSeconds = std::numeric_limits<std::uint32_t>::max();
-  const hal::Nanos sec = std::min(ns / kNanosPerSecond, kMaxSeconds);
-  const hal::Nanos nsec = sec == kMaxSeconds && ns / kNanosPerSecond > kMaxSeconds ? kNanosPerSecond - 1
-                                                                                    : ns % kNanosPerSecond;
-  out.key(name).begin_object();
-  out.member_uint32("sec", static_cast<std::uint32_t>(sec));
-  out.member_uint32("nsec", static_cast<std::uint32_t>(nsec));
-  out.end_object();
-}
-
 void write_vector3(json::Writer& out, std::string_view name, double x, double y, double z) noexcept {
   out.key(name).begin_object().member_number("x", x).member_number("y", y).member_number("z", z).end_object();
 }
@@ -58,7 +45,7 @@ void empty_array(json::Writer& out, std::string_view name) noexcept { out.key(na
 void write_arrow(json::Writer& out, const Arrow& a) noexcept {
   out.begin_object();
   write_pose(out, "pose", a.from.x_m, a.from.y_m, 0.0, a.heading_rad);
-  // A fixed shape scaled by the length: a short arrow is a small arrow, not a fat stub.
+  // A fixed shape scaled by the length, so a short arrow keeps the proportions of a long one.
   out.member_number("shaft_length", 0.8 * a.length_m);
   out.member_number("shaft_diameter", 0.1 * a.length_m);
   out.member_number("head_length", 0.2 * a.length_m);
@@ -133,6 +120,18 @@ void write_entity(json::Writer& out, hal::Nanos stamp_ns, const Entity& e) noexc
 }
 
 }  // namespace
+
+void write_time(json::Writer& out, std::string_view name, hal::Nanos ns) noexcept {
+  ns = std::max<hal::Nanos>(ns, 0);
+  constexpr hal::Nanos kMaxSeconds = std::numeric_limits<std::uint32_t>::max();
+  const hal::Nanos sec = std::min(ns / kNanosPerSecond, kMaxSeconds);
+  const hal::Nanos nsec = sec == kMaxSeconds && ns / kNanosPerSecond > kMaxSeconds ? kNanosPerSecond - 1
+                                                                                    : ns % kNanosPerSecond;
+  out.key(name).begin_object();
+  out.member_uint32("sec", static_cast<std::uint32_t>(sec));
+  out.member_uint32("nsec", static_cast<std::uint32_t>(nsec));
+  out.end_object();
+}
 
 void write_grid(json::Writer& out, hal::Nanos stamp_ns, std::string_view frame_id, const GridView& grid) noexcept {
   // Whole rows only: a short cell span yields a smaller grid, never a ragged one.

@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <memory_resource>
 #include <span>
+#include <vector>
 
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/nav/geometry.hpp"
@@ -92,6 +93,14 @@ struct CurveBounds {
 // The map's extent (the bounding box of its corners in the map frame): a curve's bounds when its
 // file gives none.
 [[nodiscard]] CurveBounds map_extent(const OccupancyMap& map) noexcept;
+
+// The part of both boxes (empty, x1 < x0 or y1 < y0, when they do not meet).
+[[nodiscard]] CurveBounds intersect(const CurveBounds& a, const CurveBounds& b) noexcept;
+
+// V = {p = 0} inside the box as short segments (marching squares on a step_m grid): for figures
+// and the live view, at start-up (it allocates).
+[[nodiscard]] std::vector<std::array<Point2D, 2>> trace_curve(const SafeCurve& curve, const CurveBounds& box,
+                                                              double step_m);
 
 // The foot of `from` on V by Newton's steps along grad p; false when they do not converge.
 [[nodiscard]] bool project_onto_curve(const SafeCurve& curve, Point2D from, Point2D& on) noexcept;

@@ -36,6 +36,10 @@ std::string_view schema_name(Schema schema) noexcept;  // "foxglove.Grid", ...
 // field of an advertised channel. Static text; valid JSON.
 std::string_view json_schema(Schema schema) noexcept;
 
+// A time or duration as the schemas' {sec, nsec}, under `name`: negative clamps to 0, beyond the
+// u32 seconds to the last one. For the robot's own JSON messages too.
+void write_time(json::Writer& out, std::string_view name, hal::Nanos ns) noexcept;
+
 struct Point2 {
   double x_m = 0.0;
   double y_m = 0.0;

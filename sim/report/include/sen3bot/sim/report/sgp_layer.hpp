@@ -1,7 +1,7 @@
 #pragma once
 // The supervisory planner's picture on a case figure (the source's Figures 1.12-1.16): the
 // obstacles' ellipses it holds, its safe curve V traced inside the curve's bounds and the
-// map, and a quiver plot of its field.
+// map (nav::trace_curve), and a quiver plot of its field.
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/sim/report/case_figure.hpp"
 
@@ -10,9 +10,5 @@ namespace sen3bot::sim::report {
 // figure.map must be set. The field is drawn with zeta's sign `direction`, an arrow of 0.4
 // times the spacing every quiver_spacing_m where the field is defined (0: no quiver).
 void add_sgp_layer(CaseFigure& figure, const nav::SupervisoryPlanner& sgp, int direction, double quiver_spacing_m);
-
-// V = {p = 0} inside the box as short segments (marching squares on a step_m grid).
-[[nodiscard]] std::vector<std::array<msg::Point2D, 2>> trace_curve(const nav::SafeCurve& curve,
-                                                                   const nav::CurveBounds& box, double step_m);
 
 }  // namespace sen3bot::sim::report
