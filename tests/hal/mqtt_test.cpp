@@ -3,8 +3,6 @@
 // configuration, refused credentials, and a broker killed and restarted mid-stream.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "mosquitto_broker.hpp"
 #include "sen3bot/hal/pubsub.hpp"
 
@@ -135,19 +134,14 @@ TEST(Mqtt, AKilledClientsWillIsPublishedAndACleanCloseSendsNone) {
   ASSERT_TRUE(wait_for([&] { return (*polite)->state() == PubSubState::connected; }));
   (*polite)->close(1.0);
 
-  // A process that dies with its connection open.
-  const pid_t child = ::fork();
-  if (child == 0) {
-    auto o = options(broker, "doomed");
-    o.will = PubSubWill{"uagv/v2/S3B/doomed/connection", "BROKEN doomed", 1, true};
-    auto client = open_mqtt(o);
-    if (!client.ok()) std::_Exit(1);
-    for (;;) ::pause();
-  }
-  ASSERT_TRUE(wait_for([&] { return testing::port_accepts(broker.port()); }));
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // connected by then
-  ::kill(child, SIGKILL);
-  ::waitpid(child, nullptr, 0);
+  // A process that dies with its connection open: killed once the broker has accepted it.
+  const std::string dir = broker.dir();
+  testing::ChildProcess doomed({SEN3BOT_MQTT_WILL_CLIENT, broker.url(), "doomed", "uagv/v2/S3B/doomed/connection", "BROKEN doomed"},
+                               dir + "/doomed.out", dir + "/doomed.err");
+  ASSERT_TRUE(doomed.started());
+  ASSERT_TRUE(wait_for([&] { return doomed.out().find("connected") != std::string::npos; }, 30.0)) << doomed.err();
+  doomed.signal(SIGKILL);
+  EXPECT_EQ(doomed.wait(10.0), 128 + SIGKILL);
   Inbox inbox;
   ASSERT_TRUE(wait_for([&] {
     inbox.poll(**watcher);

@@ -1,6 +1,9 @@
 #pragma once
-// A program under test as a child process, its standard output and error in files: started
-// with posix_spawn, signalled, waited for with a deadline, killed when the object goes away.
+// A program of this build under test as a child process, its standard output and error in
+// files: started with posix_spawn, signalled, waited for with a deadline, killed when the
+// object goes away. A cross build runs its tests under CMake's cross-compiling emulator
+// (qemu-user with the sysroot); the child goes through the same emulator, named explicitly,
+// never through whatever binfmt registration the host happens to have.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -9,14 +12,35 @@
 
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 extern char** environ;
 
+// The emulator's command line with its words joined by '|' (tests/CMakeLists.txt); native
+// builds define nothing.
+#ifndef SEN3BOT_TEST_EMULATOR
+#define SEN3BOT_TEST_EMULATOR ""
+#endif
+
 namespace sen3bot::testing {
+
+// `args` (a program of this build and its arguments) prefixed with the emulator's words.
+inline std::vector<std::string> built_program(std::vector<std::string> args) {
+  std::vector<std::string> command;
+  std::string_view rest = SEN3BOT_TEST_EMULATOR;
+  while (!rest.empty()) {
+    const std::size_t bar = rest.find('|');
+    command.emplace_back(rest.substr(0, bar));
+    rest = bar == std::string_view::npos ? std::string_view{} : rest.substr(bar + 1);
+  }
+  command.insert(command.end(), std::make_move_iterator(args.begin()), std::make_move_iterator(args.end()));
+  return command;
+}
 
 inline std::string read_text_file(const std::string& path) {
   std::ifstream in(path);
@@ -29,6 +53,7 @@ class ChildProcess {
  public:
   ChildProcess(std::vector<std::string> args, const std::string& out_path, const std::string& err_path)
       : out_(out_path), err_(err_path) {
+    args = built_program(std::move(args));
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

@@ -4,8 +4,10 @@
 // toolchain/broker-pki.sh and users from mosquitto_passwd; or a plain loopback listener.
 // The broker runs as a child process and can be killed and started again on the same port.
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <signal.h>
+#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -20,6 +23,8 @@
 #include <thread>
 #include <utility>
 #include <vector>
+
+extern char** environ;
 
 namespace sen3bot::testing {
 
@@ -105,14 +110,21 @@ class MosquittoBroker {
 
   // Starts the broker and waits until it accepts connections.
   void start() {
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const std::string log = dir_ + "/mosquitto.log";
-      std::freopen(log.c_str(), "a", stderr);
-      std::freopen(log.c_str(), "a", stdout);
-      const std::string config = dir_ + "/mosquitto.conf";
-      ::execlp("mosquitto", "mosquitto", "-c", config.c_str(), static_cast<char*>(nullptr));
-      std::_Exit(127);
+    // Spawned, not forked: the test process may already run client threads (a restart), and
+    // a fork of those is unsafe (and under qemu-user, unreliable).
+    const std::string log = dir_ + "/mosquitto.log";
+    std::string config = dir_ + "/mosquitto.conf";
+    std::string program = "mosquitto", flag = "-c";
+    char* argv[] = {program.data(), flag.data(), config.data(), nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    const int spawned = ::posix_spawnp(&pid_, "mosquitto", &actions, nullptr, argv, environ);
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawned != 0) {
+      pid_ = -1;
+      throw std::runtime_error("cannot start mosquitto: " + std::string(std::strerror(spawned)));
     }
     for (int i = 0; i < 500; ++i) {
       if (port_accepts(port_)) return;
