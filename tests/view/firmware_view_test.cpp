@@ -201,6 +201,14 @@ TEST(ViewRealTime, AViewerThatStopsReadingCostsNoTaskAPeriod) {
       viewer = std::make_unique<WsClient>();
       viewer->small_receive_buffer();
       subscribe_all(*viewer, port);  // and never reads again
+      // Until its socket is full: the server then sends only what the reading viewer reads.
+      bool full = false;
+      for (int i = 0; i < 80 && !full; ++i) {
+        const std::uint64_t sent = fw.view()->server()->counters().sent, read = frames.load();
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+        full = (fw.view()->server()->counters().sent - sent) <= (frames.load() - read) + 2;
+      }
+      ASSERT_TRUE(full) << "the viewer that reads nothing was still being sent to after 20 s";
       ++stalled_viewers;
     }
     const auto from = snapshot(scheduler);

