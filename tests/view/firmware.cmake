@@ -3,7 +3,7 @@ if(TARGET sen3bot_view_server AND TARGET sen3bot_sim)
   sen3bot_test(view_firmware_tests
     SOURCES firmware_view_test.cpp
     LIBS sen3bot_firmware sen3bot_sim
-    LABELS "view;slow"
+    LABELS "view;slow;timing"
     TIMEOUT 180
     RUN_SERIAL)
   target_include_directories(view_firmware_tests PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)

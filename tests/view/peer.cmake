@@ -12,7 +12,7 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
             --cache ${CMAKE_CURRENT_BINARY_DIR}/view-npm
             --source-dir ${PROJECT_SOURCE_DIR})
   set_tests_properties(view.peer.foxglove_client PROPERTIES
-    LABELS "view;peer;npm"
+    LABELS "view;peer;npm;timing"
     TIMEOUT 300
     SKIP_RETURN_CODE 77
     RESOURCE_LOCK view-npm)
@@ -27,7 +27,7 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
             --sim $<TARGET_FILE:sen3bot-sim>
             --source-dir ${PROJECT_SOURCE_DIR})
   set_tests_properties(view.peer.hostile PROPERTIES
-    LABELS "view;peer"
+    LABELS "view;peer;timing"
     TIMEOUT 300
     SKIP_RETURN_CODE 77
     RUN_SERIAL TRUE)

@@ -4,7 +4,7 @@ if(TARGET sen3bot_view_server)
   sen3bot_test(view_server_tests
     SOURCES server_test.cpp
     LIBS sen3bot_view_server sen3bot_alloc_counter
-    LABELS view
+    LABELS view timing
     TIMEOUT 120)
   target_include_directories(view_server_tests PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
 
