@@ -208,7 +208,10 @@ TEST(ViewRealTime, AViewerThatStopsReadingCostsNoTaskAPeriod) {
         std::this_thread::sleep_for(std::chrono::milliseconds(250));
         full = (fw.view()->server()->counters().sent - sent) <= (frames.load() - read) + 2;
       }
-      ASSERT_TRUE(full) << "the viewer that reads nothing was still being sent to after 20 s";
+      if (!full) {
+        ADD_FAILURE() << "the viewer that reads nothing was still being sent to after 20 s";
+        break;  // the firmware and the reader stop below
+      }
       ++stalled_viewers;
     }
     const auto from = snapshot(scheduler);
@@ -230,6 +233,7 @@ TEST(ViewRealTime, AViewerThatStopsReadingCostsNoTaskAPeriod) {
   std::printf("%-13s %8s %8s %8s | %8s %8s %8s | %s\n", "row", "late", "skipped", "exec ms", "late", "skipped", "exec ms",
               "p (late more often with the stalled viewer)");
   std::printf("%-13s %26s | %26s |\n", "", "with a stalled viewer", "control");
+  ASSERT_EQ(stalled_viewers, static_cast<std::uint64_t>(kPairs));
   for (std::size_t i = 0; i < stalled.runs.size(); ++i) {
     const tasks::TaskStats& row = scheduler.stats(i);
     // Late starts, not skipped releases: one long stall skips many releases at once.
@@ -240,7 +244,7 @@ TEST(ViewRealTime, AViewerThatStopsReadingCostsNoTaskAPeriod) {
                 static_cast<unsigned long long>(control.skips[i]), control.exec_mean_ms(i), p);
     EXPECT_GT(stalled.runs[i], 0u) << row.name << " stopped while a viewer was stalled";
     EXPECT_GT(control.runs[i], 0u) << row.name;
-    // 20 rows at 1e-4 each: a false alarm in about one run in 500 on a machine whose load
+    // A dozen rows at 1e-4 each: a false alarm in about one run in 800 on a machine whose load
     // comes and goes; a row that pays for the stalled viewer is far below it.
     EXPECT_GT(p, 1e-4) << row.name << " started late " << stalled.slips[i] << " times in " << stalled.seconds
                        << " s with a stalled viewer, " << control.slips[i] << " times in " << control.seconds << " s without";
