@@ -63,6 +63,16 @@ struct Inbox {
   }
 };
 
+// Reads and drops whatever `client` holds.
+void drain(PubSub& client) {
+  std::vector<char> topic(256);
+  std::vector<std::uint8_t> payload(64 * 1024);
+  for (;;) {
+    auto m = client.receive(topic, payload);
+    if (!m.ok() || !m.value()) break;
+  }
+}
+
 // Clean sessions keep nothing for a subscription not yet made: publish probes on `probe_topic`
 // until the reader has one, so the reader's subscription is known to be in place.
 void await_subscription(PubSub& writer, PubSub& reader, std::string_view probe_topic) {
@@ -77,10 +87,7 @@ void await_subscription(PubSub& writer, PubSub& reader, std::string_view probe_t
   ASSERT_TRUE(seen) << "the reader's subscription never came into place";
   // Probes still on their way go too.
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  for (;;) {
-    auto m = reader.receive(topic, payload);
-    if (!m.ok() || !m.value()) break;
-  }
+  drain(reader);
 }
 
 // Publishes, retrying while the outbound queue is full.
@@ -190,7 +197,13 @@ TEST_F(MqttSite, ARobotPublishesOnlyItsOwnTopicsAndOnlyTheCentreSendsOrders) {
     return (*centre)->state() == PubSubState::connected && (*r1)->state() == PubSubState::connected &&
            (*r2)->state() == PubSubState::connected;
   })) << broker_.log();
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the three subscriptions are in place
+  // Each client's subscriptions are in place once a probe from a peer allowed to write has come
+  // through; the centre sees the robots' probes too, so everyone starts empty.
+  await_subscription(**r1, **centre, "uagv/v2/S3B/r1/visualization");
+  await_subscription(**centre, **r1, "uagv/v2/probe/r1/order");
+  await_subscription(**centre, **r2, "uagv/v2/probe/r2/order");
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  drain(**centre);
 
   ASSERT_TRUE((*r1)->publish("uagv/v2/S3B/r1/state", bytes("own state"), 1, false).ok());
   ASSERT_TRUE((*r1)->publish("uagv/v2/S3B/r2/state", bytes("forged state"), 1, false).ok());
@@ -225,7 +238,8 @@ TEST_F(MqttSite, OnlyTheCentreSendsFormationCommandsAndARobotReadsOnlyItsOwn) {
     return (*centre)->state() == PubSubState::connected && (*r1)->state() == PubSubState::connected &&
            (*r2)->state() == PubSubState::connected;
   })) << broker_.log();
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the subscriptions are in place
+  await_subscription(**centre, **r1, "sen3bot/v1/formation/probe/r1");
+  await_subscription(**centre, **r2, "sen3bot/v1/formation/probe/r2");
 
   ASSERT_TRUE((*r2)->publish("sen3bot/v1/formation/S3B/r1", bytes("forged by r2"), 1, false).ok());
   ASSERT_TRUE((*r1)->publish("sen3bot/v1/formation/S3B/r1", bytes("own"), 1, false).ok());

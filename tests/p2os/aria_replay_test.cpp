@@ -150,10 +150,11 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
   EXPECT_EQ(r.got[0].raw, bytes_of(encode_command(Command::sync0)));
   EXPECT_EQ(r.got[1].raw, bytes_of(encode_command(Command::sync1)));
   EXPECT_EQ(r.got[2].type, kTypeSync2);
-  // Bounds leave room for sanitizers and qemu; ARIA waits up to 1 s for each.
-  EXPECT_LT(r.got[0].t_ns - sync0, hal::millis(100));
-  EXPECT_LT(r.got[1].t_ns - sync1, hal::millis(100));
-  EXPECT_LT(r.got[2].t_ns - sync2, hal::millis(100));
+  // ARIA waits up to 1 s for each; half of that leaves room for sanitizers, qemu and a busy
+  // machine, whose pauses stamp an answer late (the time is when this test read it).
+  EXPECT_LT(r.got[0].t_ns - sync0, hal::millis(500));
+  EXPECT_LT(r.got[1].t_ns - sync1, hal::millis(500));
+  EXPECT_LT(r.got[2].t_ns - sync2, hal::millis(500));
   const auto reply = with_frame(r.got[2], [](const Frame& f) { return decode_sync2_reply(f); });
   ASSERT_TRUE(reply && *reply);
   EXPECT_STREQ((*reply)->name.data(), config.name.c_str());
@@ -168,7 +169,7 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
   const auto sips = r.sips();
   ASSERT_FALSE(sips.empty());
   EXPECT_GT(sips.front().first, open);
-  EXPECT_LT(sips.front().first - open, hal::millis(250));
+  EXPECT_LT(sips.front().first - open, hal::millis(500));
   const double expected_sips = static_cast<double>(close - open) / 1e8;  // one per 100 ms
   EXPECT_NEAR(static_cast<double>(sips.size()), expected_sips, 0.2 * expected_sips);
   bool config_reply = false;
@@ -190,7 +191,7 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
     if (t > enable + hal::millis(150) && t < disable) {
       EXPECT_TRUE(motors) << "SIP at " << t;
     }
-    if (t > disable + hal::millis(10)) {
+    if (t > disable + hal::millis(25)) {
       EXPECT_FALSE(motors) << "SIP at " << t;
       disabled_sips += 1;
     }
@@ -206,7 +207,7 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
       EXPECT_EQ(s.left_vel_mm_s, 0);
       EXPECT_EQ(s.right_vel_mm_s, 0);
     }
-    EXPECT_LT(t, close + hal::millis(150)) << "a SIP after CLOSE";
+    EXPECT_LT(t, close + hal::millis(300)) << "a SIP after CLOSE";
   }
   EXPECT_TRUE(drove);
   EXPECT_TRUE(turned);
@@ -214,7 +215,7 @@ TEST(P2osAria, SessionReplayedOverTcpGetsTheAnswersAriaExpects) {
 
   // CLOSE ends the session and the connection: ARIA reads EOF rather than a silent socket.
   ASSERT_GE(r.eof_ns, 0) << "the connection stayed open after CLOSE";
-  EXPECT_LT(r.eof_ns - close, hal::millis(300));
+  EXPECT_LT(r.eof_ns - close, hal::millis(1000));
   EXPECT_EQ((*runner)->connections_closed(), 1u);
   EXPECT_EQ((*runner)->clients_served(), 1u);
   const EmulatorStats stats = (*runner)->with_emulator([](P2osEmulator& e) { return e.stats(); });

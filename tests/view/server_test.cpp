@@ -5,6 +5,7 @@
 #include <ifaddrs.h>
 #include <net/if.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -425,15 +426,16 @@ TEST(Server, AStalledViewerNeverHoldsUpThePublisherNorTheOtherViewers) {
       if (next_message(*reader, 200).first == 100u) ++read_count;
   });
   const std::string big(200 * 1024, 'x');
-  std::int64_t slowest_ns = 0;
   const int publishes = 200;
+  std::vector<std::int64_t> publish_ns;
+  publish_ns.reserve(publishes);
   for (int i = 0; i < publishes; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     publish(*r.server, 0, big, i);
-    slowest_ns = std::max<std::int64_t>(slowest_ns, std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                        std::chrono::steady_clock::now() - t0).count());
+    publish_ns.push_back(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  std::sort(publish_ns.begin(), publish_ns.end());
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   stop = true;
   reading.join();
@@ -442,7 +444,10 @@ TEST(Server, AStalledViewerNeverHoldsUpThePublisherNorTheOtherViewers) {
   EXPECT_GT(read_count.load(), publishes / 4u);
   EXPECT_LT(r.server->counters().sent, read_count.load() + publishes / 4u);
   // Publishing is a copy and an index swap whatever the viewers do: far below a task's period.
-  EXPECT_LT(slowest_ns, 50'000'000) << "a publish waited for the server";
+  // A publish that waited for the server would wait on most publishes once the stalled socket is
+  // full; the 95th percentile leaves out the few a busy machine preempts.
+  const std::int64_t p95_ns = publish_ns[publish_ns.size() * 95 / 100];
+  EXPECT_LT(p95_ns, 20'000'000) << "a publish waited for the server; slowest " << publish_ns.back() / 1'000'000 << " ms";
   EXPECT_EQ(r.server->counters().clients, 2u);
 }
 
