@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 
@@ -90,16 +91,7 @@ double normal(std::mt19937_64& rng) noexcept {  // Box-Muller
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
 
-Point2D operator+(Point2D a, Point2D b) noexcept { return {a.x_m + b.x_m, a.y_m + b.y_m}; }
-Point2D operator-(Point2D a, Point2D b) noexcept { return {a.x_m - b.x_m, a.y_m - b.y_m}; }
-Point2D operator*(double k, Point2D a) noexcept { return {k * a.x_m, k * a.y_m}; }
-double dot(Point2D a, Point2D b) noexcept { return a.x_m * b.x_m + a.y_m * b.y_m; }
-double norm(Point2D a) noexcept { return std::hypot(a.x_m, a.y_m); }
-Point2D unit(Point2D a) noexcept {
-  const double n = norm(a);
-  return n > 1e-12 ? (1.0 / n) * a : Point2D{1.0, 0.0};
-}
-Point2D normal_left(Point2D d) noexcept { return {-d.y_m, d.x_m}; }
+Point2D unit(Point2D a) noexcept { return msg::unit_or(a, Point2D{1.0, 0.0}); }
 
 double polyline_length(const std::vector<Point2D>& v) noexcept {
   double l = 0;
@@ -268,7 +260,7 @@ void WorkerSimulator::Impl::shape_leg(std::vector<Point2D>& v, const WorkerStyle
       const double at = uniform(rng, 0.35, 0.65) * len;
       const Point2D leave = a + (at - kDetourHalfM) * d, rejoin = a + (at + kDetourHalfM) * d;
       for (const double s : {side, -side}) {
-        const Point2D off = a + at * d + (s * size) * normal_left(d);
+        const Point2D off = a + at * d + (s * size) * msg::perpendicular(d);
         if (clear(leave, off) && clear(off, rejoin)) {
           v.insert(v.begin() + static_cast<std::ptrdiff_t>(longest) + 1, {leave, off, rejoin});
           break;
@@ -428,7 +420,7 @@ Result<WorkerWalk> WorkerSimulator::walk(std::size_t operation, const WorkerStyl
       const std::size_t at = std::min(dense.size() - 2, static_cast<std::size_t>(s / kDenseStepM));
       const double f = std::clamp(s / kDenseStepM - static_cast<double>(at), 0.0, 1.0);
       const Point2D on_route = dense[at] + f * (dense[at + 1] - dense[at]);
-      const Point2D lateral = normal_left(unit(dense[at + 1] - dense[at]));
+      const Point2D lateral = msg::perpendicular(unit(dense[at + 1] - dense[at]));
       const double swing = sway * ramp * std::sin(2.0 * std::numbers::pi * sway_hz * walked_s + sway_phase);
       Point2D body = on_route + swing * lateral;
       if (w.cost(body) >= kBlocked) body = on_route;
