@@ -30,6 +30,7 @@
 #include "experiment.hpp"
 #include "firmware.hpp"
 #include "report_figure.hpp"
+#include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/sim/report/case_figure.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
@@ -146,12 +147,6 @@ void set_error(MissionResult& r, std::string_view what) {
 }
 
 // --- The closest approach, for the sample figure -------------------------------------------------
-
-double segment_distance(nav::Point2D q, nav::Point2D a, nav::Point2D b) {
-  const double ex = b.x_m - a.x_m, ey = b.y_m - a.y_m, len2 = ex * ex + ey * ey;
-  const double t = len2 > 0 ? std::clamp(((q.x_m - a.x_m) * ex + (q.y_m - a.y_m) * ey) / len2, 0.0, 1.0) : 0.0;
-  return std::hypot(q.x_m - (a.x_m + t * ex), q.y_m - (a.y_m + t * ey));
-}
 
 // The gap between the robot's footprint at `pose` and a square box (axis-aligned, side size_m)
 // centred at c; 0 when they overlap.

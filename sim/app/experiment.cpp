@@ -69,26 +69,6 @@ std::vector<world::MoverScript> dol_boxes(const std::vector<Lane>& lanes, double
   return movers;
 }
 
-Quartiles quartiles(std::vector<double> values) {
-  Quartiles q;
-  q.n = values.size();
-  if (values.empty()) return q;
-  std::sort(values.begin(), values.end());
-  auto at = [&](double p) {
-    const double pos = p * static_cast<double>(values.size() - 1);
-    const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
-    const std::size_t hi = std::min(lo + 1, values.size() - 1);
-    return values[lo] + (pos - static_cast<double>(lo)) * (values[hi] - values[lo]);
-  };
-  q.min = values.front();
-  q.max = values.back();
-  q.q1 = at(0.25);
-  q.median = at(0.5);
-  q.q3 = at(0.75);
-  q.iqr = q.q3 - q.q1;
-  return q;
-}
-
 BoxStats box_stats(const std::vector<double>& values) {
   BoxStats b;
   b.q = quartiles(values);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/sim/report/canvas.hpp"
 #include "sen3bot/world/world.hpp"
 
@@ -40,12 +41,10 @@ struct Lane {
 // The lanes as the world's movers: square 0.2 m boxes walking (x, 0.25) <-> (x, 5.75) m at speed.
 [[nodiscard]] std::vector<world::MoverScript> dol_boxes(const std::vector<Lane>& lanes, double speed_m_s);
 
-// Quartiles by linear interpolation between order statistics (numpy's default).
-struct Quartiles {
-  std::size_t n = 0;
-  double min = 0, q1 = 0, median = 0, q3 = 0, max = 0, iqr = 0;
-};
-[[nodiscard]] Quartiles quartiles(std::vector<double> values);
+// Quartiles by linear interpolation between order statistics (numpy's default): the crowd
+// metrics' own.
+using crowd::Quartiles;
+[[nodiscard]] inline Quartiles quartiles(std::vector<double> values) { return crowd::quartiles(values); }
 
 // One box of a box plot: quartiles, whiskers to the furthest sample within 1.5 IQR of the box,
 // the samples beyond them as outliers.

@@ -42,26 +42,26 @@ RunMetrics drive_past(const PersonTruth& person, const RunSetup& setup = {}) {
   return meter.finish(true, kDt * (kStraightSteps - 1));
 }
 
-TEST(CrowdMetrics, PolygonDistanceOutsideAnEdgeACornerAndInside) {
+TEST(PointMath, ConvexPolygonDistanceOutsideAnEdgeACornerAndInside) {
   const std::array<Point2D, 4> ccw{{{1, 1}, {-1, 1}, {-1, -1}, {1, -1}}};
   const std::array<Point2D, 4> cw{{{1, -1}, {-1, -1}, {-1, 1}, {1, 1}}};
   for (const auto& square : {ccw, cw}) {
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {3.0, 0.5}), 2.0);   // off the right edge
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {0.2, -1.5}), 0.5);  // off the bottom edge
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {4.0, 5.0}), 5.0);   // off a corner: 3-4-5
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {2.0, 1.0}), 1.0);   // on an edge's extension
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {0.5, -0.3}), 0.0);  // inside
-    EXPECT_DOUBLE_EQ(polygon_distance(square, {1.0, 0.2}), 0.0);   // on the boundary
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {3.0, 0.5}), 2.0);   // off the right edge
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {0.2, -1.5}), 0.5);  // off the bottom edge
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {4.0, 5.0}), 5.0);   // off a corner: 3-4-5
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {2.0, 1.0}), 1.0);   // on an edge's extension
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {0.5, -0.3}), 0.0);  // inside
+    EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(square, {1.0, 0.2}), 0.0);   // on the boundary
   }
   // A triangle: beyond the hypotenuse of (0,0) (2,0) (0,2), from (2,2) it is sqrt(2) away.
   const std::array<Point2D, 3> triangle{{{0, 0}, {2, 0}, {0, 2}}};
-  EXPECT_NEAR(polygon_distance(triangle, {2.0, 2.0}), std::sqrt(2.0), 1e-12);
-  EXPECT_DOUBLE_EQ(polygon_distance(triangle, {0.5, 0.5}), 0.0);
+  EXPECT_NEAR(msg::convex_polygon_distance(triangle, {2.0, 2.0}), std::sqrt(2.0), 1e-12);
+  EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(triangle, {0.5, 0.5}), 0.0);
   // A segment and a point.
   const std::array<Point2D, 2> segment{{{0, 0}, {2, 0}}};
-  EXPECT_DOUBLE_EQ(polygon_distance(segment, {1.0, 0.0}), 0.0);
-  EXPECT_DOUBLE_EQ(polygon_distance(segment, {1.0, 0.7}), 0.7);
-  EXPECT_DOUBLE_EQ(polygon_distance(std::span<const Point2D>(segment.data(), 1), {3.0, 4.0}), 5.0);
+  EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(segment, {1.0, 0.0}), 0.0);
+  EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(segment, {1.0, 0.7}), 0.7);
+  EXPECT_DOUBLE_EQ(msg::convex_polygon_distance(std::span<const Point2D>(segment.data(), 1), {3.0, 4.0}), 5.0);
 }
 
 TEST(CrowdMetrics, BodyDistanceUsesTheRotatedFootprint) {

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "sen3bot/world/world.hpp"
@@ -140,6 +142,92 @@ TEST(World, ScanSeesMoversOnlyOnceVisible) {
   w.scan(sensor, -M_PI / 2.0, M_PI / 180.0, 181, 8.0, ranges);
   EXPECT_NEAR(ranges[90], 0.9, 1e-6);
   EXPECT_NEAR(ranges[0], 1.95, 1e-6);
+}
+
+// Runs of consecutive beams that hit something nearer than `limit_m`: what a laser sees as
+// separate objects. Each run's first and last beam.
+std::vector<std::pair<std::size_t, std::size_t>> hit_runs(const std::vector<float>& ranges, double limit_m) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    if (ranges[i] >= limit_m) continue;
+    if (!runs.empty() && runs.back().second + 1 == i) runs.back().second = i;
+    else runs.emplace_back(i, i);
+  }
+  return runs;
+}
+
+// A person walking across the laser's view at 1.3 m/s, 2 m ahead: the LMS200's 0.5 degree
+// beams see two legs whose fore-aft spacing follows the gait (one step length apart at most,
+// side by side twice per stride), never the body's 0.5 m disc.
+TEST(World, APersonWithLegsIsTwoArcsThatSwingWithTheGait) {
+  World w(room());
+  MoverScript person;
+  person.path = {{0.5, 3.0}, {3.5, 3.0}};
+  person.speed_m_s = 1.3;
+  person.size_m = 0.5;
+  person.person = true;
+  person.legs = true;
+  const std::size_t i = w.add_mover(person);
+  const Pose2D sensor{2.0, 1.0, M_PI / 2.0};  // looking along +y, the person crosses along x
+  const double increment = 0.5 * M_PI / 180.0;
+  std::vector<float> ranges(121);  // +-30 degrees: the person, and the far wall beyond 2.5 m
+  double widest_m = 0.0, narrowest_m = 1e9;
+  int two_runs = 0, frames = 0;
+  for (double t = 0.8; t <= 1.5; t += 0.01) {  // about a stride, near the middle of the view
+    w.set_time(t);
+    const auto legs = w.mover_legs(i);
+    const double spacing = std::abs(legs[0].x_m - legs[1].x_m);
+    widest_m = std::max(widest_m, spacing);
+    narrowest_m = std::min(narrowest_m, spacing);
+    // The legs sit 0.1 m either side of the walking line, 2 m from the sensor.
+    EXPECT_NEAR(std::abs(legs[0].y_m - legs[1].y_m), 2.0 * crowd::kLegSpreadM, 1e-9);
+    w.scan(sensor, -M_PI / 6.0, increment, ranges.size(), 8.0, ranges);
+    const auto runs = hit_runs(ranges, 2.5);
+    ++frames;
+    if (spacing > 0.3) {
+      ASSERT_EQ(runs.size(), 2u) << "t " << t;
+      ++two_runs;
+      // Each arc is a 0.12 m leg at about 2 m (3.4 degrees: 7 beams), not the 0.5 m body (29).
+      for (const auto& [a, b] : runs) EXPECT_LE(b - a + 1, 8u) << "t " << t;
+    }
+    for (const auto& [a, b] : runs) {
+      // The nearer leg's edge is 1.84 m away at the closest; the body's would be 1.75 m.
+      for (std::size_t k = a; k <= b; ++k) EXPECT_GT(ranges[k], 1.83f);
+    }
+  }
+  // Step length at 1.3 m/s is 1.3^0.42 / 1.6 = 0.70 m: the legs' spacing swings from 0 to it.
+  EXPECT_NEAR(widest_m, crowd::step_length_m(1.3), 0.02);
+  EXPECT_LT(narrowest_m, 0.05);
+  EXPECT_GT(two_runs, frames / 4);
+}
+
+TEST(World, ADrivenMoverStaysWherePlacedAndStandsWithItsFeetTogether) {
+  World w(room());
+  MoverScript person;
+  person.path = {{1.0, 1.0}, {3.0, 1.0}};  // ignored: a model drives it
+  person.speed_m_s = 1.0;
+  person.size_m = 0.5;
+  person.person = true;
+  person.legs = true;
+  person.driven = true;
+  const std::size_t i = w.add_mover(person);
+  w.place_mover(i, {2.0, 3.0}, {0.0, 1.0}, true);
+  w.set_time(1.0);
+  EXPECT_DOUBLE_EQ(w.mover_position(i).x_m, 2.0);
+  EXPECT_DOUBLE_EQ(w.mover_position(i).y_m, 3.0);
+  EXPECT_DOUBLE_EQ(w.mover_velocity(i).y_m, 1.0);
+  EXPECT_TRUE(w.mover_visible(i));
+  // Its body counts for contacts.
+  EXPECT_TRUE(w.collides({2.0, 2.6, 0.0}, Footprint::circle(0.2)));
+  w.place_mover(i, {2.0, 3.0}, {0.0, 0.0}, true);
+  w.set_time(2.0);
+  const auto legs = w.mover_legs(i);
+  // Standing: side by side across its last heading (+y), 2 kLegSpreadM apart.
+  EXPECT_NEAR(std::abs(legs[0].x_m - legs[1].x_m), 2.0 * crowd::kLegSpreadM, 1e-6);
+  EXPECT_NEAR(legs[0].y_m, legs[1].y_m, 1e-6);
+  w.place_mover(i, {2.0, 3.0}, {0.0, 0.0}, false);
+  EXPECT_FALSE(w.collides({2.0, 2.6, 0.0}, Footprint::circle(0.2)));
+  EXPECT_DOUBLE_EQ(w.cast_ray(2.0, 1.0, M_PI / 2.0, 8.0), 2.95);  // the wall behind, nothing else
 }
 
 TEST(World, NoisyScanIsSeeded) {

@@ -83,6 +83,22 @@ Status Simulation::open(const nav::OccupancyMap& map) {
   world_config.range_noise_sigma_m = config_.range_noise_sigma_m;
   world_ = std::make_unique<world::World>(map, world_config);
   for (const world::MoverScript& mover : config_.movers) world_->add_mover(mover);
+  first_crowd_mover_ = world_->mover_count();
+  if (config_.crowd) {
+    Result<std::unique_ptr<crowd::Crowd>> made = crowd::Crowd::create(*config_.crowd);
+    if (!made) return Error::format(made.error().code(), "simulation: crowd: %s", made.error().c_str());
+    crowd_ = std::move(*made);
+    for (std::size_t i = 0; i < crowd_->size(); ++i) {
+      world::MoverScript person;
+      person.person = true;
+      person.driven = true;
+      person.legs = true;
+      person.size_m = 2.0 * crowd_->state(i).radius_m;
+      const std::size_t index = world_->add_mover(person);
+      const crowd::PersonState at = crowd_->state(i);
+      world_->place_mover(index, at.position, at.velocity, at.visible);
+    }
+  }
   world_->set_time(0.0);
   if (world_->collides(config_.start_pose, config_.footprint))
     return Error::format(Errc::config, "simulation: the start pose (%.2f, %.2f) m overlaps an obstacle of %s",
@@ -123,6 +139,20 @@ std::string Simulation::laser_device_path() const {
   return laser_pty_ ? std::string(laser_pty_->slave_path()) : std::string();
 }
 
+// The crowd sees the robot as the disc that holds its footprint, where the robot truly is.
+void Simulation::place_crowd(hal::Nanos now_ns) noexcept {
+  const nav::Pose2D truth = to_nav(base_.ground_truth());
+  const double v = base_.velocity_m_s();
+  const crowd::RobotDisc robot{{truth.x_m, truth.y_m},
+                               {v * std::cos(truth.theta_rad), v * std::sin(truth.theta_rad)},
+                               config_.footprint.circumscribed_radius_m()};
+  crowd_->advance(static_cast<double>(now_ns) / kNanosPerSecond, &robot);
+  for (std::size_t i = 0; i < crowd_->size(); ++i) {
+    const crowd::PersonState at = crowd_->state(i);
+    world_->place_mover(first_crowd_mover_ + i, at.position, at.velocity, at.visible);
+  }
+}
+
 void Simulation::step(hal::Nanos now_ns) noexcept {
   world_->set_time(static_cast<double>(now_ns) / kNanosPerSecond);
   hal::ByteStream& base_stream = base_pipe_ ? static_cast<hal::ByteStream&>(base_pipe_->b()) : *base_pty_;
@@ -134,6 +164,7 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   }
   // A failed step means the driver's end went away; the robot keeps its state, as hardware does.
   (void)base_.step(base_stream, now_ns);
+  if (crowd_) place_crowd(now_ns);
 
   const nav::Pose2D pose = to_nav(base_.ground_truth());
   const nav::Pose2D& m = config_.laser_mount;
@@ -151,7 +182,7 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   double nearest = kClearanceLimitM;
   truth_.people_count = 0;
   for (std::size_t i = 0; i < world_->mover_count(); ++i) {
-    if (!world_->mover_visible(i) || !config_.movers[i].person) continue;
+    if (!world_->mover_visible(i) || !world_->mover_script(i).person) continue;
     const nav::Point2D p = world_->mover_position(i);
     nearest = std::min(nearest, std::hypot(p.x_m - pose.x_m, p.y_m - pose.y_m));
     if (truth_.people_count < GroundTruth::kMaxPeople) truth_.people[truth_.people_count++] = p;

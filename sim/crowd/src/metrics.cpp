@@ -7,13 +7,6 @@
 namespace sen3bot::crowd {
 namespace {
 
-double segment_distance(Point2D q, Point2D a, Point2D b) noexcept {
-  const Point2D e = b - a;
-  const double len2 = norm_squared(e);
-  const double t = len2 > 0.0 ? std::clamp(dot(q - a, e) / len2, 0.0, 1.0) : 0.0;
-  return norm(q - (a + t * e));
-}
-
 // The type 7 quantile of sorted values: between the order statistics around (n - 1) p.
 double quantile(std::span<const double> sorted, double p) noexcept {
   const double h = static_cast<double>(sorted.size() - 1) * p;
@@ -32,26 +25,6 @@ Rate rate_of(std::size_t count, std::size_t n) noexcept {
 
 }  // namespace
 
-double polygon_distance(std::span<const Point2D> polygon, Point2D q) noexcept {
-  if (polygon.empty()) return std::numeric_limits<double>::infinity();
-  if (polygon.size() == 1) return norm(q - polygon[0]);
-  // Inside a convex polygon q is on the same side of every edge, whichever the winding. At
-  // least one strict side is required, so a degenerate (flat) polygon is never "around" q.
-  bool left = false;
-  bool right = false;
-  double d = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < polygon.size(); ++i) {
-    const Point2D a = polygon[i];
-    const Point2D b = polygon[(i + 1) % polygon.size()];
-    const double side = cross(b - a, q - a);
-    left = left || side > 0.0;
-    right = right || side < 0.0;
-    d = std::min(d, segment_distance(q, a, b));
-  }
-  if (polygon.size() >= 3 && left != right) return 0.0;
-  return d;
-}
-
 double body_distance(const nav::Footprint& footprint, const Pose2D& pose, Point2D centre, double radius_m) noexcept {
   const Point2D offset = centre - Point2D{pose.x_m, pose.y_m};
   if (footprint.vertex_count == 0) return norm(offset) - footprint.circle_radius_m - radius_m;
@@ -60,7 +33,7 @@ double body_distance(const nav::Footprint& footprint, const Pose2D& pose, Point2
   const double s = std::sin(pose.theta_rad);
   const Point2D local{c * offset.x_m + s * offset.y_m, -s * offset.x_m + c * offset.y_m};
   const std::size_t count = std::min(footprint.vertex_count, nav::Footprint::kMaxVertices);
-  return polygon_distance({footprint.vertices.data(), count}, local) - radius_m;
+  return msg::convex_polygon_distance({footprint.vertices.data(), count}, local) - radius_m;
 }
 
 void RunMeter::start(const RunSetup& setup) noexcept {
@@ -153,6 +126,8 @@ Quartiles quartiles(std::span<double> values) noexcept {
   q.median = quantile(values, 0.5);
   q.q3 = quantile(values, 0.75);
   q.iqr = q.q1 == q.q3 ? 0.0 : q.q3 - q.q1;
+  q.min = values.front();
+  q.max = values.back();
   return q;
 }
 

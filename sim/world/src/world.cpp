@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "sen3bot/msg/point_math.hpp"
+
 namespace sen3bot::world {
 namespace {
 
@@ -24,36 +26,9 @@ Polygon place(const Footprint& footprint, const Pose2D& pose) {
   return p;
 }
 
-double segment_distance(Point2D q, Point2D a, Point2D b) {
-  const double ex = b.x_m - a.x_m;
-  const double ey = b.y_m - a.y_m;
-  const double len2 = ex * ex + ey * ey;
-  double t = len2 > 0.0 ? ((q.x_m - a.x_m) * ex + (q.y_m - a.y_m) * ey) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  return std::hypot(q.x_m - (a.x_m + t * ex), q.y_m - (a.y_m + t * ey));
-}
-
-bool inside(const Polygon& poly, Point2D q) {
-  bool in = false;
-  for (std::size_t i = 0, j = poly.count - 1; i < poly.count; j = i++) {
-    const Point2D a = poly.points[i];
-    const Point2D b = poly.points[j];
-    if ((a.y_m > q.y_m) != (b.y_m > q.y_m) &&
-        q.x_m < (b.x_m - a.x_m) * (q.y_m - a.y_m) / (b.y_m - a.y_m) + a.x_m) {
-      in = !in;
-    }
-  }
-  return in;
-}
-
-// Distance from q to the polygon (0 inside).
+// Distance from q to the placed footprint (0 inside).
 double polygon_distance(const Polygon& poly, Point2D q) {
-  if (inside(poly, q)) return 0.0;
-  double d = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < poly.count; ++i) {
-    d = std::min(d, segment_distance(q, poly.points[i], poly.points[(i + 1) % poly.count]));
-  }
-  return d;
+  return msg::convex_polygon_distance({poly.points.data(), poly.count}, q);
 }
 
 // Separating-axis test between a convex polygon and an axis-aligned box.
@@ -231,11 +206,29 @@ Point2D World::position_at(const Mover& mover, double time_s) noexcept {
 }
 
 void World::set_time(double time_s) noexcept {
+  const double dt = time_s - time_s_;
   time_s_ = time_s;
   for (Mover& m : movers_) {
-    m.position = position_at(m, time_s);
-    m.visible = time_s >= m.script.appear_time_s && time_s < m.script.vanish_time_s;
+    if (!m.script.driven) {
+      const Point2D was = m.position;
+      m.position = position_at(m, time_s);
+      m.visible = time_s >= m.script.appear_time_s && time_s < m.script.vanish_time_s;
+      if (dt > 0.0) m.velocity = (1.0 / dt) * (m.position - was);
+    }
+    if (m.script.legs && dt > 0.0) crowd::advance(m.gait, m.velocity, dt);
   }
+}
+
+void World::place_mover(std::size_t index, Point2D position, Point2D velocity, bool visible) noexcept {
+  Mover& m = movers_[index];
+  m.position = position;
+  m.velocity = velocity;
+  m.visible = visible;
+}
+
+std::array<Point2D, 2> World::mover_legs(std::size_t index) const noexcept {
+  const Mover& m = movers_[index];
+  return crowd::leg_centres(m.position, m.gait, msg::norm(m.velocity));
 }
 
 bool World::solid(int col, int row) const noexcept {
@@ -291,10 +284,17 @@ double World::cast_ray(double x_m, double y_m, double angle_rad, double max_rang
   for (const Mover& m : movers_) {
     if (!m.visible) continue;
     const double half = m.script.size_m / 2.0;
-    const double t = m.script.shape == MoverShape::circle
-                         ? ray_circle(x_m, y_m, dx, dy, m.position, half)
-                         : ray_box(x_m, y_m, dx, dy, m.position.x_m - half, m.position.y_m - half,
-                                   m.position.x_m + half, m.position.y_m + half);
+    double t = 0.0;
+    if (m.script.legs) {
+      const std::array<Point2D, 2> legs = crowd::leg_centres(m.position, m.gait, msg::norm(m.velocity));
+      t = std::min(ray_circle(x_m, y_m, dx, dy, legs[0], crowd::kLegRadiusM),
+                   ray_circle(x_m, y_m, dx, dy, legs[1], crowd::kLegRadiusM));
+    } else if (m.script.shape == MoverShape::circle) {
+      t = ray_circle(x_m, y_m, dx, dy, m.position, half);
+    } else {
+      t = ray_box(x_m, y_m, dx, dy, m.position.x_m - half, m.position.y_m - half, m.position.x_m + half,
+                  m.position.y_m + half);
+    }
     best = std::min(best, t);
   }
   return std::min(best, max_range_m);

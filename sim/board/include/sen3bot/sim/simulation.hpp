@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "sen3bot/crowd/crowd.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/memory_stream.hpp"
 #include "sen3bot/hal/pty.hpp"
@@ -65,6 +66,9 @@ struct SimulationConfig {
   std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
   SimDetectorConfig detector;          // the remote person detector, off unless configured
   SimIoNodeConfig io_node;             // the CAN I/O node, absent unless configured
+  // People moved by a crowd model (recorded, social, blind or ORCA) that may react to the
+  // robot: each a world mover with legs, added after `movers`. Null: none.
+  std::shared_ptr<const crowd::CrowdConfig> crowd;
 };
 
 // What really happened, published every simulation step.
@@ -106,6 +110,9 @@ class Simulation {
   [[nodiscard]] const GroundTruth& truth() const noexcept { return truth_; }
 
   [[nodiscard]] world::World& world() noexcept { return *world_; }
+  // The crowd's people are the world's movers from this index on (none without a crowd).
+  [[nodiscard]] std::size_t first_crowd_mover() const noexcept { return first_crowd_mover_; }
+  [[nodiscard]] const crowd::Crowd* crowd() const noexcept { return crowd_.get(); }
   [[nodiscard]] p2os::P2osEmulator& base() noexcept { return base_; }
   [[nodiscard]] lms200::Lms200Emulator& laser() noexcept { return *laser_; }
   [[nodiscard]] const SimulationConfig& config() const noexcept { return config_; }
@@ -117,9 +124,12 @@ class Simulation {
 
   explicit Simulation(const SimulationConfig& config);
   Status open(const nav::OccupancyMap& map);
+  void place_crowd(hal::Nanos now_ns) noexcept;
 
   SimulationConfig config_;
   std::unique_ptr<world::World> world_;
+  std::unique_ptr<crowd::Crowd> crowd_;
+  std::size_t first_crowd_mover_ = 0;
   std::unique_ptr<WorldRanges> ranges_;
   std::unique_ptr<WorldObstacles> obstacles_;
   p2os::P2osEmulator base_;

@@ -83,10 +83,6 @@ struct RunMetrics {
   std::uint64_t steps = 0;
 };
 
-// Distance from q to a convex polygon (either winding), 0 on or inside it. Fewer than 3
-// vertices: the distance to the point or segment.
-[[nodiscard]] double polygon_distance(std::span<const Point2D> polygon, Point2D q) noexcept;
-
 // Body-to-body distance from the footprint at `pose` to a circle of radius_m around `centre`:
 // negative when they overlap (down to -radius_m with the centre inside the footprint).
 [[nodiscard]] double body_distance(const nav::Footprint& footprint, const Pose2D& pose, Point2D centre,
@@ -147,6 +143,8 @@ struct Quartiles {
   double median = std::numeric_limits<double>::quiet_NaN();
   double q3 = std::numeric_limits<double>::quiet_NaN();
   double iqr = std::numeric_limits<double>::quiet_NaN();
+  double min = std::numeric_limits<double>::quiet_NaN();
+  double max = std::numeric_limits<double>::quiet_NaN();
 };
 // Sorts `values` in place.
 [[nodiscard]] Quartiles quartiles(std::span<double> values) noexcept;

@@ -1,16 +1,18 @@
 #pragma once
-// The simulated ground truth: the static map plus scripted moving obstacles (boxes, people)
-// that walk polylines. Everything is a pure function of (map, scripts, seed, time), so a
+// The simulated ground truth: the static map plus moving obstacles (boxes, people) that walk
+// scripted polylines or are placed by a crowd model each step. Everything is a pure function of (map, scripts, seed, time), so a
 // lockstep run is reproducible bit for bit.
 //
 // The laser emulator adapts to scan(): ranges for a sensor pose, angle_min, increment, count
 // and max range. Ray casting walks the grid cell by cell (exact boundary crossings) and
 // intersects movers analytically.
+#include <array>
 #include <cstdint>
 #include <random>
 #include <span>
 #include <vector>
 
+#include "sen3bot/crowd/legs.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
 
@@ -46,6 +48,13 @@ struct MoverScript {
   // after the last. For an operator who stops, shows a tag, turns and walks on.
   std::vector<Point2D> timeline;
   std::vector<double> times_s;
+  // Moved by the caller (World::place_mover) instead of the script: a walker of a crowd model
+  // that reacts to the robot. The script's path, speed and times are ignored.
+  bool driven = false;
+  // Seen by rays as two legs (circles of crowd::kLegRadiusM) swinging with the walking speed,
+  // as a laser at shin height sees a person; the body (a circle of size_m) still counts for
+  // contacts and clearance.
+  bool legs = false;
 };
 
 struct WorldConfig {
@@ -65,12 +74,21 @@ class World {
   void extend_timeline(std::size_t index, Point2D at, double time_s);
   [[nodiscard]] std::size_t mover_count() const noexcept { return movers_.size(); }
 
-  // Moves every scripted obstacle to its place at time_s.
+  // Moves every scripted obstacle to its place at time_s; driven movers stay where they were
+  // placed, and every mover with legs steps its gait on.
   void set_time(double time_s) noexcept;
+  // Puts a driven mover where its model has it: position, velocity (for the legs' gait) and
+  // whether it is in the scene.
+  void place_mover(std::size_t index, Point2D position, Point2D velocity, bool visible) noexcept;
   [[nodiscard]] double time_s() const noexcept { return time_s_; }
   // Current centre of a mover (for tests and reports); visible() says whether it exists yet.
   [[nodiscard]] Point2D mover_position(std::size_t index) const noexcept { return movers_[index].position; }
   [[nodiscard]] bool mover_visible(std::size_t index) const noexcept { return movers_[index].visible; }
+  [[nodiscard]] const MoverScript& mover_script(std::size_t index) const noexcept { return movers_[index].script; }
+  // Its velocity: a driven mover's as placed, a scripted one's over the last set_time step.
+  [[nodiscard]] Point2D mover_velocity(std::size_t index) const noexcept { return movers_[index].velocity; }
+  // Where a mover with legs has them now.
+  [[nodiscard]] std::array<Point2D, 2> mover_legs(std::size_t index) const noexcept;
 
   // Distance along the ray to the first solid thing, or max_range_m if none is nearer.
   [[nodiscard]] double cast_ray(double x_m, double y_m, double angle_rad, double max_range_m) const noexcept;
@@ -104,6 +122,8 @@ class World {
     MoverScript script;
     std::vector<double> cumulative_m;  // arc length at each vertex (loop: closing edge appended)
     Point2D position;
+    Point2D velocity;
+    crowd::Gait gait;
     bool visible = true;
   };
 
