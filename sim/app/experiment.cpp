@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sen3bot/crowd/random.hpp"
+
 namespace sen3bot::sim::experiment {
 
 namespace {
@@ -36,11 +38,8 @@ double nice_step(double span, int ticks) {
 
 }  // namespace
 
-double unit_uniform(std::mt19937_64& rng) noexcept {
-  return static_cast<double>(rng() >> 11) * 0x1.0p-53;
-}
-
 std::vector<Lane> dol_layout(std::uint64_t seed, int boxes) {
+  using crowd::unit_uniform;  // the same draws on every platform
   std::mt19937_64 rng(seed);
   const int k = std::clamp(boxes, 1, kMaxBoxes);
   const double slack = (kLaneMaxXM - kLaneMinXM) - (k - 1) * kLaneMinGapM;

@@ -3,7 +3,6 @@
 // thesis' moving-obstacle layout drawn from a seed, the quartiles of a sample, and the travel
 // time box plot. docs/navigation.md describes the experiment.
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -23,10 +22,6 @@ inline constexpr double kBoxHighYM = 5.75;
 inline constexpr double kBoxSizeM = 0.2;    // the thesis' 20 x 20 cm boxes
 inline constexpr double kRoundTripM = 2.0 * (kBoxHighYM - kBoxLowYM);  // 11 m
 inline constexpr int kMaxBoxes = 8;
-
-// [0, 1) from the top 53 bits of one draw: the same on every platform and standard library
-// (std::uniform_real_distribution is not specified bit for bit).
-[[nodiscard]] double unit_uniform(std::mt19937_64& rng) noexcept;
 
 struct Lane {
   double x_m = 0;      // the lane: x = const
