@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/msg/point_math.hpp"
 
 namespace sen3bot::crowd {
@@ -51,15 +52,6 @@ void for_each_run(const std::vector<T>& sorted, Visit visit) {
     visit(i, j - i);
     i = j;
   }
-}
-
-// The median (the mean of the middle two for an even count), 0 for none. Reorders values.
-double median(std::vector<double>& values) {
-  if (values.empty()) return 0.0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  if (values.size() % 2 == 1) return *middle;
-  return 0.5 * (*std::max_element(values.begin(), middle) + *middle);
 }
 
 struct Row {
@@ -263,7 +255,7 @@ Summary summarize(const Recording& recording) {
   for (const FrameCount& frame : people_per_frame(recording)) {
     summary.most_at_once = std::max(summary.most_at_once, frame.people);
   }
-  summary.median_speed_m_s = median(speeds_m_s);
+  summary.median_speed_m_s = speeds_m_s.empty() ? 0.0 : quartiles(speeds_m_s).median;
   return summary;
 }
 
