@@ -3,11 +3,7 @@
 // config/dol_arena.yaml with its own seed's layout of boxes; the runs go to worker processes
 // (fork), each sending a fixed-size result per mission through a pipe. The table counts smooth
 // navigations, wait recoveries and collisions as the thesis does.
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -29,6 +25,7 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
+#include "mission_pool.hpp"
 #include "report_figure.hpp"
 #include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/sim/report/case_figure.hpp"
@@ -339,48 +336,6 @@ MissionResult run_job(const Plan& plan, std::size_t index, Sample* sample = null
 
 // --- The worker processes ----------------------------------------------------------------------------
 
-bool write_all(int fd, const void* data, std::size_t size) {
-  const char* p = static_cast<const char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    p += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
-// Worker w of n runs jobs w, w + n, ... in order and sends each result; never returns.
-[[noreturn]] void worker_main(int fd, const Plan& plan, std::size_t w, std::size_t n) {
-  const char* crash = std::getenv(kCrashSeedVariable);
-  for (std::size_t j = w; j < plan.jobs.size(); j += n) {
-    if (crash != nullptr && std::to_string(plan.jobs[j].seed) == crash) std::abort();
-    const MissionResult r = run_job(plan, j);
-    if (!write_all(fd, &r, sizeof r)) ::_exit(1);
-  }
-  ::close(fd);
-  ::_exit(0);
-}
-
-struct Worker {
-  pid_t pid = -1;
-  int fd = -1;
-  std::size_t next = 0;  // the job whose result comes next
-  std::vector<char> buffer;
-};
-
-std::string describe_exit(int status) {
-  char text[96];
-  if (WIFSIGNALED(status))
-    std::snprintf(text, sizeof text, "killed by signal %d (%s)", WTERMSIG(status), strsignal(WTERMSIG(status)));
-  else if (WIFEXITED(status))
-    std::snprintf(text, sizeof text, "exited with status %d", WEXITSTATUS(status));
-  else
-    std::snprintf(text, sizeof text, "ended (status %d)", status);
-  return text;
-}
-
 struct Tally {
   std::size_t runs = 0, smooth = 0, waits = 0, collisions = 0, timeouts = 0;
   void add(Outcome o) {
@@ -392,52 +347,14 @@ struct Tally {
   }
 };
 
-// Runs every job on `workers` processes; results[j] for job j. False (after the message) when a
-// worker died or a mission could not run.
+// Runs every job on `workers` processes (mission_pool.hpp); results[j] for job j. False (after
+// the message) when a worker died or a mission could not run.
 bool run_pool(const Plan& plan, const std::vector<Variant>& variants, std::size_t workers, std::vector<MissionResult>& results,
               std::FILE* out, std::FILE* err) {
-  results.assign(plan.jobs.size(), MissionResult{});
-  workers = std::max<std::size_t>(1, std::min(workers, plan.jobs.size()));
-  std::fflush(out);
-  std::fflush(err);
-  std::fflush(stdout);
-  std::fflush(stderr);
-  std::vector<Worker> pool(workers);
-  for (std::size_t w = 0; w < workers; ++w) {
-    int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) {
-      std::fprintf(err, "%s: pipe: %s\n", kName, std::strerror(errno));
-      return false;
-    }
-    const pid_t pid = ::fork();
-    if (pid < 0) {
-      std::fprintf(err, "%s: fork: %s\n", kName, std::strerror(errno));
-      ::close(fds[0]);
-      ::close(fds[1]);
-      for (std::size_t k = 0; k < w; ++k) {
-        ::kill(pool[k].pid, SIGKILL);
-        ::waitpid(pool[k].pid, nullptr, 0);
-        ::close(pool[k].fd);
-      }
-      return false;
-    }
-    if (pid == 0) {
-      ::close(fds[0]);
-      for (std::size_t k = 0; k < w; ++k) ::close(pool[k].fd);
-      worker_main(fds[1], plan, w, workers);
-    }
-    ::close(fds[1]);
-    pool[w].pid = pid;
-    pool[w].fd = fds[0];
-    pool[w].next = w;
-  }
-
   const std::size_t total = plan.jobs.size();
   const std::size_t every = std::max<std::size_t>(1, std::min<std::size_t>(10, total / 20));
   std::size_t done = 0;
   std::vector<Tally> tallies(variants.size());
-  std::string failure;
-  std::size_t open = workers;
   auto progress = [&] {
     std::fprintf(out, "dol %.2f m/s: %zu/%zu runs", plan.options.speed_m_s, done, total);
     for (std::size_t v = 0; v < variants.size(); ++v)
@@ -447,77 +364,25 @@ bool run_pool(const Plan& plan, const std::vector<Variant>& variants, std::size_
     std::fprintf(out, "\n");
     std::fflush(out);
   };
-  auto stop_all = [&] {
-    for (Worker& k : pool)
-      if (k.fd >= 0) ::kill(k.pid, SIGKILL);
+  pool::Callbacks<MissionResult> callbacks;
+  callbacks.run = [&plan](std::size_t j) {
+    // A worker that aborts on purpose at the crash seed: how the tests see a crashed worker.
+    const char* crash = std::getenv(kCrashSeedVariable);
+    if (crash != nullptr && std::to_string(plan.jobs[j].seed) == crash) std::abort();
+    return run_job(plan, j);
   };
-  while (open > 0) {
-    std::vector<pollfd> fds;
-    std::vector<std::size_t> owner;
-    for (std::size_t w = 0; w < pool.size(); ++w)
-      if (pool[w].fd >= 0) {
-        fds.push_back({pool[w].fd, POLLIN, 0});
-        owner.push_back(w);
-      }
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
-      if (errno == EINTR) continue;
-      std::fprintf(err, "%s: poll: %s\n", kName, std::strerror(errno));
-      stop_all();
-      failure = "poll failed";
-    }
-    for (std::size_t i = 0; i < fds.size(); ++i) {
-      if (fds[i].revents == 0 && failure.empty()) continue;
-      Worker& k = pool[owner[i]];
-      char chunk[4096];
-      const ssize_t n = failure.empty() ? ::read(k.fd, chunk, sizeof chunk) : 0;
-      if (n < 0 && errno == EINTR) continue;
-      if (n > 0) {
-        k.buffer.insert(k.buffer.end(), chunk, chunk + n);
-        while (k.buffer.size() >= sizeof(MissionResult)) {
-          MissionResult r;
-          std::memcpy(&r, k.buffer.data(), sizeof r);
-          k.buffer.erase(k.buffer.begin(), k.buffer.begin() + static_cast<std::ptrdiff_t>(sizeof r));
-          if (r.job != k.next || k.next >= total) {
-            if (failure.empty()) failure = "a worker sent a result out of order";
-            stop_all();
-            break;
-          }
-          k.next += workers;
-          if (!r.ran) {
-            if (failure.empty())
-              failure = "seed " + std::to_string(r.seed) + " (" + label(r.variant) + "): the mission could not run: " + r.error;
-            stop_all();
-            continue;
-          }
-          results[r.job] = r;
-          ++done;
-          for (std::size_t v = 0; v < variants.size(); ++v)
-            if (variants[v] == r.variant) tallies[v].add(classify(r));
-          if (done % every == 0 || done == total) progress();
-        }
-        continue;
-      }
-      // End of the pipe: the worker is done, or died.
-      int status = 0;
-      while (::waitpid(k.pid, &status, 0) < 0 && errno == EINTR) {
-      }
-      ::close(k.fd);
-      k.fd = -1;
-      --open;
-      const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-      if ((!clean || k.next < total) && failure.empty()) {
-        const Job& job = plan.jobs[std::min(k.next, total - 1)];
-        failure = "worker " + std::to_string(k.pid) + " " + describe_exit(status) + " while running seed " +
-                  std::to_string(job.seed) + " (" + label(job.variant) + ")";
-        stop_all();
-      }
-    }
-  }
-  if (!failure.empty()) {
-    std::fprintf(err, "%s: %s\n", kName, failure.c_str());
-    return false;
-  }
-  return true;
+  callbacks.accept = [&](std::size_t, const MissionResult& r) -> std::string {
+    if (!r.ran) return "seed " + std::to_string(r.seed) + " (" + label(r.variant) + "): the mission could not run: " + r.error;
+    ++done;
+    for (std::size_t v = 0; v < variants.size(); ++v)
+      if (variants[v] == r.variant) tallies[v].add(classify(r));
+    if (done % every == 0 || done == total) progress();
+    return {};
+  };
+  callbacks.describe = [&plan](std::size_t j) {
+    return "seed " + std::to_string(plan.jobs[j].seed) + " (" + label(plan.jobs[j].variant) + ")";
+  };
+  return pool::run_pool(kName, total, workers, callbacks, results, out, err);
 }
 
 // --- The command line ----------------------------------------------------------------------------------
@@ -528,8 +393,8 @@ int bad(std::FILE* err, const std::string& message) {
 }
 
 int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
-  if (argc < 1) return bad(err, "which experiment? (dol, operations)");
-  if (std::string_view(argv[0]) != "dol") return bad(err, "no experiment named '" + std::string(argv[0]) + "' (dol, operations)");
+  if (argc < 1) return bad(err, "which experiment? (dol, crowd, operations)");
+  if (std::string_view(argv[0]) != "dol") return bad(err, "no experiment named '" + std::string(argv[0]) + "' (dol, crowd, operations)");
   bool have_speed = false, have_runs = false;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -679,6 +544,7 @@ int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 #ifdef SEN3BOT_HAS_RECOGNIZER
   if (argc >= 1 && std::string_view(argv[0]) == "operations") return operations_experiment_command(argc - 1, argv + 1, out, err);
 #endif
+  if (argc >= 1 && std::string_view(argv[0]) == "crowd") return crowd_experiment_command(argc - 1, argv + 1, out, err);
   Plan plan;
   Options& o = plan.options;
   if (int rc = parse_options(argc, argv, o, err); rc != 0) return rc;

@@ -88,7 +88,7 @@ BoxStats box_stats(const std::vector<double>& values) {
 }
 
 Canvas draw_travel_time_box_plot(const std::string& title, const std::string& subtitle,
-                                 const std::vector<BoxPlotSeries>& series) {
+                                 const std::vector<BoxPlotSeries>& series, const BoxPlotText& text) {
   constexpr int kWidth = 760, kHeight = 540;
   constexpr int kLeft = 86, kRight = 24, kTop = 96, kBottom = 78;
   Canvas canvas(kWidth, kHeight, kPaper);
@@ -126,7 +126,7 @@ Canvas draw_travel_time_box_plot(const std::string& title, const std::string& su
     const std::string label = format(step < 1 ? "%.1f" : "%.0f", s);
     canvas.text({kLeft - 9.0 - Canvas::text_width(label, 0.4), y + 5}, label, kInk, 0.4);
   }
-  canvas.text({12, kTop - 14.0}, "travel time (s)", kInk, 0.45);
+  canvas.text({12, kTop - 14.0}, text.axis, kInk, 0.45);
   const std::vector<Px> frame{{kLeft - 1.0, kTop - 1.0},
                               {static_cast<double>(kLeft + plot_w), kTop - 1.0},
                               {static_cast<double>(kLeft + plot_w), static_cast<double>(kTop + plot_h)},
@@ -140,11 +140,11 @@ Canvas draw_travel_time_box_plot(const std::string& title, const std::string& su
     const Rgb fill = kBoxFills[i % 3], edge = kBoxEdges[i % 3];
     const double cx = kLeft + (static_cast<double>(i) + 0.5) * slot;
     const std::string label = series[i].label;
-    const std::string count = format("%.0f smooth runs", static_cast<double>(b.q.n));
+    const std::string count = format("%.0f", static_cast<double>(b.q.n)) + " " + text.runs + " runs";
     canvas.text({cx - Canvas::text_width(label, 0.5, 2) / 2.0, kTop + plot_h + 26.0}, label, kInk, 0.5, 2);
     canvas.text({cx - Canvas::text_width(count, 0.4) / 2.0, kTop + plot_h + 48.0}, count, kGrey, 0.4);
     if (b.q.n == 0) {
-      const std::string none = "no smooth run";
+      const std::string none = "no " + text.runs + " run";
       canvas.text({cx - Canvas::text_width(none, 0.45) / 2.0, kTop + plot_h / 2.0}, none, kGrey, 0.45);
       continue;
     }

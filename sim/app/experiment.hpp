@@ -55,8 +55,15 @@ struct BoxPlotSeries {
   std::vector<double> values;   // seconds
 };
 
+// The words of the box plot (the defaults are experiment dol's).
+struct BoxPlotText {
+  std::string axis = "travel time (s)";  // the y axis' name
+  std::string runs = "smooth";           // under each box: "N smooth runs", or "no smooth run"
+};
+
 // The thesis' Figure 1.32 for our runs: a box per series, y in seconds.
 [[nodiscard]] report::Canvas draw_travel_time_box_plot(const std::string& title, const std::string& subtitle,
-                                                       const std::vector<BoxPlotSeries>& series);
+                                                       const std::vector<BoxPlotSeries>& series,
+                                                       const BoxPlotText& text = {});
 
 }  // namespace sen3bot::sim::experiment

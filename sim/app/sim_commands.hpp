@@ -23,6 +23,9 @@ void list_cobot_scenario(std::FILE* out);
 // sen3bot-sim experiment dol --speed M_S --runs N [--boxes K] [--no-dol] [--no-prediction]
 //   [--no-baseline] [--seed S] [--jobs J] [--report DIR] [--config FILE]
 int experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim experiment crowd (--scene NAME [--people N] [--behaviour B] | --trajectories FILE)
+//   --runs N [--seed S] [--jobs J] [--variant default|no-people]... [--report DIR] [--config FILE]
+int crowd_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim experiment operations --runs N [--report DIR] [--seed S] [--model M] [--operations O]
 //   [--save-paths FILE] [--style NAME] [--first-task] [--no-baseline] [--baseline-per-class N]
 int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err);

@@ -26,10 +26,8 @@ using msg::norm;
 constexpr int kMaxDraws = 1000;
 
 constexpr double kTimeLimitFactor = 3.0;  // CrowdNav: 25 s for 8 m at 1 m/s
-constexpr double kWallGapM = 0.5;         // starts, goals and robot ends this far inside a wall
 
 // Simulated walkers (crossing, corridor, square).
-constexpr double kWalkerRadiusM = 0.25;  // Helbing 2000
 constexpr double kSpeedMeanM_s = 1.3;    // Moussaïd et al. 2009
 constexpr double kSpeedSdM_s = 0.26;     // Weidmann 1993
 constexpr double kSpeedMinM_s = 0.5;
@@ -83,14 +81,6 @@ bool near_robot(const Scene& s, Point2D p, double radius_m) noexcept {
   return norm(p - robot_start(s)) < gap || norm(p - s.robot_goal) < gap;
 }
 
-// Normal about 1.3 m/s, drawn again outside the range (clamping would pile people on its ends).
-double walker_speed(std::mt19937_64& rng) noexcept {
-  for (;;) {
-    const double v = kSpeedMeanM_s + kSpeedSdM_s * standard_normal(rng);
-    if (v >= kSpeedMinM_s && v <= kSpeedMaxM_s) return v;
-  }
-}
-
 // Walker `by` passes (or stands at) p's start when p appears, as far as its straight walk at
 // between kSlowFactor and the model's cap of kFastFactor times its desired speed tells; the
 // window is widened by twice the time either needs to walk the gap from rest (relaxation 0.5 s).
@@ -137,7 +127,7 @@ Status add_walkers(Scene& s, std::size_t count, double window_s, std::mt19937_64
   for (std::size_t i = 0; i < count; ++i) {
     Person p;
     p.radius_m = kWalkerRadiusM;
-    p.desired_speed_m_s = walker_speed(rng);
+    p.desired_speed_m_s = draw_walker_speed(rng);
     p.goal_count = 1;
     p.leave_at_goal = true;
     bool placed = false;
@@ -347,6 +337,13 @@ Status write_file(const std::string& path, const std::string& bytes) {
 }
 
 }  // namespace
+
+double draw_walker_speed(std::mt19937_64& rng) noexcept {
+  for (;;) {
+    const double v = kSpeedMeanM_s + kSpeedSdM_s * standard_normal(rng);
+    if (v >= kSpeedMinM_s && v <= kSpeedMaxM_s) return v;
+  }
+}
 
 std::size_t default_people(std::string_view name) noexcept {
   if (name == "circle") return 5;

@@ -60,6 +60,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -75,6 +76,13 @@ namespace sen3bot::crowd {
 inline constexpr double kSceneRobotRadiusM = 0.3;  // CrowdNav's robot
 inline constexpr double kDiscomfortM = 0.2;        // CrowdNav's discomfort distance
 inline constexpr double kRobotSpeedM_s = 0.5;      // the local planner's top speed: time limits
+// Simulated walkers (crossing, corridor, square, and the crowds matched to a recording).
+inline constexpr double kWalkerRadiusM = 0.25;     // Helbing 2000
+inline constexpr double kWallGapM = 0.5;           // starts, goals and robot ends this far inside a wall
+
+// A walker's desired speed: normal, 1.3 +- 0.26 m/s (Moussaid et al. 2009; Weidmann 1993's
+// spread), drawn again outside [0.5, 2.0] m/s (clamping would pile people on the ends).
+[[nodiscard]] double draw_walker_speed(std::mt19937_64& rng) noexcept;
 
 struct Scene {
   std::string name;         // "circle", "crossing", "corridor", "square", or the recording's name

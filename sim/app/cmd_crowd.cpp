@@ -1,0 +1,792 @@
+// `sen3bot-sim experiment crowd`: the crowd-navigation benchmark (docs/crowd.md, "The
+// benchmark"). N runs per variant, each a whole firmware in lockstep from config/crowd.yaml on a
+// scene drawn from the run's seed (crowd/scene.hpp), its people moved by a crowd model. The runs
+// go to worker processes (mission_pool.hpp); each run's crowd metrics (crowd/metrics.hpp) come
+// from the ground truth, sampled every 50 ms.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "cli_util.hpp"
+#include "config.hpp"
+#include "experiment.hpp"
+#include "firmware.hpp"
+#include "mission_pool.hpp"
+#include "sen3bot/crowd/metrics.hpp"
+#include "sen3bot/crowd/recording.hpp"
+#include "sen3bot/crowd/scene.hpp"
+#include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/sim/sim_board.hpp"
+#include "sen3bot/sim/sim_config.hpp"
+#include "sim_commands.hpp"
+
+namespace sen3bot::sim {
+
+using firmware::Firmware;
+using firmware::FirmwareConfig;
+using firmware::MissionState;
+using firmware::MissionTask;
+
+namespace {
+
+constexpr const char* kName = "sen3bot-sim experiment crowd";
+constexpr std::uint64_t kMaxRuns = 100000;
+constexpr std::uint64_t kMaxPeople = 256;
+// The meter's sample period: the lockstep slice.
+constexpr double kSliceS = 0.05;
+// The run goes on this long past the start delay and the scene's limit (localization settling).
+constexpr double kRunMarginS = 10.0;
+// The people's cage radius the benchmark judges by, as `sim` does (cmd_sim.cpp): half a
+// person's width and the default safety radius, plus the robot's half width.
+constexpr double kCageSafetyM = 0.5;
+constexpr double kRobotHalfWidthM = 0.19;
+
+enum class Variant : std::uint8_t { standard, no_people };
+const char* name_of(Variant v) { return v == Variant::standard ? "default" : "no-people"; }
+constexpr const char* kVariantNames = "default, no-people";
+
+// One run as a worker reports it: fixed size, no pointers.
+struct CrowdRun {
+  std::uint64_t seed = 0;
+  std::uint32_t job = 0;
+  Variant variant = Variant::standard;
+  bool ran = false;  // false: the run could not run; `error` says why
+  crowd::RunMetrics metrics;
+  double sim_s = 0;
+  double wall_s = 0;
+  char error[256] = {};
+};
+static_assert(std::is_trivially_copyable_v<CrowdRun>);
+
+struct Options {
+  std::string scene;         // circle, crossing, corridor, square
+  std::string trajectories;  // or a recording
+  std::uint64_t people = 0;  // 0: the scene's default
+  std::optional<crowd::Behaviour> behaviour;
+  std::uint64_t runs = 0;
+  std::uint64_t seed = 1;
+  long jobs = 0;  // 0: the online CPUs
+  std::vector<Variant> variants;
+  std::string report_dir;
+  std::string config_path = "config/crowd.yaml";
+};
+
+struct Job {
+  std::uint64_t seed = 0;
+  Variant variant = Variant::standard;
+};
+
+struct Plan {
+  Options options;
+  FirmwareConfig base;
+  SimulationConfig base_world;
+  std::shared_ptr<const crowd::Recording> recording;
+  std::string map_path;  // the scene's floor, written once
+  std::vector<Job> jobs;
+};
+
+void set_error(CrowdRun& r, std::string_view what) {
+  const std::size_t n = std::min(what.size(), sizeof r.error - 1);
+  std::memcpy(r.error, what.data(), n);
+  r.error[n] = '\0';
+}
+
+Result<crowd::Scene> make_run_scene(const Plan& plan, std::uint64_t seed) {
+  if (plan.recording) return crowd::recording_scene(plan.recording, seed);
+  crowd::SceneOptions options;
+  options.name = plan.options.scene;
+  options.people = plan.options.people > 0 ? static_cast<std::size_t>(plan.options.people) : crowd::default_people(options.name);
+  options.behaviour = plan.options.behaviour;
+  return crowd::make_scene(options, seed);
+}
+
+FirmwareConfig run_config(const Plan& plan, Variant v, const crowd::Scene& scene) {
+  FirmwareConfig config = plan.base;
+  config.clock = firmware::ClockMode::lockstep;
+  config.navigation.map_path = plan.map_path;
+  config.navigation.mcl.initial_pose = scene.robot_start;
+  config.navigation.mission.goal_count = 1;
+  config.navigation.mission.goals[0] = scene.robot_goal;
+  // The mission gives up just after the scene's limit; the meter judges by the limit itself.
+  config.navigation.mission.goal_timeout_s = scene.time_limit_s + 1.0;
+  config.duration_s = config.navigation.mission.start_delay_s + scene.time_limit_s + kRunMarginS;
+  if (v == Variant::no_people) {
+    // The people pipeline off (the detector, the fusion, the cages); the laser layers stay.
+    config.navigation.people_enabled = false;
+    config.tasks.erase("detector");
+    config.tasks.erase("people");
+  }
+  return config;
+}
+
+SimulationConfig run_world(const Plan& plan, Variant v, std::uint64_t seed, const crowd::Scene& scene, double delay_s) {
+  SimulationConfig world = plan.base_world;
+  world.link = LinkKind::memory;
+  world.map_path = plan.map_path;
+  world.start_pose = scene.robot_start;
+  world.seed = seed;
+  world.base.noise_seed = static_cast<std::uint32_t>(seed);
+  world.movers.clear();
+  if (v == Variant::no_people) world.detector.enabled = false;
+  // The scene's crowd time 0 is when the robot sets off: after the mission's start delay.
+  auto people = std::make_shared<crowd::CrowdConfig>(scene.crowd);
+  for (crowd::Person& p : people->people) p.appear_s += delay_s;
+  people->recording_start_s -= delay_s;
+  world.crowd = std::move(people);
+  return world;
+}
+
+// --- One run -------------------------------------------------------------------------------------
+
+// A whole firmware on the scene until the mission ends or the run's limit, in 50 ms slices, a
+// RunStep to the meter after each once the robot has set off; quiet.
+void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, CrowdRun& r) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
+  if (!created) return set_error(r, created.error().c_str());
+  SimBoard& board = **created;
+  std::FILE* quiet = std::fopen("/dev/null", "w");
+  if (quiet == nullptr) return set_error(r, "cannot open /dev/null");
+  {
+    Firmware fw(config, board, quiet);
+    board.referee().watch_estimate(&fw.pose_estimate());
+    auto fail = [&](const Error& e) {
+      set_error(r, e.c_str());
+      fw.shutdown();
+      board.stop();
+    };
+    Status started = board.start();
+    if (started) started = fw.init();
+    if (!started) {
+      fail(started.error());
+      std::fclose(quiet);
+      return;
+    }
+    tasks::Scheduler& scheduler = fw.scheduler();
+    const MissionTask& mission = *fw.mission();
+    hal::SimClock& clock = *board.lockstep_clock();
+    const Simulation& sim = board.simulation();
+    world::World& w = board.simulation().world();
+    const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
+    const hal::Nanos slice = hal::millis(50);  // kSliceS
+
+    const double free_length_m =
+        std::hypot(scene.robot_goal.x_m - scene.robot_start.x_m, scene.robot_goal.y_m - scene.robot_start.y_m);
+    const double max_v = config.navigation.dwa.max_v_m_s;
+    crowd::RunMeter meter;
+    crowd::RunSetup setup;
+    setup.dt_s = kSliceS;
+    setup.time_limit_s = scene.time_limit_s;
+    setup.free_path_length_m = free_length_m;
+    setup.free_path_time_s = max_v > 0 ? free_length_m / max_v : 0.0;
+
+    const std::size_t first = sim.first_crowd_mover();
+    const std::size_t count = w.mover_count() > first ? w.mover_count() - first : 0;
+    std::vector<crowd::PersonTruth> people(count);
+    std::vector<bool> inside(count, false);        // in a person's cage
+    std::vector<bool> robot_inside(count, false);  // and it was the robot's motion that entered it
+    bool started_driving = false;
+    double start_s = 0;
+    double last_theta = 0;
+    msg::Pose2D last_pose;
+    std::uint64_t last_contacts = 0, last_moving = 0;
+    double sim_s = 0;
+    while (!mission.finished() && sim_s < limit_s) {
+      if (Status s = scheduler.run_lockstep(clock, slice); !s) {
+        fail(s.error());
+        std::fclose(quiet);
+        return;
+      }
+      sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+      const GroundTruth& truth = sim.truth();
+      if (!started_driving) {
+        if (mission.current_goal() == nullptr && !mission.finished()) {
+          last_contacts = truth.contacts;
+          last_moving = truth.moving_contacts;
+          last_theta = truth.pose.theta_rad;
+          last_pose = truth.pose;
+          continue;
+        }
+        started_driving = true;
+        start_s = sim_s;
+        setup.start_time_s = start_s;
+        meter.start(setup);
+      }
+      const msg::Pose2D pose = truth.pose;
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t m = first + i;
+        crowd::PersonTruth& p = people[i];
+        p.position = w.mover_position(m);
+        p.velocity = w.mover_velocity(m);
+        p.radius_m = w.mover_script(m).size_m / 2;
+        p.visible = w.mover_visible(m);
+      }
+      // Cage entries: the robot's when its own motion since the last sample closed the distance.
+      bool in_cage = false;
+      for (std::size_t i = 0; i < count; ++i) {
+        const crowd::PersonTruth& p = people[i];
+        const double d = std::hypot(p.position.x_m - pose.x_m, p.position.y_m - pose.y_m);
+        const bool in = p.visible && d < p.radius_m + kCageSafetyM + kRobotHalfWidthM;
+        if (in && !inside[i]) {
+          const double before = std::hypot(p.position.x_m - last_pose.x_m, p.position.y_m - last_pose.y_m);
+          robot_inside[i] = before - d > 0.01;
+        }
+        if (!in) robot_inside[i] = false;
+        inside[i] = in;
+        in_cage = in_cage || robot_inside[i];
+      }
+      crowd::RunStep step;
+      step.time_s = sim_s;
+      step.robot = pose;
+      step.v_m_s = truth.speed_m_s;
+      step.w_rad_s = msg::normalize_angle(pose.theta_rad - last_theta) / kSliceS;
+      step.footprint = world.footprint;
+      step.people = std::span<const crowd::PersonTruth>(people.data(), people.size());
+      step.contact_started = truth.contacts > last_contacts;
+      step.contact_by_robot = truth.moving_contacts > last_moving;
+      step.robot_in_cage = in_cage;
+      meter.observe(step);
+      last_contacts = truth.contacts;
+      last_moving = truth.moving_contacts;
+      last_theta = pose.theta_rad;
+      last_pose = pose;
+    }
+    fw.shutdown();
+    board.stop();
+    const firmware::MissionReport& report = mission.report();
+    const bool reached = report.state == MissionState::complete;
+    if (!started_driving) {
+      setup.start_time_s = sim_s;
+      meter.start(setup);
+    }
+    const double end_s = reached && report.goals_reached > 0 ? start_s + report.goal_time_s[0] : sim_s;
+    r.metrics = meter.finish(reached, end_s);
+    r.ran = true;
+    r.sim_s = sim_s;
+    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  }
+  std::fclose(quiet);
+}
+
+CrowdRun run_job(const Plan& plan, std::size_t index) {
+  const Job& job = plan.jobs[index];
+  CrowdRun r;
+  r.seed = job.seed;
+  r.job = static_cast<std::uint32_t>(index);
+  r.variant = job.variant;
+  Result<crowd::Scene> scene = make_run_scene(plan, job.seed);
+  if (!scene) {
+    set_error(r, scene.error().c_str());
+    return r;
+  }
+  const FirmwareConfig config = run_config(plan, job.variant, *scene);
+  run_mission(config, run_world(plan, job.variant, job.seed, *scene, config.navigation.mission.start_delay_s), *scene, r);
+  return r;
+}
+
+// --- The command line ----------------------------------------------------------------------------
+
+int bad(std::FILE* err, const std::string& message) {
+  std::fprintf(err, "%s: %s\n", kName, message.c_str());
+  return 2;
+}
+
+int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
+  bool have_runs = false, have_people = false;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    auto value_error = [&](const char* expected) {
+      return bad(err, std::string(arg) + ": expected " + expected + ", got '" + argv[i + 1] + "'");
+    };
+    std::uint64_t u = 0;
+    if (arg == "--scene" && has_value) {
+      o.scene = argv[++i];
+      if (o.scene != "circle" && o.scene != "crossing" && o.scene != "corridor" && o.scene != "square")
+        return bad(err, "--scene: no scene named '" + o.scene + "' (circle, crossing, corridor, square; --trajectories FILE for a recording)");
+    } else if (arg == "--trajectories" && has_value) {
+      o.trajectories = argv[++i];
+      if (o.trajectories.empty()) return bad(err, "--trajectories: expected a file");
+    } else if (arg == "--people" && has_value) {
+      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > kMaxPeople) return value_error("a person count from 1 to 256");
+      o.people = u;
+      have_people = true;
+      ++i;
+    } else if (arg == "--behaviour" && has_value) {
+      o.behaviour = crowd::parse_behaviour(argv[i + 1]);
+      if (!o.behaviour) return value_error("recorded, social, blind or orca");
+      ++i;
+    } else if (arg == "--runs" && has_value) {
+      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > kMaxRuns) return value_error("a run count from 1 to 100000");
+      o.runs = u;
+      have_runs = true;
+      ++i;
+    } else if (arg == "--seed" && has_value) {
+      if (!firmware::parse_u64(argv[i + 1], u)) return value_error("a non-negative integer");
+      o.seed = u;
+      ++i;
+    } else if (arg == "--jobs" && has_value) {
+      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > 1024) return value_error("a worker count from 1 to 1024");
+      o.jobs = static_cast<long>(u);
+      ++i;
+    } else if (arg == "--variant" && has_value) {
+      const std::string_view name = argv[i + 1];
+      Variant v;
+      if (name == "default") v = Variant::standard;
+      else if (name == "no-people") v = Variant::no_people;
+      else return bad(err, "--variant: no variant named '" + std::string(name) + "' (" + kVariantNames + ")");
+      if (std::find(o.variants.begin(), o.variants.end(), v) == o.variants.end()) o.variants.push_back(v);
+      ++i;
+    } else if (arg == "--report" && has_value) {
+      o.report_dir = argv[++i];
+      if (o.report_dir.empty()) return bad(err, "--report: expected a directory");
+    } else if (arg == "--config" && has_value) {
+      o.config_path = argv[++i];
+    } else {
+      return bad(err, "unknown or incomplete option '" + std::string(arg) + "' (sen3bot-sim --help shows the options)");
+    }
+  }
+  if (o.scene.empty() && o.trajectories.empty())
+    return bad(err, "--scene NAME (circle, crossing, corridor, square) or --trajectories FILE is required");
+  if (!o.scene.empty() && !o.trajectories.empty()) return bad(err, "--scene and --trajectories are alternatives: give one");
+  if (!o.trajectories.empty() && have_people)
+    return bad(err, "--people is for the simulated scenes: a recording (--trajectories) brings its own people");
+  if (!o.trajectories.empty() && o.behaviour && *o.behaviour != crowd::Behaviour::recorded)
+    return bad(err, std::string("--behaviour ") + crowd::to_string(*o.behaviour) +
+                        ": a recording (--trajectories) is replayed as it was (--behaviour recorded)");
+  if (!o.scene.empty() && o.behaviour && *o.behaviour == crowd::Behaviour::recorded)
+    return bad(err, "--behaviour recorded needs --trajectories FILE");
+  if (!have_runs) return bad(err, "--runs N is required");
+  if (o.variants.empty()) o.variants = {Variant::standard, Variant::no_people};
+  if (o.jobs == 0) o.jobs = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
+  return 0;
+}
+
+// --- The results ---------------------------------------------------------------------------------
+
+struct VariantResults {
+  Variant variant;
+  std::vector<const CrowdRun*> runs;
+  std::vector<crowd::RunMetrics> metrics;
+  crowd::Aggregate aggregate;
+  crowd::Rate any_contact;
+  crowd::Quartiles time_ratio;  // successful runs
+  crowd::Quartiles path_ratio;  // successful runs
+  std::vector<double> success_times;
+  double mean_cage_entries = 0;
+  double mean_jerk = 0;  // mean of the runs' mean jerks
+  double max_jerk = 0;   // the largest of any run
+};
+
+VariantResults summarize(Variant v, std::vector<const CrowdRun*> runs) {
+  VariantResults s{v, std::move(runs), {}, {}, {}, {}, {}, {}, 0, 0, 0};
+  std::vector<double> time_ratios, path_ratios;
+  std::size_t any = 0;
+  for (const CrowdRun* r : s.runs) {
+    const crowd::RunMetrics& m = r->metrics;
+    s.metrics.push_back(m);
+    if (m.contacts_any > 0) ++any;
+    if (m.success) {
+      s.success_times.push_back(m.time_to_goal_s);
+      if (m.time_ratio >= 0) time_ratios.push_back(m.time_ratio);
+      if (m.path_ratio >= 0) path_ratios.push_back(m.path_ratio);
+    }
+    s.mean_cage_entries += m.cage_entries;
+    s.mean_jerk += m.mean_jerk_m_s3;
+    s.max_jerk = std::max(s.max_jerk, m.max_jerk_m_s3);
+  }
+  const double n = static_cast<double>(s.runs.size());
+  if (n > 0) {
+    s.mean_cage_entries /= n;
+    s.mean_jerk /= n;
+  }
+  s.aggregate = crowd::aggregate(s.metrics);
+  const crowd::Interval i = crowd::wilson_interval(any, s.runs.size());
+  s.any_contact = {any, s.runs.size(), n > 0 ? static_cast<double>(any) / n : 0.0, i.lower, i.upper};
+  s.time_ratio = crowd::quartiles(time_ratios);
+  s.path_ratio = crowd::quartiles(path_ratios);
+  return s;
+}
+
+std::string rate_cell(const crowd::Rate& r) {
+  char cell[64];
+  std::snprintf(cell, sizeof cell, "%zu/%zu %.0f %% [%.0f, %.0f]", r.count, r.n, 100 * r.rate, 100 * r.lower, 100 * r.upper);
+  return cell;
+}
+
+std::string number_cell(double v, const char* format) {
+  if (!std::isfinite(v)) return "-";
+  char cell[64];
+  std::snprintf(cell, sizeof cell, format, v);
+  return cell;
+}
+
+std::string describe_scene(const Options& o, std::size_t people, crowd::Behaviour behaviour) {
+  if (!o.trajectories.empty()) return "recording " + o.trajectories + " replayed";
+  char text[160];
+  std::snprintf(text, sizeof text, "%s scene, %zu %s", o.scene.c_str(), people, crowd::to_string(behaviour));
+  return std::string(text) + (people == 1 ? " person" : " people");
+}
+
+void print_table(std::FILE* out, const std::vector<VariantResults>& variants, const std::string& head) {
+  std::fprintf(out, "\n| %-40s |", head.c_str());
+  for (const VariantResults& v : variants) std::fprintf(out, " %-24s |", name_of(v.variant));
+  std::fprintf(out, "\n|%s|", std::string(42, '-').c_str());
+  for (std::size_t i = 0; i < variants.size(); ++i) std::fprintf(out, "%s|", std::string(26, '-').c_str());
+  auto row = [&](const char* name, auto cell) {
+    std::fprintf(out, "\n| %-40s |", name);
+    for (const VariantResults& v : variants) std::fprintf(out, " %-24s |", cell(v).c_str());
+  };
+  row("runs", [](const VariantResults& v) { return std::to_string(v.runs.size()); });
+  row("success (95 % Wilson interval)", [](const VariantResults& v) { return rate_cell(v.aggregate.success); });
+  row("collisions (robot moving into someone)", [](const VariantResults& v) { return rate_cell(v.aggregate.collision); });
+  row("runs with any contact", [](const VariantResults& v) { return rate_cell(v.any_contact); });
+  row("timeouts", [](const VariantResults& v) { return rate_cell(v.aggregate.timeout); });
+  row("time to goal, s: median (IQR) *", [](const VariantResults& v) {
+    const crowd::Quartiles& q = v.aggregate.time_to_goal_s;
+    if (q.n == 0) return std::string("-");
+    char cell[64];
+    std::snprintf(cell, sizeof cell, "%.1f (%.1f)", q.median, q.iqr);
+    return std::string(cell);
+  });
+  row("time ratio to the free path: median *", [](const VariantResults& v) { return number_cell(v.time_ratio.median, "%.2f"); });
+  row("path ratio to the free path: median *", [](const VariantResults& v) { return number_cell(v.path_ratio.median, "%.2f"); });
+  row("min distance to a person, m: median", [](const VariantResults& v) { return number_cell(v.aggregate.min_distance_m.median, "%.2f"); });
+  row("intimate zone (< 0.45 m), s: mean", [](const VariantResults& v) { return number_cell(v.aggregate.mean_intimate_zone_s, "%.2f"); });
+  row("personal zone (< 1.2 m), s: mean", [](const VariantResults& v) { return number_cell(v.aggregate.mean_personal_zone_s, "%.2f"); });
+  row("danger frequency (< 0.2 m): mean", [](const VariantResults& v) { return number_cell(v.aggregate.mean_danger_frequency, "%.3f"); });
+  row("cage entries: mean", [](const VariantResults& v) { return number_cell(v.mean_cage_entries, "%.2f"); });
+  row("jerk, m/s^3: mean / max", [](const VariantResults& v) {
+    char cell[64];
+    std::snprintf(cell, sizeof cell, "%.2f / %.2f", v.mean_jerk, v.max_jerk);
+    return std::string(cell);
+  });
+  std::fprintf(out, "\n* successful runs only\n");
+}
+
+// A JSON number, or null when not finite.
+void json_number(std::FILE* f, double v, const char* format = "%.4f") {
+  if (std::isfinite(v)) std::fprintf(f, format, v);
+  else std::fputs("null", f);
+}
+
+void json_string(std::FILE* f, std::string_view s) {
+  std::fputc('"', f);
+  for (const char c : s) {
+    if (c == '"' || c == '\\') std::fputc('\\', f);
+    if (static_cast<unsigned char>(c) < 0x20) std::fprintf(f, "\\u%04x", c);
+    else std::fputc(c, f);
+  }
+  std::fputc('"', f);
+}
+
+void json_rate(std::FILE* f, const char* name, const crowd::Rate& r) {
+  std::fprintf(f, "\"%s\": {\"count\": %zu, \"n\": %zu, \"rate\": %.4f, \"lower\": %.4f, \"upper\": %.4f}", name, r.count, r.n,
+               r.rate, r.lower, r.upper);
+}
+
+void json_quartiles(std::FILE* f, const char* name, const crowd::Quartiles& q) {
+  std::fprintf(f, "\"%s\": {\"n\": %zu, \"median\": ", name, q.n);
+  json_number(f, q.median);
+  std::fputs(", \"q1\": ", f);
+  json_number(f, q.q1);
+  std::fputs(", \"q3\": ", f);
+  json_number(f, q.q3);
+  std::fputs(", \"iqr\": ", f);
+  json_number(f, q.iqr);
+  std::fputs(", \"min\": ", f);
+  json_number(f, q.min);
+  std::fputs(", \"max\": ", f);
+  json_number(f, q.max);
+  std::fputs("}", f);
+}
+
+void json_metrics(std::FILE* f, const crowd::RunMetrics& m) {
+  std::fprintf(f, "\"reached_goal\": %s, \"success\": %s, \"timeout\": %s, \"contacts_any\": %u, \"contacts_by_robot\": %u, "
+                  "\"cage_entries\": %u, \"time_to_goal_s\": ",
+               m.reached_goal ? "true" : "false", m.success ? "true" : "false", m.timeout ? "true" : "false", m.contacts_any,
+               m.contacts_by_robot, m.cage_entries);
+  json_number(f, m.time_to_goal_s);
+  const std::pair<const char*, double> rest[] = {
+      {"time_ratio", m.time_ratio},           {"path_length_m", m.path_length_m},
+      {"path_ratio", m.path_ratio},           {"min_distance_m", m.min_distance_m},
+      {"min_distance_time_s", m.min_distance_time_s}, {"intimate_zone_s", m.intimate_zone_s},
+      {"personal_zone_s", m.personal_zone_s}, {"danger_frequency", m.danger_frequency},
+      {"mean_jerk_m_s3", m.mean_jerk_m_s3},   {"max_jerk_m_s3", m.max_jerk_m_s3},
+      {"mean_angular_jerk_rad_s3", m.mean_angular_jerk_rad_s3}, {"max_angular_jerk_rad_s3", m.max_angular_jerk_rad_s3}};
+  for (const auto& [key, value] : rest) {
+    std::fprintf(f, ", \"%s\": ", key);
+    json_number(f, value);
+  }
+  std::fprintf(f, ", \"steps\": %llu", static_cast<unsigned long long>(m.steps));
+}
+
+bool write_report_json(const std::string& path, const Options& o, std::size_t people, const std::vector<VariantResults>& variants) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  std::fputs("{\n  \"experiment\": \"crowd\",\n  \"scene\": ", f);
+  if (o.trajectories.empty()) json_string(f, o.scene);
+  else std::fputs("\"recorded\"", f);
+  std::fputs(",\n  \"trajectories\": ", f);
+  if (o.trajectories.empty()) std::fputs("null", f);
+  else json_string(f, o.trajectories);
+  std::fprintf(f, ",\n  \"people\": %zu,\n  \"behaviour\": ", people);
+  if (!o.trajectories.empty()) std::fputs("\"recorded\"", f);
+  else if (o.behaviour) json_string(f, crowd::to_string(*o.behaviour));
+  else std::fputs("null", f);
+  std::fprintf(f, ",\n  \"runs\": %llu,\n  \"seed\": %llu,\n  \"jobs\": %ld,\n  \"config\": ", static_cast<unsigned long long>(o.runs),
+               static_cast<unsigned long long>(o.seed), o.jobs);
+  json_string(f, o.config_path);
+  std::fputs(",\n  \"variants\": {", f);
+  for (std::size_t i = 0; i < variants.size(); ++i) {
+    const VariantResults& v = variants[i];
+    const crowd::Aggregate& a = v.aggregate;
+    std::fprintf(f, "%s\n    \"%s\": {\n      \"aggregate\": {\"runs\": %zu, ", i ? "," : "", name_of(v.variant), a.n);
+    json_rate(f, "success", a.success);
+    std::fputs(", ", f);
+    json_rate(f, "collision", a.collision);
+    std::fputs(", ", f);
+    json_rate(f, "any_contact", v.any_contact);
+    std::fputs(", ", f);
+    json_rate(f, "timeout", a.timeout);
+    std::fputs(",\n        ", f);
+    json_quartiles(f, "time_to_goal_s", a.time_to_goal_s);
+    std::fputs(",\n        ", f);
+    json_quartiles(f, "time_ratio", v.time_ratio);
+    std::fputs(",\n        ", f);
+    json_quartiles(f, "path_ratio", v.path_ratio);
+    std::fputs(",\n        ", f);
+    json_quartiles(f, "min_distance_m", a.min_distance_m);
+    std::fputs(",\n        \"mean_intimate_zone_s\": ", f);
+    json_number(f, a.mean_intimate_zone_s);
+    std::fputs(", \"mean_personal_zone_s\": ", f);
+    json_number(f, a.mean_personal_zone_s);
+    std::fputs(", \"mean_danger_frequency\": ", f);
+    json_number(f, a.mean_danger_frequency);
+    std::fputs(", \"mean_cage_entries\": ", f);
+    json_number(f, v.mean_cage_entries);
+    std::fputs(", \"mean_jerk_m_s3\": ", f);
+    json_number(f, v.mean_jerk);
+    std::fputs(", \"max_jerk_m_s3\": ", f);
+    json_number(f, v.max_jerk);
+    std::fputs("},\n      \"runs\": [", f);
+    for (std::size_t k = 0; k < v.runs.size(); ++k) {
+      const CrowdRun& r = *v.runs[k];
+      std::fprintf(f, "%s\n        {\"seed\": %llu, ", k ? "," : "", static_cast<unsigned long long>(r.seed));
+      json_metrics(f, r.metrics);
+      std::fprintf(f, ", \"sim_s\": %.2f, \"wall_s\": %.3f}", r.sim_s, r.wall_s);
+    }
+    std::fputs("\n      ]\n    }", f);
+  }
+  std::fputs("\n  }\n}\n", f);
+  return std::fclose(f) == 0;
+}
+
+bool write_runs_csv(const std::string& path, const std::vector<CrowdRun>& runs) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  std::fputs("variant,seed,reached_goal,success,timeout,contacts_any,contacts_by_robot,cage_entries,time_to_goal_s,time_ratio,"
+             "path_length_m,path_ratio,min_distance_m,min_distance_time_s,intimate_zone_s,personal_zone_s,danger_frequency,"
+             "mean_jerk_m_s3,max_jerk_m_s3,mean_angular_jerk_rad_s3,max_angular_jerk_rad_s3,steps,sim_s\n",
+             f);
+  for (const CrowdRun& r : runs) {
+    const crowd::RunMetrics& m = r.metrics;
+    std::fprintf(f, "%s,%llu,%d,%d,%d,%u,%u,%u", name_of(r.variant), static_cast<unsigned long long>(r.seed), m.reached_goal ? 1 : 0,
+                 m.success ? 1 : 0, m.timeout ? 1 : 0, m.contacts_any, m.contacts_by_robot, m.cage_entries);
+    for (const double v : {m.time_to_goal_s, m.time_ratio, m.path_length_m, m.path_ratio, m.min_distance_m, m.min_distance_time_s,
+                           m.intimate_zone_s, m.personal_zone_s, m.danger_frequency, m.mean_jerk_m_s3, m.max_jerk_m_s3,
+                           m.mean_angular_jerk_rad_s3, m.max_angular_jerk_rad_s3}) {
+      if (std::isfinite(v)) std::fprintf(f, ",%.4f", v);
+      else std::fputs(",", f);
+    }
+    std::fprintf(f, ",%llu,%.2f\n", static_cast<unsigned long long>(m.steps), r.sim_s);
+  }
+  return std::fclose(f) == 0;
+}
+
+// The scene's map: in the report folder, or in a temporary folder removed at the end.
+struct MapFolder {
+  std::string dir;
+  bool temporary = false;
+  std::string yaml;
+  ~MapFolder() {
+    if (!temporary || dir.empty()) return;
+    if (!yaml.empty()) {
+      std::remove(yaml.c_str());
+      std::remove((yaml.substr(0, yaml.size() - 5) + ".pgm").c_str());
+    }
+    ::rmdir(dir.c_str());
+  }
+};
+
+}  // namespace
+
+int crowd_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  Plan plan;
+  Options& o = plan.options;
+  if (int rc = parse_options(argc, argv, o, err); rc != 0) return rc;
+
+  if (!o.trajectories.empty()) {
+    Result<crowd::Recording> recording = crowd::load_recording(o.trajectories);
+    if (!recording) return bad(err, recording.error().c_str());
+    plan.recording = std::make_shared<const crowd::Recording>(std::move(*recording));
+  }
+  // The first run's scene: its options checked before any worker starts, and its floor (the
+  // same for every seed) written as the map.
+  Result<crowd::Scene> first = make_run_scene(plan, o.seed);
+  if (!first) return bad(err, first.error().c_str());
+  std::size_t people = first->crowd.behaviour == crowd::Behaviour::recorded && first->crowd.recording
+                           ? first->crowd.recording->tracks.size()
+                           : first->crowd.people.size();
+
+  Result<SimulatedRobot> loaded = load_simulated_robot(o.config_path);
+  if (!loaded) return bad(err, loaded.error().c_str());
+  plan.base = std::move(loaded->firmware);
+  plan.base_world = std::move(loaded->world);
+  if (!plan.base.navigation.enabled || plan.base.has_fleet)
+    return bad(err, o.config_path + ": needs a navigation section (and no fleet section)");
+  if (!o.report_dir.empty()) {
+    if (::mkdir(o.report_dir.c_str(), 0755) != 0 && errno != EEXIST)
+      return bad(err, "--report: cannot create " + o.report_dir + ": " + std::strerror(errno));
+    struct stat st {};
+    if (::stat(o.report_dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || ::access(o.report_dir.c_str(), W_OK | X_OK) != 0)
+      return bad(err, "--report: " + o.report_dir + " is not a writable directory");
+  }
+  MapFolder maps;
+  if (o.report_dir.empty()) {
+    char dir[] = "/tmp/sen3bot-crowd-XXXXXX";
+    if (::mkdtemp(dir) == nullptr) {
+      std::fprintf(err, "%s: cannot create a temporary folder: %s\n", kName, std::strerror(errno));
+      return 1;
+    }
+    maps.dir = dir;
+    maps.temporary = true;
+  } else {
+    maps.dir = o.report_dir;
+  }
+  Result<std::string> map = crowd::write_scene_map(*first, maps.dir);
+  if (!map) {
+    std::fprintf(err, "%s: the scene's map: %s\n", kName, map.error().c_str());
+    return 1;
+  }
+  maps.yaml = *map;
+  plan.map_path = *map;
+
+  for (std::uint64_t i = 0; i < o.runs; ++i)
+    for (const Variant v : o.variants) plan.jobs.push_back({o.seed + i, v});
+
+  std::string variant_list;
+  for (const Variant v : o.variants) variant_list += std::string(variant_list.empty() ? "" : ", ") + name_of(v);
+  const std::string scene_text = describe_scene(o, people, first->crowd.behaviour);
+  std::fprintf(out, "experiment crowd: %s, %llu run%s per variant (seeds %llu..%llu), variants %s, %ld worker%s\n",
+               scene_text.c_str(), static_cast<unsigned long long>(o.runs), o.runs == 1 ? "" : "s",
+               static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1),
+               variant_list.c_str(), o.jobs, o.jobs == 1 ? "" : "s");
+  std::fflush(out);
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::size_t total = plan.jobs.size();
+  const std::size_t every = std::max<std::size_t>(1, std::min<std::size_t>(10, total / 20));
+  std::size_t done = 0;
+  struct Tally {
+    std::size_t runs = 0, successes = 0, collisions = 0, timeouts = 0;
+  };
+  std::vector<Tally> tallies(o.variants.size());
+  const std::string scene_name = o.trajectories.empty() ? o.scene : "recorded";
+  pool::Callbacks<CrowdRun> callbacks;
+  callbacks.run = [&plan](std::size_t j) { return run_job(plan, j); };
+  callbacks.accept = [&](std::size_t, const CrowdRun& r) -> std::string {
+    if (!r.ran)
+      return "seed " + std::to_string(r.seed) + " (" + name_of(r.variant) + "): the run could not run: " + r.error;
+    ++done;
+    for (std::size_t v = 0; v < o.variants.size(); ++v)
+      if (o.variants[v] == r.variant) {
+        Tally& t = tallies[v];
+        ++t.runs;
+        t.successes += r.metrics.success ? 1 : 0;
+        t.collisions += r.metrics.contacts_by_robot > 0 ? 1 : 0;
+        t.timeouts += r.metrics.timeout ? 1 : 0;
+      }
+    if (done % every == 0 || done == total) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      std::fprintf(out, "crowd %s: %zu/%zu runs (%.0f s)", scene_name.c_str(), done, total, elapsed);
+      for (std::size_t v = 0; v < o.variants.size(); ++v)
+        std::fprintf(out, "; %s %zu done, %zu success%s, %zu collision%s, %zu timeout%s so far", name_of(o.variants[v]),
+                     tallies[v].runs, tallies[v].successes, tallies[v].successes == 1 ? "" : "es", tallies[v].collisions,
+                     tallies[v].collisions == 1 ? "" : "s", tallies[v].timeouts, tallies[v].timeouts == 1 ? "" : "s");
+      std::fprintf(out, "\n");
+      std::fflush(out);
+    }
+    return {};
+  };
+  callbacks.describe = [&plan](std::size_t j) {
+    return "seed " + std::to_string(plan.jobs[j].seed) + " (" + name_of(plan.jobs[j].variant) + ")";
+  };
+  std::vector<CrowdRun> results;
+  if (!pool::run_pool(kName, total, static_cast<std::size_t>(o.jobs), callbacks, results, out, err)) return 1;
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  std::vector<VariantResults> by_variant;
+  double run_wall_s = 0;
+  for (const CrowdRun& r : results) run_wall_s += r.wall_s;
+  for (const Variant v : o.variants) {
+    std::vector<const CrowdRun*> runs;
+    for (const CrowdRun& r : results)
+      if (r.variant == v) runs.push_back(&r);
+    by_variant.push_back(summarize(v, std::move(runs)));
+  }
+  char head[96];
+  std::snprintf(head, sizeof head, "%s, N = %llu", scene_name.c_str(), static_cast<unsigned long long>(o.runs));
+  print_table(out, by_variant, head);
+  std::fprintf(out, "%zu runs in %.1f s wall, %.2f s of one core per run\n", results.size(), wall_s,
+               results.empty() ? 0.0 : run_wall_s / static_cast<double>(results.size()));
+
+  if (!o.report_dir.empty()) {
+    const std::string json = o.report_dir + "/report.json";
+    if (!write_report_json(json, o, people, by_variant)) {
+      std::fprintf(err, "%s: cannot write %s\n", kName, json.c_str());
+      return 1;
+    }
+    const std::string csv = o.report_dir + "/runs.csv";
+    if (!write_runs_csv(csv, results)) {
+      std::fprintf(err, "%s: cannot write %s\n", kName, csv.c_str());
+      return 1;
+    }
+    std::vector<experiment::BoxPlotSeries> series;
+    for (const VariantResults& v : by_variant) series.push_back({name_of(v.variant), v.success_times});
+    char title[160], subtitle[200];
+    std::snprintf(title, sizeof title, "time to goal: %s, N = %llu", scene_text.c_str(), static_cast<unsigned long long>(o.runs));
+    std::snprintf(subtitle, sizeof subtitle,
+                  "box: quartiles (IQR), bar: median, whiskers: furthest run within 1.5 IQR, rings: outliers; seeds %llu..%llu",
+                  static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1));
+    const std::string box_png = o.report_dir + "/time_to_goal.png";
+    experiment::BoxPlotText words;
+    words.axis = "time to goal (s)";
+    words.runs = "successful";
+    if (!experiment::draw_travel_time_box_plot(title, subtitle, series, words).write_png(box_png)) {
+      std::fprintf(err, "%s: cannot write %s\n", kName, box_png.c_str());
+      return 1;
+    }
+    std::fprintf(out, "report: %s (report.json, runs.csv, time_to_goal.png, the scene's map)\n", o.report_dir.c_str());
+  }
+  std::fflush(out);
+  return 0;
+}
+
+}  // namespace sen3bot::sim
