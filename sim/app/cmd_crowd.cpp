@@ -52,10 +52,6 @@ constexpr std::uint64_t kMaxPeople = 256;
 constexpr double kSliceS = 0.05;
 // The run goes on this long past the start delay and the scene's limit (localization settling).
 constexpr double kRunMarginS = 10.0;
-// The people's cage radius the benchmark judges by, as `sim` does (cmd_sim.cpp): half a
-// person's width and the default safety radius, plus the robot's half width.
-constexpr double kCageSafetyM = 0.5;
-constexpr double kRobotHalfWidthM = 0.19;
 
 enum class Variant : std::uint8_t { standard, no_people };
 const char* name_of(Variant v) { return v == Variant::standard ? "default" : "no-people"; }
@@ -242,7 +238,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
       for (std::size_t i = 0; i < count; ++i) {
         const crowd::PersonTruth& p = people[i];
         const double d = std::hypot(p.position.x_m - pose.x_m, p.position.y_m - pose.y_m);
-        const bool in = p.visible && d < p.radius_m + kCageSafetyM + kRobotHalfWidthM;
+        const bool in = p.visible && d < judged_cage_reach_m(p.radius_m);
         if (in && !inside[i]) {
           const double before = std::hypot(p.position.x_m - last_pose.x_m, p.position.y_m - last_pose.y_m);
           robot_inside[i] = before - d > 0.01;

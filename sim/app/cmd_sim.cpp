@@ -202,10 +202,6 @@ std::vector<Scenario> scenarios() {
   };
 }
 
-// The people's cage radius the report judges by: half a person's width and the default safety
-// radius, plus the robot's half width (its footprint must stay out).
-constexpr double kCageSafetyM = 0.5;
-constexpr double kRobotHalfWidthM = 0.19;
 
 // The referee's person position errors, 1-6 m from the robot.
 struct PersonErrors {
@@ -497,7 +493,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
         if (!sim.movers[i].person || !w.mover_visible(i)) continue;
         const msg::Point2D at = w.mover_position(i);
         const double d = std::hypot(at.x_m - p.pose.x_m, at.y_m - p.pose.y_m);
-        const bool in = d < sim.movers[i].size_m / 2 + kCageSafetyM + kRobotHalfWidthM;
+        const bool in = d < judged_cage_reach_m(sim.movers[i].size_m / 2);
         if (in && !inside[i]) {
           const msg::Pose2D& before = k > 0 ? poses[k - 1].pose : p.pose;
           const bool robot_closed = std::hypot(at.x_m - before.x_m, at.y_m - before.y_m) - d > 0.01;

@@ -41,6 +41,13 @@ struct TimedPose {
   bool moving = false;  // for a contact: whether the robot itself was moving
 };
 
+// How close to a person the robot's centre may come before it is in the person's cage, as the
+// reports judge it: the person's body radius, the default cage safety radius (0.5 m) and the
+// robot's half width (0.19 m), since its footprint must stay out.
+[[nodiscard]] constexpr double judged_cage_reach_m(double person_radius_m) noexcept {
+  return person_radius_m + 0.5 + 0.19;
+}
+
 class Referee {
  public:
   static constexpr std::size_t kMaxTrack = 4096;
