@@ -27,11 +27,13 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
+#include "lockstep_mission.hpp"
 #include "mission_pool.hpp"
 #include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/crowd/recording.hpp"
 #include "sen3bot/crowd/scene.hpp"
 #include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -154,118 +156,94 @@ SimulationConfig run_world(const Plan& plan, Variant v, std::uint64_t seed, cons
 // RunStep to the meter after each once the robot has set off; quiet.
 void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, CrowdRun& r) {
   const auto wall_start = std::chrono::steady_clock::now();
-  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
-  if (!created) return set_error(r, created.error().c_str());
-  SimBoard& board = **created;
-  std::FILE* quiet = std::fopen("/dev/null", "w");
-  if (quiet == nullptr) return set_error(r, "cannot open /dev/null");
-  {
-    Firmware fw(config, board, quiet);
-    board.referee().watch_estimate(&fw.pose_estimate());
-    auto fail = [&](const Error& e) {
-      set_error(r, e.c_str());
-      fw.shutdown();
-      board.stop();
-    };
-    Status started = board.start();
-    if (started) started = fw.init();
-    if (!started) {
-      fail(started.error());
-      std::fclose(quiet);
-      return;
-    }
-    tasks::Scheduler& scheduler = fw.scheduler();
+  const double free_length_m =
+      std::hypot(scene.robot_goal.x_m - scene.robot_start.x_m, scene.robot_goal.y_m - scene.robot_start.y_m);
+  const double max_v = config.navigation.dwa.max_v_m_s;
+  crowd::RunMeter meter;
+  crowd::RunSetup setup;
+  setup.dt_s = kSliceS;
+  setup.time_limit_s = scene.time_limit_s;
+  setup.free_path_length_m = free_length_m;
+  setup.free_path_time_s = max_v > 0 ? free_length_m / max_v : 0.0;
+
+  // The crowd's movers (sized at the first slice, once the board has them).
+  std::size_t first = 0, count = 0;
+  bool sized = false;
+  std::vector<crowd::PersonTruth> people;
+  std::vector<bool> inside;        // in a person's cage
+  std::vector<bool> robot_inside;  // and it was the robot's motion that entered it
+  bool started_driving = false;
+  double start_s = 0;
+  double last_theta = 0;
+  msg::Pose2D last_pose;
+  std::uint64_t last_contacts = 0, last_moving = 0;
+  auto on_slice = [&](const Firmware& fw, SimBoard& board, double sim_s) {
     const MissionTask& mission = *fw.mission();
-    hal::SimClock& clock = *board.lockstep_clock();
-    const Simulation& sim = board.simulation();
-    world::World& w = board.simulation().world();
-    const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
-    const hal::Nanos slice = hal::millis(50);  // kSliceS
-
-    const double free_length_m =
-        std::hypot(scene.robot_goal.x_m - scene.robot_start.x_m, scene.robot_goal.y_m - scene.robot_start.y_m);
-    const double max_v = config.navigation.dwa.max_v_m_s;
-    crowd::RunMeter meter;
-    crowd::RunSetup setup;
-    setup.dt_s = kSliceS;
-    setup.time_limit_s = scene.time_limit_s;
-    setup.free_path_length_m = free_length_m;
-    setup.free_path_time_s = max_v > 0 ? free_length_m / max_v : 0.0;
-
-    const std::size_t first = sim.first_crowd_mover();
-    const std::size_t count = w.mover_count() > first ? w.mover_count() - first : 0;
-    std::vector<crowd::PersonTruth> people(count);
-    std::vector<bool> inside(count, false);        // in a person's cage
-    std::vector<bool> robot_inside(count, false);  // and it was the robot's motion that entered it
-    bool started_driving = false;
-    double start_s = 0;
-    double last_theta = 0;
-    msg::Pose2D last_pose;
-    std::uint64_t last_contacts = 0, last_moving = 0;
-    double sim_s = 0;
-    while (!mission.finished() && sim_s < limit_s) {
-      if (Status s = scheduler.run_lockstep(clock, slice); !s) {
-        fail(s.error());
-        std::fclose(quiet);
+    Simulation& sim = board.simulation();
+    const world::World& w = sim.world();
+    if (!sized) {
+      first = sim.first_crowd_mover();
+      count = w.mover_count() > first ? w.mover_count() - first : 0;
+      people.resize(count);
+      inside.assign(count, false);
+      robot_inside.assign(count, false);
+      sized = true;
+    }
+    const GroundTruth& truth = sim.truth();
+    if (!started_driving) {
+      if (mission.current_goal() == nullptr && !mission.finished()) {
+        last_contacts = truth.contacts;
+        last_moving = truth.moving_contacts;
+        last_theta = truth.pose.theta_rad;
+        last_pose = truth.pose;
         return;
       }
-      sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
-      const GroundTruth& truth = sim.truth();
-      if (!started_driving) {
-        if (mission.current_goal() == nullptr && !mission.finished()) {
-          last_contacts = truth.contacts;
-          last_moving = truth.moving_contacts;
-          last_theta = truth.pose.theta_rad;
-          last_pose = truth.pose;
-          continue;
-        }
-        started_driving = true;
-        start_s = sim_s;
-        setup.start_time_s = start_s;
-        meter.start(setup);
-      }
-      const msg::Pose2D pose = truth.pose;
-      for (std::size_t i = 0; i < count; ++i) {
-        const std::size_t m = first + i;
-        crowd::PersonTruth& p = people[i];
-        p.position = w.mover_position(m);
-        p.velocity = w.mover_velocity(m);
-        p.radius_m = w.mover_script(m).size_m / 2;
-        p.visible = w.mover_visible(m);
-      }
-      // Cage entries: the robot's when its own motion since the last sample closed the distance.
-      bool in_cage = false;
-      for (std::size_t i = 0; i < count; ++i) {
-        const crowd::PersonTruth& p = people[i];
-        const double d = std::hypot(p.position.x_m - pose.x_m, p.position.y_m - pose.y_m);
-        const bool in = p.visible && d < judged_cage_reach_m(p.radius_m);
-        if (in && !inside[i]) {
-          const double before = std::hypot(p.position.x_m - last_pose.x_m, p.position.y_m - last_pose.y_m);
-          robot_inside[i] = before - d > 0.01;
-        }
-        if (!in) robot_inside[i] = false;
-        inside[i] = in;
-        in_cage = in_cage || robot_inside[i];
-      }
-      crowd::RunStep step;
-      step.time_s = sim_s;
-      step.robot = pose;
-      step.v_m_s = truth.speed_m_s;
-      step.w_rad_s = msg::normalize_angle(pose.theta_rad - last_theta) / kSliceS;
-      step.footprint = world.footprint;
-      step.people = std::span<const crowd::PersonTruth>(people.data(), people.size());
-      step.contact_started = truth.contacts > last_contacts;
-      step.contact_by_robot = truth.moving_contacts > last_moving;
-      step.robot_in_cage = in_cage;
-      meter.observe(step);
-      last_contacts = truth.contacts;
-      last_moving = truth.moving_contacts;
-      last_theta = pose.theta_rad;
-      last_pose = pose;
+      started_driving = true;
+      start_s = sim_s;
+      setup.start_time_s = start_s;
+      meter.start(setup);
     }
-    fw.shutdown();
-    board.stop();
-    const firmware::MissionReport& report = mission.report();
+    const msg::Pose2D pose = truth.pose;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t m = first + i;
+      crowd::PersonTruth& p = people[i];
+      p.position = w.mover_position(m);
+      p.velocity = w.mover_velocity(m);
+      p.radius_m = w.mover_script(m).size_m / 2;
+      p.visible = w.mover_visible(m);
+    }
+    // Cage entries: the robot's when its own motion since the last sample closed the distance.
+    bool in_cage = false;
+    for (std::size_t i = 0; i < count; ++i) {
+      const crowd::PersonTruth& p = people[i];
+      const double d = std::hypot(p.position.x_m - pose.x_m, p.position.y_m - pose.y_m);
+      const bool in = p.visible && d < judged_cage_reach_m(p.radius_m);
+      if (in && !inside[i]) {
+        const double before = std::hypot(p.position.x_m - last_pose.x_m, p.position.y_m - last_pose.y_m);
+        robot_inside[i] = before - d > 0.01;
+      }
+      if (!in) robot_inside[i] = false;
+      inside[i] = in;
+      in_cage = in_cage || robot_inside[i];
+    }
+    crowd::RunStep step;
+    step.time_s = sim_s;
+    step.robot = pose;
+    step.v_m_s = truth.speed_m_s;
+    step.w_rad_s = msg::normalize_angle(pose.theta_rad - last_theta) / kSliceS;
+    step.footprint = world.footprint;
+    step.people = std::span<const crowd::PersonTruth>(people.data(), people.size());
+    step.contact_started = truth.contacts > last_contacts;
+    step.contact_by_robot = truth.moving_contacts > last_moving;
+    step.robot_in_cage = in_cage;
+    meter.observe(step);
+    last_contacts = truth.contacts;
+    last_moving = truth.moving_contacts;
+    last_theta = pose.theta_rad;
+    last_pose = pose;
+  };
+  auto on_end = [&](Firmware& fw, SimBoard&, double sim_s) {
+    const firmware::MissionReport& report = fw.mission()->report();
     const bool reached = report.state == MissionState::complete;
     if (!started_driving) {
       setup.start_time_s = sim_s;
@@ -276,8 +254,9 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
     r.ran = true;
     r.sim_s = sim_s;
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  }
-  std::fclose(quiet);
+  };
+  if (const std::string error = run_lockstep_mission(config, world, hal::millis(50), on_slice, on_end); !error.empty())
+    set_error(r, error);
 }
 
 CrowdRun run_job(const Plan& plan, std::size_t index) {
@@ -476,22 +455,6 @@ void print_table(std::FILE* out, const std::vector<VariantResults>& variants, co
   std::fprintf(out, "\n* successful runs only\n");
 }
 
-// A JSON number, or null when not finite.
-void json_number(std::FILE* f, double v, const char* format = "%.4f") {
-  if (std::isfinite(v)) std::fprintf(f, format, v);
-  else std::fputs("null", f);
-}
-
-void json_string(std::FILE* f, std::string_view s) {
-  std::fputc('"', f);
-  for (const char c : s) {
-    if (c == '"' || c == '\\') std::fputc('\\', f);
-    if (static_cast<unsigned char>(c) < 0x20) std::fprintf(f, "\\u%04x", c);
-    else std::fputc(c, f);
-  }
-  std::fputc('"', f);
-}
-
 void json_rate(std::FILE* f, const char* name, const crowd::Rate& r) {
   std::fprintf(f, "\"%s\": {\"count\": %zu, \"n\": %zu, \"rate\": %.4f, \"lower\": %.4f, \"upper\": %.4f}", name, r.count, r.n,
                r.rate, r.lower, r.upper);
@@ -499,17 +462,17 @@ void json_rate(std::FILE* f, const char* name, const crowd::Rate& r) {
 
 void json_quartiles(std::FILE* f, const char* name, const crowd::Quartiles& q) {
   std::fprintf(f, "\"%s\": {\"n\": %zu, \"median\": ", name, q.n);
-  json_number(f, q.median);
+  report::write_json_number(f, q.median);
   std::fputs(", \"q1\": ", f);
-  json_number(f, q.q1);
+  report::write_json_number(f, q.q1);
   std::fputs(", \"q3\": ", f);
-  json_number(f, q.q3);
+  report::write_json_number(f, q.q3);
   std::fputs(", \"iqr\": ", f);
-  json_number(f, q.iqr);
+  report::write_json_number(f, q.iqr);
   std::fputs(", \"min\": ", f);
-  json_number(f, q.min);
+  report::write_json_number(f, q.min);
   std::fputs(", \"max\": ", f);
-  json_number(f, q.max);
+  report::write_json_number(f, q.max);
   std::fputs("}", f);
 }
 
@@ -518,7 +481,7 @@ void json_metrics(std::FILE* f, const crowd::RunMetrics& m) {
                   "\"cage_entries\": %u, \"time_to_goal_s\": ",
                m.reached_goal ? "true" : "false", m.success ? "true" : "false", m.timeout ? "true" : "false", m.contacts_any,
                m.contacts_by_robot, m.cage_entries);
-  json_number(f, m.time_to_goal_s);
+  report::write_json_number(f, m.time_to_goal_s);
   const std::pair<const char*, double> rest[] = {
       {"time_ratio", m.time_ratio},           {"path_length_m", m.path_length_m},
       {"path_ratio", m.path_ratio},           {"min_distance_m", m.min_distance_m},
@@ -528,7 +491,7 @@ void json_metrics(std::FILE* f, const crowd::RunMetrics& m) {
       {"mean_angular_jerk_rad_s3", m.mean_angular_jerk_rad_s3}, {"max_angular_jerk_rad_s3", m.max_angular_jerk_rad_s3}};
   for (const auto& [key, value] : rest) {
     std::fprintf(f, ", \"%s\": ", key);
-    json_number(f, value);
+    report::write_json_number(f, value);
   }
   std::fprintf(f, ", \"steps\": %llu", static_cast<unsigned long long>(m.steps));
 }
@@ -537,18 +500,18 @@ bool write_report_json(const std::string& path, const Options& o, std::size_t pe
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   std::fputs("{\n  \"experiment\": \"crowd\",\n  \"scene\": ", f);
-  if (o.trajectories.empty()) json_string(f, o.scene);
+  if (o.trajectories.empty()) report::write_json_string(f, o.scene);
   else std::fputs("\"recorded\"", f);
   std::fputs(",\n  \"trajectories\": ", f);
   if (o.trajectories.empty()) std::fputs("null", f);
-  else json_string(f, o.trajectories);
+  else report::write_json_string(f, o.trajectories);
   std::fprintf(f, ",\n  \"people\": %zu,\n  \"behaviour\": ", people);
   if (!o.trajectories.empty()) std::fputs("\"recorded\"", f);
-  else if (o.behaviour) json_string(f, crowd::to_string(*o.behaviour));
+  else if (o.behaviour) report::write_json_string(f, crowd::to_string(*o.behaviour));
   else std::fputs("null", f);
   std::fprintf(f, ",\n  \"runs\": %llu,\n  \"seed\": %llu,\n  \"jobs\": %ld,\n  \"config\": ", static_cast<unsigned long long>(o.runs),
                static_cast<unsigned long long>(o.seed), o.jobs);
-  json_string(f, o.config_path);
+  report::write_json_string(f, o.config_path);
   std::fputs(",\n  \"variants\": {", f);
   for (std::size_t i = 0; i < variants.size(); ++i) {
     const VariantResults& v = variants[i];
@@ -570,17 +533,17 @@ bool write_report_json(const std::string& path, const Options& o, std::size_t pe
     std::fputs(",\n        ", f);
     json_quartiles(f, "min_distance_m", a.min_distance_m);
     std::fputs(",\n        \"mean_intimate_zone_s\": ", f);
-    json_number(f, a.mean_intimate_zone_s);
+    report::write_json_number(f, a.mean_intimate_zone_s);
     std::fputs(", \"mean_personal_zone_s\": ", f);
-    json_number(f, a.mean_personal_zone_s);
+    report::write_json_number(f, a.mean_personal_zone_s);
     std::fputs(", \"mean_danger_frequency\": ", f);
-    json_number(f, a.mean_danger_frequency);
+    report::write_json_number(f, a.mean_danger_frequency);
     std::fputs(", \"mean_cage_entries\": ", f);
-    json_number(f, v.mean_cage_entries);
+    report::write_json_number(f, v.mean_cage_entries);
     std::fputs(", \"mean_jerk_m_s3\": ", f);
-    json_number(f, v.mean_jerk);
+    report::write_json_number(f, v.mean_jerk);
     std::fputs(", \"max_jerk_m_s3\": ", f);
-    json_number(f, v.max_jerk);
+    report::write_json_number(f, v.max_jerk);
     std::fputs("},\n      \"runs\": [", f);
     for (std::size_t k = 0; k < v.runs.size(); ++k) {
       const CrowdRun& r = *v.runs[k];

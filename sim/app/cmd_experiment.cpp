@@ -25,6 +25,7 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
+#include "lockstep_mission.hpp"
 #include "mission_pool.hpp"
 #include "report_figure.hpp"
 #include "sen3bot/msg/point_math.hpp"
@@ -249,44 +250,13 @@ void capture(const Firmware& fw, SimBoard& board, hal::Nanos now_ns, double t_s,
 // With a sample: slices of 100 ms, the closest approach to a box kept, and the figure written.
 void run_mission(const FirmwareConfig& config, const SimulationConfig& world, MissionResult& r, Sample* sample) {
   const auto wall_start = std::chrono::steady_clock::now();
-  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
-  if (!created) return set_error(r, created.error().c_str());
-  SimBoard& board = **created;
-  std::FILE* quiet = std::fopen("/dev/null", "w");
-  if (quiet == nullptr) return set_error(r, "cannot open /dev/null");
-  {
-    Firmware fw(config, board, quiet);
-    board.referee().watch_estimate(&fw.pose_estimate());
-    auto fail = [&](const Error& e) {
-      set_error(r, e.c_str());
-      fw.shutdown();
-      board.stop();
-    };
-    Status started = board.start();
-    if (started) started = fw.init();
-    if (!started) {
-      fail(started.error());
-      std::fclose(quiet);
-      return;
-    }
-    tasks::Scheduler& scheduler = fw.scheduler();
-    const MissionTask& mission = *fw.mission();
-    hal::SimClock& clock = *board.lockstep_clock();
-    const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
-    const hal::Nanos slice = sample != nullptr ? hal::millis(100) : hal::millis(500);
-    double sim_s = 0;
-    while (!mission.finished() && sim_s < limit_s) {
-      if (Status s = scheduler.run_lockstep(clock, slice); !s) {
-        fail(s.error());
-        std::fclose(quiet);
-        return;
-      }
-      sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
-      if (sample != nullptr) capture(fw, board, clock.now(), board.simulation().world().time_s(), *sample);
-    }
-    fw.shutdown();
-    board.stop();
-    const firmware::MissionReport& report = mission.report();
+  const hal::Nanos slice = sample != nullptr ? hal::millis(100) : hal::millis(500);
+  auto on_slice = [&](const Firmware& fw, SimBoard& board, double) {
+    if (sample != nullptr)
+      capture(fw, board, board.lockstep_clock()->now(), board.simulation().world().time_s(), *sample);
+  };
+  auto on_end = [&](Firmware& fw, SimBoard& board, double sim_s) {
+    const firmware::MissionReport& report = fw.mission()->report();
     const RefereeReport& truth = board.referee().report();
     r.ran = true;
     r.state = report.state;
@@ -319,8 +289,9 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
       figure.passed = classify(r) == Outcome::smooth || classify(r) == Outcome::wait_recovery;
       if (!report::draw_case_figure(figure).write_png(sample->png)) set_error(r, "cannot write " + sample->png);
     }
-  }
-  std::fclose(quiet);
+  };
+  if (const std::string error = run_lockstep_mission(config, world, slice, on_slice, on_end); !error.empty())
+    set_error(r, error);
 }
 
 MissionResult run_job(const Plan& plan, std::size_t index, Sample* sample = nullptr) {

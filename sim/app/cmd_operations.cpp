@@ -18,6 +18,7 @@
 
 #include "cli_util.hpp"
 #include "operations_report.hpp"
+#include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/path_file.hpp"
 #include "sen3bot/cobot/recognizer.hpp"
@@ -272,27 +273,10 @@ struct ExperimentOptions {
   TrainingPlan baseline_plan{.encoding = FeatureEncoding::occupancy};
 };
 
-std::string json_string(std::string_view s) {
-  std::string o = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-      o += buf;
-    } else {
-      o += c;
-    }
-  }
-  return o + "\"";
-}
-
 void write_evaluation(std::FILE* f, const Evaluation& e, const char* indent) {
   std::fprintf(f, "%s\"paths\": %zu,\n%s\"accuracy\": %.6f,\n", indent, e.paths, indent, e.accuracy);
   std::fprintf(f, "%s\"confusion\": {\"rows\": \"true operation\", \"columns\": \"recognised\", \"classes\": [", indent);
-  for (std::size_t i = 0; i < e.classes.size(); ++i) std::fprintf(f, "%s%s", i ? ", " : "", json_string(e.classes[i]).c_str());
+  for (std::size_t i = 0; i < e.classes.size(); ++i) std::fprintf(f, "%s%s", i ? ", " : "", report::json_quoted(e.classes[i]).c_str());
   std::fprintf(f, "], \"matrix\": [");
   for (std::size_t r = 0; r < e.confusion.size(); ++r) {
     std::fprintf(f, "%s[", r ? ", " : "");
@@ -520,9 +504,9 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
     std::FILE* f = std::fopen(json_path.c_str(), "w");
     if (!f) return bad(err, kExperimentName, "--report: cannot write " + json_path);
     std::fprintf(f, "{\n  \"experiment\": \"operations\",\n  \"operations_file\": %s,\n  \"model\": %s,\n",
-                 json_string(o.operations_path).c_str(), json_string(o.model_path).c_str());
+                 report::json_quoted(o.operations_path).c_str(), report::json_quoted(o.model_path).c_str());
     std::fprintf(f, "  \"style\": %s,\n  \"held_out_style\": %s,\n  \"runs_per_operation\": %zu,\n  \"seed\": %llu,\n",
-                 json_string(style.name).c_str(), held_out ? "true" : "false", o.runs,
+                 report::json_quoted(style.name).c_str(), held_out ? "true" : "false", o.runs,
                  static_cast<unsigned long long>(o.seed));
     std::fprintf(f, "  \"recorded_from_first_task\": %s,\n", o.first_task ? "true" : "false");
     write_evaluation(f, *ours, "  ");

@@ -25,6 +25,7 @@
 #include "firmware.hpp"
 #include "report_figure.hpp"
 #include "runner.hpp"
+#include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -260,20 +261,11 @@ struct CaseResult {
   double io_held_s = 0;   // time the safety I/O held the robot (its stop reasons on)
 };
 
-void write_json_string(std::FILE* f, std::string_view s) {
-  std::fputc('"', f);
-  for (const char c : s) {
-    if (c == '"' || c == '\\') std::fputc('\\', f);
-    std::fputc(c, f);
-  }
-  std::fputc('"', f);
-}
-
 bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t seed, const std::vector<CaseResult>& results) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   std::fprintf(f, "{\n  \"scenario\": ");
-  write_json_string(f, scenario.name);
+  report::write_json_string(f, scenario.name);
   std::fprintf(f, ",\n  \"seed\": %llu,\n  \"cases\": [", static_cast<unsigned long long>(seed));
   for (std::size_t i = 0; i < results.size(); ++i) {
     const CaseResult& c = results[i];
@@ -282,7 +274,7 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
     double time_s = 0;
     for (std::size_t g = 0; g < r.goals_reached; ++g) time_s += r.goal_time_s[g];
     std::fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
-    write_json_string(f, c.name);
+    report::write_json_string(f, c.name);
     std::fprintf(f,
                  ", \"reached\": %s, \"collisions\": %llu, \"contacts\": %llu, \"time_s\": %.2f, "
                  "\"path_length_m\": %.3f, \"min_clearance_m\": %.3f, \"recoveries\": %u, \"replans\": %u, "
@@ -327,7 +319,7 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
     for (std::size_t t = 0; t < c.stats.size(); ++t) {
       const tasks::TaskStats& s = c.stats[t];
       std::fprintf(f, "%s\n       {\"name\": ", t ? "," : "");
-      write_json_string(f, s.name);
+      report::write_json_string(f, s.name);
       std::fprintf(f,
                    ", \"period_us\": %lld, \"budget_us\": %lld, \"runs\": %llu, \"overruns\": %llu, \"slips\": %llu, "
                    "\"skips\": %llu, \"exec_mean_us\": %.1f, \"exec_max_us\": %.1f, \"jitter_p99_us\": %.1f, "
