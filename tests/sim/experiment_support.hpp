@@ -3,6 +3,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -25,6 +28,18 @@ using CommandRun = sen3bot::testing::CommandOutcome;
 
 inline CommandRun run_experiment(std::vector<std::string> args) {
   return sen3bot::testing::run_command(experiment_command, std::move(args));
+}
+
+// The command refuses `args` as a usage error: exit 2, one line on stderr that contains
+// `says`, nothing on stdout.
+inline void expect_usage_error(const std::vector<std::string>& args, const std::string& says) {
+  const CommandRun run = run_experiment(args);
+  std::string line;
+  for (const std::string& a : args) line += a + " ";
+  EXPECT_EQ(run.code, 2) << line;
+  EXPECT_NE(run.err.find(says), std::string::npos) << line << "\n" << run.err;
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << line << "\n" << run.err;
+  EXPECT_EQ(run.out, "") << line;
 }
 
 inline std::string temp_dir() {
