@@ -496,7 +496,8 @@ Result<std::string> write_scene_map(const Scene& scene, const std::string& dir, 
   }
   for (const Wall& w : scene.walls) {
     if (!finite(w.a) || !finite(w.b) || on_border(w, area)) continue;
-    const double half = 0.5 * resolution_m;
+    // A nanometre of slack: a wall on a cell boundary blocks both cells on every machine, FMA or not.
+    const double half = 0.5 * resolution_m + 1e-9;
     const auto cell_range = [&](double a, double b, double o, std::size_t n) {
       const double first = std::floor((std::min(a, b) - o) / resolution_m) - 1.0;
       const double last = std::floor((std::max(a, b) - o) / resolution_m) + 1.0;
