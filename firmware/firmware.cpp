@@ -33,7 +33,7 @@ tasks::Task* Firmware::task_named(std::string_view name) {
   if (name == "mission") return mission_task_.get();
   if (name == "fleet") return fleet_task_.get();
   if (name == "detector") return detector_task_.get();
-  if (name == "people") return people_task_.get();
+  if (name == "people") return people_task_ ? static_cast<tasks::Task*>(people_task_.get()) : people_relay_task_.get();
   if (name == "cobot") return cobot_task_.get();
   if (name == "view") return view_task_.get();
 #ifdef SEN3BOT_HAS_QR
@@ -77,9 +77,12 @@ Status Firmware::create_navigation() {
     planner.curve = curve->curve;
     planner.curve_bounds = curve->has_bounds ? curve->bounds : nav::map_extent(map_);
   }
-  // People: the detector's channel, the fusion, and the cages on both costmaps.
+  // People: the detector's channel and the fusion (or a relay of people known without sensing),
+  // and the cages on both costmaps.
   const tasks::Topic<msg::People>* people = nullptr;
-  if (n.people_enabled) {
+  if (n.people_enabled && external_people_ != nullptr) {
+    people_relay_task_ = std::make_unique<nav::PeopleRelayTask>(n.person_tracker, *external_people_, nav_people_);
+  } else if (n.people_enabled) {
     const nav::CameraCalibration camera;
     if (n.people_detector == "onboard") {
       // The boxes come from the camera's own frames (vision_task.hpp).
@@ -114,6 +117,8 @@ Status Firmware::create_navigation() {
     if (config_.cobot.enabled) fusion.operator_safety_radius_m = config_.cobot.operator_safety_radius_m;
     people_task_ = std::make_unique<nav::PeopleTask>(fusion, map_, nav_scan_, nav_pose_, nav_detections_, nav_people_,
                                                      config_.cobot.enabled ? &nav_cobot_ : nullptr);
+  }
+  if (n.people_enabled) {
     people = &nav_people_;
     planner.use_people = true;
     planner.people_layer = n.cages;
@@ -284,7 +289,7 @@ ViewSources Firmware::view_sources() {
   s.safety = &nav_safety_;
   s.controller = &nav_controller_;
   s.movers = &nav_movers_;
-  if (people_task_) s.people = &nav_people_;
+  if (people_task_ || people_relay_task_) s.people = &nav_people_;
   if (controller_task_) s.local_costmap = &nav_costmap_snapshot_;
   s.planner = planner_task_.get();
   s.mission = mission_task_.get();

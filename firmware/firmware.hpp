@@ -55,6 +55,10 @@ class Firmware {
   // A live view server that outlives this firmware (a simulator's, across its cases): with a
   // `view` section the view row publishes into it instead of starting its own. Before init().
   void use_view_server(view::Server* server) noexcept { external_view_ = server; }
+  // People known without sensing (a simulator's ground truth): with navigation.people the
+  // people row relays these instead of fusing a detector's boxes with the laser, and there is no
+  // detector row. Before init(); the topic must outlive the firmware.
+  void use_people_source(const tasks::Topic<msg::People>* people) noexcept { external_people_ = people; }
   // The view row; null without a `view` section.
   [[nodiscard]] ViewTask* view() { return view_task_.get(); }
   // The channels a configuration serves (for a server made before the firmware); reads the
@@ -170,6 +174,7 @@ class Firmware {
   tasks::Topic<msg::CostmapSnapshot> nav_costmap_snapshot_;  // controller -> view
   camera::FramePool* external_frames_ = nullptr;
   view::Server* external_view_ = nullptr;
+  const tasks::Topic<msg::People>* external_people_ = nullptr;
   // Outlive the navigation tasks, which keep references.
   nav::OccupancyMap map_;
   std::vector<msg::Point2D> waypoints_;
@@ -190,6 +195,7 @@ class Firmware {
   std::unique_ptr<VisionTask> vision_task_;
 #endif
   std::unique_ptr<nav::PeopleTask> people_task_;
+  std::unique_ptr<nav::PeopleRelayTask> people_relay_task_;  // instead, with use_people_source()
   std::unique_ptr<MissionTask> mission_task_;
   std::unique_ptr<FleetTask> fleet_task_;
   std::unique_ptr<CobotTask> cobot_task_;

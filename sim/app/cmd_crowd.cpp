@@ -55,9 +55,11 @@ constexpr double kSliceS = 0.05;
 // The run goes on this long past the start delay and the scene's limit (localization settling).
 constexpr double kRunMarginS = 10.0;
 
-enum class Variant : std::uint8_t { standard, no_people };
-const char* name_of(Variant v) { return v == Variant::standard ? "default" : "no-people"; }
-constexpr const char* kVariantNames = "default, no-people";
+enum class Variant : std::uint8_t { standard, no_people, perfect_perception };
+const char* name_of(Variant v) {
+  return v == Variant::standard ? "default" : v == Variant::no_people ? "no-people" : "perfect-perception";
+}
+constexpr const char* kVariantNames = "default, no-people, perfect-perception";
 
 // One run as a worker reports it: fixed size, no pointers.
 struct CrowdRun {
@@ -129,6 +131,9 @@ FirmwareConfig run_config(const Plan& plan, Variant v, const crowd::Scene& scene
     config.navigation.people_enabled = false;
     config.tasks.erase("detector");
     config.tasks.erase("people");
+  } else if (v == Variant::perfect_perception) {
+    // The people row relays the true people (SimBoard::true_people): no detector, no fusion.
+    config.tasks.erase("detector");
   }
   return config;
 }
@@ -141,7 +146,7 @@ SimulationConfig run_world(const Plan& plan, Variant v, std::uint64_t seed, cons
   world.seed = seed;
   world.base.noise_seed = static_cast<std::uint32_t>(seed);
   world.movers.clear();
-  if (v == Variant::no_people) world.detector.enabled = false;
+  if (v != Variant::standard) world.detector.enabled = false;  // nobody reads its boxes
   // The scene's crowd time 0 is when the robot sets off: after the mission's start delay.
   auto people = std::make_shared<crowd::CrowdConfig>(scene.crowd);
   for (crowd::Person& p : people->people) p.appear_s += delay_s;
@@ -255,7 +260,9 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
     r.sim_s = sim_s;
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
-  if (const std::string error = run_lockstep_mission(config, world, hal::millis(50), on_slice, on_end); !error.empty())
+  if (const std::string error =
+          run_lockstep_mission(config, world, hal::millis(50), on_slice, on_end, r.variant == Variant::perfect_perception);
+      !error.empty())
     set_error(r, error);
 }
 
@@ -325,6 +332,7 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
       Variant v;
       if (name == "default") v = Variant::standard;
       else if (name == "no-people") v = Variant::no_people;
+      else if (name == "perfect-perception") v = Variant::perfect_perception;
       else return bad(err, "--variant: no variant named '" + std::string(name) + "' (" + kVariantNames + ")");
       if (std::find(o.variants.begin(), o.variants.end(), v) == o.variants.end()) o.variants.push_back(v);
       ++i;
@@ -348,7 +356,7 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
   if (!o.scene.empty() && o.behaviour && *o.behaviour == crowd::Behaviour::recorded)
     return bad(err, "--behaviour recorded needs --trajectories FILE");
   if (!have_runs) return bad(err, "--runs N is required");
-  if (o.variants.empty()) o.variants = {Variant::standard, Variant::no_people};
+  if (o.variants.empty()) o.variants = {Variant::standard, Variant::no_people, Variant::perfect_perception};
   if (o.jobs == 0) o.jobs = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
   return 0;
 }

@@ -14,9 +14,11 @@ namespace sen3bot::sim {
 // in `slice`s until the mission finishes or config.duration_s (600 s when not set) has passed,
 // calling on_slice(fw, board, sim_s) after each slice; then shuts both down and calls
 // on_end(fw, board, sim_s). Returns "" or why the run could not run (on_end is then not called).
+// true_people: the firmware's people row relays the board's true people instead of sensing them
+// (perfect perception; the configuration must have no detector row).
 template <class OnSlice, class OnEnd>
 std::string run_lockstep_mission(const firmware::FirmwareConfig& config, const SimulationConfig& world, hal::Nanos slice,
-                                 OnSlice on_slice, OnEnd on_end) {
+                                 OnSlice on_slice, OnEnd on_end, bool true_people = false) {
   Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
   if (!created) return created.error().c_str();
   SimBoard& board = **created;
@@ -25,6 +27,10 @@ std::string run_lockstep_mission(const firmware::FirmwareConfig& config, const S
   std::string error;
   {
     firmware::Firmware fw(config, board, quiet);
+    if (true_people) {
+      board.publish_true_people();
+      fw.use_people_source(&board.true_people());
+    }
     board.referee().watch_estimate(&fw.pose_estimate());
     Status status = board.start();
     if (status) status = fw.init();

@@ -1,8 +1,11 @@
 #include "sen3bot/sim/sim_board.hpp"
 
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <thread>
+#include <utility>
 
 #include "sen3bot/hal/rt_setup.hpp"
 #include "sen3bot/hal/serial.hpp"
@@ -48,11 +51,6 @@ SimBoard::SimBoard(std::unique_ptr<Simulation> simulation, bool lockstep)
   if (lockstep_) sim_clock_.set_listener(this);
   const SimulationConfig& c = simulation_->config();
   detector_ = std::make_unique<SimDetector>(c.detector, c.seed);
-  people_ = std::make_unique<bool[]>(c.movers.size());
-  for (std::size_t i = 0; i < c.movers.size(); ++i) {
-    people_[i] = c.movers[i].person;
-    mover_sizes_m_.push_back(c.movers[i].size_m);
-  }
   if (c.io_node.enabled) {
     // Two stations: the firmware's and the node's; each queue holds far more than a 5 ms step.
     can_firmware_ = *can_bus_.attach("firmware");
@@ -117,17 +115,53 @@ void SimBoard::step_io_node(hal::Nanos now_ns) noexcept {
   for (std::size_t i = 0; i < n; ++i) (void)can_node_->send(out[i]);
 }
 
+void SimBoard::step_true_people(hal::Nanos now_ns) noexcept {
+  const world::World& w = simulation_->world();
+  const nav::Pose2D robot = simulation_->truth().pose;
+  // The nearest kMax, by insertion into a list kept sorted by distance.
+  std::array<std::pair<double, std::size_t>, msg::People::kMax> nearest;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < w.mover_count(); ++i) {
+    if (!w.mover_script(i).person || !w.mover_visible(i)) continue;
+    const nav::Point2D p = w.mover_position(i);
+    const double d = std::hypot(p.x_m - robot.x_m, p.y_m - robot.y_m);
+    if (n == nearest.size() && d >= nearest[n - 1].first) continue;
+    std::size_t k = n < nearest.size() ? n++ : n - 1;
+    for (; k > 0 && nearest[k - 1].first > d; --k) nearest[k] = nearest[k - 1];
+    nearest[k] = {d, i};
+  }
+  msg::People& out = true_people_message_;
+  out.count = static_cast<std::uint8_t>(n);
+  out.stamp_ns = now_ns;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = nearest[k].second;
+    const nav::Point2D p = w.mover_position(i);
+    const nav::Point2D v = w.mover_velocity(i);
+    msg::TrackedPerson& t = out.items[k];
+    t = {};
+    t.id = static_cast<std::uint32_t>(i + 1);
+    t.x_m = p.x_m;
+    t.y_m = p.y_m;
+    t.vx_m_s = v.x_m;
+    t.vy_m_s = v.y_m;
+    t.width_m = w.mover_script(i).size_m;
+    t.state = std::hypot(v.x_m, v.y_m) >= 0.2 ? msg::PersonState::dynamic_person : msg::PersonState::static_person;
+    t.last_seen_ns = now_ns;
+  }
+  true_people_.publish(out, now_ns);
+}
+
 void SimBoard::step(hal::Nanos now_ns) noexcept {
   simulation_->step(now_ns);
   if (io_node_) step_io_node(now_ns);
+  if (publish_true_people_) step_true_people(now_ns);
   referee_.observe(simulation_->truth());
   const SimulationConfig& c = simulation_->config();
   if (c.detector.enabled) {
     // The camera sits with the laser (the calibration relates the two): seen from the laser's true pose.
     const nav::Pose2D laser = msg::compose(simulation_->truth().pose, {c.laser_mount.x_m, c.laser_mount.y_m, c.laser_mount.theta_rad});
     const std::int64_t unix_ns = lockstep_ ? hal::SimClock::kEpochUnixNs + now_ns : posix_clock_.unix_now_ns();
-    detector_->step(now_ns, unix_ns, simulation_->world(), std::span<const bool>(people_.get(), c.movers.size()),
-                    mover_sizes_m_, laser);
+    detector_->step(now_ns, unix_ns, simulation_->world(), laser);
   }
 }
 

@@ -29,8 +29,8 @@ bool SimDetector::box_for(double forward_m, double left_m, double size_m, msg::P
   return box.u1 - box.u0 >= 2.0f && box.v1 - box.v0 >= 2.0f;
 }
 
-void SimDetector::step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world::World& world, std::span<const bool> people,
-                       std::span<const double> sizes_m, const nav::Pose2D& laser_pose) noexcept {
+void SimDetector::step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world::World& world,
+                       const nav::Pose2D& laser_pose) noexcept {
   if (!config_.enabled) return;
   if (now_ns >= next_frame_ns_) {
     next_frame_ns_ = now_ns + static_cast<hal::Nanos>(1e9 / config_.rate_hz);
@@ -43,19 +43,20 @@ void SimDetector::step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world:
     std::uniform_real_distribution<double> chance(0.0, 1.0);
     const double c = std::cos(laser_pose.theta_rad);
     const double s = std::sin(laser_pose.theta_rad);
-    const std::size_t n = std::min({world.mover_count(), people.size(), sizes_m.size()});
-    for (std::size_t i = 0; i < n && d.count < detector::kMaxBoxes; ++i) {
-      if (!people[i] || !world.mover_visible(i)) continue;
+    for (std::size_t i = 0; i < world.mover_count() && d.count < detector::kMaxBoxes; ++i) {
+      const world::MoverScript& mover = world.mover_script(i);
+      if (!mover.person || !world.mover_visible(i)) continue;
+      const double size_m = mover.size_m;
       const nav::Point2D p = world.mover_position(i);
       const double dx = p.x_m - laser_pose.x_m;
       const double dy = p.y_m - laser_pose.y_m;
       const double range = std::hypot(dx, dy);
       if (range > config_.max_range_m || range < 0.3) continue;
       // Hidden behind a wall or another mover: the first thing along the ray is nearer.
-      if (world.cast_ray(laser_pose.x_m, laser_pose.y_m, std::atan2(dy, dx), range) < range - sizes_m[i] / 2 - 0.05) continue;
+      if (world.cast_ray(laser_pose.x_m, laser_pose.y_m, std::atan2(dy, dx), range) < range - size_m / 2 - 0.05) continue;
       if (chance(rng_) < config_.miss_rate) continue;
       msg::PersonBox box;
-      if (box_for(c * dx + s * dy, -s * dx + c * dy, sizes_m[i], box)) d.boxes[d.count++] = box;
+      if (box_for(c * dx + s * dy, -s * dx + c * dy, size_m, box)) d.boxes[d.count++] = box;
     }
     if (d.count < detector::kMaxBoxes && chance(rng_) < config_.false_positive_rate) {
       // A box somewhere nobody is: a plausible size, anywhere in the image.

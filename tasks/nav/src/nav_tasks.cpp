@@ -564,4 +564,28 @@ void PeopleTask::step(const tasks::StepContext& context) {
   people_.publish(message_, context.start_ns);
 }
 
+// --- PeopleRelayTask -------------------------------------------------------------------------------
+
+Status PeopleRelayTask::init(std::pmr::memory_resource& arena) {
+  (void)arena;
+  if (!(tracker_.expire_s > 0.0) || !(tracker_.safety_radius_m >= 0.0) || !(tracker_.min_width_m >= 0.0))
+    return Error::format(Errc::config, "people relay: expire_s must be positive, safety_radius_m and min_width_m at least 0");
+  return {};
+}
+
+void PeopleRelayTask::step(const tasks::StepContext& context) {
+  message_.count = 0;
+  message_.stamp_ns = context.start_ns;
+  if (source_.read(sample_) &&
+      static_cast<double>(context.start_ns - sample_.value.stamp_ns) <= tracker_.expire_s * 1e9) {
+    const std::size_t n = std::min<std::size_t>(sample_.value.count, msg::People::kMax);
+    for (std::size_t i = 0; i < n; ++i) {
+      msg::TrackedPerson p = sample_.value.items[i];
+      p.cage_radius_m = std::max(p.width_m, tracker_.min_width_m) / 2.0 + tracker_.safety_radius_m;
+      message_.items[message_.count++] = p;
+    }
+  }
+  people_.publish(message_, context.start_ns);
+}
+
 }  // namespace sen3bot::nav

@@ -15,8 +15,10 @@
 
 #include "sen3bot/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/board.hpp"
+#include "sen3bot/msg/people.hpp"
 #include "sen3bot/sim/referee.hpp"
 #include "sen3bot/sim/simulation.hpp"
+#include "sen3bot/tasks/topic.hpp"
 
 namespace sen3bot::sim {
 
@@ -87,6 +89,12 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   // robots shares one (set before the firmware opens its link; it must outlive the link).
   [[nodiscard]] hal::MemoryBroker& site_broker() noexcept { return shared_broker_ != nullptr ? *shared_broker_ : own_broker_; }
   void set_site_broker(hal::MemoryBroker* broker) noexcept { shared_broker_ = broker; }
+  // The true people: the world's person movers present, hidden or not, the msg::People::kMax
+  // nearest the robot, in the map frame, published every world step once publish_true_people()
+  // was called (before start()). What a perfect perception would report, for
+  // Firmware::use_people_source(); a walking person (>= 0.2 m/s) is dynamic.
+  void publish_true_people() noexcept { publish_true_people_ = true; }
+  [[nodiscard]] const tasks::Topic<msg::People>& true_people() const noexcept { return true_people_; }
   // Lockstep links only; set before the links are opened. Null: no tap.
   void set_wire_tap(WireTap* tap) noexcept { tap_ = tap; }
 
@@ -95,6 +103,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   void before_advance(hal::Nanos now_ns, hal::Nanos to_ns) override;
   void step(hal::Nanos now_ns) noexcept;
   void step_io_node(hal::Nanos now_ns) noexcept;
+  void step_true_people(hal::Nanos now_ns) noexcept;
   void thread_main(std::atomic<int>& started);
 
   std::unique_ptr<Simulation> simulation_;
@@ -106,6 +115,9 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimLine estop_;
   SimLine light_;
   WireTap* tap_ = nullptr;
+  bool publish_true_people_ = false;
+  tasks::Topic<msg::People> true_people_;
+  msg::People true_people_message_;
   std::unique_ptr<SimDetector> detector_;
   hal::MemoryCanBus can_bus_{4};
   hal::MemoryCanNode* can_firmware_ = nullptr;  // the firmware's station, handed out once
@@ -115,8 +127,6 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   hal::MemoryBroker own_broker_;
   hal::MemoryBroker* shared_broker_ = nullptr;
   std::size_t next_io_event_ = 0;
-  std::unique_ptr<bool[]> people_;  // per mover: a person (the detector sees people only)
-  std::vector<double> mover_sizes_m_;
   hal::Nanos next_step_ns_ = 0;
   std::thread thread_;
   std::atomic<bool> running_{false};

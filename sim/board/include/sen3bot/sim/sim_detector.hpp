@@ -35,9 +35,9 @@ class SimDetector final : public hal::DatagramPort {
   SimDetector(const SimDetectorConfig& config, std::uint64_t seed);
 
   // A world step: captures a frame when one is due (people are the world's movers whose
-  // `person` flag is set), and releases the frames whose latency has passed. Producer side.
-  void step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world::World& world, std::span<const bool> people,
-            std::span<const double> sizes_m, const nav::Pose2D& laser_pose) noexcept;
+  // `person` flag is set, the crowd's walkers among them), and releases the frames whose
+  // latency has passed. Producer side.
+  void step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world::World& world, const nav::Pose2D& laser_pose) noexcept;
   // Consumer side (the firmware's detector task).
   Result<std::optional<std::size_t>> receive(std::span<std::uint8_t> out) override;
 

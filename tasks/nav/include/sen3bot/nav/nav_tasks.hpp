@@ -338,6 +338,26 @@ class PeopleTask final : public tasks::Task {
   std::array<PersonFix, msg::People::kMax> follow_fixes_{};
 };
 
+// People known without sensing, in place of the fusion: each period the source's latest list
+// is republished with the tracker's cages (half the width, at least min_width_m, plus the
+// safety radius). A list older than expire_s is nobody. The source is the simulator's ground
+// truth for the crowd benchmark's perfect-perception runs.
+class PeopleRelayTask final : public tasks::Task {
+ public:
+  PeopleRelayTask(const PersonTrackerConfig& tracker, const tasks::Topic<msg::People>& source,
+                  tasks::Topic<msg::People>& people) noexcept
+      : tracker_(tracker), source_(source), people_(people) {}
+  Status init(std::pmr::memory_resource& arena) override;
+  void step(const tasks::StepContext& context) override;
+
+ private:
+  PersonTrackerConfig tracker_;
+  const tasks::Topic<msg::People>& source_;
+  tasks::Topic<msg::People>& people_;
+  tasks::Sample<msg::People> sample_;
+  msg::People message_;
+};
+
 // --- Safety -----------------------------------------------------------------------------------
 
 struct SafetyTaskConfig {
