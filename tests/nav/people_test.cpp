@@ -8,6 +8,7 @@
 
 #include "alloc_counter.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/people.hpp"
 
 namespace sen3bot::nav {
@@ -580,6 +581,52 @@ TEST(PeopleLayer, ACageNeverSwallowsTheRobot) {
   const Pose2D away{1.5, 3.0, 0.0};
   costmap.update({away, away, nullptr, 1'000'000'000});
   EXPECT_EQ(cost_at(3.0 - 0.65, 3.0), kLethalCost);
+}
+
+// --- Relayed people (perfect perception) ---
+
+TEST(PeopleRelay, RepublishesTheSourcesPeopleWithTheTrackersCagesUntilTheListIsStale) {
+  PersonTrackerConfig config;
+  config.safety_radius_m = 0.5;
+  config.min_width_m = 0.4;
+  config.expire_s = 2.0;
+  tasks::Topic<msg::People> source;
+  tasks::Topic<msg::People> out;
+  PeopleRelayTask relay(config, source, out);
+  mem::BudgetArena arena{"people", 1024};
+  ASSERT_TRUE(relay.init(arena));
+  tasks::Sample<msg::People> got;
+
+  relay.step({0, 0, 0});
+  ASSERT_TRUE(out.read(got));
+  EXPECT_EQ(got.value.count, 0u) << "nothing published yet: nobody";
+
+  msg::People truth;
+  truth.count = 2;
+  truth.items[0] = {.id = 7, .x_m = 1.0, .y_m = 2.0, .vx_m_s = 1.2, .vy_m_s = 0.0, .width_m = 0.6};
+  truth.items[0].state = msg::PersonState::dynamic_person;
+  truth.items[1] = {.id = 9, .x_m = 3.0, .y_m = -1.0, .width_m = 0.2};
+  source.publish(truth, hal::millis(100));
+  mem::testing::AllocationScope scope;
+  relay.step({hal::millis(150), hal::millis(150), 1});
+  EXPECT_EQ(scope.allocations(), 0u);
+  ASSERT_TRUE(out.read(got));
+  EXPECT_EQ(got.stamp_ns, hal::millis(150));
+  ASSERT_EQ(got.value.count, 2u);
+  EXPECT_EQ(got.value.items[0].id, 7u);
+  EXPECT_DOUBLE_EQ(got.value.items[0].vx_m_s, 1.2);
+  EXPECT_EQ(got.value.items[0].state, msg::PersonState::dynamic_person);
+  EXPECT_DOUBLE_EQ(got.value.items[0].cage_radius_m, 0.3 + 0.5);
+  EXPECT_DOUBLE_EQ(got.value.items[1].cage_radius_m, 0.2 + 0.5) << "at least min_width_m wide";
+
+  relay.step({hal::millis(2200), hal::millis(2200), 2});
+  ASSERT_TRUE(out.read(got));
+  EXPECT_EQ(got.value.count, 0u) << "a list older than expire_s is nobody";
+
+  PersonTrackerConfig bad = config;
+  bad.expire_s = 0.0;
+  PeopleRelayTask refused(bad, source, out);
+  EXPECT_FALSE(refused.init(arena));
 }
 
 }  // namespace

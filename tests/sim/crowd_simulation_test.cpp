@@ -7,8 +7,11 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <span>
 
 #include "sen3bot/crowd/crowd.hpp"
+#include "sen3bot/detector/protocol.hpp"
 #include "sim_rig.hpp"
 
 namespace sen3bot::sim {
@@ -89,6 +92,83 @@ TEST(CrowdSimulation, ABlindWalkerWalksIntoTheRobotAndTheContactIsNotTheRobots) 
   EXPECT_GE(w.contacts, 1u);
   EXPECT_EQ(w.moving_contacts, 0u);  // the robot stood still
   EXPECT_LT(w.nearest_person_m, 0.2);
+}
+
+TEST(CrowdSimulation, TheCameraSeesTheCrowdsWalkersAsPeople) {
+  testing::SimRig rig = testing::load_sim_rig(SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml");
+  rig.world.detector.enabled = true;
+  rig.world.detector.miss_rate = 0.0;
+  rig.world.detector.false_positive_rate = 0.0;
+  auto config = std::make_shared<crowd::CrowdConfig>();
+  config->behaviour = crowd::Behaviour::blind;
+  crowd::Person walker;  // ahead of the robot, walking away from it
+  walker.start = {3.0, 3.2};
+  walker.goals[0] = {8.0, 3.2};
+  walker.goal_count = 1;
+  config->people.push_back(walker);
+  rig.world.crowd = config;
+  rig.make_board();
+  ASSERT_TRUE(rig.board->start());
+  rig.clock().advance_to(hal::millis(1000));
+  std::size_t frames = 0, boxes = 0;
+  std::array<std::uint8_t, detector::kMaxDatagramBytes> bytes{};
+  for (;;) {
+    Result<std::optional<std::size_t>> got = rig.board->detector().receive(bytes);
+    ASSERT_TRUE(got);
+    if (!got->has_value()) break;
+    detector::Datagram d;
+    detector::Reject why{};
+    ASSERT_TRUE(detector::decode(std::span<const std::uint8_t>(bytes.data(), **got), d, why));
+    ++frames;
+    boxes += d.count;
+  }
+  rig.board->stop();
+  EXPECT_GE(frames, 8u);  // 10 Hz, 0.1 s latency
+  EXPECT_EQ(boxes, frames) << "one box per frame: the walker";
+}
+
+TEST(CrowdSimulation, TheTruePeopleAreTheNearestWalkersWithTheirVelocities) {
+  testing::SimRig rig = testing::load_sim_rig(SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml");
+  auto config = std::make_shared<crowd::CrowdConfig>();
+  config->behaviour = crowd::Behaviour::blind;
+  // 20 people standing in a row away from the robot at (1, 3) m, the nearest first; one walking.
+  for (int i = 0; i < 20; ++i) {
+    crowd::Person p;
+    p.start = {1.6 + 0.4 * i, i % 2 == 0 ? 1.0 : 5.0};
+    p.goals[0] = p.start;
+    p.goal_count = 1;
+    config->people.push_back(p);
+  }
+  config->people[0].start = {1.6, 2.0};
+  config->people[0].goals[0] = {9.0, 2.0};
+  rig.world.crowd = config;
+  rig.make_board();
+  rig.board->publish_true_people();
+  ASSERT_TRUE(rig.board->start());
+  rig.clock().advance_to(hal::millis(1000));
+  tasks::Sample<msg::People> people;
+  ASSERT_TRUE(rig.board->true_people().read(people));
+  rig.board->stop();
+  ASSERT_EQ(people.value.count, msg::People::kMax);
+  const std::size_t first = rig.board->simulation().first_crowd_mover();
+  double last_d = 0.0;
+  for (std::size_t k = 0; k < people.value.count; ++k) {
+    const msg::TrackedPerson& p = people.value.items[k];
+    const std::size_t mover = p.id - 1;
+    ASSERT_GE(mover, first);
+    EXPECT_LT(mover - first, msg::People::kMax) << "the 16 nearest of 20";
+    const double d = std::hypot(p.x_m - 1.0, p.y_m - 3.0);
+    EXPECT_GE(d, last_d) << "nearest first";
+    last_d = d;
+    EXPECT_NEAR(p.width_m, 2 * config->people[mover - first].radius_m, 1e-9);
+    EXPECT_EQ(p.last_seen_ns, people.stamp_ns);
+    if (mover == first) {
+      EXPECT_GT(p.vx_m_s, 0.3) << "walking away, +x";
+      EXPECT_EQ(p.state, msg::PersonState::dynamic_person);
+    } else {
+      EXPECT_EQ(p.state, msg::PersonState::static_person);
+    }
+  }
 }
 
 TEST(CrowdSimulation, ABadCrowdIsAClearErrorOfTheSimulation) {
