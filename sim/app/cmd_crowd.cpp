@@ -33,6 +33,8 @@
 #include "sen3bot/crowd/recording.hpp"
 #include "sen3bot/crowd/scene.hpp"
 #include "sen3bot/msg/geometry.hpp"
+#include "sen3bot/nav/map.hpp"
+#include "sen3bot/sim/report/case_figure.hpp"
 #include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
@@ -157,9 +159,45 @@ SimulationConfig run_world(const Plan& plan, Variant v, std::uint64_t seed, cons
 
 // --- One run -------------------------------------------------------------------------------------
 
+// One run as the sample figure draws it (times from the robot's setting off).
+struct Trace {
+  std::vector<report::RobotAt> robot;
+  std::vector<report::MoverTrack> people;
+  std::vector<report::Contact> contacts;
+  std::vector<double> times_s;                // per sample
+  std::vector<std::vector<msg::Point2D>> at;  // per sample, every person's place (NaN: absent)
+  double start_s = 0;                         // the simulated time the robot set off
+};
+
+void record(Trace& trace, const crowd::RunStep& step, double t_s) {
+  trace.robot.push_back({t_s, step.robot});
+  trace.times_s.push_back(t_s);
+  std::vector<msg::Point2D>& at = trace.at.emplace_back(step.people.size(), msg::Point2D{NAN, NAN});
+  double nearest_m = std::numeric_limits<double>::infinity();
+  msg::Point2D nearest{step.robot.x_m, step.robot.y_m};
+  for (std::size_t i = 0; i < step.people.size(); ++i) {
+    const crowd::PersonTruth& p = step.people[i];
+    if (!p.visible) continue;
+    report::MoverTrack& m = trace.people[i];
+    m.path.push_back(p.position);
+    m.times_s.push_back(t_s);
+    m.size_m = 2 * p.radius_m;
+    at[i] = p.position;
+    const double d = std::hypot(p.position.x_m - step.robot.x_m, p.position.y_m - step.robot.y_m);
+    if (d < nearest_m) {
+      nearest_m = d;
+      nearest = p.position;
+    }
+  }
+  // A contact is drawn halfway between the robot and the person it touched.
+  if (step.contact_started)
+    trace.contacts.push_back({{(step.robot.x_m + nearest.x_m) / 2, (step.robot.y_m + nearest.y_m) / 2}, t_s, step.contact_by_robot});
+}
+
 // A whole firmware on the scene until the mission ends or the run's limit, in 50 ms slices, a
 // RunStep to the meter after each once the robot has set off; quiet.
-void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, CrowdRun& r) {
+void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, CrowdRun& r,
+                 Trace* trace = nullptr) {
   const auto wall_start = std::chrono::steady_clock::now();
   const double free_length_m =
       std::hypot(scene.robot_goal.x_m - scene.robot_start.x_m, scene.robot_goal.y_m - scene.robot_start.y_m);
@@ -192,6 +230,13 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
       people.resize(count);
       inside.assign(count, false);
       robot_inside.assign(count, false);
+      if (trace != nullptr) {
+        trace->people.resize(count);
+        for (report::MoverTrack& m : trace->people) {
+          m.person = true;
+          m.size_m = 0;
+        }
+      }
       sized = true;
     }
     const GroundTruth& truth = sim.truth();
@@ -205,6 +250,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
       }
       started_driving = true;
       start_s = sim_s;
+      if (trace != nullptr) trace->start_s = sim_s;
       setup.start_time_s = start_s;
       meter.start(setup);
     }
@@ -242,6 +288,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
     step.contact_by_robot = truth.moving_contacts > last_moving;
     step.robot_in_cage = in_cage;
     meter.observe(step);
+    if (trace != nullptr) record(*trace, step, sim_s - start_s);
     last_contacts = truth.contacts;
     last_moving = truth.moving_contacts;
     last_theta = pose.theta_rad;
@@ -266,7 +313,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
     set_error(r, error);
 }
 
-CrowdRun run_job(const Plan& plan, std::size_t index) {
+CrowdRun run_job(const Plan& plan, std::size_t index, Trace* trace = nullptr) {
   const Job& job = plan.jobs[index];
   CrowdRun r;
   r.seed = job.seed;
@@ -278,8 +325,70 @@ CrowdRun run_job(const Plan& plan, std::size_t index) {
     return r;
   }
   const FirmwareConfig config = run_config(plan, job.variant, *scene);
-  run_mission(config, run_world(plan, job.variant, job.seed, *scene, config.navigation.mission.start_delay_s), *scene, r);
+  run_mission(config, run_world(plan, job.variant, job.seed, *scene, config.navigation.mission.start_delay_s), *scene, r,
+              trace);
   return r;
+}
+
+// The sample run (run again with a trace) as a figure: the people's tracks coloured by time, the
+// robot's path and footprint, the contacts and the closest approach.
+bool write_sample_figure(const Plan& plan, std::size_t job_index, const std::string& path, const std::string& scene_text,
+                         std::FILE* err) {
+  Trace trace;
+  const CrowdRun r = run_job(plan, job_index, &trace);
+  if (!r.ran) {
+    std::fprintf(err, "%s: the sample run: %s\n", kName, r.error);
+    return false;
+  }
+  Result<nav::OccupancyMap> map = nav::load_map(plan.map_path);
+  Result<crowd::Scene> scene = make_run_scene(plan, r.seed);
+  if (!map || !scene) {
+    std::fprintf(err, "%s: the sample run's map or scene: %s\n", kName, (!map ? map.error() : scene.error()).c_str());
+    return false;
+  }
+  const crowd::RunMetrics& m = r.metrics;
+  report::CaseFigure f;
+  char text[240];
+  std::snprintf(text, sizeof text, "crowd sample run: %s, seed %llu, variant %s", scene_text.c_str(),
+                static_cast<unsigned long long>(r.seed), name_of(r.variant));
+  f.title = text;
+  f.description = "the run of this variant with the closest approach to a person; times in s since the robot set off";
+  if (m.reached_goal)
+    std::snprintf(text, sizeof text, "goal reached in %.1f s; %u contact(s), %u by the robot; closest %.2f m; %u cage entr%s",
+                  m.time_to_goal_s, m.contacts_any, m.contacts_by_robot, m.min_distance_m, m.cage_entries,
+                  m.cage_entries == 1 ? "y" : "ies");
+  else
+    std::snprintf(text, sizeof text, "%s; %u contact(s), %u by the robot; closest %.2f m; %u cage entr%s",
+                  m.timeout ? "timed out" : "goal not reached", m.contacts_any, m.contacts_by_robot, m.min_distance_m,
+                  m.cage_entries, m.cage_entries == 1 ? "y" : "ies");
+  f.result = text;
+  f.passed = m.success;
+  f.map = &*map;
+  f.start = scene->robot_start;
+  f.goals = {{scene->robot_goal.x_m, scene->robot_goal.y_m}};
+  for (const report::RobotAt& a : trace.robot) f.driven.push_back({a.pose.x_m, a.pose.y_m});
+  f.robot = report::robot_instants(trace.robot, 2.0);
+  for (report::MoverTrack& p : trace.people)
+    if (!p.path.empty()) f.movers.push_back(std::move(p));
+  f.contacts = trace.contacts;
+  f.time_scale_s = trace.times_s.empty() ? 0.0 : std::max(1.0, trace.times_s.back());
+  // The closest approach: the sample at its time, the person nearest the robot then.
+  if (std::isfinite(m.min_distance_m) && m.min_distance_time_s >= 0 && !trace.times_s.empty()) {
+    const double t = m.min_distance_time_s - trace.start_s;
+    std::size_t k = 0;
+    for (std::size_t j = 1; j < trace.times_s.size(); ++j)
+      if (std::abs(trace.times_s[j] - t) < std::abs(trace.times_s[k] - t)) k = j;
+    const msg::Pose2D robot = trace.robot[k].pose;
+    double best = std::numeric_limits<double>::infinity();
+    for (const msg::Point2D& p : trace.at[k]) {
+      const double d = std::hypot(p.x_m - robot.x_m, p.y_m - robot.y_m);
+      if (std::isfinite(d) && d < best) {
+        best = d;
+        f.closest = {trace.times_s[k], {robot.x_m, robot.y_m}, p, m.min_distance_m};
+      }
+    }
+  }
+  return report::draw_case_figure(f).write_png(path);
 }
 
 // --- The command line ----------------------------------------------------------------------------
@@ -750,7 +859,23 @@ int crowd_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* e
       std::fprintf(err, "%s: cannot write %s\n", kName, box_png.c_str());
       return 1;
     }
-    std::fprintf(out, "report: %s (report.json, runs.csv, time_to_goal.png, the scene's map)\n", o.report_dir.c_str());
+    // The sample: the first variant's run that came closest to a person (the first such seed).
+    const VariantResults& sampled = by_variant.front();
+    const CrowdRun* sample = nullptr;
+    for (const CrowdRun* r : sampled.runs)
+      if (sample == nullptr || r->metrics.min_distance_m < sample->metrics.min_distance_m) sample = r;
+    const std::string sample_png = o.report_dir + "/sample_run.png";
+    if (sample != nullptr) {
+      std::fprintf(out, "the sample run (seed %llu, %s) again, for its figure\n", static_cast<unsigned long long>(sample->seed),
+                   name_of(sample->variant));
+      std::fflush(out);
+      if (!write_sample_figure(plan, sample->job, sample_png, scene_text, err)) {
+        std::fprintf(err, "%s: cannot write %s\n", kName, sample_png.c_str());
+        return 1;
+      }
+    }
+    std::fprintf(out, "report: %s (report.json, runs.csv, time_to_goal.png, sample_run.png, the scene's map)\n",
+                 o.report_dir.c_str());
   }
   std::fflush(out);
   return 0;

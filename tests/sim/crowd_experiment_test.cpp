@@ -49,8 +49,8 @@ TEST(CrowdExperiment, BadArgumentsAreOneLineErrors) {
       {{"crowd", "--scene", "circle", "--runs", "2", "--jobs", "0"}, "--jobs: expected"},
       {{"crowd", "--scene", "circle", "--runs", "2", "--behaviour", "polite"}, "--behaviour: expected"},
       {{"crowd", "--scene", "circle", "--runs", "2", "--behaviour", "recorded"}, "needs --trajectories"},
-      {{"crowd", "--scene", "circle", "--runs", "2", "--variant", "perfect-perception"},
-       "no variant named 'perfect-perception' (default, no-people)"},
+      {{"crowd", "--scene", "circle", "--runs", "2", "--variant", "clairvoyant"},
+       "no variant named 'clairvoyant' (default, no-people, perfect-perception)"},
       {{"crowd", "--scene", "circle", "--runs", "2", "--people", "100"}, "at most 64"},
       {{"crowd", "--scene", "circle", "--runs", "2", "--fast"}, "unknown or incomplete option '--fast'"},
       {{"crowd", "--trajectories", kRecording, "--runs", "2", "--people", "3"}, "--people is for the simulated scenes"},
@@ -72,15 +72,17 @@ TEST(CrowdExperiment, RunsDoNotDependOnTheWorkersAndTheReportParses) {
       {"crowd", "--scene", "circle", "--people", "2", "--runs", "2", "--jobs", "2", "--config", kCrowdConfig, "--report", two});
   ASSERT_EQ(a.code, 0) << a.err;
   ASSERT_EQ(b.code, 0) << b.err;
-  EXPECT_NE(a.out.find("4/4 runs"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("6/6 runs"), std::string::npos) << a.out;
   EXPECT_NE(a.out.find("| success (95 % Wilson interval)"), std::string::npos) << a.out;
   EXPECT_NE(a.out.find("| no-people"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("| perfect-perception"), std::string::npos) << a.out;
   const std::string csv_a = read_file(one + "/runs.csv"), csv_b = read_file(two + "/runs.csv");
   ASSERT_FALSE(csv_a.empty());
   EXPECT_EQ(csv_a, csv_b);
-  EXPECT_EQ(std::count(csv_a.begin(), csv_a.end(), '\n'), 5) << csv_a;  // header + 2 runs x 2 variants
+  EXPECT_EQ(std::count(csv_a.begin(), csv_a.end(), '\n'), 7) << csv_a;  // header + 2 runs x 3 variants
   EXPECT_EQ(csv_a.rfind("variant,seed,", 0), 0u) << csv_a;
   EXPECT_GT(file_size(one + "/time_to_goal.png"), 1000);
+  EXPECT_GT(file_size(one + "/sample_run.png"), 1000);
   EXPECT_GT(file_size(one + "/circle.yaml"), 0);
 
   const std::string text = read_file(one + "/report.json");
@@ -92,8 +94,8 @@ TEST(CrowdExperiment, RunsDoNotDependOnTheWorkersAndTheReportParses) {
   EXPECT_EQ(*root.find("runs").number(), 2.0);
   EXPECT_EQ(*root.find("people").number(), 2.0);
   const json::Value variants = root.find("variants");
-  ASSERT_EQ(variants.size(), 2u);
-  for (const char* name : {"default", "no-people"}) {
+  ASSERT_EQ(variants.size(), 3u);
+  for (const char* name : {"default", "no-people", "perfect-perception"}) {
     const json::Value v = variants.find(name);
     ASSERT_TRUE(v.is(json::Type::object)) << name;
     const json::Value aggregate = v.find("aggregate");

@@ -1,6 +1,7 @@
 #include "sen3bot/sim/report/case_figure.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -28,7 +29,7 @@ constexpr double kDashPx = 8;
 constexpr double kGapPx = 7;
 
 std::string format(const char* fmt, double v) {
-  char buf[32];
+  char buf[96];
   std::snprintf(buf, sizeof buf, fmt, v);
   return buf;
 }
@@ -141,6 +142,10 @@ bool moves(const MoverTrack& m) {
 }
 
 // Paper for cost 0 to kCost for the highest graded cost.
+bool timed(const CaseFigure& f, const MoverTrack& m) {
+  return f.time_scale_s > 0 && !m.times_s.empty() && m.times_s.size() == m.path.size();
+}
+
 Rgb cost_shade(std::uint8_t cost) {
   const double a = 0.15 + 0.85 * std::min(1.0, cost / 252.0);
   auto mix = [a](std::uint8_t paper, std::uint8_t full) {
@@ -275,10 +280,22 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
                        [](Canvas& c, Px p) {
                          c.fill_rect(static_cast<int>(p.x) - 6, static_cast<int>(p.y) - 6, 12, 12, kBox);
                        }});
-  if (std::any_of(f.movers.begin(), f.movers.end(), [](const MoverTrack& m) { return m.person; }))
+  if (std::any_of(f.movers.begin(), f.movers.end(), [&f](const MoverTrack& m) { return m.person && !timed(f, m); }))
     entries.push_back({"person's track, and at t (s)", [](Canvas& c, Px p) {
                          c.line({p.x - 12, p.y}, {p.x + 2, p.y}, kPerson, 2);
                          c.ring({p.x + 7, p.y}, 6, kPerson, 2);
+                       }});
+  if (std::any_of(f.movers.begin(), f.movers.end(), [&f](const MoverTrack& m) { return m.person && timed(f, m); }))
+    entries.push_back({format("person's track by time: 0 to %.0f s", f.time_scale_s), [&f](Canvas& c, Px p) {
+                         for (int i = 0; i < 8; ++i)
+                           c.line({p.x - 14 + 3.5 * i, p.y}, {p.x - 10.5 + 3.5 * i, p.y},
+                                  time_colour((i + 0.5) / 8 * f.time_scale_s, f.time_scale_s), 4);
+                       }});
+  if (f.closest.t_s >= 0)
+    entries.push_back({format("closest approach: %.2f m body to body", f.closest.distance_m), [](Canvas& c, Px p) {
+                         const Px pts[] = {{p.x - 12, p.y}, {p.x + 12, p.y}};
+                         c.dashed_polyline(pts, kClosest, 2, 4, 3);
+                         c.disc({p.x + 12, p.y}, 3, kClosest);
                        }});
   if (!f.contacts.empty())
     entries.push_back({"contact at t (s), bold: by the robot", [](Canvas& c, Px p) { draw_cross(c, p, 5, kContact, 3); }});
@@ -370,8 +387,14 @@ Canvas draw_case_figure(const CaseFigure& f) {
   for (const MoverTrack& m : f.movers) {
     if (m.path.empty()) continue;
     const double half_px = m.size_m / 2 * view.px_per_m;
-    if (m.person) {
+    if (m.person && timed(f, m)) {
+      for (std::size_t i = 1; i < m.path.size(); ++i)
+        canvas.line(view(m.path[i - 1].x_m, m.path[i - 1].y_m), view(m.path[i].x_m, m.path[i].y_m),
+                    time_colour(m.times_s[i], f.time_scale_s), 2);
+    } else if (m.person) {
       canvas.polyline(to_pixels(view, m.path), kPerson, 2);
+    }
+    if (m.person) {
       for (const TimedPoint& p : m.marks) {
         const Px c = view(p.at.x_m, p.at.y_m);
         canvas.ring(c, half_px, kPerson, 2);
@@ -415,6 +438,12 @@ Canvas draw_case_figure(const CaseFigure& f) {
     const Px p = view(c.at.x_m, c.at.y_m);
     draw_cross(canvas, p, 6, kContact, c.moving ? 4 : 2);
   }
+  if (f.closest.t_s >= 0) {
+    const Px pts[] = {view(f.closest.robot.x_m, f.closest.robot.y_m), view(f.closest.person.x_m, f.closest.person.y_m)};
+    canvas.dashed_polyline(pts, kClosest, 2, 4, 3);
+    canvas.disc(pts[0], 3, kClosest);
+    canvas.disc(pts[1], 3, kClosest);
+  }
   for (std::size_t g = 0; g < f.goals.size(); ++g) {
     const Px p = view(f.goals[g].x_m, f.goals[g].y_m);
     draw_goal(canvas, p);
@@ -429,6 +458,10 @@ Canvas draw_case_figure(const CaseFigure& f) {
   for (const Contact& c : f.contacts) {
     const Px p = view(c.at.x_m, c.at.y_m);
     labels.place(format("%.1f", c.t_s), {{p.x - 22, p.y}, {p.x + 22, p.y}, {p.x, p.y - 16}, {p.x, p.y + 16}}, kContact);
+  }
+  if (f.closest.t_s >= 0) {
+    const Px p = view(f.closest.person.x_m, f.closest.person.y_m);
+    labels.place(format("%.1f", f.closest.t_s), {{p.x + 24, p.y}, {p.x - 24, p.y}, {p.x, p.y - 18}, {p.x, p.y + 18}}, kClosest);
   }
   const double o = f.footprint.circumscribed_radius_m() + 9 / view.px_per_m;
   for (const RobotAt& r : f.robot) {
@@ -481,6 +514,18 @@ Canvas draw_case_figure(const CaseFigure& f) {
   canvas.text({static_cast<double>(legend_x), y + 8}, "scale", kInk, kLineSize);
   draw_scale_bar(canvas, legend_x + 52, static_cast<int>(y) + 2, view.px_per_m);
   return canvas;
+}
+
+Rgb time_colour(double t_s, double time_scale_s) noexcept {
+  // A perceptually ordered ramp (after viridis' ends and middle), readable on white.
+  constexpr std::array<Rgb, 5> kRamp{{{68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {220, 200, 30}}};
+  const double u = time_scale_s > 0 ? std::clamp(t_s / time_scale_s, 0.0, 1.0) * (kRamp.size() - 1) : 0.0;
+  const std::size_t i = std::min<std::size_t>(static_cast<std::size_t>(u), kRamp.size() - 2);
+  const double w = u - static_cast<double>(i);
+  const auto mix = [w](std::uint8_t a, std::uint8_t b) {
+    return static_cast<std::uint8_t>(std::lround(a + w * (static_cast<double>(b) - a)));
+  };
+  return {mix(kRamp[i].r, kRamp[i + 1].r), mix(kRamp[i].g, kRamp[i + 1].g), mix(kRamp[i].b, kRamp[i + 1].b)};
 }
 
 std::vector<RobotAt> robot_instants(std::span<const RobotAt> poses, double spacing_m) {

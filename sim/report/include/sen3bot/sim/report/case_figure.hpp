@@ -28,6 +28,9 @@ struct TimedPoint {
 
 struct MoverTrack {
   std::vector<msg::Point2D> path;  // where it was while it could be seen, in time order
+  // When it was at each point of `path` (empty or of path's size): with CaseFigure::time_scale_s
+  // a person's track is coloured by time.
+  std::vector<double> times_s;
   std::vector<TimedPoint> marks;   // a person drawn at these instants
   double size_m = 0.4;
   double appear_s = 0;  // a box that appears later is labelled with the time
@@ -85,6 +88,14 @@ struct CageMark {
   double t_s = 0;
 };
 
+// The run's closest approach: the robot and the person nearest it, body to body.
+struct Closest {
+  double t_s = -1;  // < 0: none drawn
+  msg::Point2D robot;
+  msg::Point2D person;
+  double distance_m = 0;
+};
+
 struct CaseFigure {
   std::string title;        // "case 2/3: obstacle-before-planning"
   std::string description;  // what the case is
@@ -107,7 +118,14 @@ struct CaseFigure {
   msg::Pose2D start;
   std::vector<msg::Point2D> goals;
   Moment moment;
+  Closest closest;
+  // > 0: people's tracks with times are coloured from 0 to this many seconds (a colour bar in
+  // the legend), instead of in one colour.
+  double time_scale_s = 0;
 };
+
+// The colour of time t on a time_scale_s scale: dark blue through green to yellow.
+[[nodiscard]] Rgb time_colour(double t_s, double time_scale_s) noexcept;
 
 // The colours, shared by the drawing and its legend (and the tests).
 namespace colours {
@@ -135,6 +153,7 @@ inline constexpr Rgb kCurve{170, 0, 110};       // the safe curve V
 inline constexpr Rgb kField{150, 150, 150};     // the SGP field's arrows
 inline constexpr Rgb kCage{230, 60, 60};         // a person's virtual cage (published)
 inline constexpr Rgb kReplanned{0, 190, 230};    // waypoints of an online re-plan
+inline constexpr Rgb kClosest{0, 90, 200};       // the closest approach
 }  // namespace colours
 
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
