@@ -15,6 +15,7 @@
 #include <cstring>
 #include <span>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -25,6 +26,7 @@
 #include "firmware.hpp"
 #include "report_figure.hpp"
 #include "runner.hpp"
+#include "sen3bot/crowd/crowd.hpp"
 #include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
@@ -337,6 +339,40 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
   return std::fclose(f) == 0;
 }
 
+// The case's walkers (people walking a two-point path back and forth) as a crowd's social or
+// blind walkers: each from where its script would be at t = 0, heading where it would head, at
+// its scripted speed, round the same route for ever. The crowd knows no walls of the map: the
+// scenarios' walks run down open aisles.
+void walkers_to_crowd(SimulationConfig& world, crowd::Behaviour behaviour) {
+  auto people = std::make_shared<crowd::CrowdConfig>();
+  people->behaviour = behaviour;
+  std::vector<world::MoverScript> kept;
+  for (const world::MoverScript& m : world.movers) {
+    if (!m.person || m.path.size() != 2 || !(m.speed_m_s > 0) || m.appear_time_s > 0) {
+      kept.push_back(m);
+      continue;
+    }
+    const msg::Point2D a = m.path[0], b = m.path[1];
+    const double length = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+    const double along = length > 0 ? std::fmod(std::max(0.0, m.phase_m), 2.0 * length) : 0.0;
+    const bool out = along < length;  // on the way from a to b
+    const double u = length > 0 ? (out ? along : along - length) / length : 0.0;
+    const msg::Point2D from = out ? a : b, to = out ? b : a;
+    crowd::Person p;
+    p.start = {from.x_m + u * (to.x_m - from.x_m), from.y_m + u * (to.y_m - from.y_m)};
+    p.goals[0] = to;
+    p.goals[1] = from;
+    p.goal_count = 2;
+    p.loop = true;
+    p.desired_speed_m_s = m.speed_m_s;
+    p.radius_m = m.size_m / 2;
+    p.appear_s = m.start_time_s;
+    people->people.push_back(p);
+  }
+  world.movers = std::move(kept);
+  if (!people->people.empty()) world.crowd = std::move(people);
+}
+
 // One case: a whole firmware over the simulated robot, until the mission ends or times out.
 int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool realtime, const std::string& label,
              const std::string& report_dir, CaseResult& result, view::Server* view, std::FILE* out, std::FILE* err) {
@@ -471,29 +507,10 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     result.boxes_located = people->fusion().count(nav::BoxVerdict::located);
     if (const nav::OsgpTrigger* osgp = fw.planner()->osgp(); osgp != nullptr)
       result.replans_triggered = osgp->count(nav::OsgpOutcome::triggered);
-    // Cage entries: the true poses (every 0.25 s) against the true people, replayed.
-    world::World& w = board.simulation().world();
-    const SimulationConfig& sim = board.simulation().config();
-    // An entry is the robot's when its own motion since the last pose closed the distance (as
-    // a contact counts only while the robot moves); a walker stepping up to it is the walker's.
-    std::vector<bool> inside(sim.movers.size(), false);
-    const std::span<const TimedPose> poses = board.referee().poses();
-    for (std::size_t k = 0; k < poses.size(); ++k) {
-      const TimedPose& p = poses[k];
-      w.set_time(p.t_s);
-      for (std::size_t i = 0; i < sim.movers.size() && i < w.mover_count(); ++i) {
-        if (!sim.movers[i].person || !w.mover_visible(i)) continue;
-        const msg::Point2D at = w.mover_position(i);
-        const double d = std::hypot(at.x_m - p.pose.x_m, at.y_m - p.pose.y_m);
-        const bool in = d < judged_cage_reach_m(sim.movers[i].size_m / 2);
-        if (in && !inside[i]) {
-          const msg::Pose2D& before = k > 0 ? poses[k - 1].pose : p.pose;
-          const bool robot_closed = std::hypot(at.x_m - before.x_m, at.y_m - before.y_m) - d > 0.01;
-          ++(robot_closed ? result.cage_entries : result.cage_entries_by_person);
-        }
-        inside[i] = in;
-      }
-    }
+    // Cage entries, judged by the simulation against the true people as they moved (scripted or
+    // walking a crowd model).
+    result.cage_entries = board.simulation().truth().cage_entries;
+    result.cage_entries_by_person = board.simulation().truth().cage_entries_by_person;
     result.person_errors = summarize(board.referee().person_errors(), board.referee().report().false_people);
     std::fprintf(out, "  people: %llu boxes placed, %llu online re-plans, %llu cage entries (and %llu by a person)\n",
                  static_cast<unsigned long long>(result.boxes_located),
@@ -531,6 +548,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
 constexpr const char* kSimUsage =
     "usage: sen3bot-sim sim --list\n"
     "       sen3bot-sim sim --scenario NAME [--case NAME] [--config FILE] [--realtime] [--seed N] [--report DIR]\n"
+    "                       [--walkers scripted|social|blind]\n"
     "                       [--view [--view-port P] [--view-address A] [--view-token T] [--view-hold S]]\n"
     "       sen3bot-sim sim --scenario cobot [--attempts N] [--case NAME] [--config FILE] [--seed N] [--report DIR]\n";
 
@@ -588,6 +606,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   bool view = false;
   view::ServerConfig view_server;
   double view_hold_s = 0;
+  std::optional<crowd::Behaviour> walkers;  // none: the scripted walkers
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -608,6 +627,14 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       }
     } else if (arg == "--case" && has_value) {
       only_case = argv[++i];
+    } else if (arg == "--walkers" && has_value) {
+      const std::string_view w = argv[++i];
+      if (w == "social") walkers = crowd::Behaviour::social;
+      else if (w == "blind") walkers = crowd::Behaviour::blind;
+      else if (w != "scripted") {
+        std::fprintf(err, "sen3bot-sim sim: --walkers: expected scripted, social or blind, got '%s'\n", argv[i]);
+        return 2;
+      }
     } else if (arg == "--view") {
       view = true;
     } else if (arg == "--view-port" && has_value) {
@@ -707,8 +734,9 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     shaped.view.task.server = view_server;
     if (Status s = start_view(shaped, view_server_owned, out, err); !s) return 2;
   }
-  std::fprintf(out, "scenario %s (%zu cases, %s time%s)\n", scenario->name, scenario->cases.size(),
-               realtime ? "real" : "lockstep simulated", have_seed ? "" : ", seed from the configuration");
+  std::fprintf(out, "scenario %s (%zu cases, %s time%s%s%s)\n", scenario->name, scenario->cases.size(),
+               realtime ? "real" : "lockstep simulated", have_seed ? "" : ", seed from the configuration",
+               walkers ? ", walkers: " : "", walkers ? crowd::to_string(*walkers) : "");
   std::vector<CaseResult> results;
   int rc = 0;
   for (std::size_t i = 0; i < scenario->cases.size(); ++i) {
@@ -749,6 +777,7 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       const double u = std::fmod(static_cast<double>(phase_seed) * 0.6180339887 + static_cast<double>(m) * 0.4142135624, 1.0);
       mover.phase_m = u * 2.0 * length;  // a ping-pong cycle is there and back
     }
+    if (walkers) walkers_to_crowd(world, *walkers);
     // Carrying the robot off tests recovery: on at AMCL's usual rates if the configuration
     // leaves it off (it is off by default; docs/navigation.md says why).
     if (c.kidnap.time_s >= 0 && !(config.navigation.mcl.recovery_alpha_slow > 0 && config.navigation.mcl.recovery_alpha_fast > 0)) {
@@ -769,10 +798,10 @@ int sim_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       config.tasks["people"].arena_bytes = 64 * 1024;
       world.detector.enabled = true;
       // Walking people are also moving obstacles to the laser: the layer predicts their way.
-      const bool walkers = std::any_of(c.movers.begin(), c.movers.end(), [](const world::MoverScript& m) {
+      const bool walking = std::any_of(c.movers.begin(), c.movers.end(), [](const world::MoverScript& m) {
         return m.person && m.path.size() > 1 && m.speed_m_s > 0;
       });
-      if (walkers) config.navigation.dynamic_obstacles.enabled = true;
+      if (walking) config.navigation.dynamic_obstacles.enabled = true;
     }
     if (scenario->without_movers_layer) config.navigation.dynamic_obstacles.enabled = false;
     if (scenario->safe_curve[0] != '\0') {

@@ -98,6 +98,24 @@ report::CaseFigure case_figure(std::string title, std::string description, const
     }
   }
   world.set_time(t1);
+  // The crowd's walkers, moved by their model rather than a script: from the referee's record.
+  const std::size_t first_walker = board.simulation().first_crowd_mover();
+  for (std::size_t i = first_walker; i < world.mover_count(); ++i) {
+    report::MoverTrack& m = f.movers.emplace_back();
+    m.size_m = world.mover_script(i).size_m;
+    m.person = true;
+    std::size_t next_robot = 0;
+    for (const PersonAt& p : referee.person_path()) {
+      if (p.mover != i) continue;
+      m.path.push_back(p.at);
+      for (; next_robot < f.robot.size() && f.robot[next_robot].t_s <= p.t_s + 1e-9; ++next_robot) {
+        const msg::Pose2D& r = f.robot[next_robot].pose;
+        if (std::abs(f.robot[next_robot].t_s - p.t_s) < 1e-6 && std::hypot(p.at.x_m - r.x_m, p.at.y_m - r.y_m) <= kPersonNearM)
+          m.marks.push_back({p.t_s, p.at});
+      }
+    }
+    if (m.path.empty()) f.movers.pop_back();
+  }
   return f;
 }
 

@@ -5,6 +5,7 @@
 
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav/scan.hpp"
+#include "sen3bot/sim/referee.hpp"
 
 namespace sen3bot::sim {
 
@@ -100,6 +101,7 @@ Status Simulation::open(const nav::OccupancyMap& map) {
     }
   }
   world_->set_time(0.0);
+  in_cage_.assign(world_->mover_count(), false);
   if (world_->collides(config_.start_pose, config_.footprint))
     return Error::format(Errc::config, "simulation: the start pose (%.2f, %.2f) m overlaps an obstacle of %s",
                          config_.start_pose.x_m, config_.start_pose.y_m, config_.map_path.c_str());
@@ -185,7 +187,10 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
     if (!world_->mover_visible(i) || !world_->mover_script(i).person) continue;
     const nav::Point2D p = world_->mover_position(i);
     nearest = std::min(nearest, std::hypot(p.x_m - pose.x_m, p.y_m - pose.y_m));
-    if (truth_.people_count < GroundTruth::kMaxPeople) truth_.people[truth_.people_count++] = p;
+    if (truth_.people_count < GroundTruth::kMaxPeople) {
+      truth_.people_movers[truth_.people_count] = static_cast<std::uint32_t>(i);
+      truth_.people[truth_.people_count++] = p;
+    }
   }
   truth_.nearest_person_m = nearest;
   const bool contact = world_->collides(pose, config_.footprint);
@@ -196,6 +201,31 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
     if (world_->robot_closing(pose, config_.footprint, truth_.speed_m_s, kMovingSpeedM_s)) ++truth_.moving_contacts;
   }
   truth_.in_contact = contact;
+  if (now_ns >= next_cage_judge_ns_) {
+    next_cage_judge_ns_ = now_ns + static_cast<hal::Nanos>(GroundTruth::kCageJudgeS * kNanosPerSecond);
+    judge_cages(pose);
+  }
+}
+
+void Simulation::judge_cages(const nav::Pose2D& pose) noexcept {
+  const nav::Pose2D& before = cage_judged_ ? cage_judged_pose_ : pose;
+  for (std::size_t i = 0; i < world_->mover_count() && i < in_cage_.size(); ++i) {
+    const world::MoverScript& mover = world_->mover_script(i);
+    if (!mover.person || !world_->mover_visible(i)) {
+      in_cage_[i] = false;
+      continue;
+    }
+    const nav::Point2D at = world_->mover_position(i);
+    const double d = std::hypot(at.x_m - pose.x_m, at.y_m - pose.y_m);
+    const bool in = d < judged_cage_reach_m(mover.size_m / 2);
+    if (in && !in_cage_[i]) {
+      const bool robot_closed = std::hypot(at.x_m - before.x_m, at.y_m - before.y_m) - d > 0.01;
+      ++(robot_closed ? truth_.cage_entries : truth_.cage_entries_by_person);
+    }
+    in_cage_[i] = in;
+  }
+  cage_judged_ = true;
+  cage_judged_pose_ = pose;
 }
 
 }  // namespace sen3bot::sim

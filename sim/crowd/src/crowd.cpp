@@ -38,6 +38,9 @@ Status check_person(const Person& p, std::size_t i) noexcept {
   if (!finite(p.appear_s)) {
     return Error::format(Errc::invalid_argument, "person %zu: appear time %g s is not finite", i, p.appear_s);
   }
+  if (p.loop && p.leave_at_goal) {
+    return Error::format(Errc::invalid_argument, "person %zu: a looping route never ends: not with leave_at_goal", i);
+  }
   // With no goal it would count as arrived and vanish the moment it appears.
   if (p.leave_at_goal && p.goal_count == 0) {
     return Error::format(Errc::invalid_argument, "person %zu: leaves at its goal but has no goal", i);
@@ -229,6 +232,8 @@ void Crowd::step(const RobotDisc* robot) noexcept {
     // Cannot fail: create() checked the walker count and the step against the sub-step.
     // Blind walkers have sees_robot false, so the robot passed here is nothing to them.
     static_cast<void>(model_.step(walkers_, walls_, robot, step_s_));
+    for (std::size_t i = 0; i < walkers_.size(); ++i)
+      if (people_[i].loop && reached_final_goal(walkers_[i])) walkers_[i].next_goal = 0;
   }
   ++steps_;
   enter_and_leave(static_cast<double>(steps_) * step_s_);
@@ -259,6 +264,7 @@ void Crowd::step_orca() noexcept {
     const Person& p = people_[i];
     std::size_t& next = next_goal_[i];
     while (next < p.goal_count && norm(p.goals[next] - agents_[i].position) < goal_reach_m_) ++next;
+    if (p.loop && next >= p.goal_count) next = 0;
   }
 }
 

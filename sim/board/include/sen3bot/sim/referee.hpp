@@ -41,6 +41,13 @@ struct TimedPose {
   bool moving = false;  // for a contact: whether the robot itself was moving
 };
 
+// Where a person (a world mover) truly was at a world time.
+struct PersonAt {
+  double t_s = 0;
+  std::uint32_t mover = 0;
+  msg::Point2D at;
+};
+
 // How close to a person the robot's centre may come before it is in the person's cage, as the
 // reports judge it: the person's body radius, the default cage safety radius (0.5 m) and the
 // robot's half width (0.19 m), since its footprint must stay out.
@@ -54,6 +61,7 @@ class Referee {
   static constexpr std::size_t kMaxPoses = 4096;  // at kPoseIntervalS: 17 minutes
   static constexpr double kPoseIntervalS = 0.25;
   static constexpr std::size_t kMaxContacts = 64;
+  static constexpr std::size_t kMaxPersonPath = 16384;  // two walkers for 34 minutes
   static constexpr double kRelocalizedM = 0.3;
   static constexpr double kRelocalizedRad = 10.0 * 3.14159265358979323846 / 180.0;
 
@@ -85,6 +93,9 @@ class Referee {
   [[nodiscard]] std::span<const float> person_errors() const noexcept {
     return {person_errors_.data(), person_error_count_};
   }
+  // The true people (GroundTruth::people) with every pose of poses(): their paths, however
+  // they were moved; the first kMaxPersonPath samples.
+  [[nodiscard]] std::span<const PersonAt> person_path() const noexcept { return {person_path_.data(), person_path_count_}; }
   // The true pose where each contact began, the first kMaxContacts of them.
   [[nodiscard]] std::span<const TimedPose> contact_poses() const noexcept { return {contacts_.data(), contact_count_}; }
 
@@ -102,6 +113,8 @@ class Referee {
   std::size_t pose_count_ = 0;
   std::array<msg::Point2D, kMaxTrack> estimate_track_{};
   std::size_t estimate_track_count_ = 0;
+  std::array<PersonAt, kMaxPersonPath> person_path_{};
+  std::size_t person_path_count_ = 0;
   std::array<TimedPose, kMaxContacts> contacts_{};
   std::size_t contact_count_ = 0;
   hal::Nanos close_since_ns_ = -1;  // after a kidnapping: since when every estimate was close

@@ -85,7 +85,14 @@ struct GroundTruth {
   // The visible people's true centres (the first kMaxPeople of them), for the referee.
   static constexpr std::size_t kMaxPeople = 16;
   std::array<nav::Point2D, kMaxPeople> people{};
+  std::array<std::uint32_t, kMaxPeople> people_movers{};  // each one's world mover index
   std::size_t people_count = 0;
+  // Cage entries, judged every kCageJudgeS against every person, whatever moves them
+  // (judged_cage_reach_m of referee.hpp): the robot's when its own motion since the last
+  // judgement closed the distance, else the person's, who stepped up to it.
+  std::uint64_t cage_entries = 0;
+  std::uint64_t cage_entries_by_person = 0;
+  static constexpr double kCageJudgeS = 0.25;
 };
 static_assert(std::is_trivially_copyable_v<GroundTruth>);
 
@@ -144,6 +151,11 @@ class Simulation {
   std::unique_ptr<PtyLine> laser_pty_line_;
   GroundTruth truth_;
   hal::Nanos next_clearance_ns_ = 0;
+  void judge_cages(const nav::Pose2D& pose) noexcept;
+  hal::Nanos next_cage_judge_ns_ = 0;
+  bool cage_judged_ = false;
+  nav::Pose2D cage_judged_pose_;
+  std::vector<bool> in_cage_;  // per mover, at the last judgement (sized at open)
 };
 
 }  // namespace sen3bot::sim
