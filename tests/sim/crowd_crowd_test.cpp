@@ -94,6 +94,11 @@ TEST(Crowd, CreateRefusesBadConfigsSayingWhatIsWrong) {
       {[](CrowdConfig& c) { c.people[2].appear_s = kNan; }, "person 2: appear time", Errc::invalid_argument},
       {[](CrowdConfig& c) { c.people[2].leave_at_goal = true; }, "person 2: leaves at its goal but has no goal",
        Errc::invalid_argument},
+      {[](CrowdConfig& c) {
+         c.people[0].leave_at_goal = true;
+         c.people[0].loop = true;
+       },
+       "person 0: a looping route never ends", Errc::invalid_argument},
       {[](CrowdConfig& c) { c.walls[1].b.x_m = kInf; }, "wall 1: an end is not finite", Errc::invalid_argument},
       {[](CrowdConfig& c) { c.social.max_substep_s = 0.0; }, "in social sub-steps of 0 s", Errc::invalid_argument},
       {[](CrowdConfig& c) {
@@ -377,6 +382,33 @@ TEST(Crowd, ASocialWalkerWhoLeavesAtItsGoalVanishesThere) {
   }
   EXPECT_TRUE(crowd->state(1).visible);  // the other stays, standing near its goal
   EXPECT_LT(distance(crowd->state(1).position, {3.0, -2.0}), 1.0);
+}
+
+// Social and ORCA people on a looping route walk it again and again: back and forth between two
+// goals 4 m apart for 40 s, each passes both ends several times.
+TEST(Crowd, ALoopingRouteIsWalkedAgainAndAgain) {
+  for (const Behaviour b : {Behaviour::social, Behaviour::orca}) {
+    CrowdConfig c;
+    c.behaviour = b;
+    c.people = {person({0.0, 0.0}, {{4.0, 0.0}, {0.0, 0.0}})};
+    c.people[0].loop = true;
+    c.people[0].desired_speed_m_s = 1.0;
+    std::unique_ptr<Crowd> crowd = make(c);
+    ASSERT_NE(crowd, nullptr);
+    int at_far = 0, at_near = 0;
+    bool near_far = false, near_start = true;
+    for (int k = 1; k <= 800; ++k) {
+      crowd->advance(k * c.step_s, nullptr);
+      const Point2D p = crowd->state(0).position;
+      const bool far = distance(p, {4.0, 0.0}) < 0.5, start = distance(p, {0.0, 0.0}) < 0.5;
+      at_far += far && !near_far ? 1 : 0;
+      at_near += start && !near_start ? 1 : 0;
+      near_far = far;
+      near_start = start;
+    }
+    EXPECT_GE(at_far, 3) << to_string(b);
+    EXPECT_GE(at_near, 3) << to_string(b);
+  }
 }
 
 // Two tracks of a recording, replayed with an offset: exactly the annotations at their times,

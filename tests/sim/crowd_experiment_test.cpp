@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "experiment_support.hpp"
+#include "sim_commands.hpp"
 #include "sen3bot/vda5050/json.hpp"
 
 namespace sen3bot::sim {
@@ -124,6 +125,31 @@ TEST(CrowdExperiment, ARecordingRuns) {
   ASSERT_EQ(run.code, 0) << run.err;
   EXPECT_NE(run.out.find("1/1 runs"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("| recorded, N = 1"), std::string::npos) << run.out;
+}
+
+// The scenario's two scripted workers as social walkers: they walk their lanes back and forth,
+// give way, and the cages they are in are judged as they truly moved (the judgement once
+// replayed only scripts, so a crowd's people were never in a cage).
+TEST(PeopleCrossingWalkers, SocialWalkersRunTheScenarioAndTheirCagesAreJudged) {
+  const std::string dir = temp_dir();
+  const CommandRun run = sen3bot::testing::run_command(
+      sim_command, {"--scenario", "people-crossing", "--seed", "3", "--walkers", "social", "--report", dir});
+  ASSERT_TRUE(run.code == 0 || run.code == 3) << run.err;  // 3: a cage entered or a goal missed
+  EXPECT_NE(run.out.find("walkers: social"), std::string::npos) << run.out;
+  const std::string report = read_file(dir + "/report.json");
+  auto doc = std::make_unique<json::StaticDocument<16384>>();
+  ASSERT_TRUE(doc->parse(report).ok()) << report;
+  ASSERT_EQ(doc->root().find("cases").size(), 1u);
+  json::Value c;
+  for (const json::Value item : doc->root().find("cases").items()) c = item;
+  const double entries = *c.find("cage_entries").number() + *c.find("cage_entries_by_person").number();
+  EXPECT_GE(entries, 1.0) << report;  // seed 3: three, the walkers stepping up to the robot
+  EXPECT_GT(*c.find("min_person_distance_m").number(), 0.0) << report;
+  EXPECT_GT(file_size(dir + "/two-workers.png"), 1000);
+
+  const CommandRun bad = sen3bot::testing::run_command(sim_command, {"--scenario", "people-crossing", "--walkers", "polite"});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--walkers: expected scripted, social or blind, got 'polite'"), std::string::npos) << bad.err;
 }
 
 }  // namespace
