@@ -27,7 +27,7 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
-#include "lockstep_mission.hpp"
+#include "simulated_mission.hpp"
 #include "mission_pool.hpp"
 #include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/crowd/recording.hpp"
@@ -84,6 +84,7 @@ struct Options {
   std::uint64_t runs = 0;
   std::uint64_t seed = 1;
   long jobs = 0;  // 0: the online CPUs
+  bool realtime = false;  // each mission in real time over ptys
   std::vector<Variant> variants;
   std::string report_dir;
   std::string config_path = "config/crowd.yaml";
@@ -120,7 +121,6 @@ Result<crowd::Scene> make_run_scene(const Plan& plan, std::uint64_t seed) {
 
 FirmwareConfig run_config(const Plan& plan, Variant v, const crowd::Scene& scene) {
   FirmwareConfig config = plan.base;
-  config.clock = firmware::ClockMode::lockstep;
   config.navigation.map_path = plan.map_path;
   config.navigation.mcl.initial_pose = scene.robot_start;
   config.navigation.mission.goal_count = 1;
@@ -196,8 +196,8 @@ void record(Trace& trace, const crowd::RunStep& step, double t_s) {
 
 // A whole firmware on the scene until the mission ends or the run's limit, in 50 ms slices, a
 // RunStep to the meter after each once the robot has set off; quiet.
-void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, CrowdRun& r,
-                 Trace* trace = nullptr) {
+void run_mission(const FirmwareConfig& config, const SimulationConfig& world, const crowd::Scene& scene, bool realtime,
+                 CrowdRun& r, Trace* trace = nullptr) {
   const auto wall_start = std::chrono::steady_clock::now();
   const double free_length_m =
       std::hypot(scene.robot_goal.x_m - scene.robot_start.x_m, scene.robot_goal.y_m - scene.robot_start.y_m);
@@ -308,7 +308,9 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
   if (const std::string error =
-          run_lockstep_mission(config, world, hal::millis(50), on_slice, on_end, r.variant == Variant::perfect_perception);
+          run_simulated_mission(config, world,
+                                {.slice = hal::millis(50), .true_people = r.variant == Variant::perfect_perception, .realtime = realtime},
+                                on_slice, on_end);
       !error.empty())
     set_error(r, error);
 }
@@ -325,8 +327,8 @@ CrowdRun run_job(const Plan& plan, std::size_t index, Trace* trace = nullptr) {
     return r;
   }
   const FirmwareConfig config = run_config(plan, job.variant, *scene);
-  run_mission(config, run_world(plan, job.variant, job.seed, *scene, config.navigation.mission.start_delay_s), *scene, r,
-              trace);
+  run_mission(config, run_world(plan, job.variant, job.seed, *scene, config.navigation.mission.start_delay_s), *scene,
+              plan.options.realtime, r, trace);
   return r;
 }
 
@@ -445,6 +447,8 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
       else return bad(err, "--variant: no variant named '" + std::string(name) + "' (" + kVariantNames + ")");
       if (std::find(o.variants.begin(), o.variants.end(), v) == o.variants.end()) o.variants.push_back(v);
       ++i;
+    } else if (arg == "--realtime") {
+      o.realtime = true;
     } else if (arg == "--report" && has_value) {
       o.report_dir = argv[++i];
       if (o.report_dir.empty()) return bad(err, "--report: expected a directory");
@@ -626,8 +630,9 @@ bool write_report_json(const std::string& path, const Options& o, std::size_t pe
   if (!o.trajectories.empty()) std::fputs("\"recorded\"", f);
   else if (o.behaviour) report::write_json_string(f, crowd::to_string(*o.behaviour));
   else std::fputs("null", f);
-  std::fprintf(f, ",\n  \"runs\": %llu,\n  \"seed\": %llu,\n  \"jobs\": %ld,\n  \"config\": ", static_cast<unsigned long long>(o.runs),
-               static_cast<unsigned long long>(o.seed), o.jobs);
+  std::fprintf(f, ",\n  \"runs\": %llu,\n  \"seed\": %llu,\n  \"jobs\": %ld,\n  \"clock\": \"%s\",\n  \"config\": ",
+               static_cast<unsigned long long>(o.runs), static_cast<unsigned long long>(o.seed), o.jobs,
+               o.realtime ? "realtime" : "lockstep");
   report::write_json_string(f, o.config_path);
   std::fputs(",\n  \"variants\": {", f);
   for (std::size_t i = 0; i < variants.size(); ++i) {
@@ -770,10 +775,10 @@ int crowd_experiment_command(int argc, char** argv, std::FILE* out, std::FILE* e
   std::string variant_list;
   for (const Variant v : o.variants) variant_list += std::string(variant_list.empty() ? "" : ", ") + name_of(v);
   const std::string scene_text = describe_scene(o, people, first->crowd.behaviour);
-  std::fprintf(out, "experiment crowd: %s, %llu run%s per variant (seeds %llu..%llu), variants %s, %ld worker%s\n",
+  std::fprintf(out, "experiment crowd: %s, %llu run%s per variant (seeds %llu..%llu), variants %s, %ld worker%s, %s\n",
                scene_text.c_str(), static_cast<unsigned long long>(o.runs), o.runs == 1 ? "" : "s",
                static_cast<unsigned long long>(o.seed), static_cast<unsigned long long>(o.seed + o.runs - 1),
-               variant_list.c_str(), o.jobs, o.jobs == 1 ? "" : "s");
+               variant_list.c_str(), o.jobs, o.jobs == 1 ? "" : "s", o.realtime ? "real time over ptys" : "lockstep");
   std::fflush(out);
 
   const auto wall_start = std::chrono::steady_clock::now();

@@ -25,7 +25,7 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
-#include "lockstep_mission.hpp"
+#include "simulated_mission.hpp"
 #include "mission_pool.hpp"
 #include "report_figure.hpp"
 #include "sen3bot/msg/point_math.hpp"
@@ -123,7 +123,6 @@ struct Plan {
 
 FirmwareConfig variant_config(const Plan& plan, Variant v) {
   FirmwareConfig config = plan.base;
-  config.clock = firmware::ClockMode::lockstep;
   config.navigation.dynamic_obstacles.enabled = v == Variant::dol;
   config.navigation.dwa.mover_prediction = v == Variant::dol && plan.options.prediction;
   return config;
@@ -290,7 +289,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
       if (!report::draw_case_figure(figure).write_png(sample->png)) set_error(r, "cannot write " + sample->png);
     }
   };
-  if (const std::string error = run_lockstep_mission(config, world, slice, on_slice, on_end); !error.empty())
+  if (const std::string error = run_simulated_mission(config, world, {.slice = slice}, on_slice, on_end); !error.empty())
     set_error(r, error);
 }
 

@@ -127,6 +127,24 @@ TEST(CrowdExperiment, ARecordingRuns) {
   EXPECT_NE(run.out.find("| recorded, N = 1"), std::string::npos) << run.out;
 }
 
+// --realtime: the mission on the wall clock over ptys (about 25 s of wall time, little CPU). The
+// run cannot take less wall time than it simulated.
+TEST(CrowdExperiment, ARealTimeRunTakesItsTimeOnTheWallClock) {
+  const std::string dir = temp_dir();
+  const CommandRun run = run_experiment({"crowd", "--scene", "circle", "--people", "1", "--runs", "1", "--variant",
+                                         "no-people", "--realtime", "--config", kCrowdConfig, "--report", dir});
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("real time over ptys"), std::string::npos) << run.out;
+  const std::string text = read_file(dir + "/report.json");
+  auto doc = std::make_unique<json::StaticDocument<8192>>();
+  ASSERT_TRUE(doc->parse(text).ok()) << text;
+  EXPECT_TRUE(doc->root().find("clock").string_equals("realtime"));
+  for (const json::Value r : doc->root().find("variants").find("no-people").find("runs").items()) {
+    EXPECT_GT(*r.find("sim_s").number(), 5.0);
+    EXPECT_GE(*r.find("wall_s").number(), 0.95 * *r.find("sim_s").number()) << text;
+  }
+}
+
 // The scenario's two scripted workers as social walkers: they walk their lanes back and forth,
 // give way, and the cages they are in are judged as they truly moved (the judgement once
 // replayed only scripts, so a crowd's people were never in a cage).

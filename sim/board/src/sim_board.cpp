@@ -232,7 +232,10 @@ void SimBoard::thread_main(std::atomic<int>& started) {
   const hal::Nanos origin = posix_clock_.now();
   hal::Nanos next = origin;
   while (running_.load(std::memory_order_acquire)) {
-    step(next - origin);
+    {
+      const std::lock_guard<std::mutex> hold(world_mutex_);
+      step(next - origin);
+    }
     next += kStepNs;
     const hal::Nanos now = posix_clock_.now();
     if (next < now) next = now;  // fell behind: carry on from now rather than in a burst

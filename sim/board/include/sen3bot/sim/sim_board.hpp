@@ -8,6 +8,7 @@
 // every step.
 #include <atomic>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <string_view>
 #include <thread>
@@ -77,6 +78,13 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   void stop() noexcept override;
 
   [[nodiscard]] Simulation& simulation() noexcept { return *simulation_; }
+  // f(simulation) between two of the world's steps: in real time the world's thread waits for
+  // it (keep it short); in lockstep at once, as nothing else steps the world.
+  template <class F>
+  void with_world(F&& f) {
+    const std::lock_guard<std::mutex> hold(world_mutex_);
+    f(*simulation_);
+  }
   [[nodiscard]] Referee& referee() noexcept { return referee_; }
   [[nodiscard]] SimDetector& detector() noexcept { return *detector_; }
   [[nodiscard]] SimLine& estop() noexcept { return estop_; }
@@ -115,6 +123,7 @@ class SimBoard final : public hal::Board, private hal::SimClock::Listener {
   SimLine estop_;
   SimLine light_;
   WireTap* tap_ = nullptr;
+  std::mutex world_mutex_;  // real time: held by each world step and by with_world()
   bool publish_true_people_ = false;
   tasks::Topic<msg::People> true_people_;
   msg::People true_people_message_;
