@@ -60,6 +60,33 @@ TEST(CrowdSocialForce, ForceFromAnotherPersonMatchesHandComputation) {
   EXPECT_NEAR(contact.y_m, 2400.0, 1e-6);
 }
 
+// Companions' attraction (Moussaïd et al. 2010): m beta towards the group's centre once farther
+// from it than (N - 1) / 2 m; 80 kg * 1 m/s^2 = 80 N.
+TEST(CrowdSocialForce, CompanionsArePulledTogetherOnlyWhenApart) {
+  const SocialForceModel model;
+  std::vector<Walker> walkers{walker_at({0.0, 0.0}, {{10.0, 0.0}}), walker_at({0.0, 1.4}, {{10.0, 1.4}}),
+                              walker_at({0.0, -1.0}, {{10.0, -1.0}})};
+  walkers[0].group = walkers[1].group = 3;
+  // Two, 1.4 m apart: 0.7 m from the centre, more than 0.5 m.
+  Point2D f = model.group_force(0, walkers);
+  EXPECT_NEAR(f.x_m, 0.0, 1e-12);
+  EXPECT_NEAR(f.y_m, 80.0, 1e-9);
+  EXPECT_NEAR(model.group_force(1, walkers).y_m, -80.0, 1e-9);
+  EXPECT_EQ(model.group_force(2, walkers).y_m, 0.0) << "alone";
+  // 0.8 m apart: 0.4 m from the centre, near enough.
+  walkers[1].position = {0.0, 0.8};
+  EXPECT_EQ(norm(model.group_force(0, walkers)), 0.0);
+  // Three at y = 0, 0.8 and -0.2 m: the centre is 0.2 m from the first, within (3 - 1) / 2 = 1 m.
+  walkers[2].group = 3;
+  walkers[2].position = {0.0, -0.2};
+  EXPECT_EQ(norm(model.group_force(0, walkers)), 0.0);
+  // A companion out of the scene does not count: alone again.
+  walkers[1].position = {0.0, 3.0};
+  walkers[2].active = false;
+  walkers[1].active = false;
+  EXPECT_EQ(norm(model.group_force(0, walkers)), 0.0);
+}
+
 TEST(CrowdSocialForce, ForceFromWallMatchesHandComputation) {
   const SocialForceModel model;
   const Wall wall{{-5.0, 0.0}, {5.0, 0.0}};

@@ -202,6 +202,7 @@ Crowd::Crowd(const CrowdConfig& config)
         static_cast<void>(set_route(w, std::span<const Point2D>(p.goals.data(), p.goal_count)));
         w.active = false;
         w.sees_robot = behaviour_ == Behaviour::social;
+        w.group = p.group;
       }
     }
     enter_and_leave(0.0);

@@ -98,6 +98,23 @@ Point2D SocialForceModel::wall_force(const Walker& on, const Wall& wall) const n
   return f;
 }
 
+Point2D SocialForceModel::group_force(std::size_t i, std::span<const Walker> walkers) const noexcept {
+  const Walker& me = walkers[i];
+  if (me.group == 0 || !me.active) return {};
+  Point2D sum;
+  std::size_t n = 0;
+  for (const Walker& w : walkers) {
+    if (w.group != me.group || !w.active) continue;
+    sum += w.position;
+    ++n;
+  }
+  if (n < 2) return {};
+  const Point2D to_centre = (1.0 / static_cast<double>(n)) * sum - me.position;
+  const double d = norm(to_centre);
+  if (d <= 0.5 * static_cast<double>(n - 1)) return {};
+  return (me.mass_kg * params_.group_attraction_m_s2 / d) * to_centre;
+}
+
 Point2D SocialForceModel::force_on(std::size_t i, std::span<const Walker> walkers, std::span<const Wall> walls,
                                    const RobotDisc* robot) const noexcept {
   const Walker& me = walkers[i];
@@ -108,6 +125,7 @@ Point2D SocialForceModel::force_on(std::size_t i, std::span<const Walker> walker
   }
   for (const Wall& wall : walls) f += wall_force(me, wall);
   if (robot != nullptr) f += robot_force(me, *robot);
+  f += group_force(i, walkers);
   return f;
 }
 

@@ -1,6 +1,7 @@
 #include "sen3bot/crowd/walk_stats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -28,6 +29,7 @@ constexpr double kPeriodTolerance = 1e-3;
 constexpr double kMinWalkM = 2.0;
 constexpr double kSpacingM = 0.2;  // CrowdNav's discomfort distance, as the scenes space walkers
 constexpr int kMaxDraws = 1000;
+constexpr double kRouteJitterM = 0.2;
 
 // A sample's place among the walks.
 struct Entry {
@@ -206,13 +208,21 @@ Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed
     return Error::format(Errc::invalid_argument, "matched_crowd: duration %g s is not positive and finite",
                          options.duration_s);
   }
-  std::size_t slots = options.people;
-  if (slots == 0) {
+  if (!(options.pair_share >= 0.0 && options.pair_share <= 1.0)) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: pair share %g is not in [0, 1]", options.pair_share);
+  }
+  std::size_t people = options.people;
+  if (people == 0) {
     std::vector<double> counts;
     for (const FrameCount& f : people_per_frame(recording)) counts.push_back(static_cast<double>(f.people));
-    slots = static_cast<std::size_t>(std::llround(quartiles(counts).median));
+    people = static_cast<std::size_t>(std::llround(quartiles(counts).median));
   }
+  // A slot keeps one walk going, alone or as a pair: a share s of people in pairs is pairs on
+  // s / (2 - s) of the walks, 1 + s / (2 - s) people per slot.
+  const double pair_chance = options.pair_share / (2.0 - options.pair_share);
+  const auto slots = static_cast<std::size_t>(std::llround(static_cast<double>(people) / (1.0 + pair_chance)));
   if (slots == 0) return Error(Errc::invalid_argument, "matched_crowd: no people");
+  std::uint32_t groups = 0;
 
   CrowdConfig config;
   config.behaviour = Behaviour::social;
@@ -247,47 +257,98 @@ Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed
     return length > 0.0 ? q.start + (along / length) * walk : q.start;
   };
 
+  // The recorded routes long enough to walk; none when asked for none or none is.
+  std::vector<std::array<Point2D, 2>> routes;
+  if (options.recorded_routes) {
+    for (const Track& track : recording.tracks) {
+      const Point2D a = track.samples.front().position, b = track.samples.back().position;
+      if (norm(b - a) >= kMinWalkM) routes.push_back({a, b});
+    }
+    if (routes.empty()) {
+      return Error::format(Errc::invalid_argument, "matched_crowd: %s has no track of %g m or more to walk",
+                           recording.name.c_str(), kMinWalkM);
+    }
+  }
+  const auto clamp_inside = [&](Point2D q) {
+    return Point2D{std::clamp(q.x_m, lo.x_m + kWallGapM, hi.x_m - kWallGapM), std::clamp(q.y_m, lo.y_m + kWallGapM, hi.y_m - kWallGapM)};
+  };
+
   std::mt19937_64 rng(seed);
   std::vector<double> slot_next_s(slots, 0.0);  // when each slot's next walker appears
+  std::vector<bool> slot_first(slots, true);     // the slot's first walk starts part-way
   std::vector<double> end_s;                    // each placed walker's nominal arrival
   for (;;) {
     // The slot due first, so everyone nominally present at that moment is already placed.
     const auto due = std::min_element(slot_next_s.begin(), slot_next_s.end());
     const double t = *due;
     if (t >= options.duration_s) break;
-    const bool first = config.people.size() < slots;
+    const bool first = slot_first[static_cast<std::size_t>(due - slot_next_s.begin())];
+    slot_first[static_cast<std::size_t>(due - slot_next_s.begin())] = false;
     Person p;
     p.radius_m = kWalkerRadiusM;
     p.desired_speed_m_s = draw_walker_speed(rng);  // first, so spacing does not bias it
     p.goal_count = 1;
     p.leave_at_goal = true;
     p.appear_s = t;
+    const bool pair = pair_chance > 0.0 && unit_uniform(rng) < pair_chance;
+    Person companion = p;
+    // Clear of everyone nominally present (a companion also of its walker).
+    const auto room_for = [&](const Person& who) {
+      for (std::size_t j = 0; j < config.people.size(); ++j) {
+        const std::optional<Point2D> q = nominal(config.people[j], end_s[j], t);
+        if (q && norm(*q - who.start) < who.radius_m + config.people[j].radius_m + kSpacingM) return false;
+      }
+      return true;
+    };
+    const auto inside = [&](Point2D q) {
+      return q.x_m >= lo.x_m + kWallGapM && q.x_m <= hi.x_m - kWallGapM && q.y_m >= lo.y_m + kWallGapM &&
+             q.y_m <= hi.y_m - kWallGapM;
+    };
     bool placed = false;
     for (int attempt = 0; attempt < kMaxDraws && !placed; ++attempt) {
-      const int from = std::min(3, static_cast<int>(unit_uniform(rng) * 4.0));
-      const int to = (from + 1 + std::min(2, static_cast<int>(unit_uniform(rng) * 3.0))) % 4;
-      const Point2D a = on_side(from, unit_uniform(rng));
-      const Point2D b = on_side(to, unit_uniform(rng));
+      Point2D a, b;
+      if (!routes.empty()) {
+        const std::array<Point2D, 2>& route = routes[std::min(routes.size() - 1, static_cast<std::size_t>(unit_uniform(rng) * static_cast<double>(routes.size())))];
+        a = clamp_inside(route[0] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
+        b = clamp_inside(route[1] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
+      } else {
+        const int from = std::min(3, static_cast<int>(unit_uniform(rng) * 4.0));
+        const int to = (from + 1 + std::min(2, static_cast<int>(unit_uniform(rng) * 3.0))) % 4;
+        a = on_side(from, unit_uniform(rng));
+        b = on_side(to, unit_uniform(rng));
+      }
       const double along = first ? unit_uniform(rng) : 0.0;
       if (norm(b - a) < kMinWalkM) continue;
       p.start = a + along * (b - a);
       p.goals[0] = b;
-      placed = true;
-      for (std::size_t j = 0; j < config.people.size() && placed; ++j) {
-        const std::optional<Point2D> q = nominal(config.people[j], end_s[j], t);
-        placed = !q || norm(*q - p.start) >= p.radius_m + config.people[j].radius_m + kSpacingM;
+      placed = room_for(p);
+      if (placed && pair) {
+        // Beside the walker, on its left if there is room, else on its right.
+        const Point2D left = (kCompanionGapM / norm(b - a)) * perpendicular(b - a);
+        companion.start = p.start + left;
+        companion.goals[0] = b + left;
+        if (!inside(companion.start) || !inside(companion.goals[0])) {
+          companion.start = p.start - left;
+          companion.goals[0] = b - left;
+        }
+        placed = inside(companion.start) && inside(companion.goals[0]) && room_for(companion);
       }
     }
     if (!placed) {
       return Error::format(Errc::capacity, "matched_crowd: no room for walker %zu at %g s in %d draws",
                            config.people.size(), t, kMaxDraws);
     }
-    if (config.people.size() == kMaxWalkers) {
+    if (config.people.size() + (pair ? 2 : 1) > kMaxWalkers) {
       return Error::format(Errc::capacity, "matched_crowd: %zu at once for %g s needs more than %zu walkers", slots,
                            options.duration_s, kMaxWalkers);
     }
     // From rest a walker lags its desired speed by the relaxation time; it leaves within reach.
     const double walk_s = std::max(0.0, norm(p.goals[0] - p.start) - reach_m) / p.desired_speed_m_s + relaxation_s;
+    if (pair) {
+      p.group = companion.group = ++groups;
+      end_s.push_back(t + walk_s);
+      config.people.push_back(companion);
+    }
     end_s.push_back(t + walk_s);
     config.people.push_back(p);
     *due = t + walk_s;

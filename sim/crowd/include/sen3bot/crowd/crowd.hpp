@@ -45,6 +45,7 @@ struct Person {
   double appear_s = 0.0;       // not in the scene before this crowd time (enters at start)
   bool leave_at_goal = false;  // vanishes once past its last goal (walked out of the scene)
   bool loop = false;           // after the last goal, walks the route again from goals[0]
+  std::uint32_t group = 0;     // > 0: walks with the others of this group (social, blind)
 };
 
 struct CrowdConfig {

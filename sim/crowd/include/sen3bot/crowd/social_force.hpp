@@ -28,6 +28,12 @@
 // before contact, so people give way late, as they do. A blind walker (sees_robot = false) feels
 // nothing from the robot and walks through its place; the world registers that contact.
 //
+// Companions (walkers with the same non-zero group) also feel the attraction of Moussaïd et al.
+// 2010 ("The walking behaviour of pedestrian social groups", PLoS ONE 5): towards the group's
+// centre of mass, m q beta U, with q = 1 once farther from it than (N - 1) / 2 m (N members
+// present) and 0 nearer; beta = 1 m/s^2 is our choice. Their gaze term is left out: it turns
+// heads, not paths.
+//
 // Known property of the model: two bodies in exact head-on symmetry (no lateral offset at all)
 // only push each other back and stop. Scripted crowds give walkers a few centimetres of offset.
 //
@@ -36,6 +42,7 @@
 // the force sums).
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
 
 #include "sen3bot/hal/result.hpp"
@@ -64,6 +71,7 @@ struct Walker {
   std::size_t next_goal = 0;
   bool active = true;      // false: not in the scene (neither moves nor is an obstacle)
   bool sees_robot = true;  // false: the invisible-robot setting; still avoids walls and people
+  std::uint32_t group = 0; // > 0: walks with the others of this group (the attraction above)
 };
 
 struct Wall {
@@ -100,6 +108,7 @@ class SocialForceModel {
     double robot_range_m = 0.08;
     double max_speed_factor = 1.3;               // speed cap = factor * desired speed
     double goal_reach_m = 0.3;                   // a goal is passed within this distance
+    double group_attraction_m_s2 = 1.0;          // beta, companions' pull to their centre
     // Bodies whose surfaces are farther apart than this are skipped: A exp(-3 / 0.08) ~ 1e-13 N.
     double cutoff_gap_m = 3.0;
     // step() splits dt into sub-steps no longer than this: the contact stiffness k/m makes the
@@ -115,6 +124,8 @@ class SocialForceModel {
   [[nodiscard]] Point2D driving_force(const Walker& walker) const noexcept;
   [[nodiscard]] Point2D walker_force(const Walker& on, const Walker& from) const noexcept;
   [[nodiscard]] Point2D wall_force(const Walker& on, const Wall& wall) const noexcept;
+  // Towards walkers[i]'s companions (zero alone, or near enough to their centre).
+  [[nodiscard]] Point2D group_force(std::size_t i, std::span<const Walker> walkers) const noexcept;
   // Zero for a walker that does not see the robot.
   [[nodiscard]] Point2D robot_force(const Walker& on, const RobotDisc& robot) const noexcept;
   // Total force on walkers[i]; zero for an inactive walker. robot may be null (no robot).

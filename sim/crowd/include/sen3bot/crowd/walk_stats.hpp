@@ -76,7 +76,15 @@ struct WalkStats {
 struct MatchedCrowdOptions {
   std::size_t people = 0;    // present at once; 0: the recording's median people per moment
   double duration_s = 300.0; // walkers are planned to keep the count up this long
+  // Of the people, the share walking in pairs (side by side, kCompanionGapM apart, one route
+  // and pace, a group of the social force model); the rest walk alone.
+  double pair_share = 0.0;
+  // Routes as the recording's people walked them: each walk from the first to the last place
+  // of a recorded track (drawn at random, 0.2 m of jitter), where people enter and leave (doors,
+  // pavements); false: between random points of the extent's sides.
+  bool recorded_routes = false;
 };
+inline constexpr double kCompanionGapM = 0.7;  // centre to centre, shoulder to shoulder plus a little
 
 // Social walkers at a recording's density: the floor is the extent of every annotation with
 // walls on its border; `people` walkers are present at any time. Each walks from 0.5 m inside
