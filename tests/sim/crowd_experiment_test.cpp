@@ -151,7 +151,8 @@ TEST(CrowdExperiment, ARealTimeRunTakesItsTimeOnTheWallClock) {
 TEST(PeopleCrossingWalkers, SocialWalkersRunTheScenarioAndTheirCagesAreJudged) {
   const std::string dir = temp_dir();
   const CommandRun run = sen3bot::testing::run_command(
-      sim_command, {"--scenario", "people-crossing", "--seed", "3", "--walkers", "social", "--report", dir});
+      sim_command, {"--scenario", "people-crossing", "--config", SEN3BOT_SOURCE_DIR "/config/sim.yaml", "--seed", "3",
+                    "--walkers", "social", "--report", dir});
   ASSERT_TRUE(run.code == 0 || run.code == 3) << run.err;  // 3: a cage entered or a goal missed
   EXPECT_NE(run.out.find("walkers: social"), std::string::npos) << run.out;
   const std::string report = read_file(dir + "/report.json");
