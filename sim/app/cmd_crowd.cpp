@@ -27,7 +27,6 @@
 #include "config.hpp"
 #include "experiment.hpp"
 #include "firmware.hpp"
-#include "simulated_mission.hpp"
 #include "mission_pool.hpp"
 #include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/crowd/recording.hpp"
@@ -39,6 +38,7 @@
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
+#include "simulated_mission.hpp"
 
 namespace sen3bot::sim {
 
@@ -354,7 +354,10 @@ bool write_sample_figure(const Plan& plan, std::size_t job_index, const std::str
   std::snprintf(text, sizeof text, "crowd sample run: %s, seed %llu, variant %s", scene_text.c_str(),
                 static_cast<unsigned long long>(r.seed), name_of(r.variant));
   f.title = text;
-  f.description = "the run of this variant with the closest approach to a person; times in s since the robot set off";
+  f.description = plan.options.realtime
+                      ? "the seed of this variant that came closest to a person, run again in real time (so not the same run); "
+                        "times in s since the robot set off"
+                      : "the run of this variant with the closest approach to a person; times in s since the robot set off";
   if (m.reached_goal)
     std::snprintf(text, sizeof text, "goal reached in %.1f s; %u contact(s), %u by the robot; closest %.2f m; %u cage entr%s",
                   m.time_to_goal_s, m.contacts_any, m.contacts_by_robot, m.min_distance_m, m.cage_entries,
