@@ -270,7 +270,8 @@ Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed
     }
   }
   const auto clamp_inside = [&](Point2D q) {
-    return Point2D{std::clamp(q.x_m, lo.x_m + kWallGapM, hi.x_m - kWallGapM), std::clamp(q.y_m, lo.y_m + kWallGapM, hi.y_m - kWallGapM)};
+    return Point2D{std::clamp(q.x_m, lo.x_m + kWallGapM, hi.x_m - kWallGapM),
+                   std::clamp(q.y_m, lo.y_m + kWallGapM, hi.y_m - kWallGapM)};
   };
 
   std::mt19937_64 rng(seed);
@@ -308,7 +309,8 @@ Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed
     for (int attempt = 0; attempt < kMaxDraws && !placed; ++attempt) {
       Point2D a, b;
       if (!routes.empty()) {
-        const std::array<Point2D, 2>& route = routes[std::min(routes.size() - 1, static_cast<std::size_t>(unit_uniform(rng) * static_cast<double>(routes.size())))];
+        const auto pick = static_cast<std::size_t>(unit_uniform(rng) * static_cast<double>(routes.size()));
+        const std::array<Point2D, 2>& route = routes[std::min(routes.size() - 1, pick)];
         a = clamp_inside(route[0] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
         b = clamp_inside(route[1] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
       } else {
