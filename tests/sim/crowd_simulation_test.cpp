@@ -18,14 +18,22 @@ namespace sen3bot::sim {
 namespace {
 
 // The arena (config/dol_arena.yaml): an empty 10 x 6 m room, the robot at (1, 3) m facing +x.
-// One person walks from (4, 3.05) m to (0.4, 3.05) m, straight through the robot's place.
-testing::SimRig arena_with_walker(crowd::Behaviour behaviour) {
+// One person walks from `from` to `to`; by default from (4, 3.05) m to (0.4, 3.05) m, straight
+// through the robot's place. `camera`: the simulated detector on, missing nothing, inventing
+// nothing.
+testing::SimRig arena_with_walker(crowd::Behaviour behaviour, msg::Point2D from = {4.0, 3.05},
+                                  msg::Point2D to = {0.4, 3.05}, bool camera = false) {
   testing::SimRig rig = testing::load_sim_rig(SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml");
+  if (camera) {
+    rig.world.detector.enabled = true;
+    rig.world.detector.miss_rate = 0.0;
+    rig.world.detector.false_positive_rate = 0.0;
+  }
   auto config = std::make_shared<crowd::CrowdConfig>();
   config->behaviour = behaviour;
   crowd::Person walker;
-  walker.start = {4.0, 3.05};
-  walker.goals[0] = {0.4, 3.05};
+  walker.start = from;
+  walker.goals[0] = to;
   walker.goal_count = 1;
   config->people.push_back(walker);
   rig.world.crowd = config;
@@ -95,19 +103,8 @@ TEST(CrowdSimulation, ABlindWalkerWalksIntoTheRobotAndTheContactIsNotTheRobots) 
 }
 
 TEST(CrowdSimulation, TheCameraSeesTheCrowdsWalkersAsPeople) {
-  testing::SimRig rig = testing::load_sim_rig(SEN3BOT_SOURCE_DIR "/config/dol_arena.yaml");
-  rig.world.detector.enabled = true;
-  rig.world.detector.miss_rate = 0.0;
-  rig.world.detector.false_positive_rate = 0.0;
-  auto config = std::make_shared<crowd::CrowdConfig>();
-  config->behaviour = crowd::Behaviour::blind;
-  crowd::Person walker;  // ahead of the robot, walking away from it
-  walker.start = {3.0, 3.2};
-  walker.goals[0] = {8.0, 3.2};
-  walker.goal_count = 1;
-  config->people.push_back(walker);
-  rig.world.crowd = config;
-  rig.make_board();
+  // Ahead of the robot, walking away from it.
+  testing::SimRig rig = arena_with_walker(crowd::Behaviour::blind, {3.0, 3.2}, {8.0, 3.2}, true);
   ASSERT_TRUE(rig.board->start());
   rig.clock().advance_to(hal::millis(1000));
   std::size_t frames = 0, boxes = 0;
