@@ -209,7 +209,7 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "approach", "goals", "start_delay_s", "goal_timeout_s",
-                "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people"});
+                "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people", "crossings"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -317,6 +317,21 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("candidates")) n.safety.approach_candidates = p.boolean("candidates");
   }
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
+  if (r.has("crossings")) {
+    // The crossing gate and the lanes (nav/crossings.hpp).
+    const Reader p = r.child("crossings");
+    p.allow_only({"enabled", "lookahead_m", "horizon_s", "spread_m_s", "margin_m", "go_share", "lane_decay_s",
+                  "lane_band_weight"});
+    nav::CrossingConfig& x = n.crossings;
+    if (p.has("enabled")) x.enabled = p.boolean("enabled");
+    if (p.has("lookahead_m")) x.lookahead_m = p.number("lookahead_m", 0.5, 12.0);
+    if (p.has("horizon_s")) x.horizon_s = p.number("horizon_s", 0.5, 12.0);
+    if (p.has("spread_m_s")) x.spread_m_s = p.number("spread_m_s", 0.0, 2.0);
+    if (p.has("margin_m")) x.margin_m = p.number("margin_m", 0.0, 2.0);
+    if (p.has("go_share")) x.go_share = p.number("go_share", 0.1, 1.0);
+    if (p.has("lane_decay_s")) n.lanes.decay_s = p.number("lane_decay_s", 1.0, 3600.0);
+    if (p.has("lane_band_weight")) n.lanes.band_weight = p.number("lane_band_weight", 0.01, 0.99);
+  }
   if (r.has("local_costmap")) {
     // A larger window with longer marking sees movers earlier (costing memory and time).
     const Reader p = r.child("local_costmap");

@@ -11,6 +11,7 @@
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/camera/camera.hpp"
 #include "sen3bot/lms200/device.hpp"
+#include "sen3bot/nav/crossings.hpp"
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/local_planner.hpp"
@@ -85,6 +86,8 @@ struct NavigationSection {
   nav::DwaConfig dwa;          // max_v_m_s, max_w_rad_s, goal_tolerance_m
   nav::SafetyConfig safety;    // stop_distance_m
   nav::DynamicObstacleConfig dynamic_obstacles;  // the local costmap's moving-obstacle layer
+  nav::CrossingConfig crossings;  // walkers' crossings of the path, planned in time
+  nav::LaneConfig lanes;          // where walkers went in the last minutes
   // The local costmap: its square window and how far its obstacle layer marks and clears.
   double local_costmap_size_m = 6.0;
   nav::ObstacleLayerConfig local_obstacles;

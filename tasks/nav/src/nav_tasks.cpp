@@ -297,8 +297,76 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
     DwaConfig dwa = config_.dwa;
     dwa.max_costmap_cells = std::max(dwa.max_costmap_cells, costmap_.costmap().size());
     dwa.max_path_points = std::max(dwa.max_path_points, PathMessage::kMaxPoints);
-    return dwa_.init(dwa, arena);
+    if (Status s = dwa_.init(dwa, arena); !s) return s;
+    if (!crossings_on()) return Status::success();
+    // The lanes cover the map (its corners in the map frame, for a rotated map).
+    const double w = map_.width() * map_.resolution_m(), h = map_.height() * map_.resolution_m();
+    const double cy = std::cos(map_.origin_yaw_rad()), sy = std::sin(map_.origin_yaw_rad());
+    double x0 = map_.origin_x_m(), x1 = x0, y0 = map_.origin_y_m(), y1 = y0;
+    for (const auto& [u, v] : {std::pair{w, 0.0}, std::pair{0.0, h}, std::pair{w, h}}) {
+      x0 = std::min(x0, map_.origin_x_m() + cy * u - sy * v);
+      x1 = std::max(x1, map_.origin_x_m() + cy * u - sy * v);
+      y0 = std::min(y0, map_.origin_y_m() + sy * u + cy * v);
+      y1 = std::max(y1, map_.origin_y_m() + sy * u + cy * v);
+    }
+    if (Status s = lanes_.init(config_.lanes, x0, y0, x1 - x0, y1 - y0, arena); !s) return s;
+    // The body as a disc: it crosses lanes at any angle.
+    return gate_.init(config_.crossings, config_.dwa.footprint.circumscribed_radius_m(), config_.dwa.max_v_m_s,
+                      config_.dwa.acc_v_m_s2);
   });
+}
+
+bool ControllerTask::crossings_on() const noexcept {
+  return config_.crossings.enabled && (config_.dynamic_obstacles.enabled || (config_.use_people && people_ != nullptr));
+}
+
+void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, VelocityCommand& command,
+                          ControllerStatus& status) noexcept {
+  const double now_s = static_cast<double>(now) * 1e-9;
+  std::size_t n = 0;
+  // The candidates too (walkers that have not yet travelled far enough to be movers): a worker
+  // coming out from behind a rack is one for the first half second.
+  const std::size_t movers =
+      std::min<std::size_t>(movers_message_.count + movers_message_.candidate_count, msg::MovingObstacles::kMax);
+  for (std::size_t i = 0; i < movers; ++i) {
+    const msg::MovingObstacle& m = movers_message_.items[i];
+    tracks_[n++] = {m.id, m.x_m, m.y_m, m.vx_m_s, m.vy_m_s, m.radius_m + config_.mover_keep_out_m, m.radius_m};
+  }
+  if (config_.use_people && people_ != nullptr) {
+    const double age_s = std::max(0.0, static_cast<double>(now - people_copy_.stamp_ns) * 1e-9);
+    for (std::size_t i = 0; i < std::min<std::size_t>(people_copy_.count, msg::People::kMax); ++i) {
+      const msg::TrackedPerson& p = people_copy_.items[i];
+      // Ids of their own, apart from the movers'.
+      tracks_[n++] = {p.id | 0x8000'0000u, p.x_m + p.vx_m_s * age_s, p.y_m + p.vy_m_s * age_s, p.vx_m_s, p.vy_m_s,
+                      p.cage_radius_m, p.width_m / 2.0};
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const CrossingTrack& t = tracks_[i];
+    if (std::hypot(t.vx_m_s, t.vy_m_s) >= lanes_.config().min_speed_m_s) lanes_.walk(t.x_m, t.y_m, t.body_m, now_s);
+  }
+  const std::span<const PathPoint> path = dwa_.path();
+  const std::size_t from = std::min(dwa_.window_begin(), path.size());
+  const CrossingDecision d =
+      gate_.decide({pose, v_m_s, path.subspan(from), std::span<const CrossingTrack>(tracks_.data(), n), &lanes_, now_s});
+  status.crossing = d.action;
+  status.crossing_cap_m_s = d.v_cap_m_s;
+  if (d.action == Crossing::evade) {
+    // Back the way it came while the footprint there is clear of what the costmap holds.
+    Pose2D behind = pose;
+    advance_arc(behind, -0.15, 0.0, 1.0);
+    const bool clear = !dwa_.footprint_collides(behind, costmap_.costmap());
+    command.v_m_s = clear ? config_.crossings.evade_v_m_s : 0.0;
+    command.w_rad_s = 0.0;
+    status.status = DwaStatus::yielding;
+    ++crossing_evades_;
+  } else if (d.action == Crossing::wait && command.v_m_s > d.v_cap_m_s) {
+    const double scale = command.v_m_s > 0.0 ? d.v_cap_m_s / command.v_m_s : 0.0;
+    command.v_m_s = d.v_cap_m_s;
+    command.w_rad_s *= scale;  // the same arc, slower
+    status.status = DwaStatus::yielding;
+    ++crossing_waits_;
+  }
 }
 
 bool ControllerTask::formation_fresh(hal::Nanos now) const noexcept {
@@ -353,6 +421,8 @@ void ControllerTask::step(const tasks::StepContext& context) {
       status.status = c.status;
       status.distance_to_goal_m = c.distance_to_goal_m;
       status.admissible = c.admissible;
+      if (crossings_on() && c.status != DwaStatus::reached && c.status != DwaStatus::idle)
+        gate(pose.value.pose, odom.value.v_m_s, context.start_ns, command, status);
     }
   }
   // The centre's velocity replaces whatever the DWA or localization would ask for; the safety
@@ -365,6 +435,8 @@ void ControllerTask::step(const tasks::StepContext& context) {
   }
   status.recoveries = dwa_.recoveries();
   status.plan_id = plan_id_;
+  status.crossing_waits = crossing_waits_;
+  status.crossing_evades = crossing_evades_;
   command_.publish(command, context.start_ns);
   status_.publish(status, context.start_ns);
   movers_.publish(movers_message_, context.start_ns);

@@ -140,6 +140,7 @@ class DwaPlanner {
   void set_path(std::span<const PathPoint> path) noexcept;
   void clear_path() noexcept;
   [[nodiscard]] std::size_t path_size() const noexcept { return path_count_; }
+  [[nodiscard]] std::span<const PathPoint> path() const noexcept { return {path_.data(), path_count_}; }
 
   // One control period: pose in the map frame, current body velocities, the local costmap.
   // movers: tracked moving obstacles predicted to now (map frame); used when mover_prediction.

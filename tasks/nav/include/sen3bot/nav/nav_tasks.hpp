@@ -20,6 +20,7 @@
 
 #include "sen3bot/msg/messages.hpp"
 #include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/crossings.hpp"
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
@@ -201,6 +202,11 @@ struct ControllerTaskConfig {
   double pose_timeout_s = 1.0;  // no fresh pose estimate: command zero
   bool use_people = false;      // the people's cages, from a People topic
   PeopleLayerConfig people_layer;
+  // Walkers' crossings of the path planned in time, and their lanes (crossings.hpp): from the
+  // movers and the people, when either is tracked.
+  CrossingConfig crossings;
+  LaneConfig lanes;
+  double mover_keep_out_m = 0.0;  // added to a mover's radius (the cages' safety radius)
 };
 
 class ControllerTask final : public tasks::Task {
@@ -219,6 +225,7 @@ class ControllerTask final : public tasks::Task {
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const Costmap2D& costmap() const noexcept { return costmap_.costmap(); }
   [[nodiscard]] const DwaPlanner& planner() const noexcept { return dwa_; }
+  [[nodiscard]] const LaneMap& lanes() const noexcept { return lanes_; }
   // Before init: every `every_cycles` cycles the costmap goes out on `topic` (the live view's).
   void publish_costmap(tasks::Topic<msg::CostmapSnapshot>* topic, int every_cycles) noexcept {
     snapshot_topic_ = topic;
@@ -254,6 +261,14 @@ class ControllerTask final : public tasks::Task {
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   DwaPlanner dwa_;
+  // The crossing gate on the DWA's command; the tracks it reads, built each cycle.
+  [[nodiscard]] bool crossings_on() const noexcept;
+  void gate(const Pose2D& pose, double v_m_s, hal::Nanos now, VelocityCommand& command, ControllerStatus& status) noexcept;
+  LaneMap lanes_;
+  CrossingGate gate_;
+  std::array<CrossingTrack, msg::MovingObstacles::kMax + msg::People::kMax> tracks_{};
+  std::uint32_t crossing_waits_ = 0;
+  std::uint32_t crossing_evades_ = 0;
   msg::MovingObstacles movers_message_;
   std::uint32_t plan_id_ = 0;
   std::uint64_t scan_seq_ = 0;

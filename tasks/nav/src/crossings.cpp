@@ -1,0 +1,239 @@
+#include "sen3bot/nav/crossings.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sen3bot::nav {
+
+Status LaneMap::init(const LaneConfig& config, double origin_x_m, double origin_y_m, double width_m, double height_m,
+                     std::pmr::memory_resource& resource) {
+  if (!(config.cell_m > 0.0) || !(config.decay_s > 0.0) || !(config.band_weight > 0.0 && config.band_weight < 1.0) ||
+      config.max_cells == 0 || !(width_m > 0.0) || !(height_m > 0.0))
+    return Error::format(Errc::config, "lanes: cell_m, decay_s, band_weight (0-1), the budget and the extent must be positive");
+  config_ = config;
+  origin_x_m_ = origin_x_m;
+  origin_y_m_ = origin_y_m;
+  cell_m_ = config.cell_m;
+  // A larger site gets coarser lanes, never more memory.
+  for (;;) {
+    columns_ = static_cast<int>(std::ceil(width_m / cell_m_));
+    rows_ = static_cast<int>(std::ceil(height_m / cell_m_));
+    if (static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_) <= config.max_cells) break;
+    cell_m_ *= 1.25;
+  }
+  const std::size_t cells = static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_);
+  auto* data = static_cast<float*>(resource.allocate(cells * sizeof(float), alignof(float)));
+  walked_ = {data, cells};
+  // The age at which the weight falls to band_weight.
+  min_walked_s_ = config.decay_s * std::log(config.band_weight);
+  clear();
+  return Status::success();
+}
+
+void LaneMap::clear() noexcept { std::fill(walked_.begin(), walked_.end(), -std::numeric_limits<float>::infinity()); }
+
+void LaneMap::walk(double x_m, double y_m, double radius_m, double now_s) noexcept {
+  if (walked_.empty()) return;
+  const double r = radius_m + config_.half_width_m;
+  const int c0 = static_cast<int>(std::floor((x_m - r - origin_x_m_) / cell_m_));
+  const int c1 = static_cast<int>(std::floor((x_m + r - origin_x_m_) / cell_m_));
+  const int r0 = static_cast<int>(std::floor((y_m - r - origin_y_m_) / cell_m_));
+  const int r1 = static_cast<int>(std::floor((y_m + r - origin_y_m_) / cell_m_));
+  for (int row = std::max(0, r0); row <= std::min(rows_ - 1, r1); ++row) {
+    for (int col = std::max(0, c0); col <= std::min(columns_ - 1, c1); ++col) {
+      const double cx = origin_x_m_ + (col + 0.5) * cell_m_;
+      const double cy = origin_y_m_ + (row + 0.5) * cell_m_;
+      if (std::hypot(cx - x_m, cy - y_m) > r) continue;
+      walked_[static_cast<std::size_t>(row) * static_cast<std::size_t>(columns_) + static_cast<std::size_t>(col)] =
+          static_cast<float>(now_s);
+    }
+  }
+}
+
+double LaneMap::weight(double x_m, double y_m, double now_s) const noexcept {
+  const int col = static_cast<int>(std::floor((x_m - origin_x_m_) / cell_m_));
+  const int row = static_cast<int>(std::floor((y_m - origin_y_m_) / cell_m_));
+  if (col < 0 || row < 0 || col >= columns_ || row >= rows_) return 0.0;
+  const double at = walked_[static_cast<std::size_t>(row) * static_cast<std::size_t>(columns_) + static_cast<std::size_t>(col)];
+  if (!std::isfinite(at)) return 0.0;
+  return std::exp(-std::max(0.0, now_s - at) / config_.decay_s);
+}
+
+bool LaneMap::in_band(double x_m, double y_m, double radius_m, double now_s) const noexcept {
+  if (walked_.empty()) return false;
+  const double since = now_s + min_walked_s_;  // stamps at or after this are in a band
+  const int c0 = static_cast<int>(std::floor((x_m - radius_m - origin_x_m_) / cell_m_));
+  const int c1 = static_cast<int>(std::floor((x_m + radius_m - origin_x_m_) / cell_m_));
+  const int r0 = static_cast<int>(std::floor((y_m - radius_m - origin_y_m_) / cell_m_));
+  const int r1 = static_cast<int>(std::floor((y_m + radius_m - origin_y_m_) / cell_m_));
+  for (int row = std::max(0, r0); row <= std::min(rows_ - 1, r1); ++row) {
+    for (int col = std::max(0, c0); col <= std::min(columns_ - 1, c1); ++col) {
+      const double at =
+          walked_[static_cast<std::size_t>(row) * static_cast<std::size_t>(columns_) + static_cast<std::size_t>(col)];
+      if (!(at >= since)) continue;
+      // The cell's nearest point to the disc's centre.
+      const double nx = std::clamp(x_m, origin_x_m_ + col * cell_m_, origin_x_m_ + (col + 1) * cell_m_);
+      const double ny = std::clamp(y_m, origin_y_m_ + row * cell_m_, origin_y_m_ + (row + 1) * cell_m_);
+      if (std::hypot(nx - x_m, ny - y_m) <= radius_m) return true;
+    }
+  }
+  return false;
+}
+
+Status CrossingGate::init(const CrossingConfig& config, double body_radius_m, double max_v_m_s,
+                          double acc_v_m_s2) noexcept {
+  if (!(config.sample_m > 0.0) || !(config.time_step_s > 0.0) || !(config.horizon_s > 0.0) ||
+      !(config.lookahead_m > 0.0) || !(config.decel_m_s2 > 0.0) || !(max_v_m_s > 0.0) || !(acc_v_m_s2 > 0.0))
+    return Error::format(Errc::config, "crossings: sample_m, time_step_s, horizon_s, lookahead_m, decel and the drive limits must be positive");
+  if (config.lookahead_m / config.sample_m + 1.0 > static_cast<double>(kMaxSamples))
+    return Error::format(Errc::config, "crossings: lookahead_m / sample_m exceeds %zu samples", kMaxSamples);
+  if (config.horizon_s / config.time_step_s + 1.0 > static_cast<double>(kMaxSteps))
+    return Error::format(Errc::config, "crossings: horizon_s / time_step_s exceeds %zu steps", kMaxSteps - 1);
+  config_ = config;
+  body_m_ = body_radius_m;
+  max_v_m_s_ = max_v_m_s;
+  acc_v_m_s2_ = acc_v_m_s2;
+  steps_ = static_cast<std::size_t>(std::floor(config.horizon_s / config.time_step_s + 1e-9)) + 1;
+  return Status::success();
+}
+
+void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
+  sample_count_ = 0;
+  const std::size_t limit =
+      std::min(kMaxSamples, static_cast<std::size_t>(std::floor(config_.lookahead_m / config_.sample_m + 1e-9)) + 1);
+  Point2D prev{in.pose.x_m, in.pose.y_m};
+  samples_[sample_count_++] = prev;
+  double carried = 0.0;  // arc length since the last sample
+  for (const msg::PathPoint& q : in.path) {
+    const Point2D next{q.x_m, q.y_m};
+    double len = std::hypot(next.x_m - prev.x_m, next.y_m - prev.y_m);
+    while (len > 0.0 && carried + len >= config_.sample_m && sample_count_ < limit) {
+      const double u = (config_.sample_m - carried) / len;
+      prev = {prev.x_m + u * (next.x_m - prev.x_m), prev.y_m + u * (next.y_m - prev.y_m)};
+      samples_[sample_count_++] = prev;
+      len = std::hypot(next.x_m - prev.x_m, next.y_m - prev.y_m);
+      carried = 0.0;
+    }
+    if (sample_count_ >= limit) return;
+    carried += len;
+    prev = next;
+  }
+}
+
+void CrossingGate::mark(const CrossingInputs& in, bool bodies_only, bool with_spread, std::span<std::uint64_t> taken,
+                        std::span<std::uint32_t> by) const noexcept {
+  std::fill(taken.begin(), taken.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
+  std::fill(by.begin(), by.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
+  for (const CrossingTrack& t : in.tracks) {
+    const double speed = std::hypot(t.vx_m_s, t.vy_m_s);
+    if (speed < config_.min_speed_m_s) continue;
+    const double base = bodies_only ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
+    for (std::size_t i = 0; i < steps_; ++i) {
+      const double time = static_cast<double>(i) * config_.time_step_s;
+      const double cx = t.x_m + t.vx_m_s * time;
+      const double cy = t.y_m + t.vy_m_s * time;
+      const double r = base + (with_spread ? config_.spread_m_s * time : 0.0);
+      for (std::size_t k = 0; k < sample_count_; ++k) {
+        const double dx = samples_[k].x_m - cx;
+        const double dy = samples_[k].y_m - cy;
+        if (dx * dx + dy * dy >= r * r) continue;
+        taken[k] |= std::uint64_t{1} << i;
+        if (by[k] == 0) by[k] = t.id + 1;  // 0: none
+      }
+    }
+  }
+}
+
+int CrossingGate::first_meeting(std::span<const std::uint64_t> taken, double v0, double share) const noexcept {
+  // share: of the top speed and the acceleration the robot is counted on to reach
+  const double top = max_v_m_s_ * share;
+  const double acc = acc_v_m_s2_ * share;
+  const double v = std::clamp(v0, 0.0, top);
+  const double t_acc = (top - v) / acc;
+  const double s_acc = v * t_acc + 0.5 * acc * t_acc * t_acc;
+  const bool path_ends = sample_count_ <
+                         std::min(kMaxSamples, static_cast<std::size_t>(std::floor(config_.lookahead_m / config_.sample_m + 1e-9)) + 1);
+  for (std::size_t i = 0; i < steps_; ++i) {
+    const double t = static_cast<double>(i) * config_.time_step_s;
+    const double s = t < t_acc ? v * t + 0.5 * acc * t * t : s_acc + top * (t - t_acc);
+    auto k = static_cast<std::size_t>(std::floor(s / config_.sample_m + 0.5));
+    if (k >= sample_count_) {
+      if (!path_ends) return -1;  // past the look-ahead: out of this crossing
+      k = sample_count_ - 1;      // the path ends here: the robot stands at its end
+    }
+    if ((taken[k] >> i) & 1u) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
+  CrossingDecision out;
+  out.v_cap_m_s = std::numeric_limits<double>::infinity();
+  sample_count_ = 0;
+  if (!config_.enabled || in.path.empty() || in.tracks.empty()) return out;
+  sample_path(in);
+  mark(in, false, true, taken_, taken_by_);
+  if (std::all_of(taken_.begin(), taken_.begin() + static_cast<std::ptrdiff_t>(sample_count_),
+                  [](std::uint64_t t) { return t == 0; }))
+    return out;
+  const double v0 = std::max(0.0, in.v_m_s);
+  if (first_meeting(taken_, v0, config_.go_share) < 0) {
+    out.action = Crossing::go;
+    return out;
+  }
+  // Where to wait: outside every walker's keep-out along their predicted way (the spread is
+  // the timing's uncertainty, which decides whether to go; it would push the wait point back
+  // by metres).
+  mark(in, false, false, touched_, touched_by_);
+  std::size_t block = 0;
+  while (block < sample_count_ && touched_[block] == 0) ++block;
+  if (block == sample_count_) {  // only the spread reaches the path: wait where it begins
+    while (block < sample_count_ && taken_[block] == 0) ++block;
+    out.track_id = taken_by_[block] - 1;
+  } else {
+    out.track_id = touched_by_[block] - 1;
+  }
+  out.conflict_at_m = static_cast<double>(block) * config_.sample_m;
+  // Wait before the first taken sample, and before any band that holds it.
+  auto k = static_cast<std::ptrdiff_t>(block) - static_cast<std::ptrdiff_t>(std::ceil(config_.stop_margin_m / config_.sample_m - 1e-9));
+  if (in.lanes != nullptr) {
+    while (k > 0 && in.lanes->in_band(samples_[static_cast<std::size_t>(k)].x_m, samples_[static_cast<std::size_t>(k)].y_m,
+                                      body_m_, in.now_s))
+      --k;
+  }
+  const double wait_at = std::max(0.0, static_cast<double>(k) * config_.sample_m);
+  out.wait_at_m = wait_at;
+  const double reach = v0 * config_.reaction_s + v0 * v0 / (2.0 * config_.decel_m_s2);
+  if (k > 0 && wait_at >= reach) {
+    out.action = Crossing::wait;
+    out.v_cap_m_s = std::sqrt(2.0 * config_.decel_m_s2 * std::max(0.0, wait_at - v0 * config_.reaction_s));
+    return out;
+  }
+  // Too late to stop before it, or standing in it: bodies alone decide.
+  mark(in, true, false, touched_, touched_by_);
+  if (v0 > 0.05) {
+    if (first_meeting(touched_, v0, 1.0) < 0) {
+      out.action = Crossing::commit;
+    } else {
+      out.action = Crossing::wait;
+      out.v_cap_m_s = 0.0;
+    }
+    return out;
+  }
+  // Standing in a lane, or where a walker's body comes soon: out of the way, backwards.
+  const auto soon_steps = static_cast<std::size_t>(std::floor(config_.evade_s / config_.time_step_s + 1e-9)) + 1;
+  const std::uint64_t soon = soon_steps >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << soon_steps) - 1;
+  const bool in_lane = in.lanes != nullptr && in.lanes->in_band(samples_[0].x_m, samples_[0].y_m, body_m_, in.now_s);
+  if ((touched_[0] & soon) != 0 || (in_lane && taken_[0] != 0)) {
+    out.action = Crossing::evade;
+    out.track_id = (touched_[0] != 0 ? touched_by_[0] : taken_by_[0]) - 1;
+    out.v_cap_m_s = 0.0;
+    return out;
+  }
+  out.action = Crossing::wait;
+  out.v_cap_m_s = 0.0;
+  return out;
+}
+
+}  // namespace sen3bot::nav

@@ -1,0 +1,183 @@
+// The crossing gate and the lanes: constructed crossings of a straight path along +x from the
+// robot at the origin, a walker crossing it at x = 2 m.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory_resource>
+#include <vector>
+
+#include "sen3bot/nav/crossings.hpp"
+
+namespace sen3bot::nav {
+namespace {
+
+constexpr double kBodyM = 0.3;  // the Pioneer's circumscribed radius, about
+constexpr double kMaxV = 0.5;
+constexpr double kAcc = 0.6;
+
+struct Bench {
+  std::vector<msg::PathPoint> path;
+  std::pmr::monotonic_buffer_resource arena{1 << 20};
+  LaneMap lanes;
+  CrossingGate gate;
+  Bench() {
+    for (int i = 1; i <= 60; ++i) path.push_back({static_cast<float>(0.1 * i), 0.0f});
+    EXPECT_TRUE(lanes.init({}, -5.0, -5.0, 15.0, 10.0, arena));
+    EXPECT_TRUE(gate.init({}, kBodyM, kMaxV, kAcc));
+  }
+  // The robot at (x, 0) heading +x at v; the path from the point ahead of it on.
+  CrossingDecision decide(double v, std::vector<CrossingTrack> tracks, double now_s = 100.0, double x = 0.0) {
+    tracks_ = std::move(tracks);
+    const auto ahead = std::find_if(path.begin(), path.end(), [x](const msg::PathPoint& p) { return p.x_m > x + 1e-3; });
+    return gate.decide({{x, 0.0, 0.0}, v, std::span<const msg::PathPoint>(&*ahead, static_cast<std::size_t>(path.end() - ahead)),
+                        tracks_, &lanes, now_s});
+  }
+  // A walker's lane along x = at, walked from y = -3 to 3 at now_s.
+  void draw_lane(double at, double now_s = 100.0) {
+    for (double y = -3.0; y <= 3.0; y += 0.05) lanes.walk(at, y, 0.23, now_s);
+  }
+
+ private:
+  std::vector<CrossingTrack> tracks_;
+};
+
+// A person crossing at x = 2 m, now at y = from_y, at speed along +y; cage 0.73 m.
+CrossingTrack walker(double from_y, double speed, double x = 2.0) { return {1, x, from_y, 0.0, speed, 0.73, 0.23}; }
+
+TEST(Crossings, NobodyCrossingLeavesTheRobotAlone) {
+  Bench b;
+  const CrossingDecision d = b.decide(0.5, {});
+  EXPECT_EQ(d.action, Crossing::clear);
+  EXPECT_TRUE(std::isinf(d.v_cap_m_s));
+  // A person standing on the path is the costmap's and the cages' business, not the gate's.
+  EXPECT_EQ(b.decide(0.5, {walker(0.0, 0.0)}).action, Crossing::clear);
+}
+
+TEST(Crossings, ASlowPersonFarAwayOrOneWhoPassesFirstDoesNotHoldTheRobot) {
+  Bench b;
+  // 4.5 m out at 0.4 m/s: at the path in 11 s, long after the robot (there in about 5 s).
+  const CrossingDecision slow = b.decide(0.5, {walker(-4.5, 0.4)});
+  EXPECT_TRUE(slow.action == Crossing::clear || slow.action == Crossing::go) << msg::to_string(slow.action);
+  EXPECT_TRUE(std::isinf(slow.v_cap_m_s));
+  // 1.6 m out at 1.3 m/s: across the path 1.2 s from now and gone when the robot gets there.
+  const CrossingDecision fast = b.decide(0.5, {walker(-1.6, 1.3)});
+  EXPECT_EQ(fast.action, Crossing::go);
+  EXPECT_TRUE(std::isinf(fast.v_cap_m_s));
+}
+
+TEST(Crossings, AFastPersonCloseMakesItWaitBeforeTheirWay) {
+  Bench b;
+  // At the path in 4 s, when the robot at 0.5 m/s gets there.
+  const CrossingDecision d = b.decide(0.5, {walker(-4.0, 1.0)});
+  ASSERT_EQ(d.action, Crossing::wait);
+  // It stops outside the person's keep-out (cage + body + margin) of their line, x = 2 m.
+  EXPECT_LE(d.wait_at_m, 2.0 - (0.73 + kBodyM + 0.1) + 1e-9);
+  EXPECT_GT(d.wait_at_m, 0.5);
+  // From the cap it brakes to a stop there: v^2 / 2a within the wait point, less the reaction.
+  const CrossingConfig& c = b.gate.config();
+  EXPECT_NEAR(d.v_cap_m_s, std::sqrt(2.0 * c.decel_m_s2 * (d.wait_at_m - 0.5 * c.reaction_s)), 1e-9);
+  // Once they have passed, it goes.
+  EXPECT_EQ(b.decide(0.0, {walker(1.0, 1.3)}, 100.0, d.wait_at_m).action, Crossing::go);
+}
+
+TEST(Crossings, ItNeverWaitsInsideALane) {
+  Bench b;
+  // A lane along x = 1.2 m, walked a minute ago, before the crossing at x = 2 m.
+  b.draw_lane(1.2, 40.0);
+  const CrossingDecision d = b.decide(0.3, {walker(-4.0, 1.0)});
+  ASSERT_EQ(d.action, Crossing::wait);
+  EXPECT_FALSE(b.lanes.in_band(d.wait_at_m, 0.0, kBodyM, 100.0)) << "waits at " << d.wait_at_m;
+  // The band's edge, to the lanes' cell.
+  EXPECT_LE(d.wait_at_m + kBodyM, 1.2 - 0.23 - b.lanes.config().half_width_m + b.lanes.cell_m() + 1e-9);
+  // Without the lane it would have waited in it.
+  Bench open;
+  const CrossingDecision there = open.decide(0.3, {walker(-4.0, 1.0)});
+  ASSERT_EQ(there.action, Crossing::wait);
+  EXPECT_TRUE(b.lanes.in_band(there.wait_at_m, 0.0, kBodyM, 100.0)) << "waits at " << there.wait_at_m;
+}
+
+TEST(Crossings, TwoLanesTooCloseToStandBetweenAreOne) {
+  Bench b;
+  // The gap between the two bands (about 0.35 m) is narrower than the robot.
+  b.draw_lane(1.0);
+  b.draw_lane(2.0);
+  // At the path in 6 s, about when the robot gets there.
+  const CrossingDecision d = b.decide(0.0, {walker(-6.0, 1.0, 2.9)});
+  ASSERT_EQ(d.action, Crossing::wait);
+  EXPECT_LE(d.wait_at_m + kBodyM, 1.0 - 0.33 + b.lanes.cell_m() + 1e-9) << "waits at " << d.wait_at_m;
+  // With the second lane 1.5 m on, the robot fits between them.
+  Bench wide;
+  wide.draw_lane(1.0);
+  wide.draw_lane(2.5);
+  const CrossingDecision w = wide.decide(0.0, {walker(-6.0, 1.0, 3.4)});
+  ASSERT_EQ(w.action, Crossing::wait);
+  EXPECT_GT(w.wait_at_m - kBodyM, 1.0 + 0.33 - 1e-9) << "waits at " << w.wait_at_m;
+  EXPECT_FALSE(wide.lanes.in_band(w.wait_at_m, 0.0, kBodyM, 100.0));
+}
+
+TEST(Crossings, LanesFadeAMinuteOrTwoAfterTheLastWalker) {
+  Bench b;
+  b.draw_lane(2.0, 100.0);
+  EXPECT_NEAR(b.lanes.weight(2.0, 0.0, 100.0), 1.0, 1e-9);
+  EXPECT_NEAR(b.lanes.weight(2.0, 0.0, 160.0), std::exp(-1.0), 1e-6);
+  const double fades_s = -b.lanes.config().decay_s * std::log(b.lanes.config().band_weight);
+  EXPECT_TRUE(b.lanes.in_band(2.0, 0.0, 0.0, 100.0 + fades_s - 1.0));
+  EXPECT_FALSE(b.lanes.in_band(2.0, 0.0, 0.0, 100.0 + fades_s + 1.0));
+  EXPECT_FALSE(b.lanes.in_band(2.6, 0.0, 0.2, 100.0)) << "the band is the body plus the sway, no wider";
+}
+
+TEST(Crossings, TooLateToStopItGoesOnWhenDrivingOnTouchesNobody) {
+  Bench b;
+  // At full speed 0.3 m before the person's keep-out: braking stops it inside. Driving on, it
+  // is past x = 2 m before the walker's body gets there; stopping would leave it in their way.
+  const CrossingDecision d = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.9);
+  EXPECT_EQ(d.action, Crossing::commit);
+  // The same with the walker about to step onto the path: it stops.
+  const CrossingDecision late = b.decide(0.5, {walker(-1.5, 1.0)}, 100.0, 0.9);
+  EXPECT_EQ(late.action, Crossing::wait);
+  EXPECT_EQ(late.v_cap_m_s, 0.0);
+}
+
+TEST(Crossings, StandingInAWalkersWayItBacksOffOtherwiseItWaits) {
+  Bench b;
+  // Standing on the crossing, the walker's body there within evade_s.
+  EXPECT_EQ(b.decide(0.0, {walker(-1.2, 1.3)}, 100.0, 2.0).action, Crossing::evade);
+  // Standing at the wait line as the walker passes at the keep-out's distance: it waits.
+  EXPECT_EQ(b.decide(0.0, {walker(-1.2, 1.3)}, 100.0, 0.9).action, Crossing::wait);
+  // In their lane while they are still far: out of it.
+  b.draw_lane(2.0);
+  EXPECT_EQ(b.decide(0.0, {walker(-5.0, 1.0)}, 100.0, 2.0).action, Crossing::evade);
+}
+
+TEST(Crossings, ABadConfigurationIsAClearError) {
+  CrossingGate g;
+  CrossingConfig c;
+  c.sample_m = 0.0;
+  EXPECT_FALSE(g.init(c, kBodyM, kMaxV, kAcc));
+  c = {};
+  c.lookahead_m = 100.0;
+  const Status s = g.init(c, kBodyM, kMaxV, kAcc);
+  ASSERT_FALSE(s);
+  EXPECT_NE(std::string(s.error().message()).find("lookahead_m"), std::string::npos);
+  LaneMap lanes;
+  std::pmr::monotonic_buffer_resource arena{1024};
+  LaneConfig l;
+  l.band_weight = 1.5;
+  EXPECT_FALSE(lanes.init(l, 0.0, 0.0, 10.0, 10.0, arena));
+}
+
+TEST(Crossings, ALargeSiteGetsCoarserLanesNotMoreMemory) {
+  std::pmr::monotonic_buffer_resource arena{1 << 20};
+  LaneMap lanes;
+  ASSERT_TRUE(lanes.init({}, 0.0, 0.0, 100.0, 100.0, arena));
+  EXPECT_LE(static_cast<std::size_t>(lanes.columns()) * static_cast<std::size_t>(lanes.rows()), lanes.config().max_cells);
+  EXPECT_LE(lanes.bytes(), lanes.config().max_cells * sizeof(float));
+  EXPECT_GE(lanes.cell_m() * lanes.columns(), 100.0);
+  lanes.walk(50.0, 50.0, 0.23, 1.0);
+  EXPECT_TRUE(lanes.in_band(50.0, 50.0, 0.0, 1.0));
+  EXPECT_FALSE(lanes.in_band(52.0, 50.0, 0.0, 1.0));
+}
+
+}  // namespace
+}  // namespace sen3bot::nav
