@@ -121,14 +121,14 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
   }
 }
 
-void CrossingGate::mark(const CrossingInputs& in, bool bodies_only, bool with_spread, std::span<std::uint64_t> taken,
+void CrossingGate::mark(const CrossingInputs& in, bool with_spread, std::span<std::uint64_t> taken,
                         std::span<std::uint32_t> by) const noexcept {
   std::fill(taken.begin(), taken.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
   std::fill(by.begin(), by.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
   for (const CrossingTrack& t : in.tracks) {
     const double speed = std::hypot(t.vx_m_s, t.vy_m_s);
     if (speed < config_.min_speed_m_s) continue;
-    const double base = bodies_only ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
+    const double base = t.keep_out_m + body_m_ + config_.margin_m;
     for (std::size_t i = 0; i < steps_; ++i) {
       const double time = static_cast<double>(i) * config_.time_step_s;
       const double cx = t.x_m + t.vx_m_s * time;
@@ -173,7 +173,7 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
   sample_count_ = 0;
   if (!config_.enabled || in.path.empty() || in.tracks.empty()) return out;
   sample_path(in);
-  mark(in, false, true, taken_, taken_by_);
+  mark(in, true, taken_, taken_by_);
   if (std::all_of(taken_.begin(), taken_.begin() + static_cast<std::ptrdiff_t>(sample_count_),
                   [](std::uint64_t t) { return t == 0; }))
     return out;
@@ -185,7 +185,7 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
   // Where to wait: outside every walker's keep-out along their predicted way (the spread is
   // the timing's uncertainty, which decides whether to go; it would push the wait point back
   // by metres).
-  mark(in, false, false, touched_, touched_by_);
+  mark(in, false, touched_, touched_by_);
   std::size_t block = 0;
   while (block < sample_count_ && touched_[block] == 0) ++block;
   if (block == sample_count_) {  // only the spread reaches the path: wait where it begins
@@ -210,29 +210,10 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
     out.v_cap_m_s = std::sqrt(2.0 * config_.decel_m_s2 * std::max(0.0, wait_at - v0 * config_.reaction_s));
     return out;
   }
-  // Too late to stop before it, or standing in it: bodies alone decide.
-  mark(in, true, false, touched_, touched_by_);
-  if (v0 > 0.05) {
-    if (first_meeting(touched_, v0, 1.0) < 0) {
-      out.action = Crossing::commit;
-    } else {
-      out.action = Crossing::wait;
-      out.v_cap_m_s = 0.0;
-    }
-    return out;
-  }
-  // Standing in a lane, or where a walker's body comes soon: out of the way, backwards.
-  const auto soon_steps = static_cast<std::size_t>(std::floor(config_.evade_s / config_.time_step_s + 1e-9)) + 1;
-  const std::uint64_t soon = soon_steps >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << soon_steps) - 1;
-  const bool in_lane = in.lanes != nullptr && in.lanes->in_band(samples_[0].x_m, samples_[0].y_m, body_m_, in.now_s);
-  if ((touched_[0] & soon) != 0 || (in_lane && taken_[0] != 0)) {
-    out.action = Crossing::evade;
-    out.track_id = (touched_[0] != 0 ? touched_by_[0] : taken_by_[0]) - 1;
-    out.v_cap_m_s = 0.0;
-    return out;
-  }
-  out.action = Crossing::wait;
-  out.v_cap_m_s = 0.0;
+  // Too late to stop before it, or standing in it: the gate steps aside. Braking there would
+  // stand the robot in the walker's way; the DWA's mover check and the safety filter's cage
+  // and approach checks decide (they brake for a contact, or drive on out of the way).
+  out.action = Crossing::commit;
   return out;
 }
 

@@ -351,16 +351,7 @@ void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, Velo
       gate_.decide({pose, v_m_s, path.subspan(from), std::span<const CrossingTrack>(tracks_.data(), n), &lanes_, now_s});
   status.crossing = d.action;
   status.crossing_cap_m_s = d.v_cap_m_s;
-  if (d.action == Crossing::evade) {
-    // Back the way it came while the footprint there is clear of what the costmap holds.
-    Pose2D behind = pose;
-    advance_arc(behind, -0.15, 0.0, 1.0);
-    const bool clear = !dwa_.footprint_collides(behind, costmap_.costmap());
-    command.v_m_s = clear ? config_.crossings.evade_v_m_s : 0.0;
-    command.w_rad_s = 0.0;
-    status.status = DwaStatus::yielding;
-    ++crossing_evades_;
-  } else if (d.action == Crossing::wait && command.v_m_s > d.v_cap_m_s) {
+  if (d.action == Crossing::wait && command.v_m_s > d.v_cap_m_s) {
     const double scale = command.v_m_s > 0.0 ? d.v_cap_m_s / command.v_m_s : 0.0;
     command.v_m_s = d.v_cap_m_s;
     command.w_rad_s *= scale;  // the same arc, slower
@@ -436,7 +427,6 @@ void ControllerTask::step(const tasks::StepContext& context) {
   status.recoveries = dwa_.recoveries();
   status.plan_id = plan_id_;
   status.crossing_waits = crossing_waits_;
-  status.crossing_evades = crossing_evades_;
   command_.publish(command, context.start_ns);
   status_.publish(status, context.start_ns);
   movers_.publish(movers_message_, context.start_ns);

@@ -137,8 +137,7 @@ enum class CrossingAction : std::uint8_t {
   clear,   // no walker's predicted way crosses the path ahead
   go,      // one does, and the robot driving on clears it first
   wait,    // the robot stops before it, and before any lane that holds it (speed capped)
-  commit,  // too late to stop before it: driving on touches nobody, stopping would stand in it
-  evade,   // standing in it with nowhere ahead to wait: backing off the way it came
+  commit,  // too late to stop before it: left to the DWA's mover check and the safety filter
 };
 
 inline const char* to_string(CrossingAction c) noexcept {
@@ -147,7 +146,6 @@ inline const char* to_string(CrossingAction c) noexcept {
     case CrossingAction::go: return "go";
     case CrossingAction::wait: return "wait";
     case CrossingAction::commit: return "commit";
-    case CrossingAction::evade: return "evade";
   }
   return "?";
 }
@@ -156,8 +154,7 @@ struct ControllerStatus {
   DwaStatus status = DwaStatus::idle;
   CrossingAction crossing = CrossingAction::clear;
   double crossing_cap_m_s = 0.0;  // wait: the speed cap (infinity otherwise)
-  std::uint32_t crossing_waits = 0;   // cycles the gate lowered the DWA's speed, since start
-  std::uint32_t crossing_evades = 0;  // cycles it backed the robot off
+  std::uint32_t crossing_waits = 0;  // cycles the gate lowered the DWA's speed, since start
   RecoveryCounts recoveries;
   double distance_to_goal_m = 0.0;
   std::uint32_t admissible = 0;

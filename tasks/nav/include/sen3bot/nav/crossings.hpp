@@ -19,12 +19,8 @@
 //    further back while its body there would stand in a band (so it never waits in a lane,
 //    and two bands too close to stand between are one). The result is a speed cap that brakes
 //    it there; beyond that point's braking reach the cap does not bind;
-//  * commit: a robot that can no longer stop before that point goes on if driving on touches
-//    no track's body (radius plus its half-width, no spread): stopping there would leave it
-//    in the lane;
-//  * evade: a robot standing with nowhere ahead to wait, where a walker's body comes within
-//    evade_s or in a band a walker's way takes, backs off along the way it came (at
-//    evade_v_m_s; the controller checks behind).
+//  * commit: a robot that can no longer stop before that point is left to the DWA's mover
+//    check and the safety filter: a forced stop there would stand it in the walker's way.
 // Pure: no allocation after init, no clock.
 #include <cstdint>
 #include <memory_resource>
@@ -85,10 +81,8 @@ struct CrossingConfig {
   double stop_margin_m = 0.1;
   double decel_m_s2 = 0.45;     // the braking the cap counts on (below the base's)
   double reaction_s = 0.2;      // command to wheels, and one period
-  double evade_v_m_s = -0.1;
-  double evade_s = 1.5;  // a walker's body this soon at the robot's place makes it back off
   // Going first counts on this share of the top speed and acceleration (curves and the
-  // DWA's other critics slow it); committing counts on all of it.
+  // DWA's other critics slow it).
   double go_share = 0.75;
 };
 
@@ -97,7 +91,7 @@ struct CrossingTrack {
   std::uint32_t id = 0;
   double x_m = 0.0, y_m = 0.0, vx_m_s = 0.0, vy_m_s = 0.0;
   double keep_out_m = 0.0;  // a person's cage radius; a mover's radius and what cages add
-  double body_m = 0.0;      // the body's own radius (commit and evade)
+  double body_m = 0.0;      // the body's own radius (the lanes it draws)
 };
 
 using Crossing = msg::CrossingAction;
@@ -136,7 +130,7 @@ class CrossingGate {
   // taken in `taken`; -1 when none is.
   [[nodiscard]] int first_meeting(std::span<const std::uint64_t> taken, double v0, double share) const noexcept;
   void sample_path(const CrossingInputs& in) noexcept;
-  void mark(const CrossingInputs& in, bool bodies_only, bool with_spread, std::span<std::uint64_t> taken,
+  void mark(const CrossingInputs& in, bool with_spread, std::span<std::uint64_t> taken,
             std::span<std::uint32_t> by) const noexcept;
 
   CrossingConfig config_;
@@ -148,7 +142,7 @@ class CrossingGate {
   std::size_t sample_count_ = 0;
   std::array<std::uint64_t, kMaxSamples> taken_{};  // bit i: taken at step i
   std::array<std::uint32_t, kMaxSamples> taken_by_{};
-  std::array<std::uint64_t, kMaxSamples> touched_{};  // the bodies alone, no spread
+  std::array<std::uint64_t, kMaxSamples> touched_{};  // the keep-outs alone, no spread
   std::array<std::uint32_t, kMaxSamples> touched_by_{};
 };
 

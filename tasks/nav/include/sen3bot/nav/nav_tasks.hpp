@@ -268,7 +268,6 @@ class ControllerTask final : public tasks::Task {
   CrossingGate gate_;
   std::array<CrossingTrack, msg::MovingObstacles::kMax + msg::People::kMax> tracks_{};
   std::uint32_t crossing_waits_ = 0;
-  std::uint32_t crossing_evades_ = 0;
   msg::MovingObstacles movers_message_;
   std::uint32_t plan_id_ = 0;
   std::uint64_t scan_seq_ = 0;
