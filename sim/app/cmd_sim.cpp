@@ -233,6 +233,7 @@ struct CaseResult {
   std::string description;
   MissionReport report;
   RefereeReport truth;
+  std::vector<TimedPose> contacts;  // where and when each began
   double sim_time_s = 0;
   double wall_time_s = 0;
   msg::Pose2D final_pose;  // the estimate when the case ended
@@ -290,6 +291,12 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                  c.wall_time_s);
     std::fprintf(f, " \"final_pose\": {\"x\": %.4f, \"y\": %.4f, \"theta\": %.4f},", c.final_pose.x_m, c.final_pose.y_m,
                  c.final_pose.theta_rad);
+    std::fprintf(f, "\n     \"contact_events\": [");
+    for (std::size_t k = 0; k < c.contacts.size(); ++k)
+      std::fprintf(f, "%s{\"t_s\": %.2f, \"x\": %.3f, \"y\": %.3f, \"by_robot\": %s, \"with\": \"%s\"}", k ? ", " : "",
+                   c.contacts[k].t_s, c.contacts[k].pose.x_m, c.contacts[k].pose.y_m, c.contacts[k].moving ? "true" : "false",
+                   c.contacts[k].person ? "person" : "map or box");
+    std::fprintf(f, "],");
     if (c.kidnapped) {
       if (truth.relocalization_s >= 0) std::fprintf(f, " \"relocalization_s\": %.2f,", truth.relocalization_s);
       else std::fprintf(f, " \"relocalization_s\": null,");
@@ -494,6 +501,8 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   result.sim_time_s = sim_s;
   result.report = mission.report();
   result.truth = board.referee().report();
+  const std::span<const TimedPose> contacts = board.referee().contact_poses();
+  result.contacts.assign(contacts.begin(), contacts.end());
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
   result.safe_path_points = fw.safe_path().size();
   if (result.safety_io) {

@@ -127,17 +127,24 @@ TEST(Crossings, LanesFadeAMinuteOrTwoAfterTheLastWalker) {
   EXPECT_FALSE(b.lanes.in_band(2.6, 0.0, 0.2, 100.0)) << "the band is the body plus the sway, no wider";
 }
 
-TEST(Crossings, TooLateToStopBeforeTheirWayItDoesNotStopInIt) {
+TEST(Crossings, TooLateToStopBeforeTheKeepOutItStopsShortOfTheirWayOrNotAtAll) {
   Bench b;
-  // At full speed 0.9 m on, inside the person's keep-out of their line: braking now would
-  // stand it in their way. The gate leaves the command to the DWA and the safety filter.
-  const CrossingDecision d = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.9);
-  EXPECT_EQ(d.action, Crossing::commit);
-  EXPECT_TRUE(std::isinf(d.v_cap_m_s));
-  // Standing there, the same.
+  // At full speed 0.9 m on, inside the walker's keep-out of their line (x = 2 m): braking
+  // now ends 0.38 m on, short of their body's sweep (0.53 m from the line). It brakes.
+  const CrossingDecision short_of = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.9);
+  EXPECT_EQ(short_of.action, Crossing::wait);
+  EXPECT_EQ(short_of.v_cap_m_s, 0.0);
+  // 0.4 m farther on, braking would end in their way: the gate leaves it to the DWA and the
+  // safety filter rather than stand it there.
+  const CrossingDecision in_way = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 1.3);
+  EXPECT_EQ(in_way.action, Crossing::commit);
+  EXPECT_TRUE(std::isinf(in_way.v_cap_m_s));
+  // Standing in it, the same.
   EXPECT_EQ(b.decide(0.0, {walker(-1.2, 1.3)}, 100.0, 2.0).action, Crossing::commit);
-  // Farther back it still can, and does.
-  EXPECT_EQ(b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.0).action, Crossing::wait);
+  // From the start it can still stop before the keep-out, and the cap lets it drive on.
+  const CrossingDecision early = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.0);
+  EXPECT_EQ(early.action, Crossing::wait);
+  EXPECT_GT(early.v_cap_m_s, 0.5);
 }
 
 TEST(Crossings, ABadConfigurationIsAClearError) {

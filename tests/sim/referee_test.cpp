@@ -92,8 +92,11 @@ TEST(Referee, WhereEachContactBeganAndWhetherTheRobotMoved) {
   t = at(0.015, 0.3, 1.0);
   t.contacts = 2;
   t.moving_contacts = 1;
+  t.contact_person = true;
   referee->observe(t);
   ASSERT_EQ(referee->contact_poses().size(), 2u);
+  EXPECT_FALSE(referee->contact_poses()[0].person);
+  EXPECT_TRUE(referee->contact_poses()[1].person);
   EXPECT_NEAR(referee->contact_poses()[0].pose.x_m, 0.1, 1e-9);
   EXPECT_NEAR(referee->contact_poses()[0].t_s, 0.005, 1e-9);
   EXPECT_FALSE(referee->contact_poses()[0].moving);

@@ -22,7 +22,7 @@ void keep_spaced(std::array<msg::Point2D, N>& points, std::size_t& count, double
 void Referee::observe(const GroundTruth& truth) noexcept {
   const double t_s = static_cast<double>(truth.stamp_ns) / 1e9;
   if (truth.contacts > report_.contacts && contact_count_ < kMaxContacts)
-    contacts_[contact_count_++] = {t_s, truth.pose, truth.moving_contacts > report_.moving_contacts};
+    contacts_[contact_count_++] = {t_s, truth.pose, truth.moving_contacts > report_.moving_contacts, truth.contact_person};
   if (pose_count_ < kMaxPoses && (pose_count_ == 0 || t_s - poses_[pose_count_ - 1].t_s >= kPoseIntervalS - 1e-9)) {
     poses_[pose_count_++] = {t_s, truth.pose, false};
     for (std::size_t k = 0; k < truth.people_count && person_path_count_ < kMaxPersonPath; ++k)

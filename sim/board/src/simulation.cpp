@@ -196,6 +196,8 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   const bool contact = world_->collides(pose, config_.footprint);
   if (contact && !truth_.in_contact) {
     ++truth_.contacts;
+    const int mover = world_->touching_mover(pose, config_.footprint);
+    truth_.contact_person = mover >= 0 && world_->mover_script(static_cast<std::size_t>(mover)).person;
     // A person walking into a robot that has stopped, or that moves away from them, is not
     // the robot's doing.
     if (world_->robot_closing(pose, config_.footprint, truth_.speed_m_s, kMovingSpeedM_s)) ++truth_.moving_contacts;

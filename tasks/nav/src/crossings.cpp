@@ -121,14 +121,15 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
   }
 }
 
-void CrossingGate::mark(const CrossingInputs& in, bool with_spread, std::span<std::uint64_t> taken,
+void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::uint64_t> taken,
                         std::span<std::uint32_t> by) const noexcept {
   std::fill(taken.begin(), taken.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
   std::fill(by.begin(), by.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
   for (const CrossingTrack& t : in.tracks) {
     const double speed = std::hypot(t.vx_m_s, t.vy_m_s);
     if (speed < config_.min_speed_m_s) continue;
-    const double base = t.keep_out_m + body_m_ + config_.margin_m;
+    const double base = reach == Reach::body ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
+    const bool with_spread = reach == Reach::spread;
     for (std::size_t i = 0; i < steps_; ++i) {
       const double time = static_cast<double>(i) * config_.time_step_s;
       const double cx = t.x_m + t.vx_m_s * time;
@@ -173,7 +174,7 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
   sample_count_ = 0;
   if (!config_.enabled || in.path.empty() || in.tracks.empty()) return out;
   sample_path(in);
-  mark(in, true, taken_, taken_by_);
+  mark(in, Reach::spread, taken_, taken_by_);
   if (std::all_of(taken_.begin(), taken_.begin() + static_cast<std::ptrdiff_t>(sample_count_),
                   [](std::uint64_t t) { return t == 0; }))
     return out;
@@ -185,7 +186,7 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
   // Where to wait: outside every walker's keep-out along their predicted way (the spread is
   // the timing's uncertainty, which decides whether to go; it would push the wait point back
   // by metres).
-  mark(in, false, touched_, touched_by_);
+  mark(in, Reach::keep_out, touched_, touched_by_);
   std::size_t block = 0;
   while (block < sample_count_ && touched_[block] == 0) ++block;
   if (block == sample_count_) {  // only the spread reaches the path: wait where it begins
@@ -210,10 +211,20 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
     out.v_cap_m_s = std::sqrt(2.0 * config_.decel_m_s2 * std::max(0.0, wait_at - v0 * config_.reaction_s));
     return out;
   }
-  // Too late to stop before it, or standing in it: the gate steps aside. Braking there would
-  // stand the robot in the walker's way; the DWA's mover check and the safety filter's cage
-  // and approach checks decide (they brake for a contact, or drive on out of the way).
-  out.action = Crossing::commit;
+  // Too late to stop before it, or standing in it. Where braking now would end, is it in a
+  // walker's way (their body's sweep, no keep-out, no spread)? Then the gate steps aside: the
+  // DWA's mover check and the safety filter's cage and approach checks decide (they brake for
+  // a contact, or drive on out of the way). Else it stops there, short of their way.
+  mark(in, Reach::body, bodies_, bodies_by_);
+  const auto stop_k = std::min(sample_count_ - 1, static_cast<std::size_t>(std::ceil(reach / config_.sample_m - 1e-9)));
+  bool in_their_way = false;
+  for (std::size_t j = 0; j <= stop_k; ++j) in_their_way = in_their_way || bodies_[j] != 0;
+  if (in_their_way) {
+    out.action = Crossing::commit;
+    return out;
+  }
+  out.action = Crossing::wait;
+  out.v_cap_m_s = 0.0;
   return out;
 }
 

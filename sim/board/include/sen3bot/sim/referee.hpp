@@ -39,6 +39,7 @@ struct TimedPose {
   double t_s = 0;
   msg::Pose2D pose;
   bool moving = false;  // for a contact: whether the robot itself was moving
+  bool person = false;  // for a contact: whether it was with a person (else the map or a box)
 };
 
 // Where a person (a world mover) truly was at a world time.

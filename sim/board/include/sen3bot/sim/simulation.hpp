@@ -81,6 +81,7 @@ struct GroundTruth {
   std::uint64_t contacts = 0;       // times the footprint started to overlap something
   std::uint64_t moving_contacts = 0;  // of those, the robot moving towards what it touched
   bool in_contact = false;
+  bool contact_person = false;  // the newest contact began with a person
   hal::Nanos kidnapped_ns = -1;     // when the robot was carried away (-1: not yet)
   // The visible people's true centres (the first kMaxPeople of them), for the referee.
   static constexpr std::size_t kMaxPeople = 16;

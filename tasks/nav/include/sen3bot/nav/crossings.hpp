@@ -19,8 +19,9 @@
 //    further back while its body there would stand in a band (so it never waits in a lane,
 //    and two bands too close to stand between are one). The result is a speed cap that brakes
 //    it there; beyond that point's braking reach the cap does not bind;
-//  * commit: a robot that can no longer stop before that point is left to the DWA's mover
-//    check and the safety filter: a forced stop there would stand it in the walker's way.
+//  * a robot that can no longer stop before that point stops where braking ends if that is
+//    short of every walker's body sweep (wait, cap 0); if it is not (commit), it is left to
+//    the DWA's mover check and the safety filter: a forced stop would stand it in the way.
 // Pure: no allocation after init, no clock.
 #include <cstdint>
 #include <memory_resource>
@@ -130,7 +131,9 @@ class CrossingGate {
   // taken in `taken`; -1 when none is.
   [[nodiscard]] int first_meeting(std::span<const std::uint64_t> taken, double v0, double share) const noexcept;
   void sample_path(const CrossingInputs& in) noexcept;
-  void mark(const CrossingInputs& in, bool with_spread, std::span<std::uint64_t> taken,
+  // What a walker's disc is: keep-out plus the spread, keep-out alone, or their body alone.
+  enum class Reach : std::uint8_t { spread, keep_out, body };
+  void mark(const CrossingInputs& in, Reach reach, std::span<std::uint64_t> taken,
             std::span<std::uint32_t> by) const noexcept;
 
   CrossingConfig config_;
@@ -144,6 +147,8 @@ class CrossingGate {
   std::array<std::uint32_t, kMaxSamples> taken_by_{};
   std::array<std::uint64_t, kMaxSamples> touched_{};  // the keep-outs alone, no spread
   std::array<std::uint32_t, kMaxSamples> touched_by_{};
+  std::array<std::uint64_t, kMaxSamples> bodies_{};  // the bodies' sweep
+  std::array<std::uint32_t, kMaxSamples> bodies_by_{};
 };
 
 }  // namespace sen3bot::nav
