@@ -1,13 +1,24 @@
 #include "base_task.hpp"
 
 #include <new>
+#include <numbers>
 
 #include "adapters.hpp"
+#include "sen3bot/p2os/sonar.hpp"
 
 namespace sen3bot::firmware {
 
 BaseTask::BaseTask(const p2os::P2osConfig& config, hal::Board& board, const BaseTopics& topics)
-    : config_(config), board_(board), topics_(topics), backoff_(config.reopen_delay_ms) {}
+    : config_(config), board_(board), topics_(topics), backoff_(config.reopen_delay_ms) {
+  // The P3-DX's ring (the driver speaks to a P3-DX); never read until a SIP brings a disc.
+  sonar_.count = static_cast<std::uint8_t>(p2os::kSonarDiscs);
+  sonar_.max_range_m = p2os::kSonarMaxRangeM;
+  for (std::size_t d = 0; d < p2os::kSonarDiscs; ++d) {
+    const p2os::SonarMount& m = p2os::kP3dxSonar[d];
+    sonar_.mount[d] = {m.x_mm / 1000.0, m.y_mm / 1000.0, m.heading_deg * std::numbers::pi / 180.0};
+    sonar_.stamp_ns[d] = -1;
+  }
+}
 
 BaseTask::~BaseTask() {
   if (driver_ != nullptr) {
@@ -49,6 +60,16 @@ void BaseTask::publish(hal::Nanos now_ns) {
   topics_.odometry.publish(to_nav_odometry(state), now_ns);
   topics_.flags.publish(to_base_flags(state), now_ns);
   last_published_link_ = state.link;
+  const p2os::Sip& sip = driver_->last_sip();
+  if (topics_.sonar == nullptr || sip.sonar_count == 0) return;
+  // Each reading is the newest of its disc; a SIP carries only the discs fired since the last.
+  for (std::size_t i = 0; i < std::min<std::size_t>(sip.sonar_count, p2os::kMaxSonarPerSip); ++i) {
+    const p2os::SonarReading& r = sip.sonar[i];
+    if (r.disc >= sonar_.count) continue;
+    sonar_.range_m[r.disc] = r.range_mm * config_.conversion.range_conv_mm_per_unit / 1000.0;
+    sonar_.stamp_ns[r.disc] = now_ns;
+  }
+  topics_.sonar->publish(sonar_, now_ns);
 }
 
 void BaseTask::step(const tasks::StepContext& context) {

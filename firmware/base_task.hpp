@@ -20,6 +20,7 @@ struct BaseTopics {
   const tasks::Topic<msg::VelocityCommand>& command;  // the safety filter's output
   tasks::Topic<msg::Odometry>& odometry;
   tasks::Topic<msg::BaseFlags>& flags;
+  tasks::Topic<msg::Sonar>* sonar = nullptr;  // the ring's readings, as SIPs bring them
 };
 
 class BaseTask final : public tasks::Task {
@@ -58,6 +59,7 @@ class BaseTask final : public tasks::Task {
   std::atomic<bool> missing_{false};
   std::uint64_t last_command_sequence_ = 0;
   p2os::LinkState last_published_link_ = p2os::LinkState::disconnected;
+  msg::Sonar sonar_;
 };
 
 }  // namespace sen3bot::firmware

@@ -164,6 +164,7 @@ Status Firmware::create_navigation() {
   safety_task_ = std::make_unique<nav::SafetyTask>(safety, nav_request_, nav_scan_, nav_odometry_, nav_base_flags_,
                                                    nav_pose_, nav_movers_, nav_command_, nav_safety_, people,
                                                    config_.devices.has_io_node ? &nav_io_ : nullptr);
+  if (config_.devices.has_base) safety_task_->use_sonar(&nav_sonar_);
 
   // With the collaborative mode the mission's or the fleet's goals are the cooperative ones:
   // the cobot row passes them on.
@@ -256,7 +257,7 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
 Status Firmware::create_tasks() {
   if (config_.devices.has_base)
     base_task_ = std::make_unique<BaseTask>(config_.devices.base, board_,
-                                            BaseTopics{nav_command_, nav_odometry_, nav_base_flags_});
+                                            BaseTopics{nav_command_, nav_odometry_, nav_base_flags_, &nav_sonar_});
   if (config_.devices.has_laser) laser_task_ = std::make_unique<LaserTask>(config_.devices.laser, board_, nav_scan_);
   if (config_.devices.has_io_node)
     can_io_task_ = std::make_unique<CanIoTask>(config_.devices.io_node, board_,

@@ -151,6 +151,7 @@ class Firmware {
   tasks::Topic<msg::ScanMessage> nav_scan_;
   tasks::Topic<msg::Odometry> nav_odometry_;
   tasks::Topic<msg::BaseFlags> nav_base_flags_;
+  tasks::Topic<msg::Sonar> nav_sonar_;
   tasks::Topic<msg::PoseEstimate> nav_pose_;
   tasks::Topic<msg::NavGoal> nav_goal_;
   tasks::Topic<msg::PathMessage> nav_path_;

@@ -56,6 +56,7 @@ const char* safety_reason(std::uint32_t bit) {
     case msg::kSafetyBumper: return "bumper";
     case msg::kSafetyIoLost: return "io_lost";
     case msg::kSafetyResetNeeded: return "reset_needed";
+    case msg::kSafetySonar: return "sonar";
     default: return "other";
   }
 }

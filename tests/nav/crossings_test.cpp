@@ -24,7 +24,9 @@ struct Bench {
   Bench() {
     for (int i = 1; i <= 60; ++i) path.push_back({static_cast<float>(0.1 * i), 0.0f});
     EXPECT_TRUE(lanes.init({}, -5.0, -5.0, 15.0, 10.0, arena));
-    EXPECT_TRUE(gate.init({}, kBodyM, kMaxV, kAcc));
+    CrossingConfig on;
+    on.enabled = true;
+    EXPECT_TRUE(gate.init(on, kBodyM, kMaxV, kAcc));
   }
   // The robot at (x, 0) heading +x at v; the path from the point ahead of it on.
   CrossingDecision decide(double v, std::vector<CrossingTrack> tracks, double now_s = 100.0, double x = 0.0) {

@@ -572,3 +572,76 @@ TEST(Safety, AMoverAtWalkingSpeedIsCagedAsAPersonWhenTheFirmwareTracksPeople) {
 
 }  // namespace
 }  // namespace sen3bot::nav
+
+namespace sen3bot::nav {
+namespace {
+
+// The P3-DX ring with one echo: disc `d` reads range_m, read `age_s` ago.
+msg::Sonar ring_with_echo(std::size_t d, double range_m, hal::Nanos now_ns, double age_s = 0.1) {
+  constexpr std::array<std::array<double, 3>, 16> kMounts = {{
+      {0.069, 0.136, 90}, {0.114, 0.119, 50}, {0.148, 0.078, 30}, {0.166, 0.027, 10},
+      {0.166, -0.027, -10}, {0.148, -0.078, -30}, {0.114, -0.119, -50}, {0.069, -0.136, -90},
+      {-0.157, -0.136, -90}, {-0.203, -0.119, -130}, {-0.237, -0.078, -150}, {-0.255, -0.027, -170},
+      {-0.255, 0.027, 170}, {-0.237, 0.078, 150}, {-0.203, 0.119, 130}, {-0.157, 0.136, 90},
+  }};
+  msg::Sonar s;
+  s.count = 16;
+  for (std::size_t i = 0; i < 16; ++i) {
+    s.mount[i] = {kMounts[i][0], kMounts[i][1], kMounts[i][2] * M_PI / 180.0};
+    s.range_m[i] = s.max_range_m;
+    s.stamp_ns[i] = now_ns - 100'000'000;
+  }
+  s.range_m[d] = range_m;
+  s.stamp_ns[d] = now_ns - static_cast<hal::Nanos>(age_s * 1e9);
+  return s;
+}
+
+TEST(SafetySonar, AnEchoRightBehindStopsAReversingRobot) {
+  Scene s;
+  s.in.requested = {-0.1, 0.0, s.in.now_ns};
+  // Someone 0.2 m from rear disc 11 (which sits 0.03 m behind the footprint): within the
+  // 0.25 m stop zone behind the body.
+  const msg::Sonar ring = ring_with_echo(11, 0.2, s.in.now_ns);
+  s.in.sonar = &ring;
+  const SafetyOutput out = SafetyFilter().filter(s.in);
+  EXPECT_EQ(out.command.v_m_s, 0.0);
+  EXPECT_NE(out.reasons & kSafetySonar, 0u);
+  // Forward is the laser's business: the same echo does not stop it.
+  s.in.requested = {0.3, 0.0, s.in.now_ns};
+  EXPECT_EQ(SafetyFilter().filter(s.in).command.v_m_s, 0.3);
+}
+
+TEST(SafetySonar, FarStaleOrSideEchoesLetItReverse) {
+  Scene s;
+  s.in.requested = {-0.1, 0.0, s.in.now_ns};
+  for (const msg::Sonar& ring : {ring_with_echo(11, 1.5, s.in.now_ns),          // far behind
+                                 ring_with_echo(11, 0.25, s.in.now_ns, 2.0),     // too old to trust
+                                 ring_with_echo(8, 0.4, s.in.now_ns)}) {         // beside, not behind
+    s.in.sonar = &ring;
+    const SafetyOutput out = SafetyFilter().filter(s.in);
+    EXPECT_DOUBLE_EQ(out.command.v_m_s, -0.1);
+    EXPECT_EQ(out.reasons & kSafetySonar, 0u);
+  }
+  // And one just past the stop zone: 0.25 m from the disc, 0.27 m behind the body.
+  {
+    const msg::Sonar ring = ring_with_echo(11, 0.25, s.in.now_ns);
+    s.in.sonar = &ring;
+    EXPECT_DOUBLE_EQ(SafetyFilter().filter(s.in).command.v_m_s, -0.1);
+  }
+}
+
+TEST(SafetySonar, AnEchoInsideTheTurnCircleRefusesTurningOnTheSpot) {
+  Scene s;
+  s.in.requested = {0.0, 0.5, s.in.now_ns};
+  // Disc 9 (rear left, 130 degrees off) sees something 0.1 m out: inside the circle the
+  // corners sweep.
+  const msg::Sonar ring = ring_with_echo(9, 0.1, s.in.now_ns);
+  s.in.sonar = &ring;
+  EXPECT_EQ(SafetyFilter().filter(s.in).command.w_rad_s, 0.0);
+  const msg::Sonar clear = ring_with_echo(9, 0.6, s.in.now_ns);
+  s.in.sonar = &clear;
+  EXPECT_EQ(SafetyFilter().filter(s.in).command.w_rad_s, 0.5);
+}
+
+}  // namespace
+}  // namespace sen3bot::nav

@@ -2,10 +2,12 @@
 // drive against ground truth, keep-alive, timeouts, faults, reconnects, shutdown.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 
 #include "lockstep_harness.hpp"
+#include "sen3bot/p2os/sonar.hpp"
 
 namespace sen3bot::p2os {
 namespace {
@@ -529,6 +531,93 @@ TEST(P2osLockstep, RevertsWhenTheRobotStaysSilentAfterHostbaud) {
 }
 
 // ---- The task wrapper ----
+
+}  // namespace
+}  // namespace sen3bot::p2os
+
+namespace sen3bot::p2os {
+namespace {
+
+// A wall across the world at x = wall_x (the robot starts at the origin facing +x): each ray
+// returns its distance to the wall, or the range limit.
+struct WallBehind final : EmulatorWorld {
+  double wall_x = -1.0;
+  double sonar_range_m(const Pose2& sensor, double max_range_m) override {
+    const double c = std::cos(sensor.theta_rad);
+    if (!(c < -1e-9)) return max_range_m;
+    return std::min(max_range_m, (wall_x - sensor.x_m) / c);
+  }
+};
+
+TEST(P2osLockstep, SonarFiresOneDiscPerBankPerCycleAndSeesTheWallBehind) {
+  EmulatorConfig config = test::fast_emulator_config();
+  config.sonar_miss_rate = 0.0;
+  Lockstep h({}, config);
+  WallBehind wall;
+  h.emulator.set_world(&wall);
+  ASSERT_TRUE(h.connect());
+  // Over 32 SIPs (3.2 s, 80 cycles of 40 ms) every disc is read ten times, in disc order in
+  // each bank, two or three of a bank per SIP.
+  std::array<int, kSonarDiscs> reads{};
+  std::array<std::uint16_t, kSonarDiscs> range_mm{};
+  int sips = 0;
+  int previous_front = -1;
+  bool in_order = true;
+  h.planner = [&](hal::Nanos) {
+    if (!h.driver.take_new_sip()) return;
+    const Sip& s = h.driver.last_sip();
+    ++sips;
+    int front = 0;
+    for (std::size_t i = 0; i < s.sonar_count; ++i) {
+      const SonarReading r = s.sonar[i];
+      ASSERT_LT(r.disc, kSonarDiscs);
+      ++reads[r.disc];
+      range_mm[r.disc] = r.range_mm;
+      if (r.disc < kSonarBank) {
+        in_order = in_order && (previous_front < 0 || r.disc == (previous_front + 1) % kSonarBank);
+        previous_front = r.disc;
+        ++front;
+      }
+    }
+    EXPECT_TRUE(front == 2 || front == 3) << front << " front readings in one SIP";
+  };
+  h.run_until([&] { return sips == 32; }, hal::seconds(10));
+  ASSERT_EQ(sips, 32);
+  EXPECT_TRUE(in_order);
+  for (std::size_t d = 0; d < kSonarDiscs; ++d) EXPECT_NEAR(reads[d], 10, 1) << "disc " << d;
+  // Discs 11 and 12 face 170 degrees off the heading from 0.255 m behind the centre: the wall
+  // 1 m behind is (1 - 0.255) / cos(10 deg) away along their axis, a little less at the
+  // cone's near edge. The front discs see nothing within 5 m.
+  for (std::size_t d : {11u, 12u}) {
+    const double along = (1.0 - 0.255) / std::cos(10.0 * std::numbers::pi / 180.0);
+    const double edge = (1.0 - 0.255) / std::cos(2.5 * std::numbers::pi / 180.0);
+    EXPECT_LE(range_mm[d], std::lround(along * 1000.0)) << "disc " << d;
+    EXPECT_NEAR(range_mm[d], edge * 1000.0, 5.0) << "disc " << d;
+  }
+  for (std::size_t d = 0; d < kSonarBank; ++d) EXPECT_EQ(range_mm[d], 5000) << "disc " << d;
+}
+
+TEST(P2osLockstep, SonarLosesAFewEchoesAsConfigured) {
+  EmulatorConfig config = test::fast_emulator_config();
+  config.sonar_miss_rate = 0.1;
+  Lockstep h({}, config);
+  WallBehind wall;
+  h.emulator.set_world(&wall);
+  ASSERT_TRUE(h.connect());
+  int seen = 0, lost = 0;
+  h.planner = [&](hal::Nanos) {
+    if (!h.driver.take_new_sip()) return;
+    const Sip& s = h.driver.last_sip();
+    for (std::size_t i = 0; i < s.sonar_count; ++i) {
+      if (s.sonar[i].disc != 11 && s.sonar[i].disc != 12) continue;
+      ++(s.sonar[i].range_mm == 5000 ? lost : seen);
+    }
+  };
+  h.run_for(hal::seconds(60));
+  const double rate = static_cast<double>(lost) / (seen + lost);
+  EXPECT_GT(seen + lost, 300);
+  EXPECT_NEAR(rate, 0.1, 0.05);
+}
 
 }  // namespace
 }  // namespace sen3bot::p2os

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "sen3bot/p2os/sonar.hpp"
+
 namespace sen3bot::p2os {
 
 namespace {
@@ -29,16 +31,6 @@ constexpr std::int8_t kNoTemperature = -127;
 constexpr double kMovingMmS = 0.5;
 constexpr double kMovingDegS = 0.05;
 
-// P3-DX sonar ring: x mm, y mm, heading deg (params/p3dx-sh.p).
-struct SonarPose {
-  double x_mm, y_mm, th_deg;
-};
-constexpr std::array<SonarPose, 16> kSonarPoses = {{
-    {69, 136, 90}, {114, 119, 50}, {148, 78, 30}, {166, 27, 10},
-    {166, -27, -10}, {148, -78, -30}, {114, -119, -50}, {69, -136, -90},
-    {-157, -136, -90}, {-203, -119, -130}, {-237, -78, -150}, {-255, -27, -170},
-    {-255, 27, 170}, {-237, 78, 150}, {-203, 119, 130}, {-157, 136, 90},
-}};
 
 double approach(double value, double target, double rate_up, double rate_down, double dt_s) {
   // Speeding up (same sign, larger magnitude) uses the acceleration, anything else decelerates.
@@ -438,20 +430,7 @@ void P2osEmulator::send_sip() noexcept {
   if (estop_) f |= flags::kEStop;
   s.flags = f;
   s.compass_2deg = 0;
-  if (sonar_on_ && config_.sonar_count > 0) {
-    const int count = std::min<int>(config_.sonar_count, static_cast<int>(kSonarPoses.size()));
-    for (int i = 0; i < count; ++i) {
-      const SonarPose& p = kSonarPoses[static_cast<std::size_t>(i)];
-      const double c = std::cos(truth_.theta_rad);
-      const double sn = std::sin(truth_.theta_rad);
-      const Pose2 sensor{truth_.x_m + (p.x_mm * c - p.y_mm * sn) * 1e-3, truth_.y_m + (p.x_mm * sn + p.y_mm * c) * 1e-3,
-                         wrap_angle_rad(truth_.theta_rad + p.th_deg / kDegPerRad)};
-      const double range_m = std::clamp(world_->sonar_range_m(sensor, config_.sonar_max_range_m), 0.0, 65.0);
-      s.sonar[static_cast<std::size_t>(i)] = SonarReading{static_cast<std::uint8_t>(i),
-                                                          static_cast<std::uint16_t>(std::lround(range_m * 1000.0))};
-    }
-    s.sonar_count = static_cast<std::uint8_t>(count);
-  }
+  if (sonar_on_ && config_.sonar_count > 0) fire_sonar(s);
   s.digin = 0xFF;
   s.digout = 0xFF;
   s.has_battery_x10 = true;
@@ -522,6 +501,49 @@ void P2osEmulator::send_encoder() noexcept {
   e.left_ticks = static_cast<std::int32_t>(static_cast<std::int64_t>(std::llround(left_ticks_)));
   e.right_ticks = static_cast<std::int32_t>(static_cast<std::int64_t>(std::llround(right_ticks_)));
   send(encode_encoder(e));
+}
+
+double P2osEmulator::sonar_echo_m(std::size_t disc) noexcept {
+  const p2os::SonarMount& m = p2os::kP3dxSonar[disc];
+  const double c = std::cos(truth_.theta_rad);
+  const double sn = std::sin(truth_.theta_rad);
+  const double x = truth_.x_m + (m.x_mm * c - m.y_mm * sn) * 1e-3;
+  const double y = truth_.y_m + (m.x_mm * sn + m.y_mm * c) * 1e-3;
+  const double heading = truth_.theta_rad + m.heading_deg / kDegPerRad;
+  // The nearest echo within the cone; a lost echo (a surface at a glancing angle, cross-talk)
+  // reads as nothing in range.
+  constexpr int kRays = 5;
+  const double half = p2os::kSonarBeamDeg / 2.0 / kDegPerRad;
+  double nearest = config_.sonar_max_range_m;
+  for (int r = 0; r < kRays; ++r) {
+    const double a = heading - half + 2.0 * half * r / (kRays - 1);
+    nearest = std::min(nearest, world_->sonar_range_m(Pose2{x, y, wrap_angle_rad(a)}, config_.sonar_max_range_m));
+  }
+  if (config_.sonar_miss_rate > 0.0 && next_noise_byte() < config_.sonar_miss_rate * 256.0) nearest = config_.sonar_max_range_m;
+  return std::clamp(nearest, p2os::kSonarMinRangeM, config_.sonar_max_range_m);
+}
+
+void P2osEmulator::fire_sonar(Sip& s) noexcept {
+  const auto count = static_cast<std::size_t>(std::min<int>(config_.sonar_count, static_cast<int>(p2os::kSonarDiscs)));
+  const auto put = [&](std::size_t disc) {
+    const double range_m = sonar_echo_m(disc);
+    s.sonar[s.sonar_count++] = SonarReading{static_cast<std::uint8_t>(disc), static_cast<std::uint16_t>(std::lround(range_m * 1000.0))};
+  };
+  s.sonar_count = 0;
+  if (config_.sonar_cycle_ms <= 0) {
+    for (std::size_t disc = 0; disc < count; ++disc) put(disc);
+    return;
+  }
+  // Each bank fires its next disc every cycle since the last SIP.
+  sonar_credit_ms_ += config_.sip_cycle_ms;
+  while (sonar_credit_ms_ >= config_.sonar_cycle_ms && static_cast<std::size_t>(s.sonar_count) + 2 <= kMaxSonarPerSip) {
+    sonar_credit_ms_ -= config_.sonar_cycle_ms;
+    for (std::size_t bank = 0; bank < count; bank += p2os::kSonarBank) {
+      const std::size_t disc = bank + static_cast<std::size_t>(next_sonar_);
+      if (disc < count) put(disc);
+    }
+    next_sonar_ = (next_sonar_ + 1) % static_cast<int>(p2os::kSonarBank);
+  }
 }
 
 std::uint8_t P2osEmulator::next_noise_byte() noexcept {

@@ -104,6 +104,7 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
       std::min(kMaxSamples, static_cast<std::size_t>(std::floor(config_.lookahead_m / config_.sample_m + 1e-9)) + 1);
   Point2D prev{in.pose.x_m, in.pose.y_m};
   samples_[sample_count_++] = prev;
+  tangent_[0] = {std::cos(in.pose.theta_rad), std::sin(in.pose.theta_rad)};
   double carried = 0.0;  // arc length since the last sample
   for (const msg::PathPoint& q : in.path) {
     const Point2D next{q.x_m, q.y_m};
@@ -111,6 +112,7 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
     while (len > 0.0 && carried + len >= config_.sample_m && sample_count_ < limit) {
       const double u = (config_.sample_m - carried) / len;
       prev = {prev.x_m + u * (next.x_m - prev.x_m), prev.y_m + u * (next.y_m - prev.y_m)};
+      tangent_[sample_count_] = {(next.x_m - prev.x_m) / len, (next.y_m - prev.y_m) / len};
       samples_[sample_count_++] = prev;
       len = std::hypot(next.x_m - prev.x_m, next.y_m - prev.y_m);
       carried = 0.0;
@@ -128,6 +130,7 @@ void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::ui
   for (const CrossingTrack& t : in.tracks) {
     const double speed = std::hypot(t.vx_m_s, t.vy_m_s);
     if (speed < config_.min_speed_m_s) continue;
+    const double ux = t.vx_m_s / speed, uy = t.vy_m_s / speed;
     const double base = reach == Reach::body ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
     const bool with_spread = reach == Reach::spread;
     for (std::size_t i = 0; i < steps_; ++i) {
@@ -139,6 +142,9 @@ void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::ui
         const double dx = samples_[k].x_m - cx;
         const double dy = samples_[k].y_m - cy;
         if (dx * dx + dy * dy >= r * r) continue;
+        // Walking along the path there (ahead of the robot, or towards it) is not crossing it:
+        // following and meeting are the DWA's, the cages' and the safety filter's.
+        if (std::abs(ux * tangent_[k].x_m + uy * tangent_[k].y_m) > config_.along_cos) continue;
         taken[k] |= std::uint64_t{1} << i;
         if (by[k] == 0) by[k] = t.id + 1;  // 0: none
       }

@@ -502,6 +502,7 @@ void SafetyTask::step(const tasks::StepContext& context) {
       static_cast<double>(context.start_ns - movers_sample_.stamp_ns) <= config_.movers_timeout_s * 1e9) {
     in.movers = &movers_sample_.value;
   }
+  if (sonar_ != nullptr && sonar_->read(sonar_sample_)) in.sonar = &sonar_sample_.value;
   if (people_ != nullptr && people_->read(people_sample_) &&
       static_cast<double>(context.start_ns - people_sample_.stamp_ns) <= config_.people_timeout_s * 1e9) {
     in.people = &people_sample_.value;

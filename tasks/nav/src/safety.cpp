@@ -10,10 +10,12 @@ SafetyFilter::SafetyFilter(const SafetyConfig& config) noexcept : config_(config
   const Footprint& fp = config.footprint;
   if (fp.vertex_count == 0) {
     front_m_ = fp.circle_radius_m;
+    rear_m_ = -fp.circle_radius_m;
     half_width_m_ = fp.circle_radius_m;
   } else {
     for (std::size_t i = 0; i < fp.vertex_count; ++i) {
       front_m_ = std::max(front_m_, fp.vertices[i].x_m);
+      rear_m_ = std::min(rear_m_, fp.vertices[i].x_m);
       half_width_m_ = std::max(half_width_m_, std::abs(fp.vertices[i].y_m));
     }
   }
@@ -186,6 +188,41 @@ bool SafetyFilter::Crossers::gone_before(const Point2D& q, double arrival_s) con
   return false;
 }
 
+namespace {
+// A sonar echo in the body frame, if the disc's reading is fresh and saw something.
+bool sonar_echo(const SafetyInputs& in, double max_age_s, std::size_t d, Point2D& at) noexcept {
+  const msg::Sonar& s = *in.sonar;
+  if (s.stamp_ns[d] < 0 || static_cast<double>(in.now_ns - s.stamp_ns[d]) > max_age_s * 1e9) return false;
+  if (!(s.range_m[d] < s.max_range_m)) return false;
+  const Pose2D& m = s.mount[d];
+  at = {m.x_m + s.range_m[d] * std::cos(m.theta_rad), m.y_m + s.range_m[d] * std::sin(m.theta_rad)};
+  return true;
+}
+}  // namespace
+
+bool SafetyFilter::sonar_blocks_reverse(const SafetyInputs& in, double v) const noexcept {
+  if (in.sonar == nullptr || !(v < 0.0)) return false;
+  const double speed = std::max(-v, -in.measured_v_m_s);
+  const double reach = config_.sonar_stop_m + speed * config_.reaction_s + speed * speed / (2.0 * config_.decel_m_s2);
+  const double half_width = half_width_m_ + config_.lateral_margin_m;
+  for (std::size_t d = 0; d < std::min<std::size_t>(in.sonar->count, msg::Sonar::kMax); ++d) {
+    if (std::cos(in.sonar->mount[d].theta_rad) >= 0.0) continue;  // faces forwards or sideways
+    Point2D q;
+    if (!sonar_echo(in, config_.sonar_max_age_s, d, q)) continue;
+    if (q.x_m <= rear_m_ + 1e-9 && q.x_m >= rear_m_ - reach && std::abs(q.y_m) <= half_width) return true;
+  }
+  return false;
+}
+
+bool SafetyFilter::sonar_in_turn_circle(const SafetyInputs& in) const noexcept {
+  if (in.sonar == nullptr) return false;
+  for (std::size_t d = 0; d < std::min<std::size_t>(in.sonar->count, msg::Sonar::kMax); ++d) {
+    Point2D q;
+    if (sonar_echo(in, config_.sonar_max_age_s, d, q) && std::hypot(q.x_m, q.y_m) < turn_radius_m_) return true;
+  }
+  return false;
+}
+
 std::uint32_t SafetyLatch::update(const msg::SafetyIo* io) noexcept {
   std::uint32_t causes = kSafetyNone;
   bool latching = true;
@@ -293,10 +330,18 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
       w *= scale;  // keep the arc that was checked
       out.reasons |= kSafetySlowed;
     }
-  } else if (v < -config_.max_reverse_m_s) {
-    v = -config_.max_reverse_m_s;
-    out.reasons |= kSafetyReverseCapped;
+  } else if (v < 0.0) {
+    if (v < -config_.max_reverse_m_s) {
+      v = -config_.max_reverse_m_s;
+      out.reasons |= kSafetyReverseCapped;
+    }
+    if (sonar_blocks_reverse(in, v)) {
+      v = 0.0;
+      w = 0.0;
+      out.reasons |= kSafetySonar;
+    }
   }
+  if (w != 0.0 && std::abs(v) < 1e-9 && sonar_in_turn_circle(in)) inside_turn_circle = true;
   if (w != 0.0 && inside_turn_circle && std::abs(v) < 1e-9) {
     w = 0.0;
     out.reasons |= kSafetyObstacle;

@@ -203,6 +203,7 @@ enum SafetyReason : std::uint32_t {
   kSafetyBumper = 1u << 11,        // a bumper is pressed
   kSafetyIoLost = 1u << 12,        // no current inputs: the node is lost, the bus is off
   kSafetyResetNeeded = 1u << 13,   // the cause is gone; waiting for a reset
+  kSafetySonar = 1u << 14,         // stopped reversing: a sonar echo behind, within the stop zone
 };
 
 struct SafetyOutput {
@@ -217,6 +218,18 @@ static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 
 // A moving obstacle tracked by the dynamic obstacle layer, predicted to the message's stamp
 // (map frame). Only confirmed tracks are published.
+// The base's sonar ring: the newest reading of each transducer, its time and where it sits on
+// the body. A transducer never read has stamp -1.
+struct Sonar {
+  static constexpr std::size_t kMax = 16;
+  std::array<double, kMax> range_m{};
+  std::array<hal::Nanos, kMax> stamp_ns{};
+  std::array<Pose2D, kMax> mount{};  // body frame: x forward, heading along the beam
+  std::uint8_t count = 0;            // transducers on this robot
+  double max_range_m = 5.0;          // a reading this long saw nothing
+};
+static_assert(std::is_trivially_copyable_v<Sonar>);
+
 struct MovingObstacle {
   std::uint32_t id = 0;
   double x_m = 0.0;

@@ -12,7 +12,8 @@
 // at constant velocity) sweeps a disc over time: its keep-out radius (cage for a person) plus
 // the robot's radius plus margin_m, plus spread_m_s * t, the constant-velocity error
 // growing with the horizon (docs/crowd.md measures it on the recordings). That marks which
-// path samples are taken at which times. Then:
+// path samples are taken at which times, where the walker goes across the path (within 35
+// degrees of along it, they follow or meet the robot: not a crossing). Then:
 //  * go: the robot driving on (accelerating to go_share of max_v_m_s) meets no taken sample
 //    while on it;
 //  * wait: otherwise it stops before the first sample any track takes, by stop_margin_m, and
@@ -68,7 +69,9 @@ class LaneMap {
 };
 
 struct CrossingConfig {
-  bool enabled = true;
+  // Off until it holds on every scenario: on, it costs the collaborative mode its operator
+  // (followed across a turn) and the moving-obstacle arena a contact (docs/navigation.md).
+  bool enabled = false;
   double lookahead_m = 4.0;
   double sample_m = 0.1;
   double horizon_s = 6.0;
@@ -79,6 +82,9 @@ struct CrossingConfig {
   double spread_m_s = 0.15;
   double margin_m = 0.1;
   double min_speed_m_s = 0.25;  // slower tracks are left to the costmap and the cages
+  // A walker heading within acos(along_cos) (35 degrees) of the path's direction, either way,
+  // walks along it there, not across: the robot following an operator, or meeting someone.
+  double along_cos = 0.82;
   double stop_margin_m = 0.1;
   double decel_m_s2 = 0.45;     // the braking the cap counts on (below the base's)
   double reaction_s = 0.2;      // command to wheels, and one period
@@ -142,6 +148,7 @@ class CrossingGate {
   double acc_v_m_s2_ = 0.6;
   std::size_t steps_ = 0;
   std::array<Point2D, kMaxSamples> samples_{};
+  std::array<Point2D, kMaxSamples> tangent_{};  // the path's direction there (unit)
   std::size_t sample_count_ = 0;
   std::array<std::uint64_t, kMaxSamples> taken_{};  // bit i: taken at step i
   std::array<std::uint32_t, kMaxSamples> taken_by_{};

@@ -399,6 +399,8 @@ class SafetyTask final : public tasks::Task {
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
+  // Before init: the base's sonar ring, for reversing and turning on the spot.
+  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
   // Null without the safety I/O.
   [[nodiscard]] const SafetyLatch* latch() const noexcept { return io_ != nullptr ? &latch_ : nullptr; }
 
@@ -419,6 +421,8 @@ class SafetyTask final : public tasks::Task {
   tasks::Sample<ScanMessage> scan_sample_;
   tasks::Sample<msg::MovingObstacles> movers_sample_;
   tasks::Sample<msg::People> people_sample_;
+  const tasks::Topic<msg::Sonar>* sonar_ = nullptr;
+  tasks::Sample<msg::Sonar> sonar_sample_;
   std::uint64_t scan_seq_ = 0;
   ProjectedScan projected_;  // projected once per scan, checked every step
   std::uint64_t stops_ = 0;  // steps where a non-zero request was cut to zero

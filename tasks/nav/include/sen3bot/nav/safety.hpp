@@ -42,8 +42,12 @@
 //    speed is caged the same way, its radius plus mover_cage_m: the camera sees 52 degrees
 //    of the laser's 180, and a walker coming from the side is on the laser long before the
 //    camera can tell what it is.
-// The LMS200 looks forward only, so reversing cannot be checked: reverse speed is capped at
-// max_reverse_m_s (the back-off recovery's speed).
+// The LMS200 looks forward only. Behind, the base's sonar ring (when it reports) checks
+// reversing: a fresh echo (at most sonar_max_age_s old) of a disc facing backwards inside the
+// corridor the body sweeps backwards within sonar_stop_m plus the reaction and braking
+// distance stops it (kSafetySonar); and any fresh echo inside the turn circle refuses turning on
+// the spot, as a laser point does. Sonar misses what glances off it, so reverse speed stays
+// capped at max_reverse_m_s (the back-off recovery's speed).
 #include <array>
 #include <cstdint>
 
@@ -90,6 +94,8 @@ struct SafetyConfig {
   double cage_margin_m = 0.1;   // < 0: no cage check
   double cage_horizon_s = 1.0;
   double mover_cage_m = -1.0;   // < 0: movers are not caged (people tracking sets it)
+  double sonar_max_age_s = 1.0;  // a disc fires every 0.32 s on a P3-DX
+  double sonar_stop_m = 0.25;     // as stop_distance_m in front
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;          // SafetyTask projects scans with it
 };
@@ -108,6 +114,8 @@ struct SafetyInputs {
   // Tracked people (map frame, predicted to people->stamp_ns) with their cages; null: none.
   const msg::People* people = nullptr;
   Pose2D pose;
+  // The sonar ring's newest readings (body frame mounts); null: none.
+  const msg::Sonar* sonar = nullptr;
   // Stops from the safety I/O, as SafetyLatch holds them (kSafetyEstopChain, kSafetyBumper,
   // kSafetyIoLost, kSafetyResetNeeded): any of them stops the robot.
   std::uint32_t io_stops = 0;
@@ -180,7 +188,12 @@ class SafetyFilter {
   [[nodiscard]] Crossers crossing_movers(const SafetyInputs& in, double half_width_m, double scan_age_s) const noexcept;
 
   SafetyConfig config_;
+  // Whether a fresh sonar echo lies in the corridor the body sweeps reversing at v (< 0), or,
+  // with turning, inside the turn circle.
+  [[nodiscard]] bool sonar_blocks_reverse(const SafetyInputs& in, double v) const noexcept;
+  [[nodiscard]] bool sonar_in_turn_circle(const SafetyInputs& in) const noexcept;
   double front_m_ = 0.0;
+  double rear_m_ = 0.0;
   double half_width_m_ = 0.0;
   double turn_radius_m_ = 0.0;
 };

@@ -65,6 +65,9 @@ struct EmulatorConfig {
   bool sonar_enabled = true;
   int sonar_count = 16;
   double sonar_max_range_m = 5.0;
+  // ARCOS fires one disc of each bank every sonar_cycle_ms (0: every disc in every SIP).
+  int sonar_cycle_ms = 40;
+  double sonar_miss_rate = 0.02;  // a reading lost to a glancing surface reads as max range
   double diff_conv_rad_per_mm = 0.0056;  // wheel speeds <-> yaw rate
   std::uint32_t noise_seed = 1;          // fault-injection noise is deterministic
 };
@@ -168,6 +171,10 @@ class P2osEmulator {
   [[nodiscard]] double heading_rate_deg_s(double dt_s) const noexcept;
   [[nodiscard]] std::uint32_t flash_baud() const noexcept;
   std::uint8_t next_noise_byte() noexcept;
+  // The SIP's sonar readings: the discs fired since the last SIP, each the nearest echo in its
+  // cone (kSonarBeamDeg), some lost (sonar_miss_rate).
+  void fire_sonar(Sip& s) noexcept;
+  [[nodiscard]] double sonar_echo_m(std::size_t disc) noexcept;
 
   EmulatorConfig config_;
   EmulatorWorld default_world_;
@@ -206,7 +213,8 @@ class P2osEmulator {
   std::uint32_t host_baud_ = 9600;
   bool verifying_baud_ = false;
   hal::Nanos baud_verify_deadline_ns_ = 0;
-  int next_sonar_ = 0;
+  int next_sonar_ = 0;     // the disc within each bank that fires next
+  int sonar_credit_ms_ = 0;  // time since the last firing, carried from SIP to SIP
 
   // Timing.
   bool started_ = false;
