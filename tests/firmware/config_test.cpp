@@ -230,6 +230,30 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
   EXPECT_NE(m.find("navigation.approach.margin: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, TheCrossingGateAndTheLanes) {
+  Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_FALSE(defaults->navigation.crossings.enabled);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  crossings: { enabled: true, lookahead_m: 3, horizon_s: 5, spread_m_s: 0.2, margin_m: 0.15, go_share: 0.8, "
+          "lane_decay_s: 120, lane_band_weight: 0.3 }\n",
+      "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_TRUE(r->navigation.crossings.enabled);
+  EXPECT_DOUBLE_EQ(r->navigation.crossings.lookahead_m, 3.0);
+  EXPECT_DOUBLE_EQ(r->navigation.crossings.horizon_s, 5.0);
+  EXPECT_DOUBLE_EQ(r->navigation.crossings.spread_m_s, 0.2);
+  EXPECT_DOUBLE_EQ(r->navigation.crossings.margin_m, 0.15);
+  EXPECT_DOUBLE_EQ(r->navigation.crossings.go_share, 0.8);
+  EXPECT_DOUBLE_EQ(r->navigation.lanes.decay_s, 120.0);
+  EXPECT_DOUBLE_EQ(r->navigation.lanes.band_weight, 0.3);
+  std::string m = message_of(std::string(kNavigation) + "  crossings: { horizon_s: 30 }\n");
+  EXPECT_NE(m.find("navigation.crossings.horizon_s: value 30 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  crossings: { spread: 0.1 }\n");
+  EXPECT_NE(m.find("navigation.crossings.spread: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, TheCollaborativeMode) {
   const std::string people = std::string(kNavigation) + "  people: { detector: sim }\n";
   Result<FirmwareConfig> r = parse_config(
