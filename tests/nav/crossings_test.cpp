@@ -83,6 +83,16 @@ TEST(Crossings, AFastPersonCloseMakesItWaitBeforeTheirWay) {
   EXPECT_EQ(b.decide(0.0, {walker(1.0, 1.3)}, 100.0, d.wait_at_m).action, Crossing::go);
 }
 
+TEST(Crossings, AWalkerAlongThePathIsNotCrossingIt) {
+  Bench b;
+  // An operator 1.5 m ahead walking on along the path, or someone coming down it: following
+  // and meeting are the DWA's and the cages' (the gate would hold a following robot back).
+  EXPECT_EQ(b.decide(0.5, {{1, 1.5, 0.0, 0.8, 0.0, 0.73, 0.23}}).action, Crossing::clear);
+  EXPECT_EQ(b.decide(0.5, {{1, 3.0, 0.0, -1.0, 0.0, 0.73, 0.23}}).action, Crossing::clear);
+  // At 45 degrees across it they cross.
+  EXPECT_NE(b.decide(0.5, {{1, 1.0, -3.0, 0.7, 0.7, 0.73, 0.23}}).action, Crossing::clear);
+}
+
 TEST(Crossings, ItNeverWaitsInsideALane) {
   Bench b;
   // A lane along x = 1.2 m, walked a minute ago, before the crossing at x = 2 m.

@@ -16,12 +16,10 @@ Status LaneMap::init(const LaneConfig& config, double origin_x_m, double origin_
   origin_y_m_ = origin_y_m;
   cell_m_ = config.cell_m;
   // A larger site gets coarser lanes, never more memory.
-  for (;;) {
-    columns_ = static_cast<int>(std::ceil(width_m / cell_m_));
-    rows_ = static_cast<int>(std::ceil(height_m / cell_m_));
-    if (static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_) <= config.max_cells) break;
+  while (std::ceil(width_m / cell_m_) * std::ceil(height_m / cell_m_) > static_cast<double>(config.max_cells))
     cell_m_ *= 1.25;
-  }
+  columns_ = static_cast<int>(std::ceil(width_m / cell_m_));
+  rows_ = static_cast<int>(std::ceil(height_m / cell_m_));
   const std::size_t cells = static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_);
   auto* data = static_cast<float*>(resource.allocate(cells * sizeof(float), alignof(float)));
   walked_ = {data, cells};
@@ -109,10 +107,11 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
   for (const msg::PathPoint& q : in.path) {
     const Point2D next{q.x_m, q.y_m};
     double len = std::hypot(next.x_m - prev.x_m, next.y_m - prev.y_m);
+    const Point2D along = len > 0.0 ? Point2D{(next.x_m - prev.x_m) / len, (next.y_m - prev.y_m) / len} : Point2D{};
     while (len > 0.0 && carried + len >= config_.sample_m && sample_count_ < limit) {
       const double u = (config_.sample_m - carried) / len;
       prev = {prev.x_m + u * (next.x_m - prev.x_m), prev.y_m + u * (next.y_m - prev.y_m)};
-      tangent_[sample_count_] = {(next.x_m - prev.x_m) / len, (next.y_m - prev.y_m) / len};
+      tangent_[sample_count_] = along;
       samples_[sample_count_++] = prev;
       len = std::hypot(next.x_m - prev.x_m, next.y_m - prev.y_m);
       carried = 0.0;

@@ -62,7 +62,9 @@ class LaneMap {
 
  private:
   LaneConfig config_;
-  std::span<float> walked_;  // the time a walker last covered the cell (s), or -inf
+  // The time a walker last covered the cell (s of the caller's clock), or -inf. A float keeps
+  // a second's resolution for 190 days of uptime; the 60 s decay needs no finer.
+  std::span<float> walked_;
   double origin_x_m_ = 0.0, origin_y_m_ = 0.0, cell_m_ = 0.1;
   int columns_ = 0, rows_ = 0;
   double min_walked_s_ = 0.0;  // the stamp below which a cell is out of its band
