@@ -31,7 +31,6 @@ constexpr std::int8_t kNoTemperature = -127;
 constexpr double kMovingMmS = 0.5;
 constexpr double kMovingDegS = 0.05;
 
-
 double approach(double value, double target, double rate_up, double rate_down, double dt_s) {
   // Speeding up (same sign, larger magnitude) uses the acceleration, anything else decelerates.
   const bool speeding_up = std::fabs(target) > std::fabs(value) && (value == 0 || (target > 0) == (value > 0));
@@ -52,6 +51,7 @@ double braking_speed(double distance, double decel, double dt_s) {
 
 P2osEmulator::P2osEmulator(const EmulatorConfig& config) : config_(config) {
   noise_state_ = config_.noise_seed != 0 ? config_.noise_seed : 1;
+  sonar_noise_ = (noise_state_ * 2654435761u) | 1u;  // never 0: xorshift would stay there
   battery_dv_ = config_.battery_dv;
   reset_session();
 }
@@ -519,7 +519,12 @@ double P2osEmulator::sonar_echo_m(std::size_t disc) noexcept {
     const double a = heading - half + 2.0 * half * r / (kRays - 1);
     nearest = std::min(nearest, world_->sonar_range_m(Pose2{x, y, wrap_angle_rad(a)}, config_.sonar_max_range_m));
   }
-  if (config_.sonar_miss_rate > 0.0 && next_noise_byte() < config_.sonar_miss_rate * 256.0) nearest = config_.sonar_max_range_m;
+  // Its own generator, so lost echoes leave the fault injection's byte stream as it was.
+  sonar_noise_ ^= sonar_noise_ << 13;
+  sonar_noise_ ^= sonar_noise_ >> 17;
+  sonar_noise_ ^= sonar_noise_ << 5;
+  if (config_.sonar_miss_rate > 0.0 && static_cast<double>(sonar_noise_) / 4294967296.0 < config_.sonar_miss_rate)
+    nearest = config_.sonar_max_range_m;
   return std::clamp(nearest, p2os::kSonarMinRangeM, config_.sonar_max_range_m);
 }
 

@@ -215,6 +215,7 @@ class P2osEmulator {
   hal::Nanos baud_verify_deadline_ns_ = 0;
   int next_sonar_ = 0;     // the disc within each bank that fires next
   int sonar_credit_ms_ = 0;  // time since the last firing, carried from SIP to SIP
+  std::uint32_t sonar_noise_ = 0x9E3779B9u;  // xorshift state for lost echoes
 
   // Timing.
   bool started_ = false;
