@@ -153,7 +153,7 @@ inline const char* to_string(CrossingAction c) noexcept {
 struct ControllerStatus {
   DwaStatus status = DwaStatus::idle;
   CrossingAction crossing = CrossingAction::clear;
-  double crossing_cap_m_s = 0.0;  // wait: the speed cap (infinity otherwise)
+  double crossing_cap_m_s = 0.0;  // wait: the speed cap; infinity when the gate ran and caps nothing
   std::uint32_t crossing_waits = 0;  // cycles the gate lowered the DWA's speed, since start
   RecoveryCounts recoveries;
   double distance_to_goal_m = 0.0;
