@@ -7,6 +7,7 @@
 #include <memory_resource>
 #include <vector>
 
+#include "alloc_counter.hpp"
 #include "sen3bot/nav/crossings.hpp"
 
 namespace sen3bot::nav {
@@ -157,6 +158,18 @@ TEST(Crossings, TooLateToStopBeforeTheKeepOutItStopsShortOfTheirWayOrNotAtAll) {
   const CrossingDecision early = b.decide(0.5, {walker(-4.0, 1.0)}, 100.0, 0.0);
   EXPECT_EQ(early.action, Crossing::wait);
   EXPECT_GT(early.v_cap_m_s, 0.5);
+}
+
+TEST(Crossings, DecidingAndDrawingLanesAllocateNothing) {
+  Bench b;
+  const std::vector<CrossingTrack> tracks = {walker(-4.0, 1.0), walker(-1.6, 1.3, 3.0), walker(2.0, -0.8, 1.5)};
+  const CrossingInputs in{{0.0, 0.0, 0.0}, 0.5, b.path, tracks, &b.lanes, 100.0};
+  mem::testing::AllocationScope scope;
+  for (int i = 0; i < 100; ++i) {
+    for (const CrossingTrack& t : tracks) b.lanes.walk(t.x_m, t.y_m, t.body_m, 100.0 + 0.1 * i);
+    (void)b.gate.decide(in);
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
 }
 
 TEST(Crossings, ABadConfigurationIsAClearError) {

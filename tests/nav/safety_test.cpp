@@ -4,6 +4,7 @@
 #include <random>
 
 #include "sen3bot/nav/safety.hpp"
+#include "sen3bot/p2os/sonar.hpp"
 
 namespace sen3bot::nav {
 namespace {
@@ -578,16 +579,11 @@ namespace {
 
 // The P3-DX ring with one echo: disc `d` reads range_m, read `age_s` ago.
 msg::Sonar ring_with_echo(std::size_t d, double range_m, hal::Nanos now_ns, double age_s = 0.1) {
-  constexpr std::array<std::array<double, 3>, 16> kMounts = {{
-      {0.069, 0.136, 90}, {0.114, 0.119, 50}, {0.148, 0.078, 30}, {0.166, 0.027, 10},
-      {0.166, -0.027, -10}, {0.148, -0.078, -30}, {0.114, -0.119, -50}, {0.069, -0.136, -90},
-      {-0.157, -0.136, -90}, {-0.203, -0.119, -130}, {-0.237, -0.078, -150}, {-0.255, -0.027, -170},
-      {-0.255, 0.027, 170}, {-0.237, 0.078, 150}, {-0.203, 0.119, 130}, {-0.157, 0.136, 90},
-  }};
   msg::Sonar s;
   s.count = 16;
   for (std::size_t i = 0; i < 16; ++i) {
-    s.mount[i] = {kMounts[i][0], kMounts[i][1], kMounts[i][2] * M_PI / 180.0};
+    const p2os::SonarMount& m = p2os::kP3dxSonar[i];
+    s.mount[i] = {m.x_mm / 1000.0, m.y_mm / 1000.0, m.heading_deg * M_PI / 180.0};
     s.range_m[i] = s.max_range_m;
     s.stamp_ns[i] = now_ns - 100'000'000;
   }

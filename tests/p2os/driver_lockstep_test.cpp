@@ -549,12 +549,21 @@ struct WallBehind final : EmulatorWorld {
   }
 };
 
-TEST(P2osLockstep, SonarFiresOneDiscPerBankPerCycleAndSeesTheWallBehind) {
-  EmulatorConfig config = test::fast_emulator_config();
-  config.sonar_miss_rate = 0.0;
-  Lockstep h({}, config);
+// A connected driver and emulator with the wall behind, echoes lost at miss_rate.
+struct SonarBench {
+  explicit SonarBench(double miss_rate) : h({}, config(miss_rate)) { h.emulator.set_world(&wall); }
+  static EmulatorConfig config(double miss_rate) {
+    EmulatorConfig c = test::fast_emulator_config();
+    c.sonar_miss_rate = miss_rate;
+    return c;
+  }
+  Lockstep h;
   WallBehind wall;
-  h.emulator.set_world(&wall);
+};
+
+TEST(P2osLockstep, SonarFiresOneDiscPerBankPerCycleAndSeesTheWallBehind) {
+  SonarBench bench(0.0);
+  Lockstep& h = bench.h;
   ASSERT_TRUE(h.connect());
   // Over 32 SIPs (3.2 s, 80 cycles of 40 ms) every disc is read ten times, in disc order in
   // each bank, two or three of a bank per SIP.
@@ -598,11 +607,8 @@ TEST(P2osLockstep, SonarFiresOneDiscPerBankPerCycleAndSeesTheWallBehind) {
 }
 
 TEST(P2osLockstep, SonarLosesAFewEchoesAsConfigured) {
-  EmulatorConfig config = test::fast_emulator_config();
-  config.sonar_miss_rate = 0.1;
-  Lockstep h({}, config);
-  WallBehind wall;
-  h.emulator.set_world(&wall);
+  SonarBench bench(0.1);
+  Lockstep& h = bench.h;
   ASSERT_TRUE(h.connect());
   int seen = 0, lost = 0;
   h.planner = [&](hal::Nanos) {

@@ -31,6 +31,14 @@ constexpr std::int8_t kNoTemperature = -127;
 constexpr double kMovingMmS = 0.5;
 constexpr double kMovingDegS = 0.05;
 
+// xorshift32: advances the state and returns it.
+std::uint32_t xorshift32(std::uint32_t& state) noexcept {
+  state ^= state << 13;
+  state ^= state >> 17;
+  state ^= state << 5;
+  return state;
+}
+
 double approach(double value, double target, double rate_up, double rate_down, double dt_s) {
   // Speeding up (same sign, larger magnitude) uses the acceleration, anything else decelerates.
   const bool speeding_up = std::fabs(target) > std::fabs(value) && (value == 0 || (target > 0) == (value > 0));
@@ -520,10 +528,7 @@ double P2osEmulator::sonar_echo_m(std::size_t disc) noexcept {
     nearest = std::min(nearest, world_->sonar_range_m(Pose2{x, y, wrap_angle_rad(a)}, config_.sonar_max_range_m));
   }
   // Its own generator, so lost echoes leave the fault injection's byte stream as it was.
-  sonar_noise_ ^= sonar_noise_ << 13;
-  sonar_noise_ ^= sonar_noise_ >> 17;
-  sonar_noise_ ^= sonar_noise_ << 5;
-  if (config_.sonar_miss_rate > 0.0 && static_cast<double>(sonar_noise_) / 4294967296.0 < config_.sonar_miss_rate)
+  if (config_.sonar_miss_rate > 0.0 && static_cast<double>(xorshift32(sonar_noise_)) / 4294967296.0 < config_.sonar_miss_rate)
     nearest = config_.sonar_max_range_m;
   return std::clamp(nearest, p2os::kSonarMinRangeM, config_.sonar_max_range_m);
 }
@@ -552,11 +557,8 @@ void P2osEmulator::fire_sonar(Sip& s) noexcept {
 }
 
 std::uint8_t P2osEmulator::next_noise_byte() noexcept {
-  // xorshift32: deterministic garbage for reproducible fault tests.
-  noise_state_ ^= noise_state_ << 13;
-  noise_state_ ^= noise_state_ >> 17;
-  noise_state_ ^= noise_state_ << 5;
-  return static_cast<std::uint8_t>(noise_state_);
+  // Deterministic garbage for reproducible fault tests.
+  return static_cast<std::uint8_t>(xorshift32(noise_state_));
 }
 
 void P2osEmulator::send(const Packet& packet, bool is_sip) noexcept {

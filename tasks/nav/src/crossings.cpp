@@ -31,15 +31,18 @@ Status LaneMap::init(const LaneConfig& config, double origin_x_m, double origin_
 
 void LaneMap::clear() noexcept { std::fill(walked_.begin(), walked_.end(), -std::numeric_limits<float>::infinity()); }
 
+LaneMap::Cells LaneMap::cells_around(double x_m, double y_m, double r) const noexcept {
+  const auto cell = [this](double v, double origin) { return static_cast<int>(std::floor((v - origin) / cell_m_)); };
+  return {std::max(0, cell(x_m - r, origin_x_m_)), std::min(columns_ - 1, cell(x_m + r, origin_x_m_)),
+          std::max(0, cell(y_m - r, origin_y_m_)), std::min(rows_ - 1, cell(y_m + r, origin_y_m_))};
+}
+
 void LaneMap::walk(double x_m, double y_m, double radius_m, double now_s) noexcept {
   if (walked_.empty()) return;
   const double r = radius_m + config_.half_width_m;
-  const int c0 = static_cast<int>(std::floor((x_m - r - origin_x_m_) / cell_m_));
-  const int c1 = static_cast<int>(std::floor((x_m + r - origin_x_m_) / cell_m_));
-  const int r0 = static_cast<int>(std::floor((y_m - r - origin_y_m_) / cell_m_));
-  const int r1 = static_cast<int>(std::floor((y_m + r - origin_y_m_) / cell_m_));
-  for (int row = std::max(0, r0); row <= std::min(rows_ - 1, r1); ++row) {
-    for (int col = std::max(0, c0); col <= std::min(columns_ - 1, c1); ++col) {
+  const Cells c = cells_around(x_m, y_m, r);
+  for (int row = c.row0; row <= c.row1; ++row) {
+    for (int col = c.col0; col <= c.col1; ++col) {
       const double cx = origin_x_m_ + (col + 0.5) * cell_m_;
       const double cy = origin_y_m_ + (row + 0.5) * cell_m_;
       if (std::hypot(cx - x_m, cy - y_m) > r) continue;
@@ -61,12 +64,9 @@ double LaneMap::weight(double x_m, double y_m, double now_s) const noexcept {
 bool LaneMap::in_band(double x_m, double y_m, double radius_m, double now_s) const noexcept {
   if (walked_.empty()) return false;
   const double since = now_s + min_walked_s_;  // stamps at or after this are in a band
-  const int c0 = static_cast<int>(std::floor((x_m - radius_m - origin_x_m_) / cell_m_));
-  const int c1 = static_cast<int>(std::floor((x_m + radius_m - origin_x_m_) / cell_m_));
-  const int r0 = static_cast<int>(std::floor((y_m - radius_m - origin_y_m_) / cell_m_));
-  const int r1 = static_cast<int>(std::floor((y_m + radius_m - origin_y_m_) / cell_m_));
-  for (int row = std::max(0, r0); row <= std::min(rows_ - 1, r1); ++row) {
-    for (int col = std::max(0, c0); col <= std::min(columns_ - 1, c1); ++col) {
+  const Cells c = cells_around(x_m, y_m, radius_m);
+  for (int row = c.row0; row <= c.row1; ++row) {
+    for (int col = c.col0; col <= c.col1; ++col) {
       const double at =
           walked_[static_cast<std::size_t>(row) * static_cast<std::size_t>(columns_) + static_cast<std::size_t>(col)];
       if (!(at >= since)) continue;
@@ -93,13 +93,13 @@ Status CrossingGate::init(const CrossingConfig& config, double body_radius_m, do
   max_v_m_s_ = max_v_m_s;
   acc_v_m_s2_ = acc_v_m_s2;
   steps_ = static_cast<std::size_t>(std::floor(config.horizon_s / config.time_step_s + 1e-9)) + 1;
+  max_samples_ = static_cast<std::size_t>(std::floor(config.lookahead_m / config.sample_m + 1e-9)) + 1;
   return Status::success();
 }
 
 void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
   sample_count_ = 0;
-  const std::size_t limit =
-      std::min(kMaxSamples, static_cast<std::size_t>(std::floor(config_.lookahead_m / config_.sample_m + 1e-9)) + 1);
+  const std::size_t limit = max_samples_;
   Point2D prev{in.pose.x_m, in.pose.y_m};
   samples_[sample_count_++] = prev;
   tangent_[0] = {std::cos(in.pose.theta_rad), std::sin(in.pose.theta_rad)};
@@ -158,8 +158,7 @@ int CrossingGate::first_meeting(std::span<const std::uint64_t> taken, double v0,
   const double v = std::clamp(v0, 0.0, top);
   const double t_acc = (top - v) / acc;
   const double s_acc = v * t_acc + 0.5 * acc * t_acc * t_acc;
-  const bool path_ends = sample_count_ <
-                         std::min(kMaxSamples, static_cast<std::size_t>(std::floor(config_.lookahead_m / config_.sample_m + 1e-9)) + 1);
+  const bool path_ends = sample_count_ < max_samples_;
   for (std::size_t i = 0; i < steps_; ++i) {
     const double t = static_cast<double>(i) * config_.time_step_s;
     const double s = t < t_acc ? v * t + 0.5 * acc * t * t : s_acc + top * (t - t_acc);

@@ -61,6 +61,12 @@ class LaneMap {
   [[nodiscard]] std::size_t bytes() const noexcept { return walked_.size_bytes(); }
 
  private:
+  struct Cells {
+    int col0, col1, row0, row1;  // inclusive, clipped to the grid
+  };
+  // The cells a disc of radius r about (x, y) may touch.
+  [[nodiscard]] Cells cells_around(double x_m, double y_m, double r) const noexcept;
+
   LaneConfig config_;
   // The time a walker last covered the cell (s of the caller's clock), or -inf. A float keeps
   // a second's resolution for 190 days of uptime; the 60 s decay needs no finer.
@@ -149,6 +155,7 @@ class CrossingGate {
   double max_v_m_s_ = 0.5;
   double acc_v_m_s2_ = 0.6;
   std::size_t steps_ = 0;
+  std::size_t max_samples_ = 0;  // the look-ahead's samples (init checks them against kMaxSamples)
   std::array<Point2D, kMaxSamples> samples_{};
   std::array<Point2D, kMaxSamples> tangent_{};  // the path's direction there (unit)
   std::size_t sample_count_ = 0;

@@ -9,7 +9,7 @@
 //   PathMessage + PoseEstimate + Odometry + ScanMessage --> ControllerTask (local costmap with
 //        the dynamic obstacle layer + DWA, or a fresh FormationCommand from the fleet)
 //        --[VelocityCommand requested, MovingObstacles]-->
-//        SafetyTask (+ ScanMessage, Odometry, BaseFlags, PoseEstimate) --[VelocityCommand]-->
+//        SafetyTask (+ ScanMessage, Odometry, BaseFlags, PoseEstimate, Sonar) --[VelocityCommand]-->
 //        base driver
 //
 // The OccupancyMap given to LocalizationTask, PlannerTask and ControllerTask must outlive them.
