@@ -140,6 +140,22 @@ TEST(Crossings, LanesFadeAMinuteOrTwoAfterTheLastWalker) {
   EXPECT_FALSE(b.lanes.in_band(2.6, 0.0, 0.2, 100.0)) << "the band is the body plus the sway, no wider";
 }
 
+TEST(Crossings, APointIsInABandExactlyWhenItsCellIs) {
+  // A point on a cell's edge, however the edge rounds, belongs to the cell its index names.
+  Bench b;
+  b.draw_lane(2.0);
+  int inside = 0;
+  for (int i = 0; i <= 2000; ++i) {
+    const double x = 1.0 + 0.001 * i;
+    for (const double y : {0.0, 0.1, -0.3, 1.7}) {
+      const bool walked = b.lanes.weight(x, y, 100.0) > 0.5;
+      EXPECT_EQ(b.lanes.in_band(x, y, 0.0, 100.0), walked) << x << ", " << y;
+      inside += walked ? 1 : 0;
+    }
+  }
+  EXPECT_GT(inside, 1000);
+}
+
 TEST(Crossings, TooLateToStopBeforeTheKeepOutItStopsShortOfTheirWayOrNotAtAll) {
   Bench b;
   // At full speed 0.9 m on, inside the walker's keep-out of their line (x = 2 m): braking

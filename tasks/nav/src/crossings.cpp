@@ -65,15 +65,21 @@ bool LaneMap::in_band(double x_m, double y_m, double radius_m, double now_s) con
   if (walked_.empty()) return false;
   const double since = now_s + min_walked_s_;  // stamps at or after this are in a band
   const Cells c = cells_around(x_m, y_m, radius_m);
+  // The centre's own cell, by the same rounding as the range: the gap to it is zero, not a
+  // rounding of its edge (a centre on a cell boundary would otherwise miss its own cell).
+  const int own_col = static_cast<int>(std::floor((x_m - origin_x_m_) / cell_m_));
+  const int own_row = static_cast<int>(std::floor((y_m - origin_y_m_) / cell_m_));
   for (int row = c.row0; row <= c.row1; ++row) {
     for (int col = c.col0; col <= c.col1; ++col) {
       const double at =
           walked_[static_cast<std::size_t>(row) * static_cast<std::size_t>(columns_) + static_cast<std::size_t>(col)];
       if (!(at >= since)) continue;
-      // The cell's nearest point to the disc's centre.
-      const double nx = std::clamp(x_m, origin_x_m_ + col * cell_m_, origin_x_m_ + (col + 1) * cell_m_);
-      const double ny = std::clamp(y_m, origin_y_m_ + row * cell_m_, origin_y_m_ + (row + 1) * cell_m_);
-      if (std::hypot(nx - x_m, ny - y_m) <= radius_m) return true;
+      // The gap from the disc's centre to the cell along each axis.
+      const double gx = col == own_col ? 0.0 : std::min(std::abs(origin_x_m_ + col * cell_m_ - x_m),
+                                                         std::abs(origin_x_m_ + (col + 1) * cell_m_ - x_m));
+      const double gy = row == own_row ? 0.0 : std::min(std::abs(origin_y_m_ + row * cell_m_ - y_m),
+                                                         std::abs(origin_y_m_ + (row + 1) * cell_m_ - y_m));
+      if (std::hypot(gx, gy) <= radius_m) return true;
     }
   }
   return false;
