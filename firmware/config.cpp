@@ -209,7 +209,8 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "approach", "goals", "start_delay_s", "goal_timeout_s",
-                "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people", "crossings"});
+                "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people", "crossings",
+                "separation"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -315,6 +316,14 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
     if (p.has("min_speed_m_s")) n.safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
     if (p.has("candidates")) n.safety.approach_candidates = p.boolean("candidates");
+  }
+  if (r.has("separation")) {
+    // The safety filter's speed and separation limit near people (safety.hpp).
+    const Reader p = r.child("separation");
+    p.allow_only({"enabled", "spread_m_s"});
+    const bool on = !p.has("enabled") || p.boolean("enabled");
+    if (p.has("spread_m_s")) n.safety.separation_spread_m_s = p.number("spread_m_s", 0.0, 2.0);
+    if (!on) n.safety.separation_spread_m_s = -1.0;
   }
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
   if (r.has("crossings")) {

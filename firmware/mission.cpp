@@ -47,6 +47,13 @@ void MissionTask::step(const tasks::StepContext& context) {
   if (topics_.safety.read(safety) && safety.sequence != safety_seq_) {
     safety_seq_ = safety.sequence;
     if ((safety.value.reasons & ~msg::kSafetyReverseCapped) != msg::kSafetyNone) ++report_.safety_limited_steps;
+    if ((safety.value.reasons & msg::kSafetySeparation) != 0) {
+      ++report_.separation_limited_steps;
+      if (safety.value.separation_cap_m_s < report_.separation_min_cap_m_s) {
+        report_.separation_min_cap_m_s = safety.value.separation_cap_m_s;
+        report_.separation_gap_at_min_m = safety.value.separation_gap_m;
+      }
+    }
   }
 
   if (report_.state == MissionState::waiting) {
@@ -99,6 +106,10 @@ void MissionTask::print_report(std::FILE* out) const {
   std::fprintf(out, "  driven %.2f m, %u plans (%u failed), %u recoveries, %llu safety-limited steps\n",
                r.path_length_m, r.plans, r.plan_failures, r.recoveries,
                static_cast<unsigned long long>(r.safety_limited_steps));
+  if (r.separation_limited_steps > 0)
+    std::fprintf(out, "  speed and separation: %llu steps slowed, down to %.2f m/s at %.2f m from a cage\n",
+                 static_cast<unsigned long long>(r.separation_limited_steps), r.separation_min_cap_m_s,
+                 r.separation_gap_at_min_m);
 }
 
 }  // namespace sen3bot::firmware

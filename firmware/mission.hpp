@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 
 #include "sen3bot/msg/messages.hpp"
 #include "sen3bot/tasks/task.hpp"
@@ -39,6 +40,10 @@ struct MissionReport {
   std::uint32_t plans = 0;
   std::uint32_t plan_failures = 0;
   std::uint64_t safety_limited_steps = 0;  // steps where safety lowered the requested speed
+  // Speed and separation: steps it lowered the speed, and the tightest it set (+inf: never).
+  std::uint64_t separation_limited_steps = 0;
+  double separation_min_cap_m_s = std::numeric_limits<double>::infinity();
+  double separation_gap_at_min_m = std::numeric_limits<double>::infinity();
   std::uint32_t recoveries = 0;
   double path_length_m = 0;                // estimated pose, summed while driving
 };

@@ -57,6 +57,7 @@ const char* safety_reason(std::uint32_t bit) {
     case msg::kSafetyIoLost: return "io_lost";
     case msg::kSafetyResetNeeded: return "reset_needed";
     case msg::kSafetySonar: return "sonar";
+    case msg::kSafetySeparation: return "separation";
     default: return "other";
   }
 }
@@ -478,6 +479,12 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
           for (std::uint32_t bit = 1; bit != 0 && bit <= safety.value.reasons; bit <<= 1)
             if (safety.value.reasons & bit) w.string(safety_reason(bit));
         w.end_array();
+        w.key("separation");
+        if (have_safety && std::isfinite(safety.value.separation_cap_m_s))
+          w.begin_object().member_number("cap", mm(safety.value.separation_cap_m_s)).member_number("gap", mm(safety.value.separation_gap_m))
+              .member_number("approach", mm(safety.value.separation_approach_m_s)).end_object();
+        else
+          w.null();
         w.end_object();
       });
     }

@@ -289,6 +289,12 @@ bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t
                  r.plan_failures, static_cast<unsigned long long>(r.safety_limited_steps),
                  truth.localization_error_max_m, c.sim_time_s,
                  c.wall_time_s);
+    std::fprintf(f, " \"separation\": {\"limited_steps\": %llu, \"min_cap_m_s\": ",
+                 static_cast<unsigned long long>(r.separation_limited_steps));
+    report::write_json_number(f, r.separation_min_cap_m_s, "%.3f");
+    std::fprintf(f, ", \"gap_at_min_m\": ");
+    report::write_json_number(f, r.separation_gap_at_min_m, "%.3f");
+    std::fprintf(f, "},");
     std::fprintf(f, " \"final_pose\": {\"x\": %.4f, \"y\": %.4f, \"theta\": %.4f},", c.final_pose.x_m, c.final_pose.y_m,
                  c.final_pose.theta_rad);
     std::fprintf(f, "\n     \"contact_events\": [");

@@ -254,6 +254,22 @@ TEST(Config, TheCrossingGateAndTheLanes) {
   EXPECT_NE(m.find("navigation.crossings.spread: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, TheSpeedAndSeparationLimit) {
+  Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_DOUBLE_EQ(defaults->navigation.safety.separation_spread_m_s, 0.3);
+  Result<FirmwareConfig> r = parse_config(std::string(kNavigation) + "  separation: { spread_m_s: 0.5 }\n", "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_DOUBLE_EQ(r->navigation.safety.separation_spread_m_s, 0.5);
+  r = parse_config(std::string(kNavigation) + "  separation: { enabled: false }\n", "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_LT(r->navigation.safety.separation_spread_m_s, 0.0);
+  std::string m = message_of(std::string(kNavigation) + "  separation: { spread_m_s: -1 }\n");
+  EXPECT_NE(m.find("navigation.separation.spread_m_s: value -1 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  separation: { spread: 0.1 }\n");
+  EXPECT_NE(m.find("navigation.separation.spread: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, TheCollaborativeMode) {
   const std::string people = std::string(kNavigation) + "  people: { detector: sim }\n";
   Result<FirmwareConfig> r = parse_config(

@@ -497,8 +497,15 @@ TEST(Safety, TheApproachCheckStopsForACandidateMover) {
 
 // A person at (x, y) in the robot's frame (the robot at the origin facing +x) with a 0.725 m
 // cage (a 0.45 m wide person and the 0.5 m safety radius): 0.825 m with the default margin.
+// The cage checks alone, without the speed and separation limit (tested on its own below).
+SafetyConfig cages_only() {
+  SafetyConfig c;
+  c.separation_spread_m_s = -1.0;
+  return c;
+}
+
 SafetyOutput near_person(double x, double y, double vx, double vy, double v, double w, double measured_v,
-                         const SafetyConfig& config = {}) {
+                         const SafetyConfig& config = cages_only()) {
   const SafetyFilter f(config);
   Scene s;
   s.in.requested = {v, w, s.in.now_ns};
@@ -539,7 +546,7 @@ TEST(Safety, TheRobotKeepsTheDistanceItNeedsToStopOutsideACage) {
   EXPECT_TRUE(near_person(1.0525 - 0.05, 0.0, 0.0, 0.0, 0.02, 0.0, 0.0).reasons & kSafetyCage);
   EXPECT_EQ(near_person(1.0525 - 0.05, 0.0, 0.0, 0.0, -0.05, 0.0, 0.0).reasons & kSafetyCage, 0u);
   // Turned off, a cage is the planners' alone.
-  SafetyConfig off;
+  SafetyConfig off = cages_only();
   off.cage_margin_m = -1.0;
   EXPECT_EQ(near_person(1.0525 + 0.15, 0.0, 0.0, 0.0, 0.4, 0.0, 0.4, off).reasons, kSafetyNone);
 }
@@ -559,7 +566,7 @@ TEST(Safety, AWalkersCageOnItsWayStopsTheRobotWhenBrakingKeepsFartherOut) {
 TEST(Safety, AMoverAtWalkingSpeedIsCagedAsAPersonWhenTheFirmwareTracksPeople) {
   // Coming head-on at 0.5 m/s, 1.5 m ahead, 0.25 m radius: the approach check (0.1 m margin
   // around the body) lets the robot on; caged as a person (0.5 m more) it stops.
-  SafetyConfig c;
+  SafetyConfig c = cages_only();
   c.mover_cage_m = 0.5;
   const SafetyOutput caged = approaching(1.5, 0.0, -0.5, 0.0, 0.3, 0.0, c);
   EXPECT_EQ(caged.reasons & kSafetyMoverApproach, 0u);
@@ -569,6 +576,72 @@ TEST(Safety, AMoverAtWalkingSpeedIsCagedAsAPersonWhenTheFirmwareTracksPeople) {
   EXPECT_EQ(approaching(1.5, 0.0, -0.5, 0.0, 0.3, 0.0).reasons & kSafetyCage, 0u);
   // Nor has a slow one (a still box's faces coming into view).
   EXPECT_EQ(approaching(1.5, 0.0, -0.1, 0.0, 0.3, 0.0, c).reasons & kSafetyCage, 0u);
+}
+
+// --- Speed and separation (ISO/TS 15066) ---
+
+TEST(SafetySeparation, TheLimitKeepsTheSeparationFormulaTight) {
+  // v_h (T + v/a) + v T + v^2/(2a) = S at the limit; nothing left for standing when v_h T >= S.
+  const double v = SafetyFilter::separation_speed(0.9475, 0.8, 0.2, 0.6);
+  EXPECT_NEAR(0.8 * (0.2 + v / 0.6) + v * 0.2 + v * v / 1.2, 0.9475, 1e-12);
+  EXPECT_EQ(SafetyFilter::separation_speed(0.15, 0.8, 0.2, 0.6), 0.0);
+  EXPECT_EQ(SafetyFilter::separation_speed(-0.3, 0.0, 0.2, 0.6), 0.0);
+  // A standing person with no spread: the robot's own stopping distance alone.
+  const double still = SafetyFilter::separation_speed(0.5, 0.0, 0.2, 0.6);
+  EXPECT_NEAR(still * 0.2 + still * still / 1.2, 0.5, 1e-12);
+}
+
+TEST(SafetySeparation, AWalkerComingHeadOnCapsTheSpeedAsComputedByHand) {
+  // Walking at the robot at 0.5 m/s, 2 m ahead of its centre: the nose is 0.2275 m ahead and
+  // the keep-out 0.825 m, so the gap S is 0.9475 m. T = 0.1 s (command) + 0.1 s (the scan's
+  // age), a = 0.6 m/s^2, v_h = 0.5 + 0.3 (the spread) = 0.8 m/s:
+  //   0.8 (0.2 + v/0.6) + 0.2 v + v^2/1.2 = 0.9475  =>  v = 0.418 m/s.
+  const SafetyOutput out = near_person(2.0, 0.0, -0.5, 0.0, 0.5, 0.1, 0.5, SafetyConfig{});
+  EXPECT_TRUE(out.reasons & kSafetySeparation);
+  EXPECT_NEAR(out.command.v_m_s, 0.418, 0.001);
+  EXPECT_NEAR(out.command.w_rad_s, 0.1 * out.command.v_m_s / 0.5, 1e-9) << "the arc is kept";
+  EXPECT_NEAR(out.separation_gap_m, 0.9475, 1e-9);
+  EXPECT_NEAR(out.separation_approach_m_s, 0.8, 1e-9);
+  EXPECT_NEAR(out.separation_cap_m_s, out.command.v_m_s, 1e-12);
+  // Standing, the same person lets it go faster; 3 m off, not limited at all.
+  const SafetyOutput standing = near_person(2.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
+  EXPECT_GT(standing.command.v_m_s, 0.418 + 0.05);
+  const SafetyOutput far = near_person(3.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
+  EXPECT_EQ(far.reasons, kSafetyNone);
+  EXPECT_DOUBLE_EQ(far.command.v_m_s, 0.5);
+  EXPECT_GT(far.separation_cap_m_s, 0.5) << "the terms are reported even when they do not bite";
+}
+
+TEST(SafetySeparation, OnlyTheSpeedTowardsThePersonCounts) {
+  // 45 degrees off the heading: the limit is on v cos 45.
+  const double d = 2.0 / std::sqrt(2.0);
+  const SafetyOutput diagonal = near_person(d, d, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
+  const SafetyOutput ahead = near_person(2.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
+  EXPECT_GT(diagonal.separation_cap_m_s, ahead.separation_cap_m_s);
+  // Abeam or behind, driving on is never limited; nor is backing away from one ahead.
+  EXPECT_EQ(near_person(0.0, 1.2, 0.0, 0.0, 0.3, 0.0, 0.3, SafetyConfig{}).reasons & kSafetySeparation, 0u);
+  EXPECT_EQ(near_person(-1.0, 0.0, 0.8, 0.0, 0.3, 0.0, 0.3, SafetyConfig{}).reasons & kSafetySeparation, 0u);
+  const SafetyOutput back = near_person(1.1, 0.0, -0.8, 0.0, -0.1, 0.0, 0.0, SafetyConfig{});
+  EXPECT_EQ(back.reasons & kSafetySeparation, 0u);
+  EXPECT_DOUBLE_EQ(back.command.v_m_s, -0.1);
+  // So close that even standing does not keep it: nothing towards them at all.
+  const SafetyOutput close = near_person(1.1, 0.0, -0.8, 0.0, 0.2, 0.3, 0.0, SafetyConfig{});
+  EXPECT_TRUE(close.reasons & kSafetySeparation);
+  EXPECT_EQ(close.command.v_m_s, 0.0);
+  EXPECT_EQ(close.command.w_rad_s, 0.0);
+}
+
+TEST(SafetySeparation, WalkingMoversAndCandidatesCountWhenPeopleAreTracked) {
+  SafetyConfig c;
+  c.mover_cage_m = 0.5;
+  // A walker coming head-on 2.5 m ahead, not (yet) known as a person.
+  EXPECT_TRUE(approaching(2.5, 0.0, -0.8, 0.0, 0.5, 0.0, c).reasons & kSafetySeparation);
+  // Without people tracking, movers keep the checks they had; a slow track is the corridor's.
+  EXPECT_EQ(approaching(2.5, 0.0, -0.8, 0.0, 0.5, 0.0).reasons & kSafetySeparation, 0u);
+  EXPECT_EQ(approaching(2.5, 0.0, -0.1, 0.0, 0.5, 0.0, c).reasons & kSafetySeparation, 0u);
+  // Turned off.
+  c.separation_spread_m_s = -1.0;
+  EXPECT_EQ(approaching(2.5, 0.0, -0.8, 0.0, 0.5, 0.0, c).reasons & kSafetySeparation, 0u);
 }
 
 }  // namespace

@@ -651,12 +651,12 @@ TEST(Schemas, MissionFollowsTheDocumentedFields) {
   ASSERT_TRUE(schema.parse(json_schema(Schema::mission)));
   const std::vector<std::string> fields = {"timestamp", "state", "goals_reached", "goals_total", "goal", "pose",
                                            "localized", "lost",  "v",             "w",           "controller",
-                                           "safety"};
+                                           "safety",    "separation"};
   EXPECT_EQ(keys_of(schema.root().find("properties")), fields);
   const std::string_view example = R"({"timestamp":{"sec":5,"nsec":0},"state":"driving","goals_reached":1,)"
                                    R"("goals_total":3,"goal":{"x":2.5,"y":2.0},"pose":{"x":1,"y":2,"theta":0.1},)"
                                    R"("localized":true,"lost":false,"v":0.31,"w":-0.05,"controller":"following",)"
-                                   R"("safety":["slow_zone"]})";
+                                   R"("safety":["slow_zone","separation"],"separation":{"cap":0.21,"gap":0.64,"approach":1.1}})";
   json::StaticDocument<256> doc;
   ASSERT_TRUE(doc.parse(example));
   EXPECT_EQ(validate(schema.root(), doc.root(), "mission"), "");
@@ -664,9 +664,17 @@ TEST(Schemas, MissionFollowsTheDocumentedFields) {
   no_goal.replace(no_goal.find("{\"x\":2.5,\"y\":2.0}"), 17, "null");
   ASSERT_TRUE(doc.parse(no_goal));
   EXPECT_EQ(validate(schema.root(), doc.root(), "mission"), "");
+  std::string no_limit(example);
+  no_limit.replace(no_limit.find("{\"cap\""), 38, "null");
+  ASSERT_TRUE(doc.parse(no_limit)) << no_limit;
+  EXPECT_EQ(validate(schema.root(), doc.root(), "mission"), "");
   std::string bad_safety(example);
-  bad_safety.replace(bad_safety.find("[\"slow_zone\"]"), 13, "[1]");
+  bad_safety.replace(bad_safety.find("\"slow_zone\""), 11, "1");
   ASSERT_TRUE(doc.parse(bad_safety));
+  EXPECT_NE(validate(schema.root(), doc.root(), "mission"), "");
+  std::string no_gap(example);
+  no_gap.replace(no_gap.find(",\"gap\":0.64"), 11, "");
+  ASSERT_TRUE(doc.parse(no_gap)) << no_gap;
   EXPECT_NE(validate(schema.root(), doc.root(), "mission"), "");
 }
 

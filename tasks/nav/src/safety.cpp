@@ -140,6 +140,47 @@ bool SafetyFilter::cage_refused(const SafetyInputs& in, double v, double w) cons
   return false;
 }
 
+double SafetyFilter::separation_speed(double gap_m, double approach_m_s, double latency_s, double decel_m_s2) noexcept {
+  const double b = latency_s + approach_m_s / decel_m_s2;
+  const double c = approach_m_s * latency_s - gap_m;
+  if (c >= 0.0) return 0.0;
+  return decel_m_s2 * (std::sqrt(b * b - 2.0 * c / decel_m_s2) - b);
+}
+
+double SafetyFilter::separation_cap(const SafetyInputs& in, double v, double scan_age_s, SafetyOutput& out) const noexcept {
+  double cap = std::numeric_limits<double>::infinity();
+  if (config_.separation_spread_m_s < 0.0 || config_.cage_margin_m < 0.0 || v == 0.0) return cap;
+  const double latency_s = config_.reaction_s + scan_age_s;
+  const auto consider = [&](const BodyMover& b, double cage_radius_m) {
+    const double range = std::hypot(b.x_m, b.y_m);
+    if (!(range > 1e-6)) return;
+    const double toward = v * b.x_m / range;  // the robot's speed towards them
+    if (!(toward > 0.0)) return;
+    const double gap = footprint_distance(config_.footprint, b.x_m, b.y_m) - cage_radius_m - config_.cage_margin_m;
+    const double approach = std::max(0.0, -(b.vx_m_s * b.x_m + b.vy_m_s * b.y_m) / range) + config_.separation_spread_m_s;
+    const double limit = separation_speed(gap, approach, latency_s, config_.decel_m_s2) * std::abs(v) / toward;
+    if (limit < cap) {
+      cap = limit;
+      out.separation_cap_m_s = limit;
+      out.separation_gap_m = gap;
+      out.separation_approach_m_s = approach;
+    }
+  };
+  const std::size_t people = in.people != nullptr ? std::min<std::size_t>(in.people->count, msg::People::kMax) : 0;
+  for (std::size_t i = 0; i < people; ++i) {
+    const msg::TrackedPerson& p = in.people->items[i];
+    consider(in_body(in, p, in.people->stamp_ns), p.cage_radius_m);
+  }
+  if (in.movers == nullptr || config_.mover_cage_m < 0.0) return cap;
+  const std::size_t tracks = in.movers->count + (config_.approach_candidates ? in.movers->candidate_count : 0u);
+  for (std::size_t i = 0; i < std::min<std::size_t>(tracks, msg::MovingObstacles::kMax); ++i) {
+    const msg::MovingObstacle& m = in.movers->items[i];
+    if (std::hypot(m.vx_m_s, m.vy_m_s) < config_.approach_min_speed_m_s) continue;
+    consider(in_body(in, m), m.radius_m + config_.mover_cage_m);
+  }
+  return cap;
+}
+
 double SafetyFilter::closing_speed(const SafetyInputs& in) const noexcept {
   if (in.movers == nullptr) return 0.0;
   double nearest = std::numeric_limits<double>::infinity();
@@ -340,6 +381,12 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
       w = 0.0;
       out.reasons |= kSafetySonar;
     }
+  }
+  if (const double cap = separation_cap(in, v, out.scan_age_s, out); std::abs(v) > cap) {
+    const double scale = cap / std::abs(v);
+    v *= scale;
+    w *= scale;  // keep the arc
+    out.reasons |= kSafetySeparation;
   }
   if (w != 0.0 && std::abs(v) < 1e-9 && sonar_in_turn_circle(in)) inside_turn_circle = true;
   if (w != 0.0 && inside_turn_circle && std::abs(v) < 1e-9) {

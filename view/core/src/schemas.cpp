@@ -127,9 +127,10 @@ constexpr std::string_view kMission = S3_OBJ(
     ",\"goal\":{\"type\":[\"object\",\"null\"],\"properties\":{\"x\":" S3_NUM ",\"y\":" S3_NUM
     "},\"required\":[\"x\",\"y\"]},\"pose\":" S3_OBJ("sen3bot.Pose2", S3_XY_THETA, "\"x\",\"y\",\"theta\"")
     ",\"localized\":" S3_BOOL ",\"lost\":" S3_BOOL ",\"v\":" S3_NUM ",\"w\":" S3_NUM ",\"controller\":" S3_STR
-    ",\"safety\":" S3_ARRAY(S3_STR),
+    ",\"safety\":" S3_ARRAY(S3_STR) ",\"separation\":{\"type\":[\"object\",\"null\"],\"properties\":{\"cap\":" S3_NUM
+    ",\"gap\":" S3_NUM ",\"approach\":" S3_NUM "},\"required\":[\"cap\",\"gap\",\"approach\"]}",
     "\"timestamp\",\"state\",\"goals_reached\",\"goals_total\",\"goal\",\"pose\",\"localized\",\"lost\",\"v\",\"w\","
-    "\"controller\",\"safety\"");
+    "\"controller\",\"safety\",\"separation\"");
 
 #undef S3_OBJ
 #undef S3_NUM

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 #include "sen3bot/hal/clock.hpp"
@@ -204,6 +205,7 @@ enum SafetyReason : std::uint32_t {
   kSafetyIoLost = 1u << 12,        // no current inputs: the node is lost, the bus is off
   kSafetyResetNeeded = 1u << 13,   // the cause is gone; waiting for a reset
   kSafetySonar = 1u << 14,         // stopped reversing: a sonar echo behind, within the stop zone
+  kSafetySeparation = 1u << 15,    // slowed to keep the separation from a person (ISO/TS 15066 SSM)
 };
 
 struct SafetyOutput {
@@ -213,6 +215,12 @@ struct SafetyOutput {
   double stop_distance_m = 0.0;  // the stop zone's depth used for this decision
   double scan_age_s = 0.0;       // age of the scan that decision used (0: none)
   double closing_speed_m_s = 0.0;  // of the nearest tracked mover ahead, towards the robot
+  // Speed and separation: the speed limit the most constraining person set (+inf: none did)
+  // and its terms, the gap from the body to their cage's edge and their approach speed as
+  // counted (measured plus the prediction's spread), for the live view and the reports.
+  double separation_cap_m_s = std::numeric_limits<double>::infinity();
+  double separation_gap_m = std::numeric_limits<double>::infinity();
+  double separation_approach_m_s = 0.0;
 };
 static_assert(std::is_trivially_copyable_v<SafetyOutput>);
 

@@ -42,6 +42,17 @@
 //    speed is caged the same way, its radius plus mover_cage_m: the camera sees 52 degrees
 //    of the laser's 180, and a walker coming from the side is on the laser long before the
 //    camera can tell what it is.
+//  * Speed and separation (ISO/TS 15066's speed and separation monitoring): near a tracked
+//    person (and, with people tracked, a mover or candidate at walking speed) the robot's
+//    speed towards them is limited so that it can still stop outside their cage plus
+//    cage_margin_m while they keep coming: with T = reaction_s + scan_age_s, the robot's
+//    speed towards them v_r, theirs towards the robot v_h and the gap S from the body to the
+//    cage's edge,
+//      v_h (T + v_r / decel) + v_r T + v_r^2 / (2 decel) <= S
+//    v_h is the measured approach speed plus separation_spread_m_s (a standing person may set
+//    off; a walker's velocity is a prediction). The command is scaled down (v and w alike) to
+//    the largest v_r that holds, for the most constraining person; moving away is never
+//    limited. The cap and its terms go out with the decision (kSafetySeparation when it bit).
 // The LMS200 looks forward only. Behind, the base's sonar ring (when it reports) checks
 // reversing: a fresh echo (at most sonar_max_age_s old) of a disc facing backwards inside the
 // corridor the body sweeps backwards within sonar_stop_m plus the reaction and braking
@@ -94,6 +105,9 @@ struct SafetyConfig {
   double cage_margin_m = 0.1;   // < 0: no cage check
   double cage_horizon_s = 1.0;
   double mover_cage_m = -1.0;   // < 0: movers are not caged (people tracking sets it)
+  // The approach speed counted beyond the measured one (< 0: no separation limit): the p90 of
+  // the constant-velocity prediction's speed error on the recorded pedestrians (docs/crowd.md).
+  double separation_spread_m_s = 0.3;
   double sonar_max_age_s = 1.0;  // a disc fires every 0.32 s on a P3-DX
   double sonar_stop_m = 0.25;     // as stop_distance_m in front
   Footprint footprint = Footprint::pioneer();
@@ -157,6 +171,13 @@ class SafetyFilter {
   // Whether (v, w) would leave the robot unable to stop outside a tracked person's cage plus
   // cage_margin_m, or take it into a walker's, when braking now would keep it farther out.
   [[nodiscard]] bool cage_refused(const SafetyInputs& in, double v, double w) const noexcept;
+  // The largest speed along (v, w)'s direction that keeps the separation from every tracked
+  // person (+inf when none limits it); fills the output's separation terms.
+  [[nodiscard]] double separation_cap(const SafetyInputs& in, double v, double scan_age_s, SafetyOutput& out) const noexcept;
+  // ISO/TS 15066's separation solved for the robot's speed towards the person: the largest v_r
+  // with v_h (T + v_r / a) + v_r T + v_r^2 / (2 a) <= gap (0 when even standing does not hold).
+  [[nodiscard]] static double separation_speed(double gap_m, double approach_m_s, double latency_s,
+                                               double decel_m_s2) noexcept;
 
  private:
   static constexpr double kSweepStepM = 0.02;
