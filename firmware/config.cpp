@@ -210,7 +210,7 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "approach", "goals", "start_delay_s", "goal_timeout_s",
                 "dynamic_obstacles", "mover_prediction", "local_costmap", "safe_curve", "sgp", "people", "crossings",
-                "separation"});
+                "separation", "make_way"});
   NavigationSection& n = c.navigation;
   n.enabled = true;
   n.map_path = relative_to(r.file(), r.text("map"));
@@ -316,6 +316,17 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
     if (p.has("min_speed_m_s")) n.safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
     if (p.has("candidates")) n.safety.approach_candidates = p.boolean("candidates");
+  }
+  if (r.has("make_way")) {
+    // Moving out of a walker's way when the robot would stand in it (crossings.hpp).
+    const Reader p = r.child("make_way");
+    p.allow_only({"enabled", "horizon_s", "forward_m_s", "reverse_m_s", "slack_s"});
+    nav::MakeWayConfig& m = n.make_way;
+    if (p.has("enabled")) m.enabled = p.boolean("enabled");
+    if (p.has("horizon_s")) m.horizon_s = p.number("horizon_s", 0.5, 20.0);
+    if (p.has("forward_m_s")) m.forward_m_s = p.number("forward_m_s", 0.05, 2.0);
+    if (p.has("reverse_m_s")) m.reverse_m_s = p.number("reverse_m_s", 0.05, 1.0);
+    if (p.has("slack_s")) m.slack_s = p.number("slack_s", 0.0, 5.0);
   }
   if (r.has("separation")) {
     // The safety filter's speed and separation limit near people (safety.hpp).

@@ -88,6 +88,7 @@ struct NavigationSection {
   nav::DynamicObstacleConfig dynamic_obstacles;  // the local costmap's moving-obstacle layer
   nav::CrossingConfig crossings;  // walkers' crossings of the path, planned in time
   nav::LaneConfig lanes;          // where walkers went in the last minutes
+  nav::MakeWayConfig make_way;    // moving out of a walker's way
   // The local costmap: its square window and how far its obstacle layer marks and clears.
   double local_costmap_size_m = 6.0;
   nav::ObstacleLayerConfig local_obstacles;

@@ -141,6 +141,7 @@ Status Firmware::create_navigation() {
   controller.people_layer = n.cages;
   controller.crossings = n.crossings;
   controller.lanes = n.lanes;
+  controller.make_way = n.make_way;
   controller.mover_keep_out_m = n.people_enabled && n.cage_movers ? n.person_tracker.safety_radius_m : 0.0;
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
                                                            nav_request_, nav_controller_, nav_movers_, people,

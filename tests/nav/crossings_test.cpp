@@ -156,6 +156,64 @@ TEST(Crossings, APointIsInABandExactlyWhenItsCellIs) {
   EXPECT_GT(inside, 1000);
 }
 
+// --- Making way ---
+
+MakeWayConfig making_way() {
+  MakeWayConfig c;
+  c.enabled = true;
+  return c;
+}
+// The robot standing at the origin facing +y (across a walker's way along x).
+MakeWayDecision way_for(std::vector<CrossingTrack> tracks, double heading = M_PI / 2,
+                        const MakeWayConfig& c = making_way()) {
+  return make_way(c, {0.0, 0.0, heading}, 0.0, kBodyM, tracks);
+}
+// A walker at (x, y) walking west (-x) at speed.
+CrossingTrack westward(double x, double y, double speed = 1.0, std::uint32_t id = 1) {
+  return {id, x, y, -speed, 0.0, 0.73, 0.23};
+}
+
+TEST(Crossings, AStandingRobotInAWalkersWayMovesOutAheadWhenThereIsTime) {
+  // Their way passes 0.2 m ahead of the robot's centre; they are 5 m off at 1 m/s.
+  const MakeWayDecision d = way_for({westward(5.0, 0.2)});
+  ASSERT_EQ(d.move, MakeWayMove::forward);
+  EXPECT_EQ(d.track_id, 1u);
+  EXPECT_GT(d.v_m_s, 0.0);
+  EXPECT_GT(d.arrives_s, 3.0);
+  // Where it ends, their sweep no longer covers it.
+  const MakeWayDecision after =
+      make_way(making_way(), {0.0, d.exit_m + 0.02, M_PI / 2}, 0.0, kBodyM, std::vector{westward(5.0, 0.2)});
+  EXPECT_EQ(after.move, MakeWayMove::none);
+  // Backing out would have been shorter (their way is 0.2 m ahead of the centre), but going
+  // on is in time too and keeps the robot on its way.
+  EXPECT_GT(d.exit_m, 0.2 + 0.23 + kBodyM);
+  EXPECT_EQ(way_for({westward(5.0, -0.2)}).move, MakeWayMove::forward);
+}
+
+TEST(Crossings, NoTimeToGetOutMeansStandingStill) {
+  const MakeWayDecision d = way_for({westward(1.2, 0.0)});
+  EXPECT_EQ(d.move, MakeWayMove::stay);
+  EXPECT_EQ(d.v_m_s, 0.0);
+  // Facing along their way, moving along its axis gets it out no faster.
+  EXPECT_EQ(way_for({westward(5.0, 0.1)}, M_PI).move, MakeWayMove::stay);
+}
+
+TEST(Crossings, WalkersGoingAwayOrPassingWideNeedNoWay) {
+  EXPECT_EQ(way_for({westward(-2.0, 0.0)}).move, MakeWayMove::none);   // already past
+  EXPECT_EQ(way_for({westward(5.0, 2.5)}).move, MakeWayMove::none);    // far to the side
+  EXPECT_EQ(way_for({westward(5.0, 0.0, 0.1)}).move, MakeWayMove::none);  // a still track
+  EXPECT_EQ(way_for({westward(5.0, 0.0)}, M_PI / 2, MakeWayConfig{}).move, MakeWayMove::none) << "off by default";
+}
+
+TEST(Crossings, ItBacksOutWhenTheWayAheadIsAnotherWalkersWay) {
+  // A second walker's way lies where moving out ahead would end (the first walker's way is
+  // 0.2 m behind the centre, so ahead is the short way out).
+  const MakeWayDecision d = way_for({westward(5.5, -0.2, 0.8), westward(6.0, 1.3, 1.0, 2)});
+  ASSERT_EQ(d.move, MakeWayMove::backward);
+  EXPECT_LT(d.v_m_s, 0.0);
+  EXPECT_LT(d.exit_m, 0.0);
+}
+
 TEST(Crossings, TooLateToStopBeforeTheKeepOutItStopsShortOfTheirWayOrNotAtAll) {
   Bench b;
   // At full speed 0.9 m on, inside the walker's keep-out of their line (x = 2 m): braking

@@ -606,6 +606,7 @@ TEST(SafetySeparation, AWalkerComingHeadOnCapsTheSpeedAsComputedByHand) {
   // Standing, the same person lets it go faster; 3 m off, not limited at all.
   const SafetyOutput standing = near_person(2.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
   EXPECT_GT(standing.command.v_m_s, 0.418 + 0.05);
+  EXPECT_EQ(standing.separation_approach_m_s, 0.0) << "a standing person's step is the cage's";
   const SafetyOutput far = near_person(3.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.5, SafetyConfig{});
   EXPECT_EQ(far.reasons, kSafetyNone);
   EXPECT_DOUBLE_EQ(far.command.v_m_s, 0.5);
@@ -624,11 +625,15 @@ TEST(SafetySeparation, OnlyTheSpeedTowardsThePersonCounts) {
   const SafetyOutput back = near_person(1.1, 0.0, -0.8, 0.0, -0.1, 0.0, 0.0, SafetyConfig{});
   EXPECT_EQ(back.reasons & kSafetySeparation, 0u);
   EXPECT_DOUBLE_EQ(back.command.v_m_s, -0.1);
-  // So close that even standing does not keep it: nothing towards them at all.
-  const SafetyOutput close = near_person(1.1, 0.0, -0.8, 0.0, 0.2, 0.3, 0.0, SafetyConfig{});
+  // So close that even standing does not keep it: nothing towards them at all, but it may
+  // turn on the spot to face away.
+  // (The cage check alone on the walker's way, over 0 s, lets the turn through.)
+  SafetyConfig now_only;
+  now_only.cage_horizon_s = 0.0;
+  const SafetyOutput close = near_person(1.25, 0.0, -0.8, 0.0, 0.2, 0.3, 0.0, now_only);
   EXPECT_TRUE(close.reasons & kSafetySeparation);
   EXPECT_EQ(close.command.v_m_s, 0.0);
-  EXPECT_EQ(close.command.w_rad_s, 0.0);
+  EXPECT_DOUBLE_EQ(close.command.w_rad_s, 0.3);
 }
 
 TEST(SafetySeparation, WalkingMoversAndCandidatesCountWhenPeopleAreTracked) {
@@ -678,6 +683,30 @@ TEST(SafetySonar, AnEchoRightBehindStopsAReversingRobot) {
   // Forward is the laser's business: the same echo does not stop it.
   s.in.requested = {0.3, 0.0, s.in.now_ns};
   EXPECT_EQ(SafetyFilter().filter(s.in).command.v_m_s, 0.3);
+}
+
+TEST(SafetySonar, AWatchedBackLetsItReverseFasterAndStillStopsForAnEcho) {
+  Scene s;
+  s.in.requested = {-0.4, 0.0, s.in.now_ns};
+  // No sonar: the back-off speed.
+  SafetyOutput out = SafetyFilter().filter(s.in);
+  EXPECT_DOUBLE_EQ(out.command.v_m_s, -0.1);
+  EXPECT_TRUE(out.reasons & kSafetyReverseCapped);
+  // Every rear disc fresh and clear: sonar_reverse_m_s.
+  const msg::Sonar clear = ring_with_echo(11, 5.0, s.in.now_ns);
+  s.in.sonar = &clear;
+  out = SafetyFilter().filter(s.in);
+  EXPECT_DOUBLE_EQ(out.command.v_m_s, -SafetyConfig{}.sonar_reverse_m_s);
+  // One rear disc stale: back to the back-off speed.
+  const msg::Sonar stale = ring_with_echo(12, 5.0, s.in.now_ns, 2.0);
+  s.in.sonar = &stale;
+  EXPECT_DOUBLE_EQ(SafetyFilter().filter(s.in).command.v_m_s, -0.1);
+  // At the faster speed the stop reach is longer: an echo 0.3 m behind stops it.
+  const msg::Sonar near = ring_with_echo(11, 0.3, s.in.now_ns);
+  s.in.sonar = &near;
+  out = SafetyFilter().filter(s.in);
+  EXPECT_EQ(out.command.v_m_s, 0.0);
+  EXPECT_TRUE(out.reasons & kSafetySonar);
 }
 
 TEST(SafetySonar, FarStaleOrSideEchoesLetItReverse) {

@@ -238,4 +238,91 @@ CrossingDecision CrossingGate::decide(const CrossingInputs& in) noexcept {
   return out;
 }
 
+namespace {
+// The time to cover `distance` from speed v0 (towards it, >= 0) accelerating at acc up to top.
+double travel_s(double distance, double v0, double top, double acc) noexcept {
+  const double v = std::clamp(v0, 0.0, top);
+  const double t_acc = (top - v) / acc;
+  const double s_acc = v * t_acc + 0.5 * acc * t_acc * t_acc;
+  if (distance >= s_acc) return t_acc + (distance - s_acc) / top;
+  return (std::sqrt(v * v + 2.0 * acc * distance) - v) / acc;
+}
+
+struct Sweep {
+  double along_m, offset_m, half_width_m, arrives_s;
+};
+// Where (x, y) lies against a walker's way: how far ahead of them along it, how far off it,
+// the sweep's half width, and when the sweep reaches it (+inf: it does not within horizon_s).
+Sweep sweep_of(const MakeWayConfig& config, const CrossingTrack& t, double x, double y, double body_radius_m) noexcept {
+  const double speed = std::hypot(t.vx_m_s, t.vy_m_s);
+  const double ux = t.vx_m_s / speed, uy = t.vy_m_s / speed;
+  const double rx = x - t.x_m, ry = y - t.y_m;
+  const double along = ux * rx + uy * ry;
+  // Their heading is a prediction: the sweep widens with the time they take to get here.
+  Sweep s{along, ux * ry - uy * rx,
+          t.body_m + body_radius_m + config.margin_m + config.spread_m_s * std::max(0.0, along) / speed,
+          std::numeric_limits<double>::infinity()};
+  if (std::abs(s.offset_m) >= s.half_width_m || s.along_m + s.half_width_m < 0.0) return s;
+  const double arrives = std::max(0.0, (s.along_m - s.half_width_m) / speed);
+  if (arrives <= config.horizon_s) s.arrives_s = arrives;
+  return s;
+}
+}  // namespace
+
+MakeWayDecision make_way(const MakeWayConfig& config, const Pose2D& pose, double v_m_s, double body_radius_m,
+                         std::span<const CrossingTrack> tracks) noexcept {
+  MakeWayDecision out;
+  if (!config.enabled) return out;
+  const auto walking = [&](const CrossingTrack& t) { return std::hypot(t.vx_m_s, t.vy_m_s) >= config.min_walker_m_s; };
+  // The walker whose sweep reaches the robot first.
+  const CrossingTrack* first = nullptr;
+  Sweep at{};
+  for (const CrossingTrack& t : tracks) {
+    if (!walking(t)) continue;
+    const Sweep s = sweep_of(config, t, pose.x_m, pose.y_m, body_radius_m);
+    if (std::isfinite(s.arrives_s) && (first == nullptr || s.arrives_s < at.arrives_s)) {
+      first = &t;
+      at = s;
+    }
+  }
+  if (first == nullptr) return out;
+  out.track_id = first->id;
+  out.arrives_s = at.arrives_s;
+  out.move = MakeWayMove::stay;
+  // Moving s along its heading changes its offset from the walker's way by s * sin.
+  const double speed = std::hypot(first->vx_m_s, first->vy_m_s);
+  const double hx = std::cos(pose.theta_rad), hy = std::sin(pose.theta_rad);
+  const double sin_cross = (first->vx_m_s * hy - first->vy_m_s * hx) / speed;
+  if (std::abs(sin_cross) < config.min_cross_sin) return out;
+  const double to_plus = (at.half_width_m - at.offset_m) / sin_cross;
+  const double to_minus = (-at.half_width_m - at.offset_m) / sin_cross;
+  const double forward = std::max(to_plus, to_minus);   // > 0
+  const double backward = std::min(to_plus, to_minus);  // < 0
+  // Free of every walker's sweep where it would end, a centimetre beyond the edge.
+  const auto clear_at = [&](double s_m) {
+    const double x = pose.x_m + s_m * hx, y = pose.y_m + s_m * hy;
+    for (const CrossingTrack& t : tracks)
+      if (walking(t) && std::isfinite(sweep_of(config, t, x, y, body_radius_m).arrives_s)) return false;
+    return true;
+  };
+  // Moving along the walker's way as well brings the meeting sooner (or later): counted at
+  // whichever end of the move is nearer them.
+  const double cos_along = (first->vx_m_s * hx + first->vy_m_s * hy) / speed;
+  const auto arrives = [&](double s_m) {
+    return std::max(0.0, (std::min(at.along_m, at.along_m + s_m * cos_along) - at.half_width_m) / speed);
+  };
+  const double t_forward = travel_s(forward, v_m_s, config.forward_m_s, config.accel_m_s2);
+  const double t_backward = travel_s(-backward, -v_m_s, config.reverse_m_s, config.accel_m_s2);
+  if (t_forward + config.slack_s <= arrives(forward) && clear_at(forward + 0.01)) {
+    out.move = MakeWayMove::forward;
+    out.v_m_s = config.forward_m_s;
+    out.exit_m = forward;
+  } else if (t_backward + config.slack_s <= arrives(backward) && clear_at(backward - 0.01)) {
+    out.move = MakeWayMove::backward;
+    out.v_m_s = -config.reverse_m_s;
+    out.exit_m = backward;
+  }
+  return out;
+}
+
 }  // namespace sen3bot::nav

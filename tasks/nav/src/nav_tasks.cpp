@@ -10,6 +10,8 @@
 namespace sen3bot::nav {
 namespace {
 
+constexpr double kStandingM_s = 0.05;  // a command this slow means to stand
+
 // Where the robot was when the scan was taken: the pose localization found for that very scan
 // when it has one, else the newest pose.
 Pose2D robot_pose_at(const PoseEstimate& pose, const ProjectedScan& scan) noexcept {
@@ -316,13 +318,13 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
   });
 }
 
-bool ControllerTask::crossings_on() const noexcept {
-  return config_.crossings.enabled && (config_.dynamic_obstacles.enabled || (config_.use_people && people_ != nullptr));
+bool ControllerTask::walkers_tracked() const noexcept {
+  return config_.dynamic_obstacles.enabled || (config_.use_people && people_ != nullptr);
 }
 
-void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, VelocityCommand& command,
-                          ControllerStatus& status) noexcept {
-  const double now_s = static_cast<double>(now) * 1e-9;
+bool ControllerTask::crossings_on() const noexcept { return config_.crossings.enabled && walkers_tracked(); }
+
+std::size_t ControllerTask::collect_tracks(hal::Nanos now) noexcept {
   std::size_t n = 0;
   // The candidates too (walkers that have not yet travelled far enough to be movers): a worker
   // coming out from behind a rack is one for the first half second.
@@ -341,6 +343,12 @@ void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, Velo
                       p.cage_radius_m, p.width_m / 2.0};
     }
   }
+  return n;
+}
+
+void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, std::size_t n, VelocityCommand& command,
+                          ControllerStatus& status) noexcept {
+  const double now_s = static_cast<double>(now) * 1e-9;
   for (std::size_t i = 0; i < n; ++i) {
     const CrossingTrack& t = tracks_[i];
     if (std::hypot(t.vx_m_s, t.vy_m_s) >= lanes_.config().min_speed_m_s) lanes_.walk(t.x_m, t.y_m, t.body_m, now_s);
@@ -358,6 +366,22 @@ void ControllerTask::gate(const Pose2D& pose, double v_m_s, hal::Nanos now, Velo
     status.status = DwaStatus::yielding;
     ++crossing_waits_;
   }
+}
+
+void ControllerTask::make_way(const Pose2D& pose, double v_m_s, std::size_t n, VelocityCommand& command,
+                              ControllerStatus& status) noexcept {
+  const MakeWayDecision d = nav::make_way(config_.make_way, pose, v_m_s, config_.dwa.footprint.circumscribed_radius_m(),
+                                          std::span<const CrossingTrack>(tracks_.data(), n));
+  status.making_way = d.move;
+  // A command already taking it out that way, briskly, stands; one that would hold it in
+  // their way (standing, creeping, or going the other way) is replaced.
+  const bool out_ahead = d.move == MakeWayMove::forward && command.v_m_s < 0.5 * d.v_m_s;
+  const bool out_behind = d.move == MakeWayMove::backward && command.v_m_s > 0.5 * d.v_m_s;
+  if (!out_ahead && !out_behind) return;
+  command.v_m_s = d.v_m_s;
+  command.w_rad_s = 0.0;  // straight out along its axis
+  status.status = DwaStatus::yielding;
+  ++ways_made_;
 }
 
 bool ControllerTask::formation_fresh(hal::Nanos now) const noexcept {
@@ -412,8 +436,11 @@ void ControllerTask::step(const tasks::StepContext& context) {
       status.status = c.status;
       status.distance_to_goal_m = c.distance_to_goal_m;
       status.admissible = c.admissible;
-      if (crossings_on() && c.status != DwaStatus::reached && c.status != DwaStatus::idle)
-        gate(pose.value.pose, odom.value.v_m_s, context.start_ns, command, status);
+      if (walkers_tracked() && c.status != DwaStatus::reached && c.status != DwaStatus::idle) {
+        const std::size_t tracks = collect_tracks(context.start_ns);
+        if (crossings_on()) gate(pose.value.pose, odom.value.v_m_s, context.start_ns, tracks, command, status);
+        if (config_.make_way.enabled) make_way(pose.value.pose, odom.value.v_m_s, tracks, command, status);
+      }
     }
   }
   // The centre's velocity replaces whatever the DWA or localization would ask for; the safety
@@ -427,6 +454,7 @@ void ControllerTask::step(const tasks::StepContext& context) {
   status.recoveries = dwa_.recoveries();
   status.plan_id = plan_id_;
   status.crossing_waits = crossing_waits_;
+  status.ways_made = ways_made_;
   command_.publish(command, context.start_ns);
   status_.publish(status, context.start_ns);
   movers_.publish(movers_message_, context.start_ns);

@@ -157,7 +157,11 @@ double SafetyFilter::separation_cap(const SafetyInputs& in, double v, double sca
     const double toward = v * b.x_m / range;  // the robot's speed towards them
     if (!(toward > 0.0)) return;
     const double gap = footprint_distance(config_.footprint, b.x_m, b.y_m) - cage_radius_m - config_.cage_margin_m;
-    const double approach = std::max(0.0, -(b.vx_m_s * b.x_m + b.vy_m_s * b.y_m) / range) + config_.separation_spread_m_s;
+    // The spread is a walker's: the prediction's error was measured on walkers, and a standing
+    // person's possible step is what the cage's safety radius is for.
+    const bool walking = std::hypot(b.vx_m_s, b.vy_m_s) >= config_.approach_min_speed_m_s;
+    const double approach = std::max(0.0, -(b.vx_m_s * b.x_m + b.vy_m_s * b.y_m) / range) +
+                            (walking ? config_.separation_spread_m_s : 0.0);
     const double limit = separation_speed(gap, approach, latency_s, config_.decel_m_s2) * std::abs(v) / toward;
     if (limit < cap) {
       cap = limit;
@@ -253,6 +257,18 @@ bool SafetyFilter::sonar_blocks_reverse(const SafetyInputs& in, double v) const 
     if (q.x_m <= rear_m_ + 1e-9 && q.x_m >= rear_m_ - reach && std::abs(q.y_m) <= half_width) return true;
   }
   return false;
+}
+
+bool SafetyFilter::sonar_watches_behind(const SafetyInputs& in) const noexcept {
+  if (in.sonar == nullptr) return false;
+  std::size_t behind = 0;
+  for (std::size_t d = 0; d < std::min<std::size_t>(in.sonar->count, msg::Sonar::kMax); ++d) {
+    if (std::cos(in.sonar->mount[d].theta_rad) >= 0.0) continue;
+    const hal::Nanos stamp = in.sonar->stamp_ns[d];
+    if (stamp < 0 || static_cast<double>(in.now_ns - stamp) > config_.sonar_max_age_s * 1e9) return false;
+    ++behind;
+  }
+  return behind > 0;
 }
 
 bool SafetyFilter::sonar_in_turn_circle(const SafetyInputs& in) const noexcept {
@@ -372,8 +388,10 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
       out.reasons |= kSafetySlowed;
     }
   } else if (v < 0.0) {
-    if (v < -config_.max_reverse_m_s) {
-      v = -config_.max_reverse_m_s;
+    const double reverse_cap =
+        sonar_watches_behind(in) ? std::max(config_.max_reverse_m_s, config_.sonar_reverse_m_s) : config_.max_reverse_m_s;
+    if (v < -reverse_cap) {
+      v = -reverse_cap;
       out.reasons |= kSafetyReverseCapped;
     }
     if (sonar_blocks_reverse(in, v)) {
@@ -385,7 +403,9 @@ SafetyOutput SafetyFilter::filter(const SafetyInputs& in) const noexcept {
   if (const double cap = separation_cap(in, v, out.scan_age_s, out); std::abs(v) > cap) {
     const double scale = cap / std::abs(v);
     v *= scale;
-    w *= scale;  // keep the arc
+    // Keep the arc; with nothing left towards them, turning on the spot (which closes no
+    // distance; the turn circle check below still applies) is what lets it face away.
+    if (v != 0.0) w *= scale;
     out.reasons |= kSafetySeparation;
   }
   if (w != 0.0 && std::abs(v) < 1e-9 && sonar_in_turn_circle(in)) inside_turn_circle = true;

@@ -140,6 +140,14 @@ enum class CrossingAction : std::uint8_t {
   wait,    // the robot stops before it, and before any lane that holds it (speed capped)
   commit,  // too late to stop before it: left to the DWA's mover check and the safety filter
 };
+// The controller moving out of a walker's way (nav/crossings.hpp, make_way).
+enum class MakeWayAction : std::uint8_t {
+  none,      // nobody's way covers where the robot stands
+  forward,   // out of it ahead, on its way
+  backward,  // out of it the way it came
+  stay,      // no way out in time: it stands still
+};
+
 
 inline const char* to_string(CrossingAction c) noexcept {
   switch (c) {
@@ -156,6 +164,8 @@ struct ControllerStatus {
   CrossingAction crossing = CrossingAction::clear;
   double crossing_cap_m_s = 0.0;  // wait: the speed cap; infinity when the gate ran and caps nothing
   std::uint32_t crossing_waits = 0;  // cycles the gate lowered the DWA's speed, since start
+  MakeWayAction making_way = MakeWayAction::none;
+  std::uint32_t ways_made = 0;  // cycles the robot moved out of a walker's way, since start
   RecoveryCounts recoveries;
   double distance_to_goal_m = 0.0;
   std::uint32_t admissible = 0;

@@ -23,6 +23,13 @@
 //  * a robot that can no longer stop before that point stops where braking ends if that is
 //    short of every walker's body sweep (wait, cap 0); if it is not (commit), it is left to
 //    the DWA's mover check and the safety filter: a forced stop would stand it in the way.
+//
+// make_way: a walker whose body, going on as it goes, would sweep over the robot where it
+// stands (or waits) within horizon_s: the robot moves along its own axis, forwards (on its
+// way) or backwards (the way it came), out of that sweep, when it gets out at least slack_s
+// before the walker arrives and where it ends up is in no other walker's sweep; otherwise it
+// stays still (moving when they meet would make the contact the robot's). The safety filter
+// still checks every such move (the laser ahead, the rear sonar behind).
 // Pure: no allocation after init, no clock.
 #include <cstdint>
 #include <memory_resource>
@@ -108,6 +115,38 @@ struct CrossingTrack {
   double keep_out_m = 0.0;  // a person's cage radius; a mover's radius and what cages add
   double body_m = 0.0;      // the body's own radius (the lanes it draws)
 };
+
+struct MakeWayConfig {
+  // Off: on people-crossing it did not lower the contacts (docs/navigation.md, "Making way").
+  bool enabled = false;
+  double horizon_s = 6.0;
+  double margin_m = 0.1;          // beyond the walker's body and the robot's radius
+  // And this much per second they take to get here: their heading is a prediction. Small: a
+  // wide sweep leaves no time to get out of it, and the decision is taken again every cycle.
+  double spread_m_s = 0.05;
+  double min_walker_m_s = 0.3;    // slower tracks are the cages' and the costmap's
+  double forward_m_s = 0.5;
+  double reverse_m_s = 0.25;      // the safety filter caps reversing further without the sonar
+  double accel_m_s2 = 0.6;
+  double slack_s = 0.5;           // out of their way this long before they get there
+  double min_cross_sin = 0.3;     // moving along its axis gets it out of a walker's way no faster
+};
+
+using MakeWayMove = msg::MakeWayAction;
+
+struct MakeWayDecision {
+  MakeWayMove move = MakeWayMove::none;
+  double v_m_s = 0.0;        // forward > 0, backward < 0; 0 when staying
+  double exit_m = 0.0;       // how far along its axis it goes (signed)
+  double arrives_s = 0.0;    // when the walker's sweep reaches where it stands
+  std::uint32_t track_id = 0;
+};
+
+// pose: the robot (map frame); v_m_s: its measured forward speed; body_radius_m: the robot
+// as a disc.
+[[nodiscard]] MakeWayDecision make_way(const MakeWayConfig& config, const Pose2D& pose, double v_m_s,
+                                       double body_radius_m, std::span<const CrossingTrack> tracks) noexcept;
+
 
 using Crossing = msg::CrossingAction;
 

@@ -206,6 +206,7 @@ struct ControllerTaskConfig {
   // movers and the people, when either is tracked.
   CrossingConfig crossings;
   LaneConfig lanes;
+  MakeWayConfig make_way;  // moving out of a walker's way when the robot would stand in it
   double mover_keep_out_m = 0.0;  // added to a mover's radius (the cages' safety radius)
 };
 
@@ -261,13 +262,20 @@ class ControllerTask final : public tasks::Task {
   InflationLayer inflation_layer_;
   LayeredCostmap costmap_;
   DwaPlanner dwa_;
-  // The crossing gate on the DWA's command; the tracks it reads, built each cycle.
+  // The crossing gate and making way, on the DWA's command; the tracks they read, built each
+  // cycle from the movers and the people.
   [[nodiscard]] bool crossings_on() const noexcept;
-  void gate(const Pose2D& pose, double v_m_s, hal::Nanos now, VelocityCommand& command, ControllerStatus& status) noexcept;
+  [[nodiscard]] bool walkers_tracked() const noexcept;
+  std::size_t collect_tracks(hal::Nanos now) noexcept;
+  void gate(const Pose2D& pose, double v_m_s, hal::Nanos now, std::size_t tracks, VelocityCommand& command,
+            ControllerStatus& status) noexcept;
+  void make_way(const Pose2D& pose, double v_m_s, std::size_t tracks, VelocityCommand& command,
+                ControllerStatus& status) noexcept;
   LaneMap lanes_;
   CrossingGate gate_;
   std::array<CrossingTrack, msg::MovingObstacles::kMax + msg::People::kMax> tracks_{};
   std::uint32_t crossing_waits_ = 0;
+  std::uint32_t ways_made_ = 0;
   msg::MovingObstacles movers_message_;
   std::uint32_t plan_id_ = 0;
   std::uint64_t scan_seq_ = 0;

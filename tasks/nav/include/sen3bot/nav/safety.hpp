@@ -49,8 +49,9 @@
 //    speed towards them v_r, theirs towards the robot v_h and the gap S from the body to the
 //    cage's edge,
 //      v_h (T + v_r / decel) + v_r T + v_r^2 / (2 decel) <= S
-//    v_h is the measured approach speed plus separation_spread_m_s (a standing person may set
-//    off; a walker's velocity is a prediction). The command is scaled down (v and w alike) to
+//    v_h is the measured approach speed, plus separation_spread_m_s for a walker (at
+//    approach_min_speed_m_s or more: their velocity is a prediction; a standing person's step
+//    is what their cage's safety radius holds). The command is scaled down (v and w alike) to
 //    the largest v_r that holds, for the most constraining person; moving away is never
 //    limited. The cap and its terms go out with the decision (kSafetySeparation when it bit).
 // The LMS200 looks forward only. Behind, the base's sonar ring (when it reports) checks
@@ -58,7 +59,8 @@
 // corridor the body sweeps backwards within sonar_stop_m plus the reaction and braking
 // distance stops it (kSafetySonar); and any fresh echo inside the turn circle refuses turning on
 // the spot, as a laser point does. Sonar misses what glances off it, so reverse speed stays
-// capped at max_reverse_m_s (the back-off recovery's speed).
+// capped at max_reverse_m_s (the back-off recovery's speed), or sonar_reverse_m_s while every
+// disc facing backwards has a fresh reading (making way for a walker backs off at it).
 #include <array>
 #include <cstdint>
 
@@ -110,6 +112,7 @@ struct SafetyConfig {
   double separation_spread_m_s = 0.3;
   double sonar_max_age_s = 1.0;  // a disc fires every 0.32 s on a P3-DX
   double sonar_stop_m = 0.25;     // as stop_distance_m in front
+  double sonar_reverse_m_s = 0.25;
   Footprint footprint = Footprint::pioneer();
   SensorMount laser_mount;          // SafetyTask projects scans with it
 };
@@ -213,6 +216,8 @@ class SafetyFilter {
   // with turning, inside the turn circle.
   [[nodiscard]] bool sonar_blocks_reverse(const SafetyInputs& in, double v) const noexcept;
   [[nodiscard]] bool sonar_in_turn_circle(const SafetyInputs& in) const noexcept;
+  // Whether every disc facing backwards has a reading no older than sonar_max_age_s.
+  [[nodiscard]] bool sonar_watches_behind(const SafetyInputs& in) const noexcept;
   double front_m_ = 0.0;
   double rear_m_ = 0.0;
   double half_width_m_ = 0.0;
