@@ -38,6 +38,10 @@ TEST(ZeroAllocation, EveryTaskOfTheTableRunsTenThousandTicksWithoutAllocating) {
   // off): the worker walking across is detected, tracked and painted meanwhile.
   config->navigation.dynamic_obstacles.enabled = true;
   config->navigation.dwa.mover_prediction = true;
+  // The crossing gate with its lanes, and making way (both off by default): the proof covers
+  // every step the controller can take.
+  config->navigation.crossings.enabled = true;
+  config->navigation.make_way.enabled = true;
   // The supervisory planner computes each goal's waypoints (config/sim.yaml gives a file).
   config->navigation.waypoints_path.clear();
   config->navigation.safe_curve_path = SEN3BOT_SOURCE_DIR "/config/maps/lab_curve.yaml";

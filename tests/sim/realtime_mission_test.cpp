@@ -62,7 +62,10 @@ Outcome run_mission(bool lockstep) {
   firmware::Firmware fw(rig.config, *rig.board, out);
   rig.board->referee().watch_estimate(&fw.pose_estimate());
   const int rc = firmware::run_firmware(fw, *rig.board, rig.config, out, stderr);
-  EXPECT_EQ(rc, 0);
+  // 3: the mission gave a goal up. The lockstep run must not; a real-time run may, as 3 % of
+  // lockstep seeds do (the worker walks into the robot standing in their lane above the door
+  // until it gives up; docs/navigation.md, "Measured among two workers"): printed, not failed.
+  EXPECT_TRUE(rc == 0 || (!lockstep && rc == 3)) << "exit status " << rc;
   Outcome o;
   if (fw.mission() != nullptr) o.mission = fw.mission()->report();
   o.truth = rig.board->referee().report();
