@@ -14,12 +14,14 @@
 #include "movingai.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
 #include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/crossings.hpp"
 #include "sen3bot/nav/dynamic_obstacles.hpp"
 #include "sen3bot/nav/global_planner.hpp"
 #include "sen3bot/nav/local_planner.hpp"
 #include "sen3bot/nav/localization.hpp"
 #include "sen3bot/nav/map_ellipses.hpp"
 #include "sen3bot/nav/people.hpp"
+#include "sen3bot/nav/safety.hpp"
 #include "sen3bot/nav/sgp.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "sen3bot/world/world.hpp"
@@ -261,6 +263,87 @@ int main(int argc, char** argv) {
                   beside ? "one beside inside the margin (every rollout refused)" : "crossing ahead", s.p50_ms, s.p99_ms,
                   cmd.admissible, cmd.mover_rejected);
     }
+  }
+
+  // Among people: the control step's people-dependent parts with the messages full (16 laser
+  // movers and 16 tracked people, every one walking across the robot's way within 4 m): the DWA
+  // with its mover check, the crossing gate and making way over the 32 tracks, and the safety
+  // filter with the sonar ring.
+  {
+    const double c = std::cos(at_start.theta_rad);
+    const double sn = std::sin(at_start.theta_rad);
+    msg::MovingObstacles walkers;
+    msg::People people;
+    std::vector<CrossingTrack> tracks;
+    for (std::size_t i = 0; i < msg::MovingObstacles::kMax; ++i) {
+      const double fwd = 0.8 + 0.2 * static_cast<double>(i);
+      const double left = (i % 2 == 0 ? -1.0 : 1.0) * (0.8 + 0.1 * static_cast<double>(i % 5));
+      const double v_left = (i % 2 == 0 ? 1.0 : -1.0) * (0.6 + 0.05 * static_cast<double>(i % 7));
+      const double x = at_start.x_m + c * fwd - sn * left, y = at_start.y_m + sn * fwd + c * left;
+      const double vx = -sn * v_left, vy = c * v_left;
+      walkers.items[i] = {static_cast<std::uint32_t>(i + 1), x, y, vx, vy, 0.25, 0.0, 0.0};
+      msg::TrackedPerson& p = people.items[i];
+      p.id = static_cast<std::uint32_t>(i + 1);
+      p.x_m = x + 0.3 * c;
+      p.y_m = y + 0.3 * sn;
+      p.vx_m_s = vx;
+      p.vy_m_s = vy;
+      p.width_m = 0.45;
+      p.cage_radius_m = 0.725;
+      tracks.push_back({walkers.items[i].id, x, y, vx, vy, 0.75, 0.25});
+      tracks.push_back({p.id | 0x8000'0000u, p.x_m, p.y_m, vx, vy, 0.725, 0.225});
+    }
+    walkers.count = static_cast<std::uint8_t>(msg::MovingObstacles::kMax);
+    people.count = static_cast<std::uint8_t>(msg::People::kMax);
+    s = measure(reps * 3, [&](int) {
+      cmd = dwa.compute(at_start, 0.3, 0.0, local.costmap(), std::span(walkers.items.data(), walkers.count));
+    });
+    std::printf("DWA cycle with 16 walkers crossing within 4 m: p50 %.3f ms  p99 %.3f ms  (%u admissible, %u refused)\n",
+                s.p50_ms, s.p99_ms, cmd.admissible, cmd.mover_rejected);
+    LaneMap lanes;
+    (void)lanes.init({}, -1.0, -1.0, 10.0, 12.0, arena);
+    for (const CrossingTrack& t : tracks) lanes.walk(t.x_m, t.y_m, t.body_m, 100.0);
+    CrossingGate gate;
+    CrossingConfig on;
+    on.enabled = true;
+    (void)gate.init(on, dcfg.footprint.circumscribed_radius_m(), dcfg.max_v_m_s, dcfg.acc_v_m_s2);
+    CrossingDecision decision;
+    s = measure(reps * 10, [&](int) {
+      decision = gate.decide({at_start, 0.3, std::span<const PathPoint>(points), tracks, &lanes, 100.0});
+    });
+    std::printf("crossing gate over 32 walking tracks (4 m of path, 6 s): p50 %.3f ms  p99 %.3f ms  (%s)\n", s.p50_ms,
+                s.p99_ms, msg::to_string(decision.action));
+    MakeWayConfig way;
+    way.enabled = true;
+    MakeWayDecision made;
+    s = measure(reps * 10, [&](int) { made = make_way(way, at_start, 0.0, dcfg.footprint.circumscribed_radius_m(), tracks); });
+    std::printf("making way over 32 walking tracks: p50 %.4f ms  p99 %.4f ms\n", s.p50_ms, s.p99_ms);
+    SafetyConfig scfg;
+    scfg.mover_cage_m = 0.5;
+    const SafetyFilter filter(scfg);
+    msg::Sonar sonar;
+    sonar.count = 16;
+    for (std::size_t d = 0; d < 16; ++d) {
+      sonar.mount[d] = {0.0, 0.0, static_cast<double>(d) * std::numbers::pi / 8.0};
+      sonar.range_m[d] = 1.0 + 0.1 * static_cast<double>(d);
+      sonar.stamp_ns[d] = 0;
+    }
+    SafetyInputs in;
+    in.scan = &view361;
+    in.odom_stamp_ns = view361.stamp_ns();
+    in.now_ns = view361.stamp_ns() + 50'000'000;
+    in.requested = {0.4, 0.1, in.now_ns};
+    in.measured_v_m_s = 0.4;
+    in.pose = at_start;
+    walkers.stamp_ns = in.now_ns;
+    people.stamp_ns = in.now_ns;
+    in.movers = &walkers;
+    in.people = &people;
+    in.sonar = &sonar;
+    SafetyOutput out;
+    s = measure(reps * 10, [&](int) { out = filter.filter(in); });
+    std::printf("safety filter with 16 people, 16 movers and the sonar ring: p50 %.3f ms  p99 %.3f ms  (reasons 0x%x)\n",
+                s.p50_ms, s.p99_ms, out.reasons);
   }
 
   // SGP on the lab: the map's ellipses (once per map, with the curve's check), then the field's
