@@ -10,8 +10,6 @@
 namespace sen3bot::nav {
 namespace {
 
-constexpr double kStandingM_s = 0.05;  // a command this slow means to stand
-
 // Where the robot was when the scan was taken: the pose localization found for that very scan
 // when it has one, else the newest pose.
 Pose2D robot_pose_at(const PoseEstimate& pose, const ProjectedScan& scan) noexcept {
@@ -436,7 +434,8 @@ void ControllerTask::step(const tasks::StepContext& context) {
       status.status = c.status;
       status.distance_to_goal_m = c.distance_to_goal_m;
       status.admissible = c.admissible;
-      if (walkers_tracked() && c.status != DwaStatus::reached && c.status != DwaStatus::idle) {
+      if ((crossings_on() || (config_.make_way.enabled && walkers_tracked())) && c.status != DwaStatus::reached &&
+          c.status != DwaStatus::idle) {
         const std::size_t tracks = collect_tracks(context.start_ns);
         if (crossings_on()) gate(pose.value.pose, odom.value.v_m_s, context.start_ns, tracks, command, status);
         if (config_.make_way.enabled) make_way(pose.value.pose, odom.value.v_m_s, tracks, command, status);
