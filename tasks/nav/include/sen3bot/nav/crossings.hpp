@@ -147,7 +147,6 @@ struct MakeWayDecision {
 [[nodiscard]] MakeWayDecision make_way(const MakeWayConfig& config, const Pose2D& pose, double v_m_s,
                                        double body_radius_m, std::span<const CrossingTrack> tracks) noexcept;
 
-
 using Crossing = msg::CrossingAction;
 
 struct CrossingDecision {
