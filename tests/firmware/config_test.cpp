@@ -270,6 +270,26 @@ TEST(Config, TheSpeedAndSeparationLimit) {
   EXPECT_NE(m.find("navigation.separation.spread: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, MakingWay) {
+  Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_FALSE(defaults->navigation.make_way.enabled);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  make_way: { enabled: true, horizon_s: 5, forward_m_s: 0.4, reverse_m_s: 0.2, slack_s: 0.8 }\n",
+      "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_TRUE(r->navigation.make_way.enabled);
+  EXPECT_DOUBLE_EQ(r->navigation.make_way.horizon_s, 5.0);
+  EXPECT_DOUBLE_EQ(r->navigation.make_way.forward_m_s, 0.4);
+  EXPECT_DOUBLE_EQ(r->navigation.make_way.reverse_m_s, 0.2);
+  EXPECT_DOUBLE_EQ(r->navigation.make_way.slack_s, 0.8);
+  std::string m = message_of(std::string(kNavigation) + "  make_way: { reverse_m_s: 3 }\n");
+  EXPECT_NE(m.find("navigation.make_way.reverse_m_s: value 3 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  make_way: { speed: 0.1 }\n");
+  EXPECT_NE(m.find("navigation.make_way.speed: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, TheCollaborativeMode) {
   const std::string people = std::string(kNavigation) + "  people: { detector: sim }\n";
   Result<FirmwareConfig> r = parse_config(
