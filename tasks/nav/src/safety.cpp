@@ -234,10 +234,15 @@ bool SafetyFilter::Crossers::gone_before(const Point2D& q, double arrival_s) con
 }
 
 namespace {
+// Whether disc d has a reading no older than max_age_s.
+bool sonar_fresh(const SafetyInputs& in, double max_age_s, std::size_t d) noexcept {
+  const hal::Nanos stamp = in.sonar->stamp_ns[d];
+  return stamp >= 0 && static_cast<double>(in.now_ns - stamp) <= max_age_s * 1e9;
+}
 // A sonar echo in the body frame, if the disc's reading is fresh and saw something.
 bool sonar_echo(const SafetyInputs& in, double max_age_s, std::size_t d, Point2D& at) noexcept {
   const msg::Sonar& s = *in.sonar;
-  if (s.stamp_ns[d] < 0 || static_cast<double>(in.now_ns - s.stamp_ns[d]) > max_age_s * 1e9) return false;
+  if (!sonar_fresh(in, max_age_s, d)) return false;
   if (!(s.range_m[d] < s.max_range_m)) return false;
   const Pose2D& m = s.mount[d];
   at = {m.x_m + s.range_m[d] * std::cos(m.theta_rad), m.y_m + s.range_m[d] * std::sin(m.theta_rad)};
@@ -264,8 +269,7 @@ bool SafetyFilter::sonar_watches_behind(const SafetyInputs& in) const noexcept {
   std::size_t behind = 0;
   for (std::size_t d = 0; d < std::min<std::size_t>(in.sonar->count, msg::Sonar::kMax); ++d) {
     if (std::cos(in.sonar->mount[d].theta_rad) >= 0.0) continue;
-    const hal::Nanos stamp = in.sonar->stamp_ns[d];
-    if (stamp < 0 || static_cast<double>(in.now_ns - stamp) > config_.sonar_max_age_s * 1e9) return false;
+    if (!sonar_fresh(in, config_.sonar_max_age_s, d)) return false;
     ++behind;
   }
   return behind > 0;
