@@ -232,6 +232,52 @@ TEST(DwaMovers, TimeToContactFollowsTheRolloutAndTheMoverInTime) {
   EXPECT_TRUE(std::isinf(dwa.time_to_contact({0, 0, 0}, 0.0, 0.0, std::span(&crossing, 1))));
 }
 
+TEST(DwaMovers, TheBroadPhaseNeverChangesATimeToContact) {
+  // The broad phase only skips times at which a mover cannot be within reach: over random
+  // crowds, arcs and motions (movers across several batches too) its answer is the full
+  // check's to the bit, and it does skip (a crowd far off is never stepped through).
+  mem::BudgetArena arena("dwa", 1 << 19);
+  DwaConfig with;
+  DwaConfig without;
+  without.mover_broad_phase = false;
+  DwaPlanner fast;
+  DwaPlanner full;
+  ASSERT_TRUE(fast.init(with, arena));
+  ASSERT_TRUE(full.init(without, arena));
+  std::srand(35);
+  const auto uniform = [](double lo, double hi) { return lo + (hi - lo) * std::rand() / static_cast<double>(RAND_MAX); };
+  std::vector<msg::MovingObstacle> crowd;
+  int finite = 0;
+  int cases = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    crowd.clear();
+    const int n = trial % 10 == 0 ? 40 : 1 + trial % 16;
+    for (int i = 0; i < n; ++i) {
+      crowd.push_back({static_cast<std::uint32_t>(i + 1), uniform(-6.0, 6.0), uniform(-6.0, 6.0), uniform(-1.5, 1.5),
+                       uniform(-1.5, 1.5), uniform(0.1, 0.4), 0.0, 0.0});
+    }
+    const Pose2D pose{uniform(-1.0, 1.0), uniform(-1.0, 1.0), uniform(-3.1, 3.1)};
+    for (const double v : {0.0, 0.01, 0.2, 0.5, -0.1}) {
+      for (const double w : {0.0, 0.6, -1.2}) {
+        for (const auto motion : {DwaPlanner::MoverMotion::hold, DwaPlanner::MoverMotion::brake,
+                                  DwaPlanner::MoverMotion::speed_up}) {
+          for (const auto reach : {DwaPlanner::MoverReach::margin, DwaPlanner::MoverReach::touching}) {
+            const double a = fast.time_to_contact(pose, v, w, crowd, motion, reach);
+            const double b = full.time_to_contact(pose, v, w, crowd, motion, reach);
+            ++cases;
+            finite += std::isfinite(b) ? 1 : 0;
+            ASSERT_EQ(a, b) << "trial " << trial << " v " << v << " w " << w << " motion "
+                            << static_cast<int>(motion);
+          }
+        }
+      }
+    }
+  }
+  // Both kinds of answer occur often enough for the comparison to mean something.
+  EXPECT_GT(finite, cases / 10);
+  EXPECT_LT(finite, cases - cases / 10);
+}
+
 TEST(DwaMovers, LetsACrossingBoxPassInsteadOfDrivingIntoIt) {
   // The box crosses y = 2 at x = 3.0 about 4.4 s in, when a robot at full speed is there.
   const Crossing box{3.0, -1.5, 0.8};

@@ -1,6 +1,7 @@
 #include "sen3bot/nav/local_planner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -172,21 +173,145 @@ DwaPlanner::Rollout DwaPlanner::roll_out(const Pose2D& pose, double v, double w,
   return r;
 }
 
+namespace {
+// The hull of {t in [0, horizon] : a t^2 + b t + c <= 0}; false when that set is empty.
+bool hull_at_or_below_zero(double a, double b, double c, double horizon, double& lo, double& hi) noexcept {
+  constexpr double kFlat = 1e-12;
+  if (std::abs(a) < kFlat) {
+    if (std::abs(b) < kFlat) {
+      lo = 0.0;
+      hi = horizon;
+      return c <= 0.0;
+    }
+    const double root = -c / b;
+    lo = b > 0.0 ? 0.0 : std::max(0.0, root);
+    hi = b > 0.0 ? std::min(horizon, root) : horizon;
+    return lo <= hi;
+  }
+  const double disc = b * b - 4.0 * a * c;
+  if (disc < 0.0) {  // never zero: always above (a > 0) or always below (a < 0)
+    lo = 0.0;
+    hi = horizon;
+    return a < 0.0;
+  }
+  const double q = std::sqrt(disc);
+  const double r1 = std::min((-b - q) / (2.0 * a), (-b + q) / (2.0 * a));
+  const double r2 = std::max((-b - q) / (2.0 * a), (-b + q) / (2.0 * a));
+  if (a > 0.0) {  // below between the roots
+    lo = std::max(0.0, r1);
+    hi = std::min(horizon, r2);
+    return lo <= hi;
+  }
+  // Below outside the roots: [0, r1] and [r2, horizon].
+  const bool early = r1 >= 0.0;
+  const bool late = r2 <= horizon;
+  if (!early && !late) return false;
+  lo = early ? 0.0 : std::max(0.0, r2);
+  hi = late ? horizon : std::min(horizon, r1);
+  return lo <= hi;
+}
+}  // namespace
+
 double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
                                    MoverMotion motion, MoverReach reach_of) const noexcept {
+  // Movers are taken a fixed-size batch at a time (the message holds at most 16; the broad
+  // phase below needs a window per mover and way); the earliest contact of any batch counts.
+  constexpr std::size_t kBatch = msg::MovingObstacles::kMax;
+  double earliest = std::numeric_limits<double>::infinity();
+  for (std::size_t first = 0; first < movers.size(); first += kBatch) {
+    const auto batch = movers.subspan(first, std::min(kBatch, movers.size() - first));
+    earliest = std::min(earliest, contact_in_batch(pose, v, w, batch, motion, reach_of, earliest));
+  }
+  return earliest;
+}
+
+double DwaPlanner::contact_in_batch(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
+                                    MoverMotion motion, MoverReach reach_of, double before_s) const noexcept {
   const bool brake = motion == MoverMotion::brake;
   const double dt = config_.sim_step_s;
   // Where braking ends, or standing, the robot stays: a mover that goes back and forth may
   // turn and come back along its way meanwhile, and over a longer time.
   const bool stays = brake || std::abs(v) < config_.min_progress_v_m_s;
   const double horizon_s = stays ? std::max(config_.mover_horizon_s, config_.mover_stay_horizon_s) : config_.mover_horizon_s;
-  const int steps = static_cast<int>(std::lround(horizon_s / dt));
+  int steps = static_cast<int>(std::lround(horizon_s / dt));
+  if (std::isfinite(before_s)) steps = std::min(steps, static_cast<int>(std::lround(before_s / dt)) - 1);
   const double cx = 0.5 * (body_min_x_ + body_max_x_);
   const double cy = 0.5 * (body_min_y_ + body_max_y_);
   const double hx = 0.5 * (body_max_x_ - body_min_x_);
   const double hy = 0.5 * (body_max_y_ - body_min_y_);
   const double margin = reach_of == MoverReach::touching ? 0.0 : config_.mover_margin_m;
   const double min_speed2 = config_.mover_min_speed_m_s * config_.mover_min_speed_m_s;
+  const int ways = stays && config_.mover_may_return ? 2 : 1;
+
+  // Broad phase: contact at t needs the mover's centre within reach + the body box's farthest
+  // corner of where the robot is then, which is within the distance it can have driven of
+  // where it is now. Each mover and way keeps the steps where that can hold; most walkers in
+  // a crowd have none, and the step loop below skips them.
+  struct Window {
+    const msg::MovingObstacle* mover;
+    double sign;
+    int first;
+    int last;
+  };
+  std::array<Window, 2 * msg::MovingObstacles::kMax> near{};
+  std::size_t near_count = 0;
+  int first_step = steps + 1;
+  int last_step = 0;
+  if (config_.mover_broad_phase) {
+    const double corner = std::hypot(std::abs(cx) + hx, std::abs(cy) + hy);
+    const double speed = std::abs(v);
+    // The fastest it drives on this motion, and (braking) how far it can go at all.
+    const double top = motion == MoverMotion::speed_up ? std::max(speed, config_.max_v_m_s) : speed;
+    const double braked = speed * (config_.control_period_s + config_.mover_brake_delay_s + 2.0 * dt) +
+                          speed * speed / (2.0 * config_.mover_brake_decel_m_s2);
+    const double slack = 1e-6;
+    for (const msg::MovingObstacle& m : movers) {
+      if (m.vx_m_s * m.vx_m_s + m.vy_m_s * m.vy_m_s < min_speed2) continue;
+      const double reach = m.radius_m + margin + corner + slack;
+      for (int way = 0; way < ways; ++way) {
+        const double sign = way == 0 ? 1.0 : -1.0;
+        const double dx = m.x_m - pose.x_m;
+        const double dy = m.y_m - pose.y_m;
+        const double ux = sign * m.vx_m_s;
+        const double uy = sign * m.vy_m_s;
+        // |d + u t| <= reach + top t, and when braking also <= reach + braked.
+        double lo = 0.0;
+        double hi = 0.0;
+        if (!hull_at_or_below_zero(ux * ux + uy * uy - top * top, 2.0 * (dx * ux + dy * uy - reach * top),
+                                   dx * dx + dy * dy - reach * reach, horizon_s, lo, hi)) {
+          continue;
+        }
+        if (brake) {
+          const double stop = reach + braked;
+          double blo = 0.0;
+          double bhi = 0.0;
+          if (!hull_at_or_below_zero(ux * ux + uy * uy, 2.0 * (dx * ux + dy * uy), dx * dx + dy * dy - stop * stop,
+                                     horizon_s, blo, bhi)) {
+            continue;
+          }
+          lo = std::max(lo, blo);
+          hi = std::min(hi, bhi);
+          if (lo > hi) continue;
+        }
+        // One step of slack each side for the rounding of the times.
+        const int k0 = std::max(1, static_cast<int>(std::floor(lo / dt)) - 1);
+        const int k1 = std::min(steps, static_cast<int>(std::ceil(hi / dt)) + 1);
+        if (k0 > k1) continue;
+        near[near_count++] = {&m, sign, k0, k1};
+        first_step = std::min(first_step, k0);
+        last_step = std::max(last_step, k1);
+      }
+    }
+  } else {
+    for (const msg::MovingObstacle& m : movers) {
+      if (m.vx_m_s * m.vx_m_s + m.vy_m_s * m.vy_m_s < min_speed2) continue;
+      for (int way = 0; way < ways; ++way) near[near_count++] = {&m, way == 0 ? 1.0 : -1.0, 1, steps};
+    }
+    first_step = 1;
+    last_step = steps;
+  }
+  if (near_count == 0) return std::numeric_limits<double>::infinity();
+
   // The heading's cosine and sine are carried by rotation, not recomputed: this loop runs for
   // every rollout and every mover, and libm's sin and cos were most of its time.
   double px = pose.x_m;
@@ -198,7 +323,7 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
   double step_s = 0.0;
   double speed = v;
   double turn = w;
-  for (int k = 1; k <= steps; ++k) {
+  for (int k = 1; k <= last_step; ++k) {
     const double t = k * dt;
     if (brake && t > config_.control_period_s + config_.mover_brake_delay_s + 1e-9 && speed != 0.0) {
       // Same arc, slower: w keeps its ratio to v.
@@ -228,21 +353,20 @@ double DwaPlanner::time_to_contact(const Pose2D& pose, double v, double w, std::
       c = c1;
       s = s1;
     }
-    const int ways = stays && config_.mover_may_return ? 2 : 1;
-    for (const msg::MovingObstacle& m : movers) {
-      if (m.vx_m_s * m.vx_m_s + m.vy_m_s * m.vy_m_s < min_speed2) continue;
+    if (k < first_step) continue;
+    for (std::size_t i = 0; i < near_count; ++i) {
+      const Window& n = near[i];
+      if (k < n.first || k > n.last) continue;
+      const msg::MovingObstacle& m = *n.mover;
       const double reach = m.radius_m + margin;
-      for (int way = 0; way < ways; ++way) {
-        const double sign = way == 0 ? 1.0 : -1.0;
-        const double dx = m.x_m + sign * m.vx_m_s * t - px;
-        const double dy = m.y_m + sign * m.vy_m_s * t - py;
-        // The mover's centre in the body frame, then its distance to the padded body's box.
-        const double bx = c * dx + s * dy - cx;
-        const double by = -s * dx + c * dy - cy;
-        const double ex = std::max(0.0, std::abs(bx) - hx);
-        const double ey = std::max(0.0, std::abs(by) - hy);
-        if (ex * ex + ey * ey < reach * reach) return t;
-      }
+      const double dx = m.x_m + n.sign * m.vx_m_s * t - px;
+      const double dy = m.y_m + n.sign * m.vy_m_s * t - py;
+      // The mover's centre in the body frame, then its distance to the padded body's box.
+      const double bx = c * dx + s * dy - cx;
+      const double by = -s * dx + c * dy - cy;
+      const double ex = std::max(0.0, std::abs(bx) - hx);
+      const double ey = std::max(0.0, std::abs(by) - hy);
+      if (ex * ex + ey * ey < reach * reach) return t;
     }
   }
   return std::numeric_limits<double>::infinity();

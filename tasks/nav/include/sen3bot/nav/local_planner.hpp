@@ -112,6 +112,9 @@ struct DwaConfig {
   double mover_margin_m = 0.1;
   double mover_weight = 1.5;
   double mover_min_speed_m_s = 0.1;  // slower tracks are left to the costmap
+  // Skip, per mover, the times at which it cannot be within reach (the answer is the same;
+  // off only to check that).
+  bool mover_broad_phase = true;
   double max_yield_s = 6.0;
   // Recoveries.
   double wait_s = 1.0;
@@ -176,6 +179,9 @@ class DwaPlanner {
   };
   Rollout roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
   [[nodiscard]] double distance_to_window(double x_m, double y_m) const noexcept;
+  // time_to_contact over at most MovingObstacles::kMax movers, looking only before before_s.
+  [[nodiscard]] double contact_in_batch(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
+                                        MoverMotion motion, MoverReach reach_of, double before_s) const noexcept;
   [[nodiscard]] bool braking_is_clear(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
   // Whether (v, w) held meets one of this compute()'s movers (time_to_contact finite).
   [[nodiscard]] bool meets_mover(const Pose2D& pose, double v, double w) const noexcept;
