@@ -94,6 +94,21 @@ TEST(Crossings, AWalkerAlongThePathIsNotCrossingIt) {
   EXPECT_NE(b.decide(0.5, {{1, 1.0, -3.0, 0.7, 0.7, 0.73, 0.23}}).action, Crossing::clear);
 }
 
+TEST(Crossings, AnOperatorLeadingRoundATurnIsNotCrossing) {
+  // The path (the operator's trail) runs 2 m along +x, then turns to +y. The operator walks
+  // it 1.5 m ahead: their straight prediction cuts across the part after the turn, and a gate
+  // that took that for a crossing held the following robot back until it lost them.
+  Bench b;
+  b.path.clear();
+  for (int i = 1; i <= 20; ++i) b.path.push_back({static_cast<float>(0.1 * i), 0.0f});
+  for (int i = 1; i <= 30; ++i) b.path.push_back({2.0f, static_cast<float>(0.1 * i)});
+  EXPECT_EQ(b.decide(0.4, {{1, 1.5, 0.0, 0.8, 0.0, 0.73, 0.23}}).action, Crossing::clear);
+  // Someone off the path, walking the same way towards the later part, does cross it there.
+  EXPECT_NE(b.decide(0.4, {{1, 0.5, 1.5, 0.8, 0.0, 0.73, 0.23}}).action, Crossing::clear);
+  // Past the turn, walking up the second leg: still along it.
+  EXPECT_EQ(b.decide(0.4, {{1, 2.0, 1.0, 0.0, 0.8, 0.73, 0.23}}).action, Crossing::clear);
+}
+
 TEST(Crossings, ItNeverWaitsInsideALane) {
   Bench b;
   // A lane along x = 1.2 m, walked a minute ago, before the crossing at x = 2 m.

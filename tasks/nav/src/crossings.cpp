@@ -128,6 +128,19 @@ void CrossingGate::sample_path(const CrossingInputs& in) noexcept {
   }
 }
 
+bool CrossingGate::walks_along(const CrossingTrack& t, double ux, double uy, double reach_m) const noexcept {
+  // Someone on the path now and walking along it (an operator the robot follows, or someone
+  // coming the other way) leads or meets the robot, not crosses it. Where the path turns,
+  // the straight prediction of a leader cuts across its later part; that is not a crossing.
+  for (std::size_t k = 0; k < sample_count_; ++k) {
+    const double dx = samples_[k].x_m - t.x_m;
+    const double dy = samples_[k].y_m - t.y_m;
+    if (dx * dx + dy * dy < reach_m * reach_m && std::abs(ux * tangent_[k].x_m + uy * tangent_[k].y_m) > config_.along_cos)
+      return true;
+  }
+  return false;
+}
+
 void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::uint64_t> taken,
                         std::span<std::uint32_t> by) const noexcept {
   std::fill(taken.begin(), taken.begin() + static_cast<std::ptrdiff_t>(sample_count_), 0);
@@ -138,6 +151,7 @@ void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::ui
     const double ux = t.vx_m_s / speed, uy = t.vy_m_s / speed;
     const double base = reach == Reach::body ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
     const bool with_spread = reach == Reach::spread;
+    if (walks_along(t, ux, uy, t.keep_out_m + body_m_ + config_.margin_m)) continue;
     for (std::size_t i = 0; i < steps_; ++i) {
       const double time = static_cast<double>(i) * config_.time_step_s;
       const double cx = t.x_m + t.vx_m_s * time;
