@@ -172,7 +172,7 @@ void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal:
     const msg::TrackedPerson* nearest = nullptr;
     for (std::size_t i = 0; i < people.count && i < msg::People::kMax; ++i) {
       const msg::TrackedPerson& q = people.items[i];
-      if (!q.hidden && q.id != operator_track_ && distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
+      if (!q.hidden && distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
           (nearest == nullptr || distance({q.x_m, q.y_m}, operator_at_) < distance({nearest->x_m, nearest->y_m}, operator_at_)))
         nearest = &q;
     }
