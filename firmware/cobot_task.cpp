@@ -67,6 +67,7 @@ void CobotTask::look(const msg::People& people, const msg::Pose2D& laser, const 
   std::size_t n = 0;
   for (std::size_t i = 0; i < people.count && i < msg::People::kMax; ++i) {
     const msg::TrackedPerson& p = people.items[i];
+    if (p.hidden) continue;  // out of the sensors' view: no one to ask for the robot
     const double dx = p.x_m - laser.x_m, dy = p.y_m - laser.y_m;
     const double forward = c * dx + s * dy, left = -s * dx + c * dy;
     const double range = std::hypot(forward, left);
@@ -164,12 +165,14 @@ void CobotTask::send(const msg::NavGoal& goal, hal::Nanos now_ns) noexcept {
 }
 
 void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal::Nanos now_ns) noexcept {
+  // A hidden track is a guess of where the operator went: not followed, and not seen.
   const msg::TrackedPerson* p = find(people, operator_track_);
+  if (p != nullptr && p->hidden) p = nullptr;
   if (p == nullptr) {
     const msg::TrackedPerson* nearest = nullptr;
     for (std::size_t i = 0; i < people.count && i < msg::People::kMax; ++i) {
       const msg::TrackedPerson& q = people.items[i];
-      if (distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
+      if (!q.hidden && distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
           (nearest == nullptr || distance({q.x_m, q.y_m}, operator_at_) < distance({nearest->x_m, nearest->y_m}, operator_at_)))
         nearest = &q;
     }

@@ -226,7 +226,7 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
     const Reader p = r.child("people");
     p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
                   "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
-                  "robot_clearance_m", "online_sgp", "onboard", "keep_out"});
+                  "robot_clearance_m", "online_sgp", "onboard", "keep_out", "hidden"});
     n.people_enabled = true;
     n.people_detector = p.text("detector");
     if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
@@ -248,6 +248,17 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
       if (o.has("enabled") && !o.boolean("enabled")) n.safety.cage_margin_m = -1.0;
       if (o.has("margin_m")) n.safety.cage_margin_m = o.number("margin_m", 0.0, 2.0);
       if (o.has("movers")) n.cage_movers = o.boolean("movers");
+    }
+    if (p.has("hidden")) {
+      // People kept while out of sight until their place is seen empty.
+      const Reader o = p.child("hidden");
+      o.allow_only({"enabled", "max_s", "max_sigma_m", "cage_growth_m", "wander_m2_s"});
+      nav::PersonTrackerConfig& t = n.person_tracker;
+      if (o.has("enabled")) t.keep_hidden = o.boolean("enabled");
+      if (o.has("max_s")) t.hidden_max_s = o.number("max_s", 0.1, 600.0);
+      if (o.has("max_sigma_m")) t.hidden_max_sigma_m = o.number("max_sigma_m", 0.05, 10.0);
+      if (o.has("cage_growth_m")) t.hidden_cage_growth_m = o.number("cage_growth_m", 0.0, 2.0);
+      if (o.has("wander_m2_s")) t.hidden_wander_m2_s = o.number("wander_m2_s", 0.0, 10.0);
     }
     if (p.has("onboard")) {
       // The on-board detector's search (detector: onboard).

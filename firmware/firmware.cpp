@@ -117,6 +117,8 @@ Status Firmware::create_navigation() {
     if (config_.cobot.enabled) fusion.operator_safety_radius_m = config_.cobot.operator_safety_radius_m;
     people_task_ = std::make_unique<nav::PeopleTask>(fusion, map_, nav_scan_, nav_pose_, nav_detections_, nav_people_,
                                                      config_.cobot.enabled ? &nav_cobot_ : nullptr);
+    // The rear discs are the only sensor behind the robot: weak evidence for people hidden there.
+    if (config_.devices.has_base) people_task_->use_sonar(&nav_sonar_);
   }
   if (n.people_enabled) {
     people = &nav_people_;

@@ -385,6 +385,8 @@ void FleetTask::publish_people() {
     r.dynamic = p.state == msg::PersonState::dynamic_person;
     r.age_s = now > p.last_seen_ns ? static_cast<double>(now - p.last_seen_ns) * 1e-9 : 0.0;
     r.laser_points = p.points;
+    r.hidden = p.hidden;
+    r.position_sigma = p.position_sigma_m;
     if (!m.people.push_back(r)) break;
   }
   auto text = vda5050::encode_people(m, buffers_->out);

@@ -30,6 +30,7 @@ bool QrTask::region(cobot::PixelRect& roi) const noexcept {
   bool any = false;
   for (std::size_t i = 0; i < people.value.count && i < msg::People::kMax; ++i) {
     const msg::TrackedPerson& p = people.value.items[i];
+    if (p.hidden) continue;  // out of the camera's view: no tag of theirs to find
     const double dx = p.x_m - laser.x_m, dy = p.y_m - laser.y_m;
     const double forward = c * dx + s * dy, left = -s * dx + c * dy;
     if (forward < 0.1 || std::hypot(forward, left) > config_.reach_m) continue;

@@ -95,7 +95,7 @@ struct ViewTask::Scratch {
   std::array<view::Arrow, kMaxSceneEntities> arrows{};
   std::array<view::Text, msg::People::kMax> labels{};
   std::array<std::array<char, 24>, kMaxSceneEntities> ids{};
-  std::array<std::array<char, 16>, msg::People::kMax> label_text{};
+  std::array<std::array<char, 32>, msg::People::kMax> label_text{};
   std::array<view::Entity, kMaxSceneEntities> entities{};
   std::array<tasks::TaskStats, tasks::Scheduler::kMaxTasks> stats{};
   std::pmr::vector<std::uint8_t> jpeg;
@@ -368,13 +368,19 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
             const double a = 2.0 * M_PI * static_cast<double>(k) / kCagePoints;
             cage[k] = {mm(p.x_m + p.cage_radius_m * std::cos(a)), mm(p.y_m + p.cage_radius_m * std::sin(a))};
           }
-          s.cage_lines[i] = {view::LineType::loop, std::span(cage).first(kCagePoints), 0.03, {0.9, 0.2, 0.1, 0.9}};
-          s.bodies[body] = {{mm(p.x_m), mm(p.y_m)}, std::max(0.2, p.width_m), 1.7, {0.95, 0.6, 0.1, 0.8}};
+          // A hidden person (kept out of the sensors' view) is a guess: greyed, and labelled so.
+          s.cage_lines[i] = {view::LineType::loop, std::span(cage).first(kCagePoints), 0.03,
+                             p.hidden ? view::Color{0.5, 0.5, 0.5, 0.9} : view::Color{0.9, 0.2, 0.1, 0.9}};
+          s.bodies[body] = {{mm(p.x_m), mm(p.y_m)}, std::max(0.2, p.width_m), 1.7,
+                            p.hidden ? view::Color{0.6, 0.6, 0.6, 0.4} : view::Color{0.95, 0.6, 0.1, 0.8}};
           const double speed = std::hypot(p.vx_m_s, p.vy_m_s);
           const bool moving = speed > 0.05;
           if (moving) s.arrows[arrow] = {{mm(p.x_m), mm(p.y_m)}, rad(std::atan2(p.vy_m_s, p.vx_m_s)), mm(std::max(0.1, speed)), {0.9, 0.2, 0.1, 1.0}};
           std::snprintf(s.ids[e].data(), s.ids[e].size(), "person/%u", p.id);
-          std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u", p.id);
+          if (p.hidden)
+            std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u hidden", p.id);
+          else
+            std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u", p.id);
           s.labels[i] = {{mm(p.x_m), mm(p.y_m + p.cage_radius_m)}, s.label_text[i].data(), 12.0, {0.1, 0.1, 0.1, 1.0}};
           s.entities[e] = {s.ids[e].data(), "map", 0, std::span(&s.cage_lines[i], 1), std::span(&s.bodies[body], 1),
                            std::span(&s.arrows[arrow], moving ? 1 : 0), std::span(&s.labels[i], 1)};

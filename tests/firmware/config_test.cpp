@@ -422,6 +422,34 @@ TEST(Config, PeopleTheirCagesAndTheOnlineSgp) {
   EXPECT_NE(m.find("navigation.people.online_sgp.delay: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, PeopleKeptWhileHidden) {
+  Result<FirmwareConfig> defaults = parse_config(std::string(kNavigation) + "  people: { detector: sim }\n", "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_TRUE(defaults->navigation.person_tracker.keep_hidden);
+  EXPECT_DOUBLE_EQ(defaults->navigation.person_tracker.hidden_max_s, 30.0);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kNavigation) +
+          "  people: { detector: sim, hidden: { max_s: 12, max_sigma_m: 1.2, cage_growth_m: 0.3, wander_m2_s: 0.05 } }\n",
+      "robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  const nav::PersonTrackerConfig& t = r->navigation.person_tracker;
+  EXPECT_TRUE(t.keep_hidden);
+  EXPECT_DOUBLE_EQ(t.hidden_max_s, 12.0);
+  EXPECT_DOUBLE_EQ(t.hidden_max_sigma_m, 1.2);
+  EXPECT_DOUBLE_EQ(t.hidden_cage_growth_m, 0.3);
+  EXPECT_DOUBLE_EQ(t.hidden_wander_m2_s, 0.05);
+  Result<FirmwareConfig> off =
+      parse_config(std::string(kNavigation) + "  people: { detector: sim, hidden: { enabled: false } }\n", "robot.yaml");
+  ASSERT_TRUE(off) << off.error().c_str();
+  EXPECT_FALSE(off->navigation.person_tracker.keep_hidden);
+  std::string m = message_of(std::string(kNavigation) + "  people: { detector: sim, hidden: { max_sigma_m: 0 } }\n");
+  EXPECT_NE(m.find("navigation.people.hidden.max_sigma_m: value 0 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  people: { detector: sim, hidden: { cage_growth_m: -0.1 } }\n");
+  EXPECT_NE(m.find("navigation.people.hidden.cage_growth_m: value -0.1 is outside"), std::string::npos) << m;
+  m = message_of(std::string(kNavigation) + "  people: { detector: sim, hidden: { max_age_s: 5 } }\n");
+  EXPECT_NE(m.find("navigation.people.hidden.max_age_s: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, AMissingFileSaysSo) {
   Result<FirmwareConfig> r = load_config("/nonexistent/robot.yaml");
   ASSERT_FALSE(r);

@@ -558,6 +558,30 @@ TEST(PeopleLayer, ACageIsALethalDiscThatFollowsThePersonAndExpires) {
   EXPECT_EQ(cost_at(4.1, 3.0), kFreeCost);
 }
 
+// A hidden person (kept by the tracker past expire_s) keeps their cage while the list itself is
+// current; not hidden, the same person is gone.
+TEST(PeopleLayer, AHiddenPersonsCageLastsWhileTheListIsCurrent) {
+  msg::People people;
+  PeopleLayerConfig config;
+  config.expire_s = 1.0;
+  CageGrid g(people, config);
+  const auto cost_at = [&](double x, double y) { return g.cost_at(x, y); };
+  people.count = 1;
+  people.stamp_ns = 10'000'000'000;
+  people.items[0] = {1, 3.0, 3.0, 0.0, 0.0, 0.4, 0.9, msg::PersonState::static_person, 2'000'000'000, 12};
+  people.items[0].hidden = true;
+  people.items[0].position_sigma_m = 0.4;
+  g.costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 10'000'000'000});
+  EXPECT_EQ(g.layer.cages(), 1u);
+  EXPECT_EQ(cost_at(3.0 + 0.85, 3.0), kLethalCost);
+  people.items[0].hidden = false;
+  g.costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 10'000'000'000});
+  EXPECT_EQ(g.layer.cages(), 0u) << "not seen for 8 s and not hidden: gone";
+  people.items[0].hidden = true;
+  g.costmap.update({{0.5, 0.5, 0.0}, {0.5, 0.5, 0.0}, nullptr, 11'100'000'000});
+  EXPECT_EQ(g.layer.cages(), 0u) << "the list is older than expire_s";
+}
+
 // A person 0.6 m from the robot (closer than cage plus robot): the cage shrinks to stop
 // robot_clearance_m from the robot's centre, so the robot is not left inside a lethal region
 // and can move away; backed off, the full cage is there again.

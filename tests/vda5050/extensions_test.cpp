@@ -26,6 +26,8 @@ TEST(PeopleMessage, RoundTripsEveryField) {
   m.robot_theta = 3.0;
   (void)m.people.push_back(PersonReport{4, 1.5, 2.5, 0.3, -0.1, 0.45, 0.95, true, 0.2, 17});
   (void)m.people.push_back(PersonReport{9, -3.0, 0.0, 0.0, 0.0, 0.5, 1.0, false, 0.0, 4});
+  m.people[1].hidden = true;
+  m.people[1].position_sigma = 0.75;
   std::array<char, 4096> out{};
   auto text = encode_people(m, out);
   ASSERT_TRUE(text.ok()) << text.error().c_str();
@@ -41,6 +43,9 @@ TEST(PeopleMessage, RoundTripsEveryField) {
   EXPECT_TRUE(back.people[0].dynamic);
   EXPECT_FALSE(back.people[1].dynamic);
   EXPECT_EQ(back.people[1].laser_points, 4u);
+  EXPECT_FALSE(back.people[0].hidden);
+  EXPECT_TRUE(back.people[1].hidden);
+  EXPECT_DOUBLE_EQ(back.people[1].position_sigma, 0.75);
 }
 
 TEST(PeopleMessage, RefusesWhatTheSchemaDoesNot) {
@@ -57,6 +62,16 @@ TEST(PeopleMessage, RefusesWhatTheSchemaDoesNot) {
       head + R"([{"id":1,"x":0,"y":0,"vx":0,"vy":0,"width":0,"cageRadius":0,"state":"RUNNING","ageS":0,"laserPoints":0}]})", m,
       *scratch);
   EXPECT_FALSE(bad_state.ok());
+  // A 1.0 person (no hidden, no positionSigma) reads as seen; 1.1's fields of the wrong type do not read.
+  const std::string person = R"({"id":1,"x":0,"y":0,"vx":0,"vy":0,"width":0,"cageRadius":0,"state":"STATIC","ageS":0,"laserPoints":0)";
+  ASSERT_TRUE(decode_people(head + "[" + person + "}]}", m, *scratch).ok());
+  ASSERT_EQ(m.people.size(), 1u);
+  EXPECT_FALSE(m.people[0].hidden);
+  EXPECT_EQ(m.people[0].position_sigma, 0.0);
+  const Status bad_hidden = decode_people(head + "[" + person + R"(,"hidden":"yes"}]})", m, *scratch);
+  ASSERT_FALSE(bad_hidden.ok());
+  EXPECT_NE(std::string(bad_hidden.error().c_str()).find("'hidden'"), std::string::npos) << bad_hidden.error().c_str();
+  EXPECT_FALSE(decode_people(head + "[" + person + R"(,"positionSigma":true}]})", m, *scratch).ok());
   const Status missing = decode_people(head + R"([{"id":1}]})", m, *scratch);
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(std::string(missing.error().c_str()).find("'x'"), std::string::npos) << missing.error().c_str();

@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
     people.robot_y = 2.0;
     people.robot_theta = 1.5;
     (void)people.people.push_back(PersonReport{3, 4.0, 5.5, 0.4, -0.2, 0.5, 1.0, true, 0.1, 14});
+    (void)people.people.push_back(PersonReport{5, 1.0, 6.0, 0.0, 0.0, 0.4, 1.2, false, 4.5, 0, true, 0.7});
     AdvisoryMessage advisory;
     advisory.header_id = 9;
     advisory.timestamp = header(0).timestamp;

@@ -12,6 +12,7 @@
 #include "sen3bot/camera/frame_pool.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
+#include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/vda5050/json.hpp"
 #include "sen3bot/view/session.hpp"
 #include "view_task.hpp"
@@ -125,6 +126,70 @@ TEST(ViewTask, SendsTheCamerasNewestFrameAsJpegOncePerFrame) {
   clock.advance_to(clock.now() + hal::seconds(1));
   task.step({clock.now(), clock.now(), 2});
   EXPECT_EQ(server.board().published(camera), 1u);
+  task.shutdown();
+}
+
+// The people channel marks a hidden person (kept out of the sensors' view): the label says so
+// and the cage and body are grey.
+TEST(ViewTask, APersonKeptHiddenIsLabelledAndGreyed) {
+  hal::SimClock clock(hal::seconds(1));
+  tasks::Scheduler scheduler(clock);
+  const nav::OccupancyMap map(40, 40, 0.1, 0.0, 0.0);
+  tasks::Topic<msg::PoseEstimate> pose;
+  tasks::Topic<msg::NavGoal> goal;
+  tasks::Topic<msg::ScanMessage> scan;
+  tasks::Topic<msg::PathMessage> path;
+  tasks::Topic<msg::People> people;
+  nav::PlannerTask planner(nav::PlannerTaskConfig{}, map, {}, goal, pose, scan, path);  // only there: not run
+  ViewTaskConfig config;
+  config.server.port = 0;
+  config.period_s.fill(0.0);
+  config.period_s[static_cast<std::size_t>(ViewChannel::people)] = 0.2;
+  ViewSources sources{.scheduler = scheduler, .clock = clock, .map = &map, .pose = &pose, .people = &people, .planner = &planner};
+  mem::BudgetArena arena("view", 2 * 1024 * 1024);
+  ViewTask task(config, sources);
+  ASSERT_TRUE(mem::try_init(arena, [&] { return task.init(arena); }));
+  view::Server& server = *task.server();
+  ASSERT_EQ(server.board().channel_count(), 1u);
+  ASSERT_EQ(server.board().spec(0).topic, "/people");
+
+  msg::People list;
+  list.count = 2;
+  list.stamp_ns = clock.now();
+  list.items[0] = {.id = 3, .x_m = 1.0, .y_m = 2.0, .width_m = 0.4, .cage_radius_m = 0.7};
+  list.items[1] = {.id = 4, .x_m = 2.0, .y_m = 1.0, .width_m = 0.4, .cage_radius_m = 1.1};
+  list.items[1].hidden = true;
+  list.items[1].position_sigma_m = 0.6;
+  people.publish(list, clock.now());
+  task.step({clock.now(), clock.now(), 0});
+  ASSERT_EQ(server.board().published(0), 1u);
+  const view::Publication& pub = server.board().take(0);
+  const std::string text(pub.payload(0).data(), pub.payload(0).size());
+  std::vector<json::Token> tokens(4096);
+  json::Document doc(tokens, json::Limits{32, 1 << 20});
+  ASSERT_TRUE(doc.parse(text)) << text;
+  std::size_t seen = 0;
+  for (const json::Value entity : doc.root().find("entities").items()) {
+    std::array<char, 64> id{};
+    const auto id_size = entity.find("id").string(id);
+    ASSERT_TRUE(id_size);
+    const std::string name(id.data(), *id_size);
+    const json::Value label = *entity.find("texts").items().begin();
+    std::array<char, 64> words{};
+    const auto size = label.find("text").string(words);
+    ASSERT_TRUE(size);
+    const double cage_red = *(*entity.find("lines").items().begin()).find("color").find("r").number();
+    if (name == "person/3") {
+      EXPECT_EQ(std::string(words.data(), *size), "person 3");
+      EXPECT_DOUBLE_EQ(cage_red, 0.9);
+      ++seen;
+    } else if (name == "person/4") {
+      EXPECT_EQ(std::string(words.data(), *size), "person 4 hidden");
+      EXPECT_DOUBLE_EQ(cage_red, 0.5);
+      ++seen;
+    }
+  }
+  EXPECT_EQ(seen, 2u);
   task.shutdown();
 }
 

@@ -118,6 +118,8 @@ Result<std::string_view> encode_people(const PeopleMessage& m, std::span<char> o
     w.member("state", p.dynamic ? "DYNAMIC" : "STATIC");
     w.member_number("ageS", p.age_s);
     w.member_uint32("laserPoints", p.laser_points);
+    w.member_bool("hidden", p.hidden);
+    w.member_number("positionSigma", p.position_sigma);
     w.end_object();
   }
   w.end_array();
@@ -164,6 +166,9 @@ Status decode_people(std::string_view text, PeopleMessage& out, DecodeScratch& s
     SEN3BOT_TRY(p.text("state", state));
     if (state != "STATIC" && state != "DYNAMIC") return Error(Errc::protocol, "people.people[].state: STATIC or DYNAMIC");
     person.dynamic = state == "DYNAMIC";
+    // Added in 1.1: optional, but of the right type when there.
+    if (item.find("hidden").valid()) SEN3BOT_TRY(p.boolean("hidden", person.hidden));
+    if (item.find("positionSigma").valid()) SEN3BOT_TRY(p.number("positionSigma", person.position_sigma));
     (void)out.people.push_back(person);
   }
   return {};

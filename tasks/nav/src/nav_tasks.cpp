@@ -640,7 +640,22 @@ void PeopleTask::step(const tasks::StepContext& context) {
     PosedScan& s = scans_[(scan_next_ + k) % kScans];
     if (s.posed && !s.followed) follow(s);
   }
-  tracker_.expire(context.start_ns);
+  // Which unseen people are hidden: the newest posed scan and the sonar ring tell.
+  SensorCoverage coverage;
+  const PosedScan* newest = nullptr;
+  for (const PosedScan& s : scans_)
+    if (s.posed && (newest == nullptr || s.scan.stamp_ns > newest->scan.stamp_ns)) newest = &s;
+  msg::ScanView newest_view;
+  if (newest != nullptr) {
+    newest_view = newest->scan.view();
+    coverage.scan = &newest_view;
+    coverage.laser_pose = msg::compose(newest->pose, config_.laser_mount);
+  }
+  if (sonar_ != nullptr && sonar_->read(sonar_sample_) && pose.value.valid && !pose.value.lost) {
+    coverage.sonar = &sonar_sample_.value;
+    coverage.robot_pose = pose.value.pose;
+  }
+  tracker_.expire(context.start_ns, coverage);
   tracker_.publish(context.start_ns, message_);
   tasks::Sample<msg::CobotState> cobot;
   if (cobot_ != nullptr && config_.operator_safety_radius_m >= 0.0 && cobot_->read(cobot) &&
@@ -648,7 +663,8 @@ void PeopleTask::step(const tasks::StepContext& context) {
     for (std::size_t i = 0; i < message_.count; ++i) {
       msg::TrackedPerson& p = message_.items[i];
       if (p.id != cobot.value.operator_track) continue;
-      p.cage_radius_m = std::max(p.width_m, config_.tracker.min_width_m) / 2.0 + config_.operator_safety_radius_m;
+      p.cage_radius_m =
+          cage_radius(config_.tracker, p.width_m, config_.operator_safety_radius_m, p.hidden, p.position_sigma_m);
     }
   }
   people_.publish(message_, context.start_ns);
@@ -671,7 +687,7 @@ void PeopleRelayTask::step(const tasks::StepContext& context) {
     const std::size_t n = std::min<std::size_t>(sample_.value.count, msg::People::kMax);
     for (std::size_t i = 0; i < n; ++i) {
       msg::TrackedPerson p = sample_.value.items[i];
-      p.cage_radius_m = std::max(p.width_m, tracker_.min_width_m) / 2.0 + tracker_.safety_radius_m;
+      p.cage_radius_m = cage_radius(tracker_, p.width_m, tracker_.safety_radius_m, p.hidden, p.position_sigma_m);
       message_.items[message_.count++] = p;
     }
   }

@@ -305,6 +305,14 @@ Status PersonTracker::init(const PersonTrackerConfig& config, std::pmr::memory_r
                                        "laser_follow_s, coast_s, dynamic_after_m, safety_radius_m, min_width_m >= 0",
                          msg::People::kMax);
   }
+  if (!(config.hidden_max_s > 0.0) || !(config.hidden_max_sigma_m > 0.0) || !(config.hidden_cage_growth_m >= 0.0) ||
+      !(config.hidden_wander_m2_s >= 0.0) || !(config.sonar_half_angle_rad > 0.0) ||
+      !(config.sonar_half_angle_rad < std::numbers::pi / 2.0) || !(config.sonar_max_age_s > 0.0) ||
+      !(config.sonar_window_m >= 0.0)) {
+    return Error(Errc::config, "person tracker: hidden_max_s, hidden_max_sigma_m, sonar_max_age_s > 0, "
+                               "hidden_cage_growth_m, hidden_wander_m2_s, sonar_window_m >= 0, "
+                               "0 < sonar_half_angle_rad < pi/2");
+  }
   config_ = config;
   const std::size_t n = std::max(config.max_tracks, msg::PersonDetections::kMax);
   if (Status s = hungarian_.init(n, resource); !s) return s;
@@ -345,8 +353,19 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
     track.camera_seen_ns = std::max(track.camera_seen_ns, stamp_ns);
     ++track.hits;
   }
-  expire(stamp_ns);
-  for (std::size_t f = 0; f < fix_count && count_ < tracks_.size(); ++f) {
+  // Stale tracks end here only when nothing may keep them (unconfirmed, or keeping hidden people
+  // off); a confirmed one is for expire() to judge against what the sensors see.
+  std::size_t kept = 0;
+  for (std::size_t t = 0; t < count_; ++t) {
+    const Track& track = tracks_[t];
+    if (static_cast<double>(stamp_ns - track.last_seen_ns) > config_.expire_s * 1e9 &&
+        (track.hits < config_.confirm_hits || !config_.keep_hidden))
+      continue;
+    if (kept != t) tracks_[kept] = track;
+    ++kept;
+  }
+  count_ = kept;
+  for (std::size_t f = 0; f < fix_count; ++f) {
     if (fix_used_[f] != 0) continue;
     // Two boxes on one body (a detector's double or stray box): a second person cannot stand
     // this close to a tracked one.
@@ -359,7 +378,17 @@ void PersonTracker::update(std::span<const PersonFix> fixes, hal::Nanos stamp_ns
       ++duplicates_;
       continue;
     }
-    Track& track = tracks_[count_++];
+    std::size_t slot = count_;
+    if (slot == tracks_.size()) {
+      // Full: a person seen takes the place of the one hidden longest (a guess).
+      for (std::size_t t = 0; t < count_; ++t)
+        if (tracks_[t].hidden && (slot == count_ || tracks_[t].last_seen_ns < tracks_[slot].last_seen_ns)) slot = t;
+      if (slot == count_) break;
+      ++forgotten_;
+    } else {
+      ++count_;
+    }
+    Track& track = tracks_[slot];
     track = Track{};
     track.id = next_id_++;
     track.at = track.first_seen = {fixes[f].x_m, fixes[f].y_m};
@@ -439,6 +468,7 @@ void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp
   }
   track.points = fix.points;
   track.last_seen_ns = stamp_ns;
+  track.hidden = false;
   // Dynamic once its centre has moved farther than the threshold from where it was first seen.
   if (std::hypot(track.at.x_m - track.first_seen.x_m, track.at.y_m - track.first_seen.y_m) > config_.dynamic_after_m)
     track.state = msg::PersonState::dynamic_person;
@@ -463,14 +493,127 @@ void PersonTracker::follow(std::size_t index, const PersonFix& fix, hal::Nanos s
   correct(tracks_[index], fix, stamp_ns);
 }
 
-void PersonTracker::expire(hal::Nanos now_ns) noexcept {
+double PersonTracker::position_sigma(const Track& track, hal::Nanos stamp_ns) const noexcept {
+  // A walker coasting on their velocity: the Kalman prediction's growth. Then held (or standing
+  // all along): a person out of sight may have wandered anywhere near, by hidden_wander_m2_s.
+  const double age_s = std::max(0.0, static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9);
+  const double coasted_s = walking(track) ? std::min(age_s, config_.coast_s) : 0.0;
+  Matrix4 p = track.covariance;
+  predict_covariance(p, coasted_s, config_.accel_sigma_m_s2 * config_.accel_sigma_m_s2);
+  const double wander = config_.hidden_wander_m2_s * (age_s - coasted_s);
+  const double a = p[0] + wander;
+  const double c = p[5] + wander;
+  const double b = p[1];
+  // The larger eigenvalue of the position block: the ellipse's long axis.
+  return std::sqrt(std::max(0.0, 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b)));
+}
+
+namespace {
+// Whether the scan looked past a body of radius body_m at `at` by margin_m: every beam across
+// the body reads farther than the body's centre plus the margin (a reading at range_max saw
+// nothing that near). Partly or wholly outside the scan's field, an unreadable beam, a nearer
+// return on one of those bearings (a rack, another person) or a place beyond the laser's reach:
+// not seen.
+bool sees_past(const msg::ScanView& scan, const Pose2D& laser, Point2D at, double body_m, double margin_m) noexcept {
+  const double dx = at.x_m - laser.x_m;
+  const double dy = at.y_m - laser.y_m;
+  const double distance = std::hypot(dx, dy);
+  if (!(distance > body_m) || scan.ranges_m.empty() || !(scan.increment_rad > 0.0f)) return false;
+  const double bearing = normalize_angle(std::atan2(dy, dx) - laser.theta_rad);
+  const double half = std::asin(body_m / distance);
+  const double lo = (bearing - half - scan.angle_min_rad) / scan.increment_rad;
+  const double hi = (bearing + half - scan.angle_min_rad) / scan.increment_rad;
+  const double last_beam = static_cast<double>(scan.ranges_m.size() - 1);
+  if (lo < 0.0 || hi > last_beam) return false;
+  // The beams across the body, or the nearest one where the body is narrower than a beam's step.
+  std::size_t first = static_cast<std::size_t>(std::ceil(lo));
+  std::size_t last = static_cast<std::size_t>(std::floor(hi));
+  if (first > last) first = last = static_cast<std::size_t>(std::lround(0.5 * (lo + hi)));
+  for (std::size_t i = first; i <= last; ++i) {
+    const double r = scan.ranges_m[i];
+    if (!(r > scan.range_min_m)) return false;  // unreadable (NaN) or too near to tell
+    const double reach = std::min(r, static_cast<double>(scan.range_max_m));
+    if (!(reach > distance + margin_m)) return false;
+  }
+  return true;
+}
+}  // namespace
+
+bool PersonTracker::keep_hidden(Track& track, hal::Nanos now_ns, const SensorCoverage& coverage) noexcept {
+  if (!track.hidden) {
+    track.hidden = true;
+    track.hidden_since_ns = now_ns;
+  }
+  const Point2D at = predict(track, now_ns);
+  const double sigma = position_sigma(track, now_ns);
+  const double body = std::max(track.width_m, config_.min_width_m) / 2.0;
+  // Seen empty means seen past the body and its uncertainty along the line of sight; only
+  // readings taken after the last fix count (an older one saw the place before they came).
+  const double margin = body + sigma;
+  bool empty = coverage.scan != nullptr && coverage.scan->stamp_ns > track.last_seen_ns &&
+               sees_past(*coverage.scan, coverage.laser_pose, at, body, margin);
+  bool echo = false;
+  if (coverage.sonar != nullptr) {
+    const msg::Sonar& sonar = *coverage.sonar;
+    for (std::size_t d = 0; d < std::min<std::size_t>(sonar.count, msg::Sonar::kMax); ++d) {
+      const hal::Nanos stamp = sonar.stamp_ns[d];
+      const double range = sonar.range_m[d];
+      if (stamp < 0 || stamp <= track.last_seen_ns ||
+          static_cast<double>(now_ns - stamp) > config_.sonar_max_age_s * 1e9 || !(range >= 0.0))
+        continue;
+      const Pose2D disc = apply_motion(coverage.robot_pose, sonar.mount[d]);
+      const double distance = std::hypot(at.x_m - disc.x_m, at.y_m - disc.y_m);
+      if (!(distance > body)) continue;
+      const double off =
+          std::abs(normalize_angle(std::atan2(at.y_m - disc.y_m, at.x_m - disc.x_m) - disc.theta_rad));
+      const bool returned = range < sonar.max_range_m;
+      // The cone's axis region holds the place and it heard nothing until past it.
+      if (off <= config_.sonar_half_angle_rad && std::min(range, sonar.max_range_m) > distance + margin) empty = true;
+      // An echo from about the body's near side, with any of the body in the cone: weak
+      // evidence that they are still there (an echo says nothing of where across the cone).
+      if (returned && off <= config_.sonar_half_angle_rad + std::asin(body / distance) &&
+          std::abs(range - (distance - body)) <= config_.sonar_window_m)
+        echo = true;
+    }
+  }
+  // An echo from the place outweighs a look past it: sonar misses what glances off it, and a
+  // wrongly kept guess only costs room, a wrongly dropped person a cage.
+  if (echo) {
+    track.hidden_since_ns = now_ns;
+  } else if (empty) {
+    ++seen_empty_;
+    return false;
+  }
+  if (sigma > config_.hidden_max_sigma_m ||
+      static_cast<double>(now_ns - track.hidden_since_ns) > config_.hidden_max_s * 1e9) {
+    ++forgotten_;
+    return false;
+  }
+  return true;
+}
+
+void PersonTracker::expire(hal::Nanos now_ns, const SensorCoverage& coverage) noexcept {
+  const bool sensed = coverage.scan != nullptr || coverage.sonar != nullptr;
   std::size_t kept = 0;
   for (std::size_t t = 0; t < count_; ++t) {
-    if (static_cast<double>(now_ns - tracks_[t].last_seen_ns) > config_.expire_s * 1e9) continue;
-    if (kept != t) tracks_[kept] = tracks_[t];
+    Track& track = tracks_[t];
+    bool keep = static_cast<double>(now_ns - track.last_seen_ns) <= config_.expire_s * 1e9;
+    if (!keep && config_.keep_hidden && sensed && track.hits >= config_.confirm_hits) {
+      keep = keep_hidden(track, now_ns, coverage);
+    } else if (!keep && track.hidden) {
+      ++forgotten_;  // nothing to tell hidden from gone any more
+    }
+    if (!keep) continue;
+    if (kept != t) tracks_[kept] = track;
     ++kept;
   }
   count_ = kept;
+}
+
+double cage_radius(const PersonTrackerConfig& config, double width_m, double safety_radius_m, bool hidden,
+                   double position_sigma_m) noexcept {
+  const double growth = hidden ? std::clamp(position_sigma_m, 0.0, config.hidden_cage_growth_m) : 0.0;
+  return std::max(width_m, config.min_width_m) / 2.0 + safety_radius_m + growth;
 }
 
 void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept {
@@ -484,12 +627,16 @@ void PersonTracker::publish(hal::Nanos now_ns, msg::People& out) const noexcept 
     const Point2D at = predict(track, now_ns);
     p.x_m = at.x_m;
     p.y_m = at.y_m;
-    // A standing person's cage stays where they stand (their velocity is the fixes' noise).
-    const bool moving = walking(track);
+    // A standing person's cage stays where they stand (their velocity is the fixes' noise); a
+    // hidden walker's is held after coast_s, and so has no velocity.
+    const bool held = track.hidden && static_cast<double>(now_ns - track.last_seen_ns) > config_.coast_s * 1e9;
+    const bool moving = walking(track) && !held;
     p.vx_m_s = moving ? track.velocity.x_m : 0.0;
     p.vy_m_s = moving ? track.velocity.y_m : 0.0;
     p.width_m = track.width_m;
-    p.cage_radius_m = std::max(track.width_m, config_.min_width_m) / 2.0 + config_.safety_radius_m;
+    p.position_sigma_m = position_sigma(track, now_ns);
+    p.hidden = track.hidden;
+    p.cage_radius_m = cage_radius(config_, track.width_m, config_.safety_radius_m, track.hidden, p.position_sigma_m);
     p.state = track.state;
     p.last_seen_ns = track.last_seen_ns;
     p.points = track.points;
@@ -514,7 +661,9 @@ void PeopleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcep
   const std::size_t count = std::min<std::size_t>(people_.count, msg::People::kMax);
   for (std::size_t i = 0; i < count; ++i) {
     const msg::TrackedPerson& p = people_.items[i];
-    if (static_cast<double>(inputs.now_ns - p.last_seen_ns) > config_.expire_s * 1e9) continue;
+    // A hidden person is kept by the tracker past expire_s; their list must still be current.
+    const double age_s = static_cast<double>(inputs.now_ns - (p.hidden ? people_.stamp_ns : p.last_seen_ns)) * 1e-9;
+    if (age_s > config_.expire_s) continue;
     const double dt = config_.predict ? std::max(0.0, static_cast<double>(inputs.now_ns - people_.stamp_ns) * 1e-9) : 0.0;
     const double x = p.x_m + p.vx_m_s * dt;
     const double y = p.y_m + p.vy_m_s * dt;

@@ -46,10 +46,14 @@ struct TrackedPerson {
   double vx_m_s = 0.0;
   double vy_m_s = 0.0;
   double width_m = 0.0;        // the box's horizontal extent at the person's range
-  double cage_radius_m = 0.0;  // half the width plus the safety radius
+  double cage_radius_m = 0.0;  // half the width plus the safety radius (and, hidden, the growth)
   PersonState state = PersonState::static_person;
   hal::Nanos last_seen_ns = 0;
   std::uint16_t points = 0;    // laser returns in the last fix
+  // Not seen for the tracker's expire_s but kept: their place is out of the sensors' view (behind
+  // the robot, behind a rack) and has not been seen empty. The position is a guess.
+  bool hidden = false;
+  double position_sigma_m = 0.0;  // the position's standard deviation along its longest axis
 };
 static_assert(std::is_trivially_copyable_v<TrackedPerson>);
 

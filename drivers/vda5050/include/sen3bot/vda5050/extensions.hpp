@@ -21,7 +21,7 @@
 
 namespace sen3bot::vda5050 {
 
-inline constexpr std::string_view kPeopleSchemaVersion = "1.0.0";
+inline constexpr std::string_view kPeopleSchemaVersion = "1.1.0";  // 1.1: hidden, positionSigma
 inline constexpr std::string_view kAdvisorySchemaVersion = "1.0.0";
 inline constexpr std::string_view kFormationSchemaVersion = "1.0.0";
 inline constexpr std::size_t kMaxReportedPeople = 16;
@@ -35,6 +35,10 @@ struct PersonReport {
   bool dynamic = false;  // moved farther than the robot's threshold from where first seen
   double age_s = 0;      // since last seen
   std::uint32_t laser_points = 0;
+  // Kept out of the sensors' view (a guess), and the position's sigma (m). Optional on reading:
+  // a 1.0 report has neither (false, 0).
+  bool hidden = false;
+  double position_sigma = 0;
 };
 
 struct PeopleMessage {

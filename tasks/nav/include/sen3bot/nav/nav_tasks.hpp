@@ -315,6 +315,8 @@ class PeopleTask final : public tasks::Task {
              const tasks::Topic<PoseEstimate>& pose, const tasks::Topic<msg::PersonDetections>& detections,
              tasks::Topic<msg::People>& people, const tasks::Topic<msg::CobotState>* cobot = nullptr) noexcept
       : config_(config), map_(map), scan_(scan), pose_(pose), detections_(detections), people_(people), cobot_(cobot) {}
+  // Before init: the base's sonar ring, weak evidence about people hidden behind the robot.
+  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const PeopleFusion& fusion() const noexcept { return fusion_; }
@@ -341,6 +343,8 @@ class PeopleTask final : public tasks::Task {
   const tasks::Topic<msg::PersonDetections>& detections_;
   tasks::Topic<msg::People>& people_;
   const tasks::Topic<msg::CobotState>* cobot_;
+  const tasks::Topic<msg::Sonar>* sonar_ = nullptr;
+  tasks::Sample<msg::Sonar> sonar_sample_;
   PeopleFusion fusion_;
   PersonTracker tracker_;
   std::span<PosedScan> scans_;             // ring, newest at scans_[(scan_next_ - 1) % kScans]

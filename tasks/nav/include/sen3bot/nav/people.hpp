@@ -18,10 +18,12 @@
 #include <array>
 #include <cstdint>
 #include <memory_resource>
+#include <numbers>
 #include <span>
 
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/msg/laser.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/msg/people.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/dynamic_obstacles.hpp"
@@ -167,6 +169,37 @@ struct PersonTrackerConfig {
   // where last seen (their velocity is the fixes' noise).
   double coast_s = 1.0;
   double walking_speed_m_s = 0.3;
+  // Hidden people (docs/people.md): a confirmed person not seen for expire_s is kept while their
+  // place has not been seen empty, by the laser or the sonar, for a person out of sight is not
+  // a person gone. Unseen, their position's variance grows by hidden_wander_m2_s a second once
+  // held (the walker's coast grows it through the Kalman prediction); they end when it is seen
+  // empty, when the position's sigma passes hidden_max_sigma_m, or hidden_max_s after hiding or
+  // the last sonar echo from their place. A hidden person's cage grows by their sigma, at most
+  // hidden_cage_growth_m (a guess must not close the map).
+  bool keep_hidden = true;
+  double hidden_max_s = 30.0;
+  double hidden_max_sigma_m = 1.5;
+  double hidden_cage_growth_m = 0.5;
+  double hidden_wander_m2_s = 0.1;
+  // The sonar: a disc's cone (the P3-DX's is 15 degrees across), how old a reading may be, and
+  // how near the place's near side an echo must be to count as the person.
+  double sonar_half_angle_rad = 7.5 * std::numbers::pi / 180.0;
+  double sonar_max_age_s = 1.0;
+  double sonar_window_m = 0.3;
+};
+
+// A tracked person's cage radius: half the width (at least min_width_m) plus safety_radius_m,
+// and while hidden the position's sigma, at most hidden_cage_growth_m.
+[[nodiscard]] double cage_radius(const PersonTrackerConfig& config, double width_m, double safety_radius_m, bool hidden,
+                                 double position_sigma_m) noexcept;
+
+// What the sensors saw last, to tell a person hidden from a person gone. Null: that sensor has
+// nothing.
+struct SensorCoverage {
+  const msg::ScanView* scan = nullptr;  // the latest posed scan
+  Pose2D laser_pose;                    // the laser on the map at that scan
+  const msg::Sonar* sonar = nullptr;    // the ring's newest readings (body frame mounts)
+  Pose2D robot_pose;                    // the body on the map, for the sonar's mounts
 };
 
 class PersonTracker {
@@ -183,6 +216,8 @@ class PersonTracker {
     std::uint32_t hits = 0;         // boxes matched
     std::uint16_t points = 0;
     msg::PersonState state = msg::PersonState::static_person;
+    bool hidden = false;
+    hal::Nanos hidden_since_ns = 0;  // when it was hidden, or the last sonar echo from its place
   };
 
   Status init(const PersonTrackerConfig& config, std::pmr::memory_resource& resource);
@@ -194,14 +229,22 @@ class PersonTracker {
   std::size_t followable(hal::Nanos stamp_ns, std::span<Point2D> out, std::span<std::uint8_t> which) const noexcept;
   // A laser-only fix of tracks()[index] at stamp_ns: position and velocity, not width or hits.
   void follow(std::size_t index, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
-  // Ends the tracks not seen for expire_s by now_ns.
-  void expire(hal::Nanos now_ns) noexcept;
+  // Ends the tracks not seen for expire_s by now_ns, but keeps (hidden) the confirmed ones whose
+  // place the coverage has not seen empty, up to the caps. Without a scan or sonar readings
+  // nothing is known to be hidden: they end.
+  void expire(hal::Nanos now_ns, const SensorCoverage& coverage = {}) noexcept;
   // The tracks predicted to now_ns, with their cages.
   void publish(hal::Nanos now_ns, msg::People& out) const noexcept;
   [[nodiscard]] std::span<const Track> tracks() const noexcept { return tracks_.first(count_); }
   [[nodiscard]] std::uint32_t started() const noexcept { return next_id_ - 1; }
   // Fixes dropped as a second sighting of a tracked person in the same frame.
   [[nodiscard]] std::uint64_t duplicates() const noexcept { return duplicates_; }
+  // Hidden tracks ended because their place was seen empty, because the caps (sigma, time)
+  // were reached, or to make room for a person seen.
+  [[nodiscard]] std::uint64_t seen_empty() const noexcept { return seen_empty_; }
+  [[nodiscard]] std::uint64_t forgotten() const noexcept { return forgotten_; }
+  // The position's standard deviation along its longest axis, predicted to stamp_ns.
+  [[nodiscard]] double position_sigma(const Track& track, hal::Nanos stamp_ns) const noexcept;
 
  private:
   PersonTrackerConfig config_;
@@ -213,7 +256,11 @@ class PersonTracker {
   std::span<std::uint8_t> fix_used_;
   std::uint32_t next_id_ = 1;
   std::uint64_t duplicates_ = 0;
+  std::uint64_t seen_empty_ = 0;
+  std::uint64_t forgotten_ = 0;
 
+  // Whether a confirmed track not seen for expire_s is kept, hidden (marks it so).
+  bool keep_hidden(Track& track, hal::Nanos now_ns, const SensorCoverage& coverage) noexcept;
   void correct(Track& track, const PersonFix& fix, hal::Nanos stamp_ns) noexcept;
   [[nodiscard]] Point2D predict(const Track& track, hal::Nanos stamp_ns) const noexcept;
   [[nodiscard]] bool walking(const Track& track) const noexcept;
