@@ -366,10 +366,12 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
   if (r.has("local_costmap")) {
     // A larger window with longer marking sees movers earlier (costing memory and time).
     const Reader p = r.child("local_costmap");
-    p.allow_only({"size_m", "obstacle_range_m", "raytrace_range_m"});
+    p.allow_only({"size_m", "obstacle_range_m", "raytrace_range_m", "sonar_clearing"});
     if (p.has("size_m")) n.local_costmap_size_m = p.number("size_m", 2.0, 20.0);
     if (p.has("obstacle_range_m")) n.local_obstacles.obstacle_max_range_m = p.number("obstacle_range_m", 0.5, 10.0);
     if (p.has("raytrace_range_m")) n.local_obstacles.raytrace_max_range_m = p.number("raytrace_range_m", 0.5, 10.0);
+    // The base's sonar echoes clear marks the laser cannot see any more (beside and behind).
+    if (p.has("sonar_clearing")) n.local_obstacles.sonar_clearing = p.boolean("sonar_clearing");
     if (n.local_obstacles.raytrace_max_range_m < n.local_obstacles.obstacle_max_range_m)
       p.fail("raytrace_range_m", "must be at least obstacle_range_m (a mark must be clearable)", YAML::Node());
     if (n.local_obstacles.raytrace_max_range_m > n.local_costmap_size_m / 2.0)

@@ -148,6 +148,7 @@ Status Firmware::create_navigation() {
   controller_task_ = std::make_unique<nav::ControllerTask>(controller, map_, nav_pose_, nav_odometry_, nav_scan_, nav_path_,
                                                            nav_request_, nav_controller_, nav_movers_, people,
                                                            config_.has_fleet ? &nav_formation_ : nullptr);
+  if (config_.devices.has_base) controller_task_->use_sonar(&nav_sonar_);
 
   nav::SafetyTaskConfig safety;
   safety.safety = n.safety;

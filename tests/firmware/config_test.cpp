@@ -170,7 +170,7 @@ TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
           "    confirm_hits: 5, gate_m: 0.8, max_tracks: 12, front_horizon_s: 0.5, max_speed_m_s: 1.5 }\n"
           "  mover_prediction: { enabled: false, horizon_s: 3, stay_horizon_s: 8, margin_m: 0.2, weight: 2,\n"
           "    brake_delay_s: 0.3, brake_decel_m_s2: 0.4, may_return: false }\n"
-          "  local_costmap: { size_m: 8, obstacle_range_m: 3.5, raytrace_range_m: 4 }\n",
+          "  local_costmap: { size_m: 8, obstacle_range_m: 3.5, raytrace_range_m: 4, sonar_clearing: false }\n",
       "robot.yaml");
   ASSERT_TRUE(r) << r.error().c_str();
   const NavigationSection& n = r->navigation;
@@ -196,6 +196,8 @@ TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
   EXPECT_DOUBLE_EQ(n.local_costmap_size_m, 8.0);
   EXPECT_DOUBLE_EQ(n.local_obstacles.obstacle_max_range_m, 3.5);
   EXPECT_DOUBLE_EQ(n.local_obstacles.raytrace_max_range_m, 4.0);
+  EXPECT_TRUE(defaults->navigation.local_obstacles.sonar_clearing);
+  EXPECT_FALSE(n.local_obstacles.sonar_clearing);
 
   std::string m = message_of(std::string(kNavigation) + "  dynamic_obstacles: { alpha_fast: 0.2, alpha_slow: 0.3 }\n");
   EXPECT_NE(m.find("navigation.dynamic_obstacles.alpha_slow: must be smaller than alpha_fast"), std::string::npos) << m;

@@ -135,6 +135,59 @@ TEST(ObstacleLayer, MarksStayInPlaceWhenTheWindowRolls) {
   EXPECT_EQ(cm.costmap().at(c, r), kLethalCost);
 }
 
+TEST(ObstacleLayer, ASonarEchoClearsAMarkTheLaserCannotSeeAnyMore) {
+  // Someone walked past the robot's side: the laser marked them ahead of its mount, and the
+  // mark, now behind the laser's plane, is never raytraced away. A rear transducer's echo from
+  // farther away says its cone is empty up to there.
+  mem::BudgetArena arena("test", 1 << 20);
+  ObstacleLayer obs;
+  LayeredCostmap cm;
+  ASSERT_TRUE(cm.add_layer(obs));
+  CostmapConfig cfg;
+  cfg.rolling = true;
+  ASSERT_TRUE(cm.init(cfg, arena));
+  ScanMessage msg = ring_scan(0.5, 181);
+  ProjectedScan view;
+  view.assign(msg.view(), {});
+  // Facing +y: the beam to the right ends at (10.52, 10.02).
+  const Pose2D up{10.02, 10.02, M_PI / 2};
+  cm.update({up, up, &view, 1'000'000'000});
+  const Costmap2D& g = cm.costmap();
+  int c = 0;
+  int r = 0;
+  ASSERT_TRUE(g.world_to_cell(10.52, 10.02, c, r));
+  ASSERT_EQ(g.at(c, r), kLethalCost);
+  // Turned to face -x, the laser sees 2 m of free space ahead; the mark is behind it.
+  const Pose2D back{10.02, 10.02, M_PI};
+  msg = ring_scan(2.0, 181);
+  view.assign(msg.view(), {});
+  const hal::Nanos now = 2'000'000'000;
+  msg::Sonar sonar;
+  sonar.count = 1;
+  sonar.mount[0] = {-0.2, 0.0, M_PI};  // the rear disc looking back, 0.3 m short of the mark
+  const auto update_with = [&](double range_m, hal::Nanos stamp_ns) {
+    sonar.range_m[0] = range_m;
+    sonar.stamp_ns[0] = stamp_ns;
+    CostmapInputs in{back, back, &view, now};
+    in.sonar = &sonar;
+    cm.update(in);
+    return g.at(c, r);
+  };
+  cm.update({back, back, &view, now});
+  EXPECT_EQ(g.at(c, r), kLethalCost) << "without the sonar the mark stays";
+  EXPECT_EQ(update_with(5.0, now), kLethalCost) << "a reading at the maximum may be a miss";
+  EXPECT_EQ(update_with(1.5, now - 600'000'000), kLethalCost) << "a stale echo";
+  EXPECT_EQ(update_with(0.32, now), kLethalCost) << "an echo from the mark itself";
+  EXPECT_EQ(update_with(1.5, now), kFreeCost) << "an echo from beyond it";
+  // The laser's own new marks stand even inside a cone that echoes from farther away.
+  sonar.mount[0] = {0.2, 0.0, 0.0};  // a front disc looking along the laser
+  msg = ring_scan(1.0, 181);
+  view.assign(msg.view(), {});
+  (void)update_with(3.0, now);
+  ASSERT_TRUE(g.world_to_cell(9.02, 10.02, c, r));
+  EXPECT_EQ(g.at(c, r), kLethalCost);
+}
+
 TEST(LayeredCostmap, RollingWindowCopiesTheStaticMapAndInflates) {
   OccupancyMap map(200, 200, 0.05, -1.0, -2.0);
   for (int r = 0; r < 200; ++r) map.set(100, r, 100);  // wall at x in [4.0, 4.05)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "sen3bot/nav/arena.hpp"
 
@@ -209,9 +210,58 @@ void ObstacleLayer::raytrace(int c0, int r0, int c1, int r1, int max_cells) noex
   }
 }
 
+void ObstacleLayer::clear_sonar_cones(const CostmapInputs& inputs) noexcept {
+  const msg::Sonar& sonar = *inputs.sonar;
+  const double res = grid_.resolution_m();
+  const Pose2D& robot = inputs.robot_pose;
+  const double tan_half = std::tan(config_.sonar_half_angle_rad);
+  for (std::size_t d = 0; d < std::min<std::size_t>(sonar.count, msg::Sonar::kMax); ++d) {
+    const hal::Nanos stamp = sonar.stamp_ns[d];
+    const double range = sonar.range_m[d];
+    if (stamp <= 0 || static_cast<double>(inputs.now_ns - stamp) > config_.sonar_max_age_s * 1e9) continue;
+    if (!(range < sonar.max_range_m)) continue;  // no echo: may be a miss
+    const double clear_m = std::min(range - config_.sonar_margin_m, config_.raytrace_max_range_m);
+    if (!(clear_m > 0.0)) continue;
+    const Pose2D disc = apply_motion(robot, sonar.mount[d]);
+    const double c = std::cos(disc.theta_rad);
+    const double s = std::sin(disc.theta_rad);
+    // The cone's bounding box in cells (the grid may be rotated), then each cell in it tested.
+    int c0 = std::numeric_limits<int>::max(), r0 = c0, c1 = std::numeric_limits<int>::min(), r1 = c1;
+    const double half_width = clear_m * tan_half;
+    for (const auto& [ahead, side] : {std::pair{0.0, 0.0}, std::pair{clear_m, -half_width}, std::pair{clear_m, half_width}}) {
+      int col = 0;
+      int row = 0;
+      (void)grid_.world_to_cell(disc.x_m + c * ahead - s * side, disc.y_m + s * ahead + c * side, col, row);
+      c0 = std::min(c0, col);
+      c1 = std::max(c1, col);
+      r0 = std::min(r0, row);
+      r1 = std::max(r1, row);
+    }
+    c0 = std::max(c0, 0);
+    r0 = std::max(r0, 0);
+    c1 = std::min(c1, grid_.width() - 1);
+    r1 = std::min(r1, grid_.height() - 1);
+    for (int row = r0; row <= r1; ++row) {
+      for (int col = c0; col <= c1; ++col) {
+        if (grid_.at(col, row) != kLethalCost) continue;
+        double x = 0.0;
+        double y = 0.0;
+        grid_.cell_to_world(col, row, x, y);
+        const double along = c * (x - disc.x_m) + s * (y - disc.y_m);
+        const double across = -s * (x - disc.x_m) + c * (y - disc.y_m);
+        // The whole cell nearer than the echo's clearing distance, its centre inside the cone.
+        if (along <= 0.0 || along + res > clear_m || std::abs(across) > along * tan_half) continue;
+        grid_.set(col, row, kFreeCost);
+      }
+    }
+  }
+}
+
 void ObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs) noexcept {
   grid_.set_origin(master.origin_x_m(), master.origin_y_m());
   const double res = grid_.resolution_m();
+  // Before the scan: a mark the laser makes now is never taken back by a sonar cone.
+  if (config_.sonar_clearing && inputs.sonar != nullptr) clear_sonar_cones(inputs);
   if (inputs.scan != nullptr) {
     const ProjectedScan& scan = *inputs.scan;
     // Beams are in the robot frame; the robot stood at scan_pose when the scan was taken.

@@ -421,7 +421,9 @@ void ControllerTask::step(const tasks::StepContext& context) {
       tasks::Sample<msg::People> people;
       if (people_->read(people)) people_copy_ = people.value;
     }
-    costmap_.update({pose.value.pose, at_scan, scan, context.start_ns});
+    CostmapInputs inputs{pose.value.pose, at_scan, scan, context.start_ns};
+    if (sonar_ != nullptr && sonar_->read(sonar_sample_)) inputs.sonar = &sonar_sample_.value;
+    costmap_.update(inputs);
     if (config_.dynamic_obstacles.enabled) dynamic_layer_.movers(context.start_ns, movers_message_);
     // Under a formation command the DWA rests: its recoveries would count the robot not
     // following a path it is not asked to follow.

@@ -17,6 +17,7 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/mem/static_vector.hpp"
+#include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/nav/distance_transform.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/grid_geometry.hpp"
@@ -71,6 +72,7 @@ struct CostmapInputs {
   Pose2D scan_pose;   // map frame: where the robot was when the scan was taken
   const ProjectedScan* scan = nullptr;
   hal::Nanos now_ns = 0;  // the update's time (layers that predict motion paint for it)
+  const msg::Sonar* sonar = nullptr;  // the ring's latest readings (body frame), if any
 };
 
 // A plug-in layer. Later layers (dynamic obstacles, people) implement this too.
@@ -160,6 +162,15 @@ struct ObstacleLayerConfig {
   bool clear_no_return = true;         // "no return" beams clear up to raytrace_max_range_m
   bool footprint_clearing = true;      // clear marks under the robot (within the inscribed radius)
   double footprint_clearing_radius_m = 0.19;
+  // The laser sees only ahead of its mount: a mark left beside or behind the robot (someone who
+  // walked past it) is never raytraced away and can hold the robot in place. A sonar echo says
+  // its cone is empty up to the echo: marks there nearer than the echo less sonar_margin_m are
+  // cleared. Only echoes clear (a reading at the ring's maximum may be a miss off a slanted
+  // face), only fresh ones, and never a mark this update's scan made.
+  bool sonar_clearing = true;
+  double sonar_half_angle_rad = 0.1309;  // 7.5 degrees: half the P3-DX transducer's 15 degree cone
+  double sonar_margin_m = 0.15;
+  double sonar_max_age_s = 0.5;
 };
 
 class ObstacleLayer final : public CostmapLayer {
@@ -179,6 +190,7 @@ class ObstacleLayer final : public CostmapLayer {
 
  private:
   void raytrace(int c0, int r0, int c1, int r1, int max_cells) noexcept;
+  void clear_sonar_cones(const CostmapInputs& inputs) noexcept;
   void shift_grid(std::span<std::uint8_t> cells, int shift_cols, int shift_rows) noexcept;
 
   ObstacleLayerConfig config_;

@@ -232,6 +232,9 @@ class ControllerTask final : public tasks::Task {
     snapshot_topic_ = topic;
     snapshot_every_ = every_cycles < 1 ? 1 : every_cycles;
   }
+  // Before init: the base's sonar ring, which clears the obstacle layer's marks behind the
+  // laser (ObstacleLayerConfig::sonar_clearing).
+  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
   // Null when the configuration turns the layer off.
   [[nodiscard]] const DynamicObstacleLayer* dynamic_layer() const noexcept {
     return config_.dynamic_obstacles.enabled ? &dynamic_layer_ : nullptr;
@@ -255,6 +258,8 @@ class ControllerTask final : public tasks::Task {
   const tasks::Topic<msg::FormationCommand>* formation_;
   tasks::Sample<msg::FormationCommand> formation_sample_;
   msg::People people_copy_;  // the layer paints from this, copied before each update
+  const tasks::Topic<msg::Sonar>* sonar_ = nullptr;
+  tasks::Sample<msg::Sonar> sonar_sample_;
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
   DynamicObstacleLayer dynamic_layer_;
