@@ -241,7 +241,7 @@ TEST(Fleet, TheRobotComesOnlineWithItsFactsheetAndReportsStateVisualizationAndPe
   EXPECT_GE(rig.count("state"), 3u);  // at least once a second
   EXPECT_GE(rig.count("visualization"), 5u);
   EXPECT_GE(rig.count("people"), 10u);  // every 0.2 s
-  EXPECT_NE(rig.last("people").find("\"schemaVersion\":\"1.0.0\""), std::string::npos);
+  EXPECT_NE(rig.last("people").find("\"schemaVersion\":\"1.1.0\""), std::string::npos);
   EXPECT_EQ(rig.bad_messages(), 0);
   const vda5050::State& s = rig.state();
   ASSERT_TRUE(s.agv_position.has_value());

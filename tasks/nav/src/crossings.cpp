@@ -132,20 +132,13 @@ bool CrossingGate::walks_along(const CrossingTrack& t, double ux, double uy, dou
   // Someone on the path now and walking along it (an operator the robot follows, or someone
   // coming the other way) leads or meets the robot, not crosses it. Where the path turns,
   // the straight prediction of a leader cuts across its later part; that is not a crossing.
-  // On it means within reach_m of the nearest sample, and along it means along that sample:
-  // a walker crossing beside a bend is near samples that run their way too.
-  std::size_t nearest = sample_count_;
-  double best = reach_m * reach_m;
   for (std::size_t k = 0; k < sample_count_; ++k) {
     const double dx = samples_[k].x_m - t.x_m;
     const double dy = samples_[k].y_m - t.y_m;
-    if (dx * dx + dy * dy < best) {
-      best = dx * dx + dy * dy;
-      nearest = k;
-    }
+    if (dx * dx + dy * dy < reach_m * reach_m && std::abs(ux * tangent_[k].x_m + uy * tangent_[k].y_m) > config_.along_cos)
+      return true;
   }
-  return nearest < sample_count_ &&
-         std::abs(ux * tangent_[nearest].x_m + uy * tangent_[nearest].y_m) > config_.along_cos;
+  return false;
 }
 
 void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::uint64_t> taken,
@@ -158,7 +151,7 @@ void CrossingGate::mark(const CrossingInputs& in, Reach reach, std::span<std::ui
     const double ux = t.vx_m_s / speed, uy = t.vy_m_s / speed;
     const double base = reach == Reach::body ? t.body_m + body_m_ : t.keep_out_m + body_m_ + config_.margin_m;
     const bool with_spread = reach == Reach::spread;
-    if (walks_along(t, ux, uy, t.keep_out_m)) continue;
+    if (walks_along(t, ux, uy, t.keep_out_m + body_m_ + config_.margin_m)) continue;
     for (std::size_t i = 0; i < steps_; ++i) {
       const double time = static_cast<double>(i) * config_.time_step_s;
       const double cx = t.x_m + t.vx_m_s * time;

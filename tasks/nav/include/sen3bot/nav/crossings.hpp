@@ -185,7 +185,7 @@ class CrossingGate {
   void sample_path(const CrossingInputs& in) noexcept;
   // What a walker's disc is: keep-out plus the spread, keep-out alone, or their body alone.
   enum class Reach : std::uint8_t { spread, keep_out, body };
-  // The track stands on the path now (within reach_m of its nearest sample) walking along it.
+  // The track stands on the path now (within reach_m of a sample) walking along it there.
   [[nodiscard]] bool walks_along(const CrossingTrack& t, double ux, double uy, double reach_m) const noexcept;
   void mark(const CrossingInputs& in, Reach reach, std::span<std::uint64_t> taken,
             std::span<std::uint32_t> by) const noexcept;
