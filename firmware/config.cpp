@@ -166,7 +166,7 @@ void read_devices(const Reader& r, FirmwareConfig& c) {
 // navigation.dynamic_obstacles: every constant of the layer (dynamic_obstacles.hpp).
 void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
   r.allow_only({"enabled", "alpha_fast", "alpha_slow", "beta", "c1", "c2", "static_mask_radius_m", "min_blob_cells",
-                "max_blob_cells", "max_tracks", "gate_m", "confirm_hits", "max_coast_s", "max_coast_unseen_s",
+                "max_blob_cells", "max_tracks", "gate_m", "confirm_hits", "camera_vouches", "max_coast_s", "max_coast_unseen_s",
                 "accel_sigma_m_s2", "measurement_sigma_m", "axis_memory_m", "axis_min_travel_m", "axis_max_angle_deg",
                 "cutoff", "sigma2_front_x_m2", "sigma2_front_y_m2", "sigma2_back_x_m2", "sigma2_back_y_m2",
                 "max_speed_m_s", "front_horizon_s", "lethal_radius_m", "min_speed_m_s"});
@@ -186,6 +186,7 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
   if (r.has("max_tracks")) t.max_tracks = static_cast<std::size_t>(r.integer("max_tracks", 1, msg::MovingObstacles::kMax));
   if (r.has("gate_m")) t.gate_m = r.number("gate_m", 0.05, 10.0);
   if (r.has("confirm_hits")) t.confirm_hits = static_cast<int>(r.integer("confirm_hits", 1, 100));
+  if (r.has("camera_vouches")) t.camera_vouches = r.boolean("camera_vouches");
   if (r.has("max_coast_s")) t.max_coast_s = r.number("max_coast_s", 0.0, 60.0);
   if (r.has("max_coast_unseen_s")) t.max_coast_unseen_s = r.number("max_coast_unseen_s", 0.0, 600.0);
   if (r.has("accel_sigma_m_s2")) t.accel_sigma_m_s2 = r.number("accel_sigma_m_s2", 0.001, 100.0);

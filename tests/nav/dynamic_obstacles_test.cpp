@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -323,6 +325,59 @@ TEST(MoverTracker, ConfirmsAfterHitsAndTwoPointVelocity) {
   EXPECT_EQ(tracker.tracks()[0].id, 1u);
   tracker.update({}, 9 * kScanPeriodNs);
   EXPECT_EQ(tracker.tracks().size(), 0u);
+}
+
+TEST(MoverTracker, TheCameraVouchesForAWalkerAtTheSecondScanNeverForAStillBox) {
+  // A walker at 1 m/s coming into view beside a still box (0.45 m apart, jittering by 3 cm as
+  // a box's faces do). The camera places a walking person where the walker is.
+  mem::BudgetArena arena("test", 1 << 16);
+  MoverTracker tracker;
+  DolTrackerConfig cfg;
+  ASSERT_TRUE(tracker.init(cfg, arena));
+  MoverTracker alone;  // the same scans, nobody vouching
+  ASSERT_TRUE(alone.init(cfg, arena));
+  int vouched_at = -1;
+  for (int k = 0; k < 12; ++k) {
+    const double t = static_cast<double>(k) * 0.1;
+    const std::array<Blob, 2> blobs = {blob_at(1.0 + t, 2.0), blob_at(1.6 + (k % 2 == 0 ? 0.03 : -0.03), 2.45)};
+    tracker.update(blobs, k * kScanPeriodNs);
+    alone.update(blobs, k * kScanPeriodNs);
+    // The person as fused: a few centimetres off the laser's blob, at their walking speed.
+    const std::array<Vouch, 1> person = {Vouch{1.0 + t + 0.05, 2.02, 1.0, 0.0}};
+    if (tracker.vouch(person) > 0 && vouched_at < 0) vouched_at = k;
+    for (const DolTrack& track : tracker.tracks()) {
+      if (track.x(1) > 2.3) {
+        EXPECT_FALSE(track.mover) << "the box became a mover at scan " << k;
+      }
+    }
+    for (const DolTrack& track : alone.tracks()) {
+      if (k < cfg.confirm_hits - 1) {
+        EXPECT_FALSE(track.mover) << "without the camera, not before confirm_hits";
+      }
+    }
+  }
+  // Vouched for at its second scan (hits 2, the first with a velocity).
+  EXPECT_EQ(vouched_at, 1);
+  // A person walking the other way, or much slower, does not vouch; nor one too far off.
+  MoverTracker other;
+  ASSERT_TRUE(other.init(cfg, arena));
+  for (int k = 0; k < 3; ++k) {
+    const Blob b = blob_at(1.0 + 0.1 * k, 2.0);
+    other.update(std::span(&b, 1), k * kScanPeriodNs);
+    const double x = 1.0 + 0.1 * k;
+    const std::array<Vouch, 3> no = {Vouch{x, 2.0, -1.0, 0.0}, Vouch{x, 2.0, 0.3, 0.0}, Vouch{x, 2.6, 1.0, 0.0}};
+    EXPECT_EQ(other.vouch(no), 0u) << k;
+  }
+  // Switched off, nobody's word counts.
+  cfg.camera_vouches = false;
+  MoverTracker off;
+  ASSERT_TRUE(off.init(cfg, arena));
+  for (int k = 0; k < 3; ++k) {
+    const Blob b = blob_at(1.0 + 0.1 * k, 2.0);
+    off.update(std::span(&b, 1), k * kScanPeriodNs);
+    const std::array<Vouch, 1> person = {Vouch{1.0 + 0.1 * k, 2.0, 1.0, 0.0}};
+    EXPECT_EQ(off.vouch(person), 0u);
+  }
 }
 
 TEST(MoverTracker, GateLeavesFarBlobsUnmatched) {

@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -584,6 +585,32 @@ void MoverTracker::turn_back(std::size_t index) noexcept {
   tracks_[index].x(3) = -tracks_[index].x(3);
 }
 
+std::size_t MoverTracker::vouch(std::span<const Vouch> people) noexcept {
+  if (!config_.camera_vouches || people.empty()) return 0;
+  const double cos_max = std::cos(config_.vouch_max_angle_rad);
+  std::size_t made = 0;
+  for (std::size_t t = 0; t < count_; ++t) {
+    DolTrack& track = tracks_[t];
+    if (track.mover || track.hits < config_.vouch_min_hits || track.last_hit_ns != last_update_ns_ ||
+        !track.x.allFinite())
+      continue;
+    const double speed = std::hypot(track.x(2), track.x(3));
+    if (speed < config_.moving_min_speed_m_s) continue;
+    for (const Vouch& p : people) {
+      const double person_speed = std::hypot(p.vx_m_s, p.vy_m_s);
+      if (std::hypot(track.x(0) - p.x_m, track.x(1) - p.y_m) > config_.vouch_reach_m) continue;
+      // Their way: the same direction, and a like speed (a box beside a walker has neither).
+      if ((track.x(2) * p.vx_m_s + track.x(3) * p.vy_m_s) < cos_max * speed * person_speed) continue;
+      if (speed > config_.vouch_speed_ratio * person_speed || person_speed > config_.vouch_speed_ratio * speed) continue;
+      track.confirmed = true;
+      track.mover = true;
+      ++made;
+      break;
+    }
+  }
+  return made;
+}
+
 bool MoverTracker::moving(const DolTrack& track) const noexcept {
   return track.mover &&
          (!track.in_view || seconds_between(track.last_hit_ns, last_update_ns_) <= config_.publish_max_coast_s);
@@ -941,6 +968,19 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     if (observations_ != nullptr) view.range_m = observations_->config().obstacle_max_range_m;
     tracker_.update(blobs_, scan.stamp_ns(), view);
     tracker_.classify(image_, master.geometry());
+    if (people_ != nullptr) {
+      // Walking people the sensors see now, predicted to the scan: their word for a track.
+      std::array<Vouch, msg::People::kMax> vouches{};
+      std::size_t n = 0;
+      const double walking = 2.0 * config_.tracker.moving_min_speed_m_s;
+      for (std::size_t i = 0; i < std::min<std::size_t>(people_->count, msg::People::kMax); ++i) {
+        const msg::TrackedPerson& p = people_->items[i];
+        if (p.hidden || std::hypot(p.vx_m_s, p.vy_m_s) < walking) continue;
+        const double dt = static_cast<double>(scan.stamp_ns() - people_->stamp_ns) * 1e-9;
+        vouches[n++] = {p.x_m + p.vx_m_s * dt, p.y_m + p.vy_m_s * dt, p.vx_m_s, p.vy_m_s};
+      }
+      vouched_ += tracker_.vouch(std::span<const Vouch>(vouches.data(), n));
+    }
     turn_back_at_walls(scan.stamp_ns());
   }
   for (const DolTrack& track : tracker_.tracks()) {

@@ -283,6 +283,7 @@ Status ControllerTask::init(std::pmr::memory_resource& arena) {
     if (Status s = costmap_.add_layer(static_layer_); !s) return s;
     if (Status s = costmap_.add_layer(obstacle_layer_); !s) return s;
     if (config_.dynamic_obstacles.enabled) {
+      if (config_.use_people && people_ != nullptr) dynamic_layer_.vouch_with(&people_copy_);
       if (Status s = costmap_.add_layer(dynamic_layer_); !s) return s;
     }
     if (config_.use_people && people_ != nullptr) {

@@ -28,6 +28,7 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/msg/navigation.hpp"
+#include "sen3bot/msg/people.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/map.hpp"
 
@@ -174,6 +175,23 @@ struct DolTrackerConfig {
   double axis_memory_m = 3.0;
   double axis_min_travel_m = 0.5;
   double axis_max_angle_rad = 0.5;
+  // A track the camera vouches for is a mover at once (MoverTracker::vouch): hit by the newest
+  // scan at least vouch_min_hits times, within vouch_reach_m of a walking person the camera and
+  // laser placed, moving their way (velocities within vouch_max_angle_rad, speeds within a
+  // factor of vouch_speed_ratio) and at least moving_min_speed_m_s. Why: a walker coming into
+  // view is a person in the camera after three frames (0.3 s), a mover for the laser alone only
+  // after confirm_hits scans and moving_min_travel_m (about 1 s at 5 scans/s); still boxes
+  // are never people and never move their way.
+  bool camera_vouches = true;
+  int vouch_min_hits = 2;
+  double vouch_reach_m = 0.5;
+  double vouch_max_angle_rad = 0.6;
+  double vouch_speed_ratio = 2.0;
+};
+
+// A walking person as the camera and laser placed them, predicted to a scan's time.
+struct Vouch {
+  double x_m = 0.0, y_m = 0.0, vx_m_s = 0.0, vy_m_s = 0.0;
 };
 
 struct DolTrack {
@@ -219,6 +237,9 @@ class MoverTracker {
   // Marks the confirmed tracks that have shown they move, given the image the blobs came
   // from (255: marked) on its grid (see DolTrackerConfig).
   void classify(std::span<const std::uint8_t> image, const GridGeometry& geometry) noexcept;
+  // Makes movers of the tracks the people vouch for (DolTrackerConfig::camera_vouches);
+  // returns how many it made. After classify(), with the people predicted to the last update.
+  std::size_t vouch(std::span<const Vouch> people) noexcept;
   // Whether a track counts as a mover now (classified, and hit recently).
   [[nodiscard]] bool moving(const DolTrack& track) const noexcept;
   // Whether a track is a candidate: confirmed, hit by the newest update and faster than
@@ -331,6 +352,11 @@ class DynamicObstacleLayer final : public CostmapLayer {
   void movers(hal::Nanos stamp_ns, msg::MovingObstacles& out) const noexcept;
   // Blobs found since init(), summed over the scans.
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
+  // Before init: the tracked people (camera and laser) that may vouch for a track
+  // (DolTrackerConfig::camera_vouches); must outlive the layer.
+  void vouch_with(const msg::People* people) noexcept { people_ = people; }
+  // Tracks made movers by the people's word since init().
+  [[nodiscard]] std::uint64_t vouched() const noexcept { return vouched_; }
 
  private:
   // How far ahead of a coasting mover its way is checked for a wall.
@@ -354,6 +380,8 @@ class DynamicObstacleLayer final : public CostmapLayer {
   std::span<std::uint8_t> map_near_;       // per static-map cell: within the mask radius
   std::span<const Blob> blobs_;
   std::uint64_t detections_ = 0;
+  const msg::People* people_ = nullptr;
+  std::uint64_t vouched_ = 0;
   bool active_ = false;                    // enabled and initialised
 };
 
