@@ -167,7 +167,7 @@ TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) +
           "  dynamic_obstacles: { enabled: false, alpha_fast: 0.9, alpha_slow: 0.2, beta: 0.8, c1: 100, c2: 60,\n"
-          "    confirm_hits: 5, camera_vouches: false, gate_m: 0.8, max_tracks: 12, front_horizon_s: 0.5, max_speed_m_s: 1.5 }\n"
+          "    confirm_hits: 5, camera_vouches: true, gate_m: 0.8, max_tracks: 12, front_horizon_s: 0.5, max_speed_m_s: 1.5 }\n"
           "  mover_prediction: { enabled: false, horizon_s: 3, stay_horizon_s: 8, margin_m: 0.2, weight: 2,\n"
           "    brake_delay_s: 0.3, brake_decel_m_s2: 0.4, may_return: false }\n"
           "  local_costmap: { size_m: 8, obstacle_range_m: 3.5, raytrace_range_m: 4, sonar_clearing: false }\n",
@@ -181,8 +181,8 @@ TEST(Config, DynamicObstaclesMoverPredictionAndTheLocalCostmap) {
   EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.c1, 100.0);
   EXPECT_DOUBLE_EQ(n.dynamic_obstacles.detector.c2, 60.0);
   EXPECT_EQ(n.dynamic_obstacles.tracker.confirm_hits, 5);
-  EXPECT_FALSE(n.dynamic_obstacles.tracker.camera_vouches);
-  EXPECT_TRUE(defaults->navigation.dynamic_obstacles.tracker.camera_vouches);
+  EXPECT_TRUE(n.dynamic_obstacles.tracker.camera_vouches);
+  EXPECT_FALSE(defaults->navigation.dynamic_obstacles.tracker.camera_vouches);
   EXPECT_DOUBLE_EQ(n.dynamic_obstacles.tracker.gate_m, 0.8);
   EXPECT_EQ(n.dynamic_obstacles.tracker.max_tracks, 12u);
   EXPECT_DOUBLE_EQ(n.dynamic_obstacles.cost.front_horizon_s, 0.5);

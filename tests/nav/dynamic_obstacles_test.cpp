@@ -333,6 +333,7 @@ TEST(MoverTracker, TheCameraVouchesForAWalkerAtTheSecondScanNeverForAStillBox) {
   mem::BudgetArena arena("test", 1 << 16);
   MoverTracker tracker;
   DolTrackerConfig cfg;
+  cfg.camera_vouches = true;
   ASSERT_TRUE(tracker.init(cfg, arena));
   MoverTracker alone;  // the same scans, nobody vouching
   ASSERT_TRUE(alone.init(cfg, arena));
