@@ -429,11 +429,11 @@ TEST(Config, PeopleTheirCagesAndTheOnlineSgp) {
 TEST(Config, PeopleKeptWhileHidden) {
   Result<FirmwareConfig> defaults = parse_config(std::string(kNavigation) + "  people: { detector: sim }\n", "robot.yaml");
   ASSERT_TRUE(defaults) << defaults.error().c_str();
-  EXPECT_TRUE(defaults->navigation.person_tracker.keep_hidden);
+  EXPECT_FALSE(defaults->navigation.person_tracker.keep_hidden);
   EXPECT_DOUBLE_EQ(defaults->navigation.person_tracker.hidden_max_s, 30.0);
   Result<FirmwareConfig> r = parse_config(
       std::string(kNavigation) +
-          "  people: { detector: sim, hidden: { max_s: 12, max_sigma_m: 1.2, cage_growth_m: 0.3, wander_m2_s: 0.05 } }\n",
+          "  people: { detector: sim, hidden: { enabled: true, max_s: 12, max_sigma_m: 1.2, cage_growth_m: 0.3, wander_m2_s: 0.05 } }\n",
       "robot.yaml");
   ASSERT_TRUE(r) << r.error().c_str();
   const nav::PersonTrackerConfig& t = r->navigation.person_tracker;

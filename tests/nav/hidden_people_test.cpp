@@ -38,8 +38,15 @@ struct Scan {
   hal::Nanos stamp_ns;
 };
 
+// The tracker's configuration with hidden people kept (off by default).
+PersonTrackerConfig kept() {
+  PersonTrackerConfig c;
+  c.keep_hidden = true;
+  return c;
+}
+
 struct Tracker {
-  explicit Tracker(PersonTrackerConfig c = {}) : config(c) { EXPECT_TRUE(tracker.init(c, arena)); }
+  explicit Tracker(PersonTrackerConfig c = kept()) : config(c) { EXPECT_TRUE(tracker.init(c, arena)); }
   // A person standing at (x, y), 0.5 m wide, seen by the camera 5 times at 10 Hz from `from`.
   hal::Nanos stand(double x, double y, hal::Nanos from, int fixes = 5) {
     for (int k = 0; k < fixes; ++k) {
@@ -145,6 +152,7 @@ TEST(HiddenPeople, OnlyAScanAfterTheLastFixCanShowThePlaceEmpty) {
 // distance, and released by a rear reading well past them. All without allocating.
 TEST(HiddenPeople, APersonBehindTheRobotIsKeptByRearEchoesAndReleasedByAReadingPastThem) {
   PersonTrackerConfig config;
+  config.keep_hidden = true;
   config.hidden_max_s = 3.0;
   Tracker t(config);
   // Standing 2 m behind the robot (at the origin, facing +x, the laser on its centre).
@@ -206,6 +214,7 @@ TEST(HiddenPeople, APersonBehindTheRobotIsKeptByRearEchoesAndReleasedByAReadingP
 // than sonar_max_age_s) is no echo.
 TEST(HiddenPeople, AHiddenPersonIsForgottenAfterHiddenMaxS) {
   PersonTrackerConfig config;
+  config.keep_hidden = true;
   config.hidden_max_s = 3.0;
   Tracker t(config);
   const hal::Nanos last_fix = t.stand(-2.0, 0.0, 0);
@@ -233,6 +242,7 @@ TEST(HiddenPeople, AHiddenPersonIsForgottenAfterHiddenMaxS) {
 // with it up to hidden_cage_growth_m, and past hidden_max_sigma_m the person is forgotten.
 TEST(HiddenPeople, TheSigmaGrowsTheCageUpToItsCapAndEndsTheTrackAtItsOwn) {
   PersonTrackerConfig config;
+  config.keep_hidden = true;
   config.hidden_max_s = 100.0;
   config.hidden_max_sigma_m = 0.8;
   config.hidden_cage_growth_m = 0.5;
@@ -264,6 +274,7 @@ TEST(HiddenPeople, TheSigmaGrowsTheCageUpToItsCapAndEndsTheTrackAtItsOwn) {
 // slot taken, a person seen takes the place of the one hidden longest.
 TEST(HiddenPeople, AFixEndsTheHidingAndAPersonSeenTakesAHiddenOnesSlot) {
   PersonTrackerConfig config;
+  config.keep_hidden = true;
   config.max_tracks = 2;
   Tracker t(config);
   hal::Nanos now = t.stand(3.0, 0.0, 0);
@@ -321,7 +332,9 @@ TEST(HiddenPeople, ThePeopleTaskKeepsAPersonBehindAPostUntilTheSonarLooksPast) {
   tasks::Topic<msg::PersonDetections> detections;
   tasks::Topic<msg::People> people;
   tasks::Topic<msg::Sonar> sonar;
-  PeopleTask task(PeopleTaskConfig{}, map, scans, poses, detections, people);
+  PeopleTaskConfig with_hidden;
+  with_hidden.tracker.keep_hidden = true;
+  PeopleTask task(with_hidden, map, scans, poses, detections, people);
   task.use_sonar(&sonar);
   mem::BudgetArena arena{"people task", 1 << 20};
   ASSERT_TRUE(task.init(arena));

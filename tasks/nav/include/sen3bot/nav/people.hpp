@@ -175,8 +175,10 @@ struct PersonTrackerConfig {
   // held (the walker's coast grows it through the Kalman prediction); they end when it is seen
   // empty, when the position's sigma passes hidden_max_sigma_m, or hidden_max_s after hiding or
   // the last sonar echo from their place. A hidden person's cage grows by their sigma, at most
-  // hidden_cage_growth_m (a guess must not close the map).
-  bool keep_hidden = true;
+  // hidden_cage_growth_m (a guess must not close the map). Off by default: with walkers who
+  // react to the robot (people-crossing --walkers social) the grown cages of people kept
+  // behind the door jamb held the robot at the door, and goals reached fell (docs/people.md).
+  bool keep_hidden = false;
   double hidden_max_s = 30.0;
   double hidden_max_sigma_m = 1.5;
   double hidden_cage_growth_m = 0.5;
