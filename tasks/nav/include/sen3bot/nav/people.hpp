@@ -26,7 +26,7 @@
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/msg/people.hpp"
 #include "sen3bot/nav/costmap.hpp"
-#include "sen3bot/nav/dynamic_obstacles.hpp"
+#include "sen3bot/nav/assignment.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
 
