@@ -508,6 +508,59 @@ void DwaPlanner::skip_blocked_part(const Costmap2D& costmap) noexcept {
   target_index_ = i;
 }
 
+double DwaPlanner::score_rollout(const Rollout& r, double v, const PathPoint& target, const Costmap2D& costmap) const noexcept {
+  const double bearing = std::atan2(target.y_m - r.end.y_m, target.x_m - r.end.x_m);
+  const double heading = 1.0 - std::abs(normalize_angle(bearing - r.end.theta_rad)) / std::numbers::pi;
+  const double clearance = 1.0 - r.max_cost / static_cast<double>(kInscribedCost);
+  const double velocity = v / config_.max_v_m_s;
+  // While the window is blocked the LP is going around: only the target pulls.
+  const double path_distance =
+      window_blocked_ ? 0.0 : grid_distance_m(path_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
+  const double goal_distance = grid_distance_m(goal_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
+  return config_.heading_weight * heading + config_.clearance_weight * clearance + config_.velocity_weight * velocity -
+         config_.path_weight * path_distance - config_.goal_weight * goal_distance;
+}
+
+void DwaPlanner::offer_refused(const Pose2D& pose, double v, double w, double score, double ttc, double ttc_braking,
+                               MoverFallback& f) const noexcept {
+  // Met whatever it does: the way (on, speeding up or braking) whose contact comes latest.
+  // Speeding up is how a robot standing in a mover's way gets out of it; then, among equals,
+  // the fastest, so that the robot does go through. Otherwise the slowest, so that if the
+  // contact comes the robot is (nearly) standing.
+  const double ttc_faster = v > 0.0 ? time_to_contact(pose, v, w, movers_, MoverMotion::speed_up) : ttc;
+  const double latest = std::max({ttc, ttc_braking, ttc_faster});
+  const double preference = ttc_faster >= std::max(ttc, ttc_braking) && ttc_faster > ttc ? v : -v;
+  // First what would really touch (a graze of the margin is not a hit), then the margin.
+  const auto touch = [&](MoverMotion motion) { return time_to_contact(pose, v, w, movers_, motion, MoverReach::touching); };
+  const double hit_hold = touch(MoverMotion::hold);
+  const double hit_brake = std::isfinite(hit_hold) && v != 0.0 ? touch(MoverMotion::brake) : hit_hold;
+  const double hit_faster = v > 0.0 ? touch(MoverMotion::speed_up) : hit_hold;
+  const double hit = std::max({hit_hold, hit_brake, hit_faster});
+  // Some way of going on touches nothing: if holding or braking is that way, the usual score
+  // picks; if only speeding up is, the fastest does.
+  const int free_class = std::isinf(hit_hold) || std::isinf(hit_brake) ? 2 : std::isinf(hit_faster) ? 1 : 0;
+  if (free_class > 0) {
+    const double key = free_class == 2 ? score : v;
+    if (free_class > f.free_class || (free_class == f.free_class && key > f.free_key)) {
+      f.free_class = free_class;
+      f.free_key = key;
+      f.free_v = v;
+      f.free_w = w;
+    }
+  }
+  const bool later = hit > f.escape_hit || (hit == f.escape_hit && latest > f.escape_ttc);
+  const bool as_late = hit == f.escape_hit && latest == f.escape_ttc;
+  if (later || (as_late && preference > f.escape_preference) ||
+      (as_late && preference == f.escape_preference && score > f.escape_score)) {
+    f.escape_hit = hit;
+    f.escape_ttc = latest;
+    f.escape_score = score;
+    f.escape_preference = preference;
+    f.escape_v = v;
+    f.escape_w = w;
+  }
+}
+
 DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s, const Costmap2D& costmap,
                                std::span<const msg::MovingObstacle> movers) noexcept {
   DwaCommand out;
@@ -548,17 +601,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
   if (!config_.mover_prediction) movers = {};
   movers_ = movers;
   double best_score = -std::numeric_limits<double>::infinity();
-  // The rollout whose predicted contact with a mover is latest, for when every one is refused.
-  double escape_ttc = -1.0;
-  double escape_hit = -1.0;  // the same, touching: without the margin
-  double escape_score = -std::numeric_limits<double>::infinity();
-  double escape_v = 0.0;
-  double escape_preference = -std::numeric_limits<double>::infinity();
-  double escape_w = 0.0;
-  int best_free_class = 0;  // > 0: some refused rollout has a way of going on that touches nothing
-  double free_key = -std::numeric_limits<double>::infinity();
-  double free_v = 0.0;
-  double free_w = 0.0;
+  MoverFallback fallback;
   bool movers_cost_progress = false;  // a moving rollout was refused or penalised for a mover
   for (int i = 0; i < config_.v_samples; ++i) {
     const double v = config_.v_samples == 1 ? v_hi : v_lo + (v_hi - v_lo) * i / (config_.v_samples - 1);
@@ -568,17 +611,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
       const Rollout r = roll_out(pose, v, w, costmap);
       if (!r.admissible) continue;
       ++out.admissible;
-      const double bearing = std::atan2(target.y_m - r.end.y_m, target.x_m - r.end.x_m);
-      const double heading = 1.0 - std::abs(normalize_angle(bearing - r.end.theta_rad)) / std::numbers::pi;
-      const double clearance = 1.0 - r.max_cost / static_cast<double>(kInscribedCost);
-      const double velocity = v / config_.max_v_m_s;
-      // While the window is blocked the LP is going around: only the target pulls.
-      const double path_distance =
-          window_blocked_ ? 0.0 : grid_distance_m(path_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
-      const double goal_distance = grid_distance_m(goal_distance_, costmap, r.end.x_m, r.end.y_m) / config_.prune_distance_m;
-      double score = config_.heading_weight * heading + config_.clearance_weight * clearance +
-                     config_.velocity_weight * velocity - config_.path_weight * path_distance -
-                     config_.goal_weight * goal_distance;
+      double score = score_rollout(r, v, target, costmap);
       if (!movers.empty()) {
         const double ttc = time_to_contact(pose, v, w, movers);
         const bool moving = v >= config_.min_progress_v_m_s;
@@ -587,44 +620,7 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
         if (std::isfinite(ttc_braking)) {  // even braking meets it: unavoidable on this arc
           ++out.mover_rejected;
           movers_cost_progress = movers_cost_progress || moving;
-          // Met whatever it does: the way (on, speeding up or braking) whose contact comes
-          // latest. Speeding up is how a robot standing in a mover's way gets out of it;
-          // then, among equals, the fastest, so that the robot does go through. Otherwise the
-          // slowest, so that if the contact comes the robot is (nearly) standing.
-          const double ttc_faster = v > 0.0 ? time_to_contact(pose, v, w, movers, MoverMotion::speed_up) : ttc;
-          const double latest = std::max({ttc, ttc_braking, ttc_faster});
-          const double preference = ttc_faster >= std::max(ttc, ttc_braking) && ttc_faster > ttc ? v : -v;
-          // First what would really touch (a graze of the margin is not a hit), then the margin.
-          const auto touch = [&](MoverMotion motion) {
-            return time_to_contact(pose, v, w, movers, motion, MoverReach::touching);
-          };
-          const double hit_hold = touch(MoverMotion::hold);
-          const double hit_brake = std::isfinite(hit_hold) && v != 0.0 ? touch(MoverMotion::brake) : hit_hold;
-          const double hit_faster = v > 0.0 ? touch(MoverMotion::speed_up) : hit_hold;
-          const double hit = std::max({hit_hold, hit_brake, hit_faster});
-          // Some way of going on touches nothing: if holding or braking is that way, the usual
-          // score picks; if only speeding up is, the fastest does.
-          const int free_class = std::isinf(hit_hold) || std::isinf(hit_brake) ? 2 : std::isinf(hit_faster) ? 1 : 0;
-          if (free_class > 0) {
-            const double key = free_class == 2 ? score : v;
-            if (free_class > best_free_class || (free_class == best_free_class && key > free_key)) {
-              best_free_class = free_class;
-              free_key = key;
-              free_v = v;
-              free_w = w;
-            }
-          }
-          const bool later = hit > escape_hit || (hit == escape_hit && latest > escape_ttc);
-          const bool as_late = hit == escape_hit && latest == escape_ttc;
-          if (later || (as_late && preference > escape_preference) ||
-              (as_late && preference == escape_preference && score > escape_score)) {
-            escape_hit = hit;
-            escape_ttc = latest;
-            escape_score = score;
-            escape_preference = preference;
-            escape_v = v;
-            escape_w = w;
-          }
+          offer_refused(pose, v, w, score, ttc, ttc_braking, fallback);
           continue;
         }
         if (std::isfinite(ttc)) {
@@ -645,8 +641,8 @@ DwaCommand DwaPlanner::compute(const Pose2D& pose, double v_m_s, double w_rad_s,
       std::abs(normalize_angle(std::atan2(target.y_m - pose.y_m, target.x_m - pose.x_m) - pose.theta_rad));
   const bool refused_all = out.admissible > 0 && out.admissible == out.mover_rejected;
   if (refused_all) {  // every way meets a mover soon: the one that meets it latest
-    out.v_m_s = best_free_class > 0 ? free_v : escape_v;
-    out.w_rad_s = best_free_class > 0 ? free_w : escape_w;
+    out.v_m_s = fallback.free_class > 0 ? fallback.free_v : fallback.escape_v;
+    out.w_rad_s = fallback.free_class > 0 ? fallback.free_w : fallback.escape_w;
   }
   // Turning on the spot among movers swings the body's corners out: not into a mover's way
   // when standing still keeps out of it.

@@ -49,6 +49,7 @@
 // puts it off, else the slowest). When movers make it stop it reports `yielding`, not a
 // recovery, for up to max_yield_s.
 #include <cstdint>
+#include <limits>
 #include <memory_resource>
 #include <span>
 
@@ -178,6 +179,26 @@ class DwaPlanner {
     Pose2D end;
   };
   Rollout roll_out(const Pose2D& pose, double v, double w, const Costmap2D& costmap) const noexcept;
+  [[nodiscard]] double score_rollout(const Rollout& r, double v, const PathPoint& target,
+                                     const Costmap2D& costmap) const noexcept;
+  // When every rollout meets a mover: a way of going on that touches nothing (free_class 2:
+  // holding or braking does, best by score; 1: only speeding up does, the fastest), else the
+  // one whose contact comes latest.
+  struct MoverFallback {
+    double escape_ttc = -1.0;
+    double escape_hit = -1.0;  // the same, touching: without the margin
+    double escape_score = -std::numeric_limits<double>::infinity();
+    double escape_preference = -std::numeric_limits<double>::infinity();
+    double escape_v = 0.0;
+    double escape_w = 0.0;
+    int free_class = 0;
+    double free_key = -std::numeric_limits<double>::infinity();
+    double free_v = 0.0;
+    double free_w = 0.0;
+  };
+  // A rollout that meets a mover even braking, offered to the fallback (movers_: this cycle's).
+  void offer_refused(const Pose2D& pose, double v, double w, double score, double ttc, double ttc_braking,
+                     MoverFallback& fallback) const noexcept;
   [[nodiscard]] double distance_to_window(double x_m, double y_m) const noexcept;
   // time_to_contact over at most MovingObstacles::kMax movers, looking only before before_s.
   [[nodiscard]] double contact_in_batch(const Pose2D& pose, double v, double w, std::span<const msg::MovingObstacle> movers,
