@@ -43,7 +43,7 @@
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sen3bot/ssc/service.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/world/world.hpp"
 #include "sim_commands.hpp"
 
