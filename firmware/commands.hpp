@@ -34,11 +34,6 @@ int fuse_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot detect --image FILE [--scale S] [--threshold T] [--repeat N] [--png FILE]
 int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
-// sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F] [--event-log FILE]
-//             [--duration S] [--client-id ID]
-int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-
 // sen3bot recognize --paths FILE [--progressive] [--model M] [--operations O]
 int recognize_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 

@@ -565,14 +565,15 @@ std::string json_number_or_null(bool known, double value) {
 int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& site_path,
                    const std::string& config_path, const nav::OccupancyMap& map, const std::string& report_dir, std::FILE* out,
                    std::FILE* err) {
-  // The programs sit beside this one (the build writes sen3bot and sen3bot-sim to one folder).
+  // The programs sit beside this one (the build writes sen3bot, sen3bot-sim and sen3bot-centre to
+  // one folder).
   char self[4096] = {};
   const ssize_t self_size = ::readlink("/proc/self/exe", self, sizeof self - 1);
   if (self_size <= 0) return fail(err, std::string("cannot read /proc/self/exe: ") + std::strerror(errno), 1);
   std::string bin_dir(self, static_cast<std::size_t>(self_size));
   bin_dir = bin_dir.substr(0, bin_dir.rfind('/'));
-  const std::string sim_bin = bin_dir + "/sen3bot-sim", firmware_bin = bin_dir + "/sen3bot";
-  for (const std::string& bin : {sim_bin, firmware_bin})
+  const std::string sim_bin = bin_dir + "/sen3bot-sim", centre_bin = bin_dir + "/sen3bot-centre";
+  for (const std::string& bin : {sim_bin, centre_bin})
     if (::access(bin.c_str(), X_OK) != 0) return fail(err, "--realtime needs " + bin + ": " + std::strerror(errno), 1);
 
   char temp[] = "/tmp/sen3bot-fleet-XXXXXX";
@@ -638,9 +639,9 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
 
   const double margin_s = 30;  // the programs' own --duration: a backstop should this one vanish
   const std::string duration = std::to_string(static_cast<int>(scenario.duration_s + margin_s));
-  if (!children.start("ssc", {firmware_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log, "--duration", duration},
+  if (!children.start("ssc", {centre_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log, "--duration", duration},
                       logs + "/ssc.log"))
-    return fail(err, "cannot start sen3bot ssc", 1);
+    return fail(err, "cannot start sen3bot-centre ssc", 1);
   auto fmt = [](double v) {
     char text[32];
     std::snprintf(text, sizeof text, "%.4f", v);
