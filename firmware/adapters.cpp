@@ -47,4 +47,16 @@ msg::BaseFlags to_base_flags(const p2os::BaseState& in) noexcept {
   return msg::BaseFlags{in.estop, in.motors_enabled, in.battery_v};
 }
 
+void to_person_detections(const detector::Detections& in, msg::PersonDetections& out) noexcept {
+  static_assert(detector::Detections::kMax == msg::PersonDetections::kMax);
+  out.count = in.count;
+  for (std::size_t i = 0; i < in.count && i < out.boxes.size(); ++i) {
+    const detector::Box& b = in.boxes[i];
+    out.boxes[i] = {b.u0, b.v0, b.u1, b.v1, b.confidence, b.class_id};
+  }
+  out.source = in.source;
+  out.sequence = in.sequence;
+  out.capture_ns = in.capture_ns;
+}
+
 }  // namespace sen3bot::firmware

@@ -96,38 +96,7 @@ constexpr const char* kUsage =
     "        they went out and print one JSON object: state, inputs, outputs,\n"
     "        heartbeat state, event counters, the last emergency. Exit status 1 when\n"
     "        the node is not up within --timeout (3 s), with the master's state and\n"
-    "        counters. --iface sim [--sim-inputs 0xHH] [--sim-silent] runs against an\n"
-    "        emulated node on an in-memory bus (its inputs; a node that never answers):\n"
-    "        a demonstration and a test of the command.\n"
-    "  ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
-    "      [--event-log FILE] [--duration S] [--client-id ID]\n"
-    "        The Sensors Synergy Centre on the site's MQTT broker (mqtt:// or mqtts://,\n"
-    "        the latter with --ca-file): reads every vehicle's VDA 5050 state and\n"
-    "        connection and the robots' people reports; sends the robots their orders\n"
-    "        and cancels, and publishes each plant AGV's advisory (CLEAR, SLOW, STOP) on\n"
-    "        sen3bot/v1/advisory/MANUFACTURER/SERIAL (and, where the site's\n"
-    "        agv_cc.direct_pause allows, startPause/stopPause to the AGV). Steps every\n"
-    "        0.1 s in real time until SIGINT or SIGTERM or --duration S (0: until a\n"
-    "        signal). The password is the first line of --password-file. --event-log\n"
-    "        appends each decision with its reason as a JSON line; at the end one JSON\n"
-    "        line of counters goes to standard output. --client-id: default ssc. A\n"
-    "        restarted centre learns the robots and AGVs again from the retained\n"
-    "        connection messages and their next states.\n"
-    "  formation --broker URL --example 1|2|3 --team SERIAL,SERIAL,... [--username U\n"
-    "      --password-file F --ca-file F] [--client-id ID] [--manufacturer M]\n"
-    "      [--interface NAME] [--v-max M_S] [--w-max RAD_S] [--period S] [--hold S]\n"
-    "      [--pose-timeout S] [--log FILE.csv] [--duration S]\n"
-    "        The centre's formation controller on the site's MQTT broker\n"
-    "        (docs/formation.md): the thesis' example 1 (four robots to targets), 2\n"
-    "        (three patrol an ellipse) or 3 (a leader and two followers), scaled for\n"
-    "        Pioneers, driving the robots named by --team in that order. Reads their\n"
-    "        VDA 5050 visualization, steps every --period (0.1 s) and sends each robot\n"
-    "        its velocity on sen3bot/v1/formation/MANUFACTURER/SERIAL with --hold (0.5 s,\n"
-    "        at most 2): a robot stops by itself when the centre goes quiet. A missing\n"
-    "        or stale pose (--pose-timeout, 0.5 s) stops the whole team. --v-max and\n"
-    "        --w-max: the robots' limits (0.5 m/s, 1.5 rad/s); each drives at most half.\n"
-    "        --log writes one CSV line per step. On SIGINT, SIGTERM or --duration the\n"
-    "        team is told to stop and one JSON line of counters goes to standard output.\n"
+    "        counters. Against an emulated node: sen3bot-sim can io --iface sim.\n"
     "  recognize --paths FILE [--progressive] [--model M] [--operations O]\n"
     "        The operation recognizer on recorded worker paths (one JSON object per\n"
     "        line: name, operation (the truth, optional), points [[x, y], ...]): per\n"
@@ -205,8 +174,6 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"camera", "", camera_command},
       {"can", "dump", can_dump_command},
       {"can", "io", can_io_command},
-      {"ssc", "", ssc_command},
-      {"formation", "", formation_command},
 #ifdef SEN3BOT_HAS_RECOGNIZER
       {"recognize", "", recognize_command},
 #endif

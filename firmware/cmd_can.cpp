@@ -1,7 +1,7 @@
 // CAN command-line tools: `can dump` decodes a candump log (or a live SocketCAN bus) as
 // CANopen JSON lines, `can io` brings one CiA 401 I/O node up with the master's state machine,
-// sets its outputs and prints its inputs (on a SocketCAN bus, or against the in-process
-// emulator for a demonstration and a test of the command).
+// sets its outputs and prints its inputs (on a SocketCAN bus; against the emulated node it is
+// `sen3bot-sim can io --iface sim`, which runs the same code).
 #include <poll.h>
 #include <sys/stat.h>
 
@@ -18,11 +18,11 @@
 #include <string>
 #include <string_view>
 
+#include "can_io.hpp"
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "sen3bot/canopen/codec.hpp"
 #include "sen3bot/canopen/io_node.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/candump.hpp"
 #include "sen3bot/hal/clock.hpp"
@@ -39,8 +39,7 @@ constexpr const char* kDumpUsage =
     "usage: sen3bot can dump SOURCE [--node N] [--count N]\n"
     "  SOURCE: a candump -l log file, - for standard input, or a SocketCAN interface\n";
 constexpr const char* kIoUsage =
-    "usage: sen3bot can io --iface IFACE|sim --node N [--set OUT=0|1 ...] [--timeout S]\n"
-    "                      [--sim-inputs 0xHH] [--sim-silent]\n";
+    "usage: sen3bot can io --iface IFACE --node N [--set OUT=0|1 ...] [--timeout S]\n";
 
 [[gnu::format(printf, 2, 3)]] void append(std::string& out, const char* fmt, ...) {
   char text[256];
@@ -435,19 +434,8 @@ int can_dump_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
 
 namespace {
 
-struct IoOptions {
-  std::string iface;
-  unsigned node = 0;
-  std::uint8_t set_mask = 0;  // outputs named by --set
-  std::uint8_t set_values = 0;
-  double timeout_s = 3.0;
-  bool sim_inputs_given = false;
-  std::uint8_t sim_inputs = 0;
-  bool sim_silent = false;  // the emulated node never answers: what a missing node looks like
-};
-
 // "OUT=V", OUT 1..8, V 0 or 1.
-bool parse_set(std::string_view text, IoOptions& o) {
+bool parse_set(std::string_view text, CanIoOptions& o) {
   const std::size_t eq = text.find('=');
   if (eq == std::string_view::npos) return false;
   std::uint32_t output = 0;
@@ -491,20 +479,16 @@ std::string master_summary(const canopen::IoNodeMaster& m, bool heard, const hal
 
 }  // namespace
 
-int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  IoOptions o;
+void append_can_bits(std::string& out, std::string_view key, std::uint8_t bits) { append_bits(out, key, bits); }
+
+int parse_can_io(int argc, char** argv, const char* program, const char* usage, CanIoOptions& o, std::FILE* err) {
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
-    if (arg == "--sim-silent") {
-      o.sim_silent = true;
-      continue;
-    }
     if (i + 1 >= argc) {
-      std::fprintf(err, "sen3bot can io: %s needs a value\n%s", argv[i], kIoUsage);
+      std::fprintf(err, "%s can io: %s needs a value\n%s", program, argv[i], usage);
       return 2;
     }
     const std::string_view value = argv[++i];
-    std::uint32_t number = 0;
     bool ok = true;
     if (arg == "--iface") {
       o.iface = value;
@@ -515,70 +499,33 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       ok = parse_set(value, o);
     } else if (arg == "--timeout") {
       ok = parse_double(value, o.timeout_s) && o.timeout_s > 0 && o.timeout_s <= 3600;
-    } else if (arg == "--sim-inputs") {
-      ok = parse_u32(value, number) && number <= 0xFF;
-      o.sim_inputs = static_cast<std::uint8_t>(number);
-      o.sim_inputs_given = true;
     } else {
-      std::fprintf(err, "sen3bot can io: unknown option '%s'\n%s", argv[i - 1], kIoUsage);
+      std::fprintf(err, "%s can io: unknown option '%s'\n%s", program, argv[i - 1], usage);
       return 2;
     }
     if (!ok) {
-      std::fprintf(err, "sen3bot can io: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kIoUsage);
+      std::fprintf(err, "%s can io: bad value '%s' for %s\n%s", program, argv[i], argv[i - 1], usage);
       return 2;
     }
   }
   if (o.iface.empty() || o.node == 0) {
-    std::fprintf(err, "sen3bot can io: --iface and --node are required\n%s", kIoUsage);
+    std::fprintf(err, "%s can io: --iface and --node are required\n%s", program, usage);
     return 2;
   }
-  const bool sim = o.iface == "sim";
-  if ((o.sim_inputs_given || o.sim_silent) && !sim) {
-    std::fprintf(err, "sen3bot can io: --sim-inputs and --sim-silent are for the emulated node: "
-                      "only with --iface sim\n");
-    return 2;
-  }
-
   canopen::IoNodeConfig config;
   config.node = static_cast<std::uint8_t>(o.node);
   if (Status s = canopen::IoNodeMaster::check(config); !s) {
-    std::fprintf(err, "sen3bot can io: %s\n", s.error().c_str());
+    std::fprintf(err, "%s can io: %s\n", program, s.error().c_str());
     return 2;
   }
+  return 0;
+}
 
-  // The bus: a SocketCAN interface, or an in-memory bus with the emulated node on it.
-  std::unique_ptr<hal::SocketCanBus> socket;
-  std::unique_ptr<hal::MemoryCanBus> memory;
-  hal::CanBus* bus = nullptr;
-  hal::MemoryCanNode* node_port = nullptr;
-  std::optional<canopen::IoNodeEmulator> emulator;
+int run_can_io(const CanIoOptions& o, hal::CanBus& bus, CanIoPeer* peer, const char* program, std::FILE* out,
+               std::FILE* err) {
+  canopen::IoNodeConfig config;
+  config.node = static_cast<std::uint8_t>(o.node);
   hal::PosixClock clock;
-  if (sim) {
-    memory = std::make_unique<hal::MemoryCanBus>(2);
-    Result<hal::MemoryCanNode*> master_port = memory->attach("sim");
-    Result<hal::MemoryCanNode*> emulated = memory->attach("io-node");
-    if (!master_port || !emulated) {
-      std::fprintf(err, "sen3bot can io: sim: %s\n", (!master_port ? master_port : emulated).error().c_str());
-      return 1;
-    }
-    bus = *master_port;
-    node_port = *emulated;
-    canopen::IoNodeEmulatorConfig node_config;
-    node_config.node = config.node;
-    emulator.emplace(node_config);
-    emulator->set_inputs(o.sim_inputs);
-    emulator->set_silent(o.sim_silent);
-    emulator->power_up(clock.now());
-  } else {
-    Result<std::unique_ptr<hal::SocketCanBus>> opened = hal::SocketCanBus::open(o.iface);
-    if (!opened) {
-      std::fprintf(err, "sen3bot can io: %s\n", opened.error().c_str());
-      return 1;
-    }
-    socket = std::move(*opened);
-    bus = socket.get();
-  }
-
   const StopOnSignal stop;
   canopen::IoNodeMaster master(config);
   constexpr hal::Nanos kCycle = hal::millis(10);
@@ -592,12 +539,12 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   std::optional<std::uint8_t> outputs_sent;  // the last RPDO1 that went to the bus
 
   const auto fail = [&](const char* what) {
-    std::fprintf(err, "sen3bot can io: node %u on %s %s after %.1f s: %s\n", o.node, o.iface.c_str(), what,
-                 hal::to_seconds(clock.now() - start), master_summary(master, heard, *bus, sent, received).c_str());
+    std::fprintf(err, "%s can io: node %u on %s %s after %.1f s: %s\n", program, o.node, o.iface.c_str(), what,
+                 hal::to_seconds(clock.now() - start), master_summary(master, heard, bus, sent, received).c_str());
     return 1;
   };
   const auto transmit = [&](const CanFrame& f) -> Status {
-    if (Status s = bus->send(f); !s) return s;
+    if (Status s = bus.send(f); !s) return s;
     ++sent;
     const Classified c = canopen::classify(f);
     if (c.kind == Kind::rpdo && c.pdo == 1 && f.dlc >= 1) outputs_sent = f.data[0];
@@ -609,9 +556,9 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     const hal::Nanos now = clock.now();
     // What the bus brought, then the master's timers and frames.
     for (;;) {
-      Result<std::optional<CanFrame>> r = bus->receive();
+      Result<std::optional<CanFrame>> r = bus.receive();
       if (!r) {
-        std::fprintf(err, "sen3bot can io: %s: %s\n", o.iface.c_str(), r.error().c_str());
+        std::fprintf(err, "%s can io: %s: %s\n", program, o.iface.c_str(), r.error().c_str());
         return 1;
       }
       if (!*r) break;
@@ -627,21 +574,12 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       // retries, NMT start repeated, outputs refreshed), and the timeout's report says why.
       if (Status s = transmit(frames[i]); !s && s.error().code() != Errc::would_block &&
                                               s.error().code() != Errc::disconnected) {
-        std::fprintf(err, "sen3bot can io: %s: %s\n", o.iface.c_str(), s.error().c_str());
+        std::fprintf(err, "%s can io: %s: %s\n", program, o.iface.c_str(), s.error().c_str());
         return 1;
       }
     }
-    (void)bus->flush();  // what the backend queued goes out as soon as there is room
-    // The emulated node's turn: it answers within the same cycle, as a node on a bus would.
-    if (emulator) {
-      for (;;) {
-        Result<std::optional<CanFrame>> r = node_port->receive();
-        if (!r || !*r) break;
-        emulator->on_frame(**r, now);
-      }
-      const std::size_t k = emulator->poll(now, frames);
-      for (std::size_t i = 0; i < k; ++i) (void)node_port->send(frames[i]);
-    }
+    (void)bus.flush();  // what the backend queued goes out as soon as there is room
+    if (peer != nullptr) peer->step(now);
 
     if (operational_ns < 0 && master.state() == canopen::IoNodeState::operational) operational_ns = now;
     // The outputs are set once the inputs are there (the node is fully up), and the command
@@ -669,7 +607,7 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   append_bits(json, "inputs", master.inputs());
   append_bits(json, "outputs", master.outputs());
   append(json, ",\"link\":\"%s\",\"operational_s\":%.3f,\"frames_sent\":%llu,\"frames_received\":%llu",
-         hal::to_string(bus->link_state()), hal::to_seconds(operational_ns - start),
+         hal::to_string(bus.link_state()), hal::to_seconds(operational_ns - start),
          static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received));
   append_events(json, master);
   if (master.count(canopen::IoNodeEvent::emergency) + master.count(canopen::IoNodeEvent::emergency_reset) > 0) {
@@ -679,15 +617,26 @@ int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     append_string(json, "description", canopen::describe_emergency(e.code));
     json += '}';
   }
-  if (emulator) {
-    // What the emulated node itself now has: the outputs arrived, not only went out.
-    append(json, ",\"emulator\":{\"state\":\"%s\"", canopen::to_string(emulator->state()));
-    append_bits(json, "outputs", emulator->outputs());
-    json += '}';
-  }
+  if (peer != nullptr) peer->append_json(json);
   json += '}';
   print_line(out, json);
   return 0;
+}
+
+int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  CanIoOptions o;
+  if (int rc = parse_can_io(argc, argv, "sen3bot", kIoUsage, o, err); rc != 0) return rc;
+  if (o.iface == "sim") {
+    std::fprintf(err, "sen3bot can io: --iface sim: the emulated node is in the simulator: sen3bot-sim can io "
+                      "--iface sim\n");
+    return 2;
+  }
+  Result<std::unique_ptr<hal::SocketCanBus>> bus = hal::SocketCanBus::open(o.iface);
+  if (!bus) {
+    std::fprintf(err, "sen3bot can io: %s\n", bus.error().c_str());
+    return 1;
+  }
+  return run_can_io(o, **bus, nullptr, "sen3bot", out, err);
 }
 
 }  // namespace sen3bot::firmware

@@ -72,7 +72,7 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   }
   const detector::ImageView view{image.data, static_cast<std::uint32_t>(image.cols),
                                  static_cast<std::uint32_t>(image.rows), static_cast<std::uint32_t>(image.step[0]), 3};
-  msg::PersonDetections found;
+  detector::Detections found;
   // The first call builds OpenCV's caches; the time is the median of the rest (or the one).
   std::vector<double> times_ms;
   for (std::uint32_t k = 0; k < repeat; ++k) {
@@ -90,7 +90,7 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
                     "\"time_ms\": %.3f, \"runs\": %u, \"people\": [",
                image_path.c_str(), image.cols, image.rows, config.scale, config.hit_threshold, median_ms, repeat);
   for (std::size_t b = 0; b < found.count; ++b) {
-    const msg::PersonBox& box = found.boxes[b];
+    const detector::Box& box = found.boxes[b];
     std::fprintf(out, "%s{\"u0\": %.1f, \"v0\": %.1f, \"u1\": %.1f, \"v1\": %.1f, \"confidence\": %.3f}", b ? ", " : "",
                  box.u0, box.v0, box.u1, box.v1, box.confidence);
   }
@@ -98,7 +98,7 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (!png.empty()) {
     cv::Mat drawn = image.clone();
     for (std::size_t b = 0; b < found.count; ++b) {
-      const msg::PersonBox& box = found.boxes[b];
+      const detector::Box& box = found.boxes[b];
       const cv::Point top_left(static_cast<int>(box.u0), static_cast<int>(box.v0));
       cv::rectangle(drawn, top_left, cv::Point(static_cast<int>(box.u1), static_cast<int>(box.v1)),
                     cv::Scalar(0, 200, 0), 2);

@@ -14,7 +14,7 @@
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav/map_ellipses.hpp"
 #include "sen3bot/nav/sgp.hpp"
-#include "sen3bot/sim/report/sgp_layer.hpp"
+#include "sen3bot/nav_figure/sgp_layer.hpp"
 
 namespace sen3bot::firmware {
 
@@ -31,7 +31,7 @@ std::string file_name(const std::string& path) {
 bool write_figure(const std::string& png, const std::string& map_path, const std::string& curve_path,
                   const nav::OccupancyMap& map, const nav::SupervisoryPlanner& sgp, const nav::SgpResult& r,
                   nav::Point2D start, nav::Point2D goal) {
-  sim::report::CaseFigure f;
+  figure::CaseFigure f;
   char line[256];
   std::snprintf(line, sizeof line, "SGP: (%.2f, %.2f) m to (%.2f, %.2f) m", start.x_m, start.y_m, goal.x_m, goal.y_m);
   f.title = line;
@@ -47,8 +47,8 @@ bool write_figure(const std::string& png, const std::string& map_path, const std
   f.waypoints.assign(sgp.waypoints().begin(), sgp.waypoints().end());
   f.start = {start.x_m, start.y_m, 0.0};
   f.goals = {goal};
-  sim::report::add_sgp_layer(f, sgp, r.direction, 0.25);
-  return sim::report::draw_case_figure(f).write_png(png);
+  figure::add_sgp_layer(f, sgp, r.direction, 0.25);
+  return figure::draw_case_figure(f).write_png(png);
 }
 
 }  // namespace

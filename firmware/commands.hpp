@@ -20,8 +20,8 @@ int camera_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 // sen3bot can dump SOURCE [--node N] [--count N]  (SOURCE: candump -l log, -, or a SocketCAN interface)
 int can_dump_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-// sen3bot can io --iface IFACE|sim --node N [--set OUT=0|1 ...] [--timeout S] [--sim-inputs 0xHH]
-//            [--sim-silent]
+// sen3bot can io --iface IFACE --node N [--set OUT=0|1 ...] [--timeout S]  (the emulated node:
+// sen3bot-sim can io --iface sim; can_io.hpp)
 int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 // sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]
@@ -33,11 +33,6 @@ int sgp_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 int fuse_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot detect --image FILE [--scale S] [--threshold T] [--repeat N] [--png FILE]
 int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-
-// sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F] [--event-log FILE]
-//             [--duration S] [--client-id ID]
-int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err);
-int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
 // sen3bot recognize --paths FILE [--progressive] [--model M] [--operations O]
 int recognize_command(int argc, char** argv, std::FILE* out, std::FILE* err);

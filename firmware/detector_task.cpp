@@ -1,5 +1,7 @@
 #include "detector_task.hpp"
 
+#include "adapters.hpp"
+
 namespace sen3bot::firmware {
 
 Status DetectorTask::init(std::pmr::memory_resource& arena) {
@@ -19,7 +21,9 @@ void DetectorTask::step(const tasks::StepContext& context) {
     }
     if (!got->has_value()) return;
     const std::span<const std::uint8_t> bytes(buffer_.data(), **got);
-    if (gate_.accept(bytes, context.start_ns, board_.clock().unix_now_ns(), frame_)) topic_.publish(frame_, context.start_ns);
+    if (!gate_.accept(bytes, context.start_ns, board_.clock().unix_now_ns(), frame_)) continue;
+    to_person_detections(frame_, message_);
+    topic_.publish(message_, context.start_ns);
   }
 }
 

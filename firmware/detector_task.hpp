@@ -40,7 +40,8 @@ class DetectorTask final : public tasks::Task {
   std::unique_ptr<hal::DatagramPort> port_;
   detector::DetectionGate gate_;
   std::array<std::uint8_t, detector::kMaxDatagramBytes + 1> buffer_{};  // one more: a longer one is refused
-  msg::PersonDetections frame_;
+  detector::Detections frame_;
+  msg::PersonDetections message_;
   std::atomic<std::uint64_t> receive_errors_{0};
 };
 

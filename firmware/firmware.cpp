@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "safe_curve.hpp"
-#include "sen3bot/ssc/service.hpp"
+#include "sen3bot/ssc/site_file.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {

@@ -12,7 +12,7 @@ namespace sen3bot::firmware {
 
 namespace {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 using view::Schema;
 
 constexpr std::array<std::string_view, kViewChannels> kTopics = {

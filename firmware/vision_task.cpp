@@ -1,5 +1,7 @@
 #include "vision_task.hpp"
 
+#include "adapters.hpp"
+
 namespace sen3bot::firmware {
 
 Status VisionTask::init(std::pmr::memory_resource& arena) {
@@ -30,7 +32,7 @@ void VisionTask::step(const tasks::StepContext& context) {
   const float sx = static_cast<float>(config_.calibration_width_px) / static_cast<float>(f.width_px);
   const float sy = static_cast<float>(config_.calibration_height_px) / static_cast<float>(f.height_px);
   for (std::size_t i = 0; i < out_.count; ++i) {
-    msg::PersonBox& b = out_.boxes[i];
+    detector::Box& b = out_.boxes[i];
     b.u0 *= sx;
     b.u1 *= sx;
     b.v0 *= sy;
@@ -41,7 +43,8 @@ void VisionTask::step(const tasks::StepContext& context) {
   // The frame's last RTP packet's arrival: the camera's own encoding delay (tens of
   // milliseconds) is inside the fusion's match window.
   out_.capture_ns = f.last_packet_ns;
-  topic_.publish(out_, context.start_ns);
+  to_person_detections(out_, message_);
+  topic_.publish(message_, context.start_ns);
 }
 
 }  // namespace sen3bot::firmware

@@ -46,7 +46,8 @@ class VisionTask final : public tasks::Task {
   tasks::Topic<msg::PersonDetections>& topic_;
   std::optional<camera::FrameReader> reader_;
   detector::HogPeopleDetector hog_;
-  msg::PersonDetections out_;
+  detector::Detections out_;
+  msg::PersonDetections message_;
   hal::Nanos last_ns_ = -1;
   std::uint64_t searched_ = 0;
   std::uint64_t errors_ = 0;

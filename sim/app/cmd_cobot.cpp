@@ -429,7 +429,7 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
                result.passed ? "passed" : "FAILED", result.sim_s, result.wall_s);
   if (!report_dir.empty()) {
     const std::string png = report_dir + "/" + result.name + ".png";
-    report::CaseFigure figure =
+    figure::CaseFigure figure =
         case_figure("case " + std::to_string(index + 1) + "/" + std::to_string(kCases.size()) + ": " + result.name,
                     std::string("cobot: ") + spec.description, config, fw, board);
     figure.goals = {{kPost.x_m, kPost.y_m}};

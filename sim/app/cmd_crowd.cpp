@@ -33,7 +33,7 @@
 #include "sen3bot/crowd/scene.hpp"
 #include "sen3bot/msg/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 #include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
@@ -161,9 +161,9 @@ SimulationConfig run_world(const Plan& plan, Variant v, std::uint64_t seed, cons
 
 // One run as the sample figure draws it (times from the robot's setting off).
 struct Trace {
-  std::vector<report::RobotAt> robot;
-  std::vector<report::MoverTrack> people;
-  std::vector<report::Contact> contacts;
+  std::vector<figure::RobotAt> robot;
+  std::vector<figure::MoverTrack> people;
+  std::vector<figure::Contact> contacts;
   std::vector<double> times_s;                // per sample
   std::vector<std::vector<msg::Point2D>> at;  // per sample, every person's place (NaN: absent)
   double start_s = 0;                         // the simulated time the robot set off
@@ -178,7 +178,7 @@ void record(Trace& trace, const crowd::RunStep& step, double t_s) {
   for (std::size_t i = 0; i < step.people.size(); ++i) {
     const crowd::PersonTruth& p = step.people[i];
     if (!p.visible) continue;
-    report::MoverTrack& m = trace.people[i];
+    figure::MoverTrack& m = trace.people[i];
     m.path.push_back(p.position);
     m.times_s.push_back(t_s);
     m.size_m = 2 * p.radius_m;
@@ -232,7 +232,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, co
       robot_inside.assign(count, false);
       if (trace != nullptr) {
         trace->people.resize(count);
-        for (report::MoverTrack& m : trace->people) {
+        for (figure::MoverTrack& m : trace->people) {
           m.person = true;
           m.size_m = 0;
         }
@@ -349,7 +349,7 @@ bool write_sample_figure(const Plan& plan, std::size_t job_index, const std::str
     return false;
   }
   const crowd::RunMetrics& m = r.metrics;
-  report::CaseFigure f;
+  figure::CaseFigure f;
   char text[240];
   std::snprintf(text, sizeof text, "crowd sample run: %s, seed %llu, variant %s", scene_text.c_str(),
                 static_cast<unsigned long long>(r.seed), name_of(r.variant));
@@ -371,9 +371,9 @@ bool write_sample_figure(const Plan& plan, std::size_t job_index, const std::str
   f.map = &*map;
   f.start = scene->robot_start;
   f.goals = {{scene->robot_goal.x_m, scene->robot_goal.y_m}};
-  for (const report::RobotAt& a : trace.robot) f.driven.push_back({a.pose.x_m, a.pose.y_m});
-  f.robot = report::robot_instants(trace.robot, 2.0);
-  for (report::MoverTrack& p : trace.people)
+  for (const figure::RobotAt& a : trace.robot) f.driven.push_back({a.pose.x_m, a.pose.y_m});
+  f.robot = figure::robot_instants(trace.robot, 2.0);
+  for (figure::MoverTrack& p : trace.people)
     if (!p.path.empty()) f.movers.push_back(std::move(p));
   f.contacts = trace.contacts;
   f.time_scale_s = trace.times_s.empty() ? 0.0 : std::max(1.0, trace.times_s.back());
@@ -393,7 +393,7 @@ bool write_sample_figure(const Plan& plan, std::size_t job_index, const std::str
       }
     }
   }
-  return report::draw_case_figure(f).write_png(path);
+  return figure::draw_case_figure(f).write_png(path);
 }
 
 // --- The command line ----------------------------------------------------------------------------

@@ -29,7 +29,7 @@
 #include "mission_pool.hpp"
 #include "report_figure.hpp"
 #include "sen3bot/msg/point_math.hpp"
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -186,7 +186,7 @@ double footprint_box_gap(const nav::Footprint& footprint, const nav::Pose2D& pos
 // The dynamic obstacle layer's confirmed tracks, when the controller has one (it comes with the
 // layer's implementation; before that the figure shows no tracks).
 template <class Controller>
-void copy_tracks(const Controller& controller, hal::Nanos now_ns, report::Moment& moment) {
+void copy_tracks(const Controller& controller, hal::Nanos now_ns, figure::Moment& moment) {
   if constexpr (requires { controller.dynamic_layer(); }) {
     const auto* layer = controller.dynamic_layer();
     if (layer == nullptr) return;
@@ -204,7 +204,7 @@ struct Sample {
   std::string variant;  // its label in the title
   std::string description;
   double best_gap_m = std::numeric_limits<double>::infinity();
-  report::Moment moment;
+  figure::Moment moment;
   nav::Pose2D robot;  // the true pose at the moment
 };
 
@@ -218,7 +218,7 @@ void capture(const Firmware& fw, SimBoard& board, hal::Nanos now_ns, double t_s,
       gap = std::min(gap, footprint_box_gap(sim.footprint, pose, world.mover_position(i), sim.movers[i].size_m));
   if (!(gap < sample.best_gap_m)) return;
   sample.best_gap_m = gap;
-  report::Moment& m = sample.moment;
+  figure::Moment& m = sample.moment;
   m = {};
   m.t_s = t_s;
   sample.robot = pose;
@@ -272,7 +272,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
     r.sim_s = sim_s;
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     if (sample != nullptr) {
-      report::CaseFigure figure = case_figure("", sample->description, config, fw, board);
+      figure::CaseFigure figure = case_figure("", sample->description, config, fw, board);
       figure.moment = sample->moment;
       // The robot drawn at the moment, in place of the instant nearest to it.
       if (sample->moment.t_s >= 0 && !figure.robot.empty()) {
@@ -286,7 +286,7 @@ void run_mission(const FirmwareConfig& config, const SimulationConfig& world, Mi
                     sample->variant.c_str(), static_cast<unsigned long long>(r.seed), sample->moment.t_s, sample->best_gap_m);
       figure.title = title;
       figure.passed = classify(r) == Outcome::smooth || classify(r) == Outcome::wait_recovery;
-      if (!report::draw_case_figure(figure).write_png(sample->png)) set_error(r, "cannot write " + sample->png);
+      if (!figure::draw_case_figure(figure).write_png(sample->png)) set_error(r, "cannot write " + sample->png);
     }
   };
   if (const std::string error = run_simulated_mission(config, world, {.slice = slice}, on_slice, on_end); !error.empty())

@@ -39,11 +39,11 @@
 #include "sen3bot/hal/pubsub.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/sim/agv.hpp"
-#include "sen3bot/sim/report/canvas.hpp"
+#include "sen3bot/figure/canvas.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sen3bot/ssc/service.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/world/world.hpp"
 #include "sim_commands.hpp"
 
@@ -150,7 +150,7 @@ bool write_text(const std::string& path, const std::string& text) {
   return std::fclose(f) == 0 && ok;
 }
 
-report::Rgb area_colour(ssc::AreaType type) {
+figure::Rgb area_colour(ssc::AreaType type) {
   switch (type) {
     case ssc::AreaType::blind_intersection: return {255, 200, 200};
     case ssc::AreaType::transition: return {255, 230, 180};
@@ -168,33 +168,33 @@ bool draw_site(const std::string& path, const std::string& title, const nav::Occ
   const double width_m = map.width() * map.resolution_m(), height_m = map.height() * map.resolution_m();
   const int left = 70, bottom_margin = 60, top = 70, legend_w = 230;
   const int w = left + static_cast<int>(width_m * px_per_m) + legend_w, h = top + static_cast<int>(height_m * px_per_m) + bottom_margin;
-  report::Canvas canvas(w, h, {255, 255, 255});
-  report::View view{map.origin_x_m(), map.origin_y_m(), px_per_m, static_cast<double>(left), static_cast<double>(h - bottom_margin)};
+  figure::Canvas canvas(w, h, {255, 255, 255});
+  figure::View view{map.origin_x_m(), map.origin_y_m(), px_per_m, static_cast<double>(left), static_cast<double>(h - bottom_margin)};
   const double cell_px = map.resolution_m() * px_per_m;
   for (int row = 0; row < map.height(); ++row)
     for (int col = 0; col < map.width(); ++col)
       if (map.at(col, row) > 50) {
-        const report::Px p = view(map.origin_x_m() + col * map.resolution_m(), map.origin_y_m() + (row + 1) * map.resolution_m());
+        const figure::Px p = view(map.origin_x_m() + col * map.resolution_m(), map.origin_y_m() + (row + 1) * map.resolution_m());
         // One pixel more than a cell, so rounding never leaves gaps between cells.
         canvas.fill_rect(static_cast<int>(p.x), static_cast<int>(p.y), static_cast<int>(std::ceil(cell_px)) + 1,
                          static_cast<int>(std::ceil(cell_px)) + 1, {60, 60, 60});
       }
   for (std::size_t i = 0; i < site.site.areas.size(); ++i) {
     const ssc::Area& a = site.site.areas[i];
-    std::vector<report::Px> outline;
+    std::vector<figure::Px> outline;
     for (const ssc::Point& p : a.outline) outline.push_back(view(p.x, p.y));
     canvas.outline_polygon(outline, area_colour(a.type), 3);
     canvas.text(view(a.outline[0].x + 0.1, a.outline[0].y + 0.15), site.area_names[i] + " (" + std::string(ssc::to_string(a.type)) + ")",
                 {150, 60, 60}, 0.45, 1, true);
   }
   for (const AgvPlan& plan : plans) {
-    std::vector<report::Px> route;
+    std::vector<figure::Px> route;
     for (const msg::Point2D& p : plan.route) route.push_back(view(p.x_m, p.y_m));
     canvas.dashed_polyline(route, {120, 120, 255}, 2, 10, 6);
   }
-  const report::Rgb robot_colours[] = {{0, 140, 0}, {0, 110, 200}, {170, 0, 170}};
+  const figure::Rgb robot_colours[] = {{0, 140, 0}, {0, 110, 200}, {170, 0, 170}};
   for (std::size_t i = 0; i < robots.size(); ++i) {
-    std::vector<report::Px> trail;
+    std::vector<figure::Px> trail;
     for (const msg::Point2D& p : robots[i].trail) trail.push_back(view(p.x_m, p.y_m));
     if (trail.size() > 1) canvas.polyline(trail, robot_colours[i % 3], 2);
     if (i < shot.robots.size()) {
@@ -206,7 +206,7 @@ bool draw_site(const std::string& path, const std::string& title, const nav::Occ
   }
   for (std::size_t i = 0; i < shot.agvs.size(); ++i) {
     const msg::Pose2D& a = shot.agvs[i];
-    const report::Px c = view(a.x_m, a.y_m);
+    const figure::Px c = view(a.x_m, a.y_m);
     canvas.fill_rect(static_cast<int>(c.x - 0.5 * px_per_m), static_cast<int>(c.y - 0.35 * px_per_m), static_cast<int>(px_per_m),
                      static_cast<int>(0.7 * px_per_m), {60, 60, 230});
     canvas.text(view(a.x_m - 0.4, a.y_m + 0.5), plans[i].serial, {60, 60, 230}, 0.45, 1, true);
@@ -232,7 +232,7 @@ bool draw_site(const std::string& path, const std::string& title, const nav::Occ
   // Legend.
   const double lx = left + width_m * px_per_m + 20;
   double ly = top + 20;
-  auto entry = [&](report::Rgb colour, const std::string& text, bool square) {
+  auto entry = [&](figure::Rgb colour, const std::string& text, bool square) {
     if (square) {
       canvas.fill_rect(static_cast<int>(lx), static_cast<int>(ly - 10), 20, 14, colour);
     } else {
@@ -565,14 +565,15 @@ std::string json_number_or_null(bool known, double value) {
 int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& site_path,
                    const std::string& config_path, const nav::OccupancyMap& map, const std::string& report_dir, std::FILE* out,
                    std::FILE* err) {
-  // The programs sit beside this one (the build writes sen3bot and sen3bot-sim to one folder).
+  // The programs sit beside this one (the build writes sen3bot, sen3bot-sim and sen3bot-centre to
+  // one folder).
   char self[4096] = {};
   const ssize_t self_size = ::readlink("/proc/self/exe", self, sizeof self - 1);
   if (self_size <= 0) return fail(err, std::string("cannot read /proc/self/exe: ") + std::strerror(errno), 1);
   std::string bin_dir(self, static_cast<std::size_t>(self_size));
   bin_dir = bin_dir.substr(0, bin_dir.rfind('/'));
-  const std::string sim_bin = bin_dir + "/sen3bot-sim", firmware_bin = bin_dir + "/sen3bot";
-  for (const std::string& bin : {sim_bin, firmware_bin})
+  const std::string sim_bin = bin_dir + "/sen3bot-sim", centre_bin = bin_dir + "/sen3bot-centre";
+  for (const std::string& bin : {sim_bin, centre_bin})
     if (::access(bin.c_str(), X_OK) != 0) return fail(err, "--realtime needs " + bin + ": " + std::strerror(errno), 1);
 
   char temp[] = "/tmp/sen3bot-fleet-XXXXXX";
@@ -638,9 +639,9 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
 
   const double margin_s = 30;  // the programs' own --duration: a backstop should this one vanish
   const std::string duration = std::to_string(static_cast<int>(scenario.duration_s + margin_s));
-  if (!children.start("ssc", {firmware_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log, "--duration", duration},
+  if (!children.start("ssc", {centre_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log, "--duration", duration},
                       logs + "/ssc.log"))
-    return fail(err, "cannot start sen3bot ssc", 1);
+    return fail(err, "cannot start sen3bot-centre ssc", 1);
   auto fmt = [](double v) {
     char text[32];
     std::snprintf(text, sizeof text, "%.4f", v);

@@ -16,18 +16,18 @@
 #include <vector>
 
 #include "formation_sim.hpp"
-#include "sen3bot/sim/report/canvas.hpp"
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/figure/canvas.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 #include "sim_commands.hpp"
 
 namespace sen3bot::sim {
 
 namespace {
 
-namespace colours = report::colours;
-using report::Canvas;
-using report::Px;
-using report::Rgb;
+namespace colours = figure::colours;
+using figure::Canvas;
+using figure::Px;
+using figure::Rgb;
 
 constexpr Rgb kRobotColours[] = {{214, 39, 40}, {31, 119, 180}, {44, 160, 44}, {148, 103, 189}, {255, 127, 14},
                                  {140, 86, 75}, {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207}};
@@ -101,7 +101,7 @@ bool draw_trajectories(const std::string& path, const FormationExample& ex, cons
   const int left = 70, bottom = 60, top = 86, legend_w = 250;
   const int w = left + static_cast<int>(width_m * px_per_m) + legend_w, h = top + static_cast<int>(height_m * px_per_m) + bottom;
   Canvas canvas(w, h, colours::kPaper);
-  const report::View view{x0, y0, px_per_m, static_cast<double>(left), static_cast<double>(h - bottom)};
+  const figure::View view{x0, y0, px_per_m, static_cast<double>(left), static_cast<double>(h - bottom)};
   const double cell_px = map.resolution_m() * px_per_m;
   // Grid lines every 0.5 m, under everything.
   for (double x = std::ceil(x0 * 2) / 2; x <= x0 + width_m + 1e-9; x += 0.5)

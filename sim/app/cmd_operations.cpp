@@ -22,7 +22,7 @@
 #include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/path_file.hpp"
 #include "sen3bot/cobot/recognizer.hpp"
-#include "sen3bot/cobot/workers.hpp"
+#include "sen3bot/sim/cobot/workers.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sim_commands.hpp"
 

@@ -252,7 +252,7 @@ struct CaseResult {
   std::uint64_t cage_entries_by_person = 0;  // a person walked up to the robot
   std::uint64_t boxes_located = 0;
   PersonErrors person_errors;
-  std::vector<report::CageMark> cages;
+  std::vector<figure::CageMark> cages;
   std::vector<msg::Point2D> planned;    // the last goal's safe path, before any re-plan
   std::vector<msg::Point2D> replanned;  // the last online re-plan's safe path
   // With safety I/O events (lockstep): the first event's effect on the true robot.
@@ -549,7 +549,7 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   board.referee().print(out);
   if (!report_dir.empty()) {
     const std::string png = report_dir + "/" + result.name + ".png";
-    report::CaseFigure figure = case_figure(result.title, result.description, config, fw, board);
+    figure::CaseFigure figure = case_figure(result.title, result.description, config, fw, board);
     figure.cages = result.cages;
     figure.replanned = result.replanned;
     if (!result.planned.empty()) figure.waypoints = result.planned;

@@ -10,9 +10,9 @@ namespace sen3bot::sim::experiment {
 
 namespace {
 
-using report::Canvas;
-using report::Px;
-using report::Rgb;
+using figure::Canvas;
+using figure::Px;
+using figure::Rgb;
 
 constexpr Rgb kPaper{255, 255, 255};
 constexpr Rgb kInk{40, 40, 40};

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "sen3bot/crowd/metrics.hpp"
-#include "sen3bot/sim/report/canvas.hpp"
+#include "sen3bot/figure/canvas.hpp"
 #include "sen3bot/world/world.hpp"
 
 namespace sen3bot::sim::experiment {
@@ -62,7 +62,7 @@ struct BoxPlotText {
 };
 
 // The thesis' Figure 1.32 for our runs: a box per series, y in seconds.
-[[nodiscard]] report::Canvas draw_travel_time_box_plot(const std::string& title, const std::string& subtitle,
+[[nodiscard]] figure::Canvas draw_travel_time_box_plot(const std::string& title, const std::string& subtitle,
                                                        const std::vector<BoxPlotSeries>& series,
                                                        const BoxPlotText& text = {});
 

@@ -1,6 +1,6 @@
 #include "operations_report.hpp"
 
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,16 +10,16 @@ namespace sen3bot::sim::operations {
 
 namespace {
 
-using report::Canvas;
-using report::Px;
-using report::Rgb;
+using figure::Canvas;
+using figure::Px;
+using figure::Rgb;
 
-using report::colours::kInk;
-using report::colours::kPaper;
+using figure::colours::kInk;
+using figure::colours::kPaper;
 constexpr Rgb kGrey{90, 90, 90};
 constexpr Rgb kGuide{160, 160, 160};
 constexpr Rgb kGrid{225, 225, 225};
-using report::colours::kWall;
+using figure::colours::kWall;
 constexpr Rgb kStation{0, 130, 110};
 constexpr Rgb kCellFull{30, 80, 170};
 // Classifiers in the progressive plot; operations on the map.
@@ -177,7 +177,7 @@ Canvas draw_example_paths(const std::string& title, const std::string& subtitle,
   const int height = kTop + static_cast<int>(map_h * kPxPerM) + kBottom;
   Canvas canvas(width, height, kPaper);
   header(canvas, title, subtitle);
-  const report::View view{map.origin_x_m(), map.origin_y_m(), kPxPerM, static_cast<double>(kLeft),
+  const figure::View view{map.origin_x_m(), map.origin_y_m(), kPxPerM, static_cast<double>(kLeft),
                           static_cast<double>(kTop) + map_h * kPxPerM};
   // The map's occupied cells (axis-aligned maps: the lab's yaw is 0).
   for (int r = 0; r < map.height(); ++r)

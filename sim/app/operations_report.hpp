@@ -7,7 +7,7 @@
 #include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/recognizer.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/sim/report/canvas.hpp"
+#include "sen3bot/figure/canvas.hpp"
 
 namespace sen3bot::sim::operations {
 
@@ -19,13 +19,13 @@ struct Labelled {
 
 // A matrix per classifier side by side: rows the true operation, columns the recognised one,
 // cells shaded by the row's fraction and labelled with the count.
-[[nodiscard]] report::Canvas draw_confusion(const std::string& title, const std::string& subtitle,
+[[nodiscard]] figure::Canvas draw_confusion(const std::string& title, const std::string& subtitle,
                                             const std::vector<Labelled>& results);
 
 // Per classifier, against the percentage of the path walked: the mean probability of the right
 // operation (solid) and the fraction of paths where it is above the bar (dashed); the bar and
 // the 60 % mark as guides.
-[[nodiscard]] report::Canvas draw_progressive(const std::string& title, const std::string& subtitle,
+[[nodiscard]] figure::Canvas draw_progressive(const std::string& title, const std::string& subtitle,
                                               const std::vector<Labelled>& results, double bar);
 
 // The map in metres with the stations and one path per operation.
@@ -33,7 +33,7 @@ struct ExamplePath {
   std::string label;  // "name", or "name\nwhat it visits" (a second, grey line)
   std::vector<float> xy;
 };
-[[nodiscard]] report::Canvas draw_example_paths(const std::string& title, const std::string& subtitle,
+[[nodiscard]] figure::Canvas draw_example_paths(const std::string& title, const std::string& subtitle,
                                                 const nav::OccupancyMap& map, const cobot::OperationsConfig& config,
                                                 const std::vector<ExamplePath>& paths);
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "sen3bot/sim/report/sgp_layer.hpp"
+#include "sen3bot/nav_figure/sgp_layer.hpp"
 
 namespace sen3bot::sim {
 
@@ -43,13 +43,13 @@ std::string result_line(const MissionReport& r, std::size_t goal_count, const Re
   return line;
 }
 
-report::CaseFigure case_figure(std::string title, std::string description, const firmware::FirmwareConfig& config,
+figure::CaseFigure case_figure(std::string title, std::string description, const firmware::FirmwareConfig& config,
                                const firmware::Firmware& fw, SimBoard& board) {
   const firmware::MissionTask& mission = *fw.mission();
   const firmware::MissionConfig& goals = config.navigation.mission;
   const Referee& referee = board.referee();
   const SimulationConfig& sim = board.simulation().config();
-  report::CaseFigure f;
+  figure::CaseFigure f;
   f.title = std::move(title);
   f.description = std::move(description);
   f.result = result_line(mission.report(), goals.goal_count, referee.report());
@@ -57,7 +57,7 @@ report::CaseFigure case_figure(std::string title, std::string description, const
   f.map = &fw.map();
   f.waypoints.assign(fw.safe_path().begin(), fw.safe_path().end());
   if (const nav::SupervisoryPlanner* sgp = fw.planner() ? fw.planner()->sgp() : nullptr)
-    report::add_sgp_layer(f, *sgp, fw.planner()->sgp_result().direction, 0.0);
+    figure::add_sgp_layer(f, *sgp, fw.planner()->sgp_result().direction, 0.0);
   for (std::size_t g = 0; g <= mission.report().goals_reached && g < goals.goal_count; ++g) {
     const msg::PathMessage& plan = mission.first_plan(g);
     if (plan.count < 2) continue;
@@ -67,9 +67,9 @@ report::CaseFigure case_figure(std::string title, std::string description, const
   f.driven.assign(referee.track().begin(), referee.track().end());
   f.estimated.assign(referee.estimate_track().begin(), referee.estimate_track().end());
   f.footprint = sim.footprint;
-  std::vector<report::RobotAt> poses;
+  std::vector<figure::RobotAt> poses;
   for (const TimedPose& p : referee.poses()) poses.push_back({p.t_s, p.pose});
-  f.robot = report::robot_instants(poses, kFootprintSpacingM);
+  f.robot = figure::robot_instants(poses, kFootprintSpacingM);
   for (const TimedPose& c : referee.contact_poses()) f.contacts.push_back({{c.pose.x_m, c.pose.y_m}, c.t_s, c.moving});
   f.start = sim.start_pose;
   f.goals.assign(goals.goals.begin(), goals.goals.begin() + static_cast<std::ptrdiff_t>(goals.goal_count));
@@ -79,7 +79,7 @@ report::CaseFigure case_figure(std::string title, std::string description, const
   const double t0 = poses.empty() ? 0 : poses.front().t_s, t1 = poses.empty() ? 0 : poses.back().t_s;
   for (std::size_t i = 0; i < sim.movers.size() && i < world.mover_count(); ++i) {
     const world::MoverScript& script = sim.movers[i];
-    report::MoverTrack& m = f.movers.emplace_back();
+    figure::MoverTrack& m = f.movers.emplace_back();
     m.size_m = script.size_m;
     m.person = script.person;
     m.square = script.shape == world::MoverShape::square;
@@ -90,7 +90,7 @@ report::CaseFigure case_figure(std::string title, std::string description, const
     }
     if (!m.person) continue;
     // A person is drawn when the robot is, if near enough to matter to it.
-    for (const report::RobotAt& r : f.robot) {
+    for (const figure::RobotAt& r : f.robot) {
       world.set_time(r.t_s);
       const msg::Point2D p = world.mover_position(i);
       if (world.mover_visible(i) && std::hypot(p.x_m - r.pose.x_m, p.y_m - r.pose.y_m) <= kPersonNearM)
@@ -101,7 +101,7 @@ report::CaseFigure case_figure(std::string title, std::string description, const
   // The crowd's walkers, moved by their model rather than a script: from the referee's record.
   const std::size_t first_walker = board.simulation().first_crowd_mover();
   for (std::size_t i = first_walker; i < world.mover_count(); ++i) {
-    report::MoverTrack& m = f.movers.emplace_back();
+    figure::MoverTrack& m = f.movers.emplace_back();
     m.size_m = world.mover_script(i).size_m;
     m.person = true;
     std::size_t next_robot = 0;

@@ -6,7 +6,7 @@
 #include "config.hpp"
 #include "firmware.hpp"
 #include "sen3bot/sim/referee.hpp"
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 
 namespace sen3bot::sim {
@@ -17,7 +17,7 @@ namespace sen3bot::sim {
 
 // After the run (the scheduler and the board stopped). Moves the board's world back in time to
 // trace the people.
-[[nodiscard]] report::CaseFigure case_figure(std::string title, std::string description,
+[[nodiscard]] figure::CaseFigure case_figure(std::string title, std::string description,
                                              const firmware::FirmwareConfig& config, const firmware::Firmware& fw,
                                              SimBoard& board);
 

@@ -138,6 +138,11 @@ constexpr const char* kUsage =
     "        --references FILE writes the robot's reference route per operation as\n"
     "        the operations file's references block (tools/train_operations.sh).\n"
 #endif
+    "  can io --iface sim --node N [--set OUT=0|1 ...] [--timeout S] [--sim-inputs 0xHH]\n"
+    "         [--sim-silent]\n"
+    "        The robot's `sen3bot can io` against an emulated CiA 401 node on an\n"
+    "        in-memory bus: --sim-inputs sets its inputs, --sim-silent makes it a node\n"
+    "        that never answers. A demonstration and a test of the command.\n"
     "  p2os-emulator (--pty LINK | --tcp PORT) [--name NAME] [--watchdog stop|resume]\n"
     "        Run the Pioneer 3-DX (ARCOS) emulator until SIGINT: on a pseudo-terminal\n"
     "        whose slave is symlinked at LINK, or on a TCP port (MobileSim style).\n"
@@ -202,6 +207,7 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"formation", "", formation_command},
 #endif
       {"agv", "", agv_command},
+      {"can", "io", can_io_command},
       {"p2os-emulator", "", p2os_emulator_command},
       {"lms200-emulator", "", lms200_emulator_command},
   };

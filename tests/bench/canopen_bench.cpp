@@ -11,7 +11,7 @@
 
 #include "sen3bot/canopen/codec.hpp"
 #include "sen3bot/canopen/io_node.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/candump.hpp"
 
 namespace {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "sen3bot/cobot/qr_reader.hpp"
-#include "sen3bot/cobot/tag_scene.hpp"
+#include "sen3bot/sim/cobot/tag_scene.hpp"
 
 namespace {
 

@@ -11,7 +11,7 @@
 
 #include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/recognizer.hpp"
-#include "sen3bot/cobot/workers.hpp"
+#include "sen3bot/sim/cobot/workers.hpp"
 
 namespace {
 

@@ -36,7 +36,7 @@ void BM_HogFrame(benchmark::State& state) {
     return;
   }
   const sen3bot::detector::ImageView view{frame.data, 1280, 720, static_cast<std::uint32_t>(frame.step[0]), 3};
-  sen3bot::msg::PersonDetections found;
+  sen3bot::detector::Detections found;
   for (auto _ : state) {
     (void)hog.detect(view, found);
     benchmark::DoNotOptimize(found.count);

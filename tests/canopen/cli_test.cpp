@@ -1,7 +1,8 @@
 // `sen3bot can dump` on the e-stop scenario's log (golden lines, the line count, --node,
-// --count, standard input), bad lines and error frames, and `sen3bot can io` against the
-// emulated node (--iface sim); bad command lines are refused with exit status 2. The commands
-// run through the whole command line (cli_main), as the binary runs them.
+// --count, standard input), bad lines and error frames, and `can io` against the emulated node
+// (`sen3bot-sim can io --iface sim`, the robot's command over the simulator's node); bad
+// command lines are refused with exit status 2. The commands run through the whole command
+// line (cli_main, sim_cli_main), as the binaries run them.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 
 #include "cli.hpp"
 #include "command_capture.hpp"
+#include "sim_commands.hpp"
 
 namespace sen3bot::firmware {
 namespace {
@@ -24,6 +26,13 @@ int sen3bot_main(int argc, char** argv, std::FILE* out, std::FILE* err) { return
 testing::CommandOutcome sen3bot(std::vector<std::string> args) {
   args.insert(args.begin(), "sen3bot");
   return testing::run_command(sen3bot_main, std::move(args));
+}
+
+int sim_main(int argc, char** argv, std::FILE* out, std::FILE* err) { return sim::sim_cli_main(argc, argv, out, err); }
+
+testing::CommandOutcome sen3bot_sim(std::vector<std::string> args) {
+  args.insert(args.begin(), "sen3bot-sim");
+  return testing::run_command(sim_main, std::move(args));
 }
 
 std::vector<std::string> lines_of(const std::string& text) {
@@ -193,7 +202,7 @@ TEST(CanDump, CommandLineAndSourceErrors) {
 
 TEST(CanIo, SimBringsTheNodeUpSetsAnOutputAndReadsTheInputs) {
   const testing::CommandOutcome o =
-      sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--set", "2=1", "--sim-inputs", "0x05"});
+      sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--set", "2=1", "--sim-inputs", "0x05"});
   ASSERT_EQ(o.code, 0) << o.err;
   ASSERT_EQ(lines_of(o.out).size(), 1u) << o.out;
   EXPECT_TRUE(has(o.out, R"({"iface":"sim","node":16,"state":"operational","heartbeat":"operational",)"
@@ -209,7 +218,7 @@ TEST(CanIo, SimBringsTheNodeUpSetsAnOutputAndReadsTheInputs) {
 
 TEST(CanIo, LaterSetsOfTheSameOutputWin) {
   const testing::CommandOutcome o =
-      sen3bot({"can", "io", "--iface", "sim", "--node", "5", "--set", "1=1", "--set", "8=1", "--set", "1=0"});
+      sen3bot_sim({"can", "io", "--iface", "sim", "--node", "5", "--set", "1=1", "--set", "8=1", "--set", "1=0"});
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_TRUE(has(o.out, R"("node":5,)")) << o.out;
   EXPECT_TRUE(has(o.out, R"("outputs":"0x80","outputs_on":[8])")) << o.out;
@@ -218,31 +227,38 @@ TEST(CanIo, LaterSetsOfTheSameOutputWin) {
 
 TEST(CanIo, ANodeThatNeverAnswersTimesOutWithTheMastersState) {
   const testing::CommandOutcome o =
-      sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--sim-silent", "--timeout", "0.3"});
+      sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--sim-silent", "--timeout", "0.3"});
   EXPECT_EQ(o.code, 1);
   EXPECT_EQ(o.out, "");
-  EXPECT_TRUE(has(o.err, "sen3bot can io: node 16 on sim not operational after 0.3 s: master state waiting_boot, "
+  EXPECT_TRUE(has(o.err, "sen3bot-sim can io: node 16 on sim not operational after 0.3 s: master state waiting_boot, "
                          "no heartbeat heard, link error-active"))
       << o.err;
   EXPECT_TRUE(has(o.err, "boot_up 0 heartbeat_lost 0 configured 0")) << o.err;
 }
 
 TEST(CanIo, CommandLineErrors) {
-  EXPECT_EQ(sen3bot({"can", "io"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--node", "16"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--set", "0=1"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--set", "9=1"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--set", "2=2"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--set", "2"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--timeout", "-1"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--sim-inputs", "0x100"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--bogus", "1"}).code, 2);
-  EXPECT_EQ(sen3bot({"can", "io", "--iface", "sim", "--node", "16", "--timeout"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--node", "16"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--set", "0=1"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--set", "9=1"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--set", "2=2"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--set", "2"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--timeout", "-1"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--sim-inputs", "0x100"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--bogus", "1"}).code, 2);
+  EXPECT_EQ(sen3bot_sim({"can", "io", "--iface", "sim", "--node", "16", "--timeout"}).code, 2);
   const testing::CommandOutcome sim_only =
-      sen3bot({"can", "io", "--iface", "can0", "--node", "16", "--sim-inputs", "1"});
+      sen3bot_sim({"can", "io", "--iface", "can0", "--node", "16", "--sim-inputs", "1"});
   EXPECT_EQ(sim_only.code, 2);
   EXPECT_TRUE(has(sim_only.err, "only with --iface sim")) << sim_only.err;
+  // The robot's binary has no emulated node, and says where it is.
+  EXPECT_EQ(sen3bot({"can", "io"}).code, 2);
+  EXPECT_EQ(sen3bot({"can", "io", "--node", "16"}).code, 2);
+  const testing::CommandOutcome robot_sim = sen3bot({"can", "io", "--iface", "sim", "--node", "16"});
+  EXPECT_EQ(robot_sim.code, 2);
+  EXPECT_TRUE(has(robot_sim.err, "sen3bot-sim can io --iface sim")) << robot_sim.err;
+  EXPECT_EQ(sen3bot({"can", "io", "--iface", "can0", "--node", "16", "--sim-inputs", "1"}).code, 2);
   // A SocketCAN interface that cannot be opened (no such interface, or no CAN in the kernel).
   const testing::CommandOutcome real =
       sen3bot({"can", "io", "--iface", "nosuchcan9", "--node", "16", "--timeout", "0.2"});

@@ -4,7 +4,7 @@
 #include <deque>
 #include <stdexcept>
 
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/candump.hpp"
 

@@ -7,7 +7,7 @@
 
 #include "sen3bot/canopen/codec.hpp"
 #include "sen3bot/canopen/io_node.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace sen3bot::canopen;

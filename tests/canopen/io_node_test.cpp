@@ -5,7 +5,7 @@
 #include <string_view>
 
 #include "sen3bot/canopen/io_node.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 
 namespace sen3bot::canopen {
 namespace {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "sen3bot/canopen/io_node.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/clock.hpp"
 

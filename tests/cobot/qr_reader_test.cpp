@@ -18,7 +18,7 @@
 
 #include "sen3bot/cobot/qr_modules.hpp"
 #include "sen3bot/cobot/qr_reader.hpp"
-#include "sen3bot/cobot/tag_scene.hpp"
+#include "sen3bot/sim/cobot/tag_scene.hpp"
 
 namespace sen3bot::cobot {
 namespace {

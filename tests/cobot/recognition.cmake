@@ -8,7 +8,7 @@ sen3bot_test(cobot_operations_tests
 
 sen3bot_test(cobot_workers_tests
   SOURCES workers_test.cpp
-  LIBS sen3bot_cobot_workers
+  LIBS sen3bot_sim_workers
   LABELS cobot)
 
 if(TARGET sen3bot_cobot_recognizer)
@@ -20,7 +20,7 @@ if(TARGET sen3bot_cobot_recognizer)
   endif()
   sen3bot_test(cobot_recognizer_tests
     SOURCES recognizer_test.cpp
-    LIBS sen3bot_cobot_recognizer sen3bot_cobot_workers
+    LIBS sen3bot_cobot_recognizer sen3bot_sim_workers
     LABELS cobot
     TIMEOUT 300)
   target_compile_definitions(cobot_recognizer_tests PRIVATE SEN3BOT_HELD_OUT_WALKS=${held_out_walks})

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "sen3bot/cobot/recognizer.hpp"
-#include "sen3bot/cobot/workers.hpp"
+#include "sen3bot/sim/cobot/workers.hpp"
 
 #ifndef SEN3BOT_HELD_OUT_WALKS
 #define SEN3BOT_HELD_OUT_WALKS 20

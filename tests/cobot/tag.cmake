@@ -13,7 +13,7 @@ sen3bot_fuzz_target(cobot_tag
 if(TARGET sen3bot_cobot_qr)
   sen3bot_test(cobot_qr_tests
     SOURCES qr_reader_test.cpp
-    LIBS sen3bot_cobot_qr sen3bot_cobot_tag_scene OpenCV::objdetect OpenCV::imgcodecs OpenCV::imgproc OpenCV::core
+    LIBS sen3bot_cobot_qr sen3bot_sim_tag_scene OpenCV::objdetect OpenCV::imgcodecs OpenCV::imgproc OpenCV::core
     LABELS cobot
     TIMEOUT 300)
   sen3bot_test(cobot_command_tests

@@ -8,7 +8,7 @@
 #include <numeric>
 #include <vector>
 
-#include "sen3bot/cobot/workers.hpp"
+#include "sen3bot/sim/cobot/workers.hpp"
 
 namespace sen3bot::cobot {
 namespace {

@@ -11,7 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // The gate's clocks at the seeds' capture time, so fresh datagrams get past the clock checks.
   constexpr std::int64_t kUnixNow = 1'764'000'000'000'000'000;
   DetectionGate gate;
-  sen3bot::msg::PersonDetections out;
+  sen3bot::detector::Detections out;
   const std::span<const std::uint8_t> bytes(data, size);
   std::uint64_t seen = 0;
   for (int i = 0; i < 2; ++i) {  // twice: the second is a replay

@@ -32,9 +32,9 @@ ImageView view_of(const cv::Mat& m) {
           static_cast<std::uint32_t>(m.step[0]), static_cast<std::uint8_t>(m.channels())};
 }
 
-msg::PersonDetections detect(const cv::Mat& image, HogConfig config = {}) {
+detector::Detections detect(const cv::Mat& image, HogConfig config = {}) {
   HogPeopleDetector hog;
-  msg::PersonDetections found;
+  detector::Detections found;
   EXPECT_TRUE(hog.init(config, static_cast<std::uint32_t>(image.cols), static_cast<std::uint32_t>(image.rows)));
   const Status s = hog.detect(view_of(image), found);
   EXPECT_TRUE(s) << s.error().c_str();
@@ -46,9 +46,9 @@ TEST(HogPeopleDetector, FindsThePersonStandingInAnOffice) {
   for (const char* name : {"basketball1.png", "basketball2.png"}) {
     const cv::Mat image = load(name);
     ASSERT_FALSE(image.empty());
-    const msg::PersonDetections found = detect(image);
+    const detector::Detections found = detect(image);
     ASSERT_EQ(found.count, 1u) << name;
-    const msg::PersonBox& box = found.boxes[0];
+    const detector::Box& box = found.boxes[0];
     // Around him: his head is near (85, 100) px and his feet near (100, 465) px.
     EXPECT_LT(box.u0, 60.0f) << name;
     EXPECT_GT(box.u1, 140.0f) << name;
@@ -66,8 +66,8 @@ TEST(HogPeopleDetector, GreyFramesGiveTheSameBoxes) {
   ASSERT_FALSE(image.empty());
   cv::Mat grey;
   cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  const msg::PersonDetections a = detect(image);
-  const msg::PersonDetections b = detect(grey);
+  const detector::Detections a = detect(image);
+  const detector::Detections b = detect(grey);
   ASSERT_EQ(a.count, b.count);
   for (std::size_t i = 0; i < a.count; ++i) {
     EXPECT_EQ(a.boxes[i].u0, b.boxes[i].u0);
@@ -88,11 +88,11 @@ TEST(HogPeopleDetector, FindsTheWalkersInTheYard) {
   ASSERT_EQ(image.cols, 768);
   HogConfig config;
   config.scale = 2.0;
-  const msg::PersonDetections found = detect(image, config);
+  const detector::Detections found = detect(image, config);
   EXPECT_GE(found.count, 5u);
   EXPECT_LE(found.count, 7u);
   for (std::size_t i = 0; i < found.count; ++i) {
-    const msg::PersonBox& box = found.boxes[i];
+    const detector::Box& box = found.boxes[i];
     EXPECT_LT(box.v1, 330.0f) << "box " << i << " reaches the lawn";
     EXPECT_GT(box.v0, 130.0f) << "box " << i << " above the path";
     EXPECT_GT((box.v1 - box.v0) / (box.u1 - box.u0), 1.5f) << "box " << i << " is not a standing person's shape";
@@ -109,7 +109,7 @@ TEST(HogPeopleDetector, NothingInPicturesWithoutPeople) {
 
 TEST(HogPeopleDetector, BadFramesAndConfigurationsAreErrors) {
   HogPeopleDetector hog;
-  msg::PersonDetections found;
+  detector::Detections found;
   std::uint8_t pixels[640 * 480 * 3] = {};
   EXPECT_FALSE(hog.detect({pixels, 640, 480, 640 * 3, 3}, found));  // not initialised
   EXPECT_FALSE(hog.init({}, 100, 100));                             // under the 64 x 128 window once shrunk

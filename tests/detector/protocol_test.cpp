@@ -97,7 +97,7 @@ TEST(DetectorDatagram, MalformedDatagramsAreRefusedAndCounted) {
   cases.push_back({bytes_of(frame(1, INT64_MAX)), Reject::future});
   for (const Case& c : cases) {
     DetectionGate gate;
-    msg::PersonDetections out;
+    detector::Detections out;
     EXPECT_FALSE(gate.accept(c.bytes, kNow, kUnix, out)) << to_string(c.expected);
     EXPECT_EQ(gate.rejected(c.expected), 1u) << to_string(c.expected);
     EXPECT_EQ(gate.accepted(), 0u);
@@ -116,7 +116,7 @@ TEST(DetectorDatagram, MalformedDatagramsAreRefusedAndCounted) {
 
 TEST(DetectorDatagram, ReplaysAreRefusedARestartIsNotAndTheCaptureTimeComesOnTheFirmwareClock) {
   DetectionGate gate;
-  msg::PersonDetections out;
+  detector::Detections out;
   // 0.1 s old: its capture on the firmware's clock is 0.1 s before now.
   ASSERT_TRUE(gate.accept(bytes_of(frame(10, kUnix - 100'000'000)), kNow, kUnix, out));
   EXPECT_EQ(out.capture_ns, kNow - 100'000'000);

@@ -41,7 +41,7 @@ TEST(DetectorDatagram, TheReferenceSendersDatagramsArriveOverUdpAndDecode) {
                               boxes + " 2>/dev/null";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   DetectionGate gate;
-  std::vector<msg::PersonDetections> frames;
+  std::vector<detector::Detections> frames;
   std::uint8_t buffer[2048];
   pollfd pfd{sock, POLLIN, 0};
   while (frames.size() < 2 && ::poll(&pfd, 1, 2000) == 1) {
@@ -49,7 +49,7 @@ TEST(DetectorDatagram, TheReferenceSendersDatagramsArriveOverUdpAndDecode) {
     ASSERT_GT(n, 0);
     const std::int64_t unix_now =
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-    msg::PersonDetections out;
+    detector::Detections out;
     ASSERT_TRUE(gate.accept(std::span(buffer, static_cast<std::size_t>(n)), kNow, unix_now, out));
     frames.push_back(out);
   }

@@ -8,7 +8,7 @@
 #include "can_board.hpp"
 #include "can_io_task.hpp"
 #include "config.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/clock.hpp"
 
 namespace sen3bot::firmware {

@@ -1,4 +1,4 @@
-// `sen3bot formation` on a real Mosquitto with the shipped TLS + ACL site configuration. Three
+// `sen3bot-centre formation` on a real Mosquitto with the shipped TLS + ACL site configuration. Three
 // robots (clients in the test, each under its own credential) report their poses as VDA 5050
 // visualization messages and move as ideal unicycles by the commands they receive:
 //   - the centre drives them at its period towards example 2's formation, on their own topics;
@@ -171,7 +171,7 @@ class FormationSite : public ::testing::Test {
     return std::make_unique<FakeRobot>(serial, start, std::move(link.value()));
   }
   std::vector<std::string> centre_args(std::vector<std::string> extra = {}) const {
-    std::vector<std::string> a = {SEN3BOT_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2", "--team", "f1,f2,f3",
+    std::vector<std::string> a = {SEN3BOT_CENTRE_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2", "--team", "f1,f2,f3",
                                   "--username", "ssc", "--password-file", dir() + "/ssc.password", "--ca-file", broker_.ca_file()};
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
@@ -263,7 +263,7 @@ TEST_F(FormationSite, BadCommandLinesExit2NamingTheProblem) {
     const int status = p.wait(20.0);
     return std::make_pair(status, p.err());
   };
-  auto [status, err] = run({SEN3BOT_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2"});
+  auto [status, err] = run({SEN3BOT_CENTRE_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2"});
   EXPECT_EQ(status, 2);
   EXPECT_NE(err.find("--team"), std::string::npos) << err;
   std::tie(status, err) = run(centre_args({"--team", "f1,f2"}));
@@ -275,7 +275,7 @@ TEST_F(FormationSite, BadCommandLinesExit2NamingTheProblem) {
   std::tie(status, err) = run(centre_args({"--team", "f1,,f3"}));
   EXPECT_EQ(status, 2);
   EXPECT_NE(err.find("--team"), std::string::npos) << err;
-  std::tie(status, err) = run({SEN3BOT_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2", "--team", "f1,f2,f3",
+  std::tie(status, err) = run({SEN3BOT_CENTRE_BIN, "formation", "--broker", broker_.url("mqtts"), "--example", "2", "--team", "f1,f2,f3",
                                "--username", "ssc", "--password-file", dir() + "/missing.password"});
   EXPECT_EQ(status, 2);
   EXPECT_NE(err.find("--password-file"), std::string::npos) << err;

@@ -12,13 +12,13 @@
 
 #include "experiment_support.hpp"
 #include "sim_commands.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::sim {
 namespace {
 
 using namespace testing;
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 const std::string kCrowdConfig = SEN3BOT_SOURCE_DIR "/config/crowd.yaml";
 const std::string kRecording = SEN3BOT_SOURCE_DIR "/data/pedestrians/uni_examples.txt";

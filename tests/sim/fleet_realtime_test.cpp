@@ -9,13 +9,13 @@
 #include <memory>
 #include <string>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "text_file.hpp"
 
 namespace sen3bot::sim {
 namespace {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 TEST(FleetRealtime, Net1TheAgvIsAdvisedBeforeItsOwnScannerCouldHaveSeenThePerson) {
   if (std::system("command -v mosquitto >/dev/null 2>&1") != 0) GTEST_SKIP() << "mosquitto is not installed";

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sim_commands.hpp"
 #include "text_file.hpp"
 
@@ -16,7 +16,7 @@ namespace sen3bot::sim {
 namespace {
 
 using testing::read_file;
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 struct Event {
   double t_s;

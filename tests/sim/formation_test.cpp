@@ -14,14 +14,14 @@
 #include <vector>
 
 #include "formation_sim.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sim_commands.hpp"
 #include "text_file.hpp"
 
 namespace sen3bot::sim {
 namespace {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 using testing::read_file;
 
 constexpr double kHoldS = 0.5;

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "sen3bot/sim/report/canvas.hpp"
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/figure/canvas.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 namespace {
 
 constexpr Rgb kWhite{255, 255, 255};
@@ -323,4 +323,4 @@ TEST(CaseFigure, PeopleBoxesAndContactsAndTheLegendListsWhatIsDrawn) {
 }
 
 }  // namespace
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure

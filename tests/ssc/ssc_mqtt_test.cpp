@@ -1,5 +1,5 @@
 // The Sensors Synergy Centre on a real Mosquitto with the shipped TLS + ACL site configuration:
-// the `sen3bot ssc` and `sen3bot-sim agv` programs, and ssc::Service with SimAgv in-process, each
+// the `sen3bot-centre ssc` and `sen3bot-sim agv` programs, and ssc::Service with SimAgv in-process, each
 // under its own credential. A robot (a client in the test, credential r1) reports its pose and a
 // person in the area `cross` of config/fleet/site.yaml; an AGV's route crosses it.
 //   - the centre orders r1 to the area and advises the AGV (read by the `agvcc` credential);
@@ -314,7 +314,7 @@ class SscSite : public ::testing::Test {
     return false;
   }
   std::vector<std::string> ssc_args(const std::string& event_log) const {
-    return {SEN3BOT_BIN, "ssc", "--broker", broker_.url("mqtts"), "--site", std::string(SEN3BOT_SOURCE_DIR) + "/config/fleet/site.yaml",
+    return {SEN3BOT_CENTRE_BIN, "ssc", "--broker", broker_.url("mqtts"), "--site", std::string(SEN3BOT_SOURCE_DIR) + "/config/fleet/site.yaml",
             "--username", "ssc", "--password-file", dir() + "/ssc.password", "--ca-file", broker_.ca_file(), "--event-log", event_log};
   }
 
@@ -485,44 +485,44 @@ TEST(SscCommand, ArgumentAndSiteFileErrorsExitTwoNamingTheProblem) {
   const std::string dir = path;
   const std::string site = std::string(SEN3BOT_SOURCE_DIR) + "/config/fleet/site.yaml";
 
-  Ran r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1"}, dir);
+  Ran r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1"}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--site is required"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--site", site}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--site", site}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--broker is required"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", dir + "/none.yaml"}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", dir + "/none.yaml"}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find(dir + "/none.yaml"), std::string::npos) << r.err;
 
   write_file(dir + "/bad.yaml", read_file(site) + "colour: blue\n");
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", dir + "/bad.yaml"}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", dir + "/bad.yaml"}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("colour"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("bad.yaml"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--duration", "soon"}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--duration", "soon"}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--duration"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--colour", "blue"}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--colour", "blue"}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("unknown option '--colour'"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtts://127.0.0.1:1", "--site", site}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtts://127.0.0.1:1", "--site", site}, dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("CA"), std::string::npos) << r.err;
 
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--username", "ssc", "--password-file",
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--username", "ssc", "--password-file",
                    dir + "/none.password"},
                   dir);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--password-file"), std::string::npos) << r.err;
 
   // A broker nobody answers: the centre runs its duration and reports no connection.
-  r = run_program({SEN3BOT_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--duration", "0.5"}, dir);
+  r = run_program({SEN3BOT_CENTRE_BIN, "ssc", "--broker", "mqtt://127.0.0.1:1", "--site", site, "--duration", "0.5"}, dir);
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("\"stopped_by\":\"duration\""), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"connects\":0"), std::string::npos) << r.out;

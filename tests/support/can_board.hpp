@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "can_io_task.hpp"
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/clock.hpp"

@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <string_view>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace {
 
-using namespace sen3bot::vda5050::json;
+using namespace sen3bot::json;
 using sen3bot::Status;
 
 // Re-emits a value with the writer; the result must parse again.
@@ -48,7 +48,7 @@ void copy(Value v, Writer& w, int depth) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace sen3bot::vda5050::json;
+  using namespace sen3bot::json;
   using sen3bot::Status;
   static StaticDocument<4096> doc(Limits{24, 1 << 16});
   const std::string_view text(reinterpret_cast<const char*>(data), size);

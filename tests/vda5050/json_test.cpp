@@ -1,6 +1,6 @@
 // The JSON reader refuses what RFC 8259 refuses (with the byte offset and the reason) and what
 // exceeds its limits; the writer escapes, round-trips doubles and reports overflow.
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 #include "sen3bot/vda5050/types.hpp"
 
-namespace sen3bot::vda5050::json {
+namespace sen3bot::json {
 namespace {
 
 struct Parsed {
@@ -91,10 +91,10 @@ TEST(JsonReader, StringsUnescape) {
   auto r = v[0].string(small);
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().code(), Errc::capacity);
-  FixedString<4> fs;
+  vda5050::FixedString<4> fs;
   EXPECT_FALSE(v[0].string_to(fs));
   EXPECT_TRUE(v[2].string_to(fs).ok() == false);  // "café" is 5 bytes
-  FixedString<5> fs5;
+  vda5050::FixedString<5> fs5;
   EXPECT_TRUE(v[2].string_to(fs5));
   EXPECT_EQ(fs5.view(), "caf\xc3\xa9");
 }
@@ -279,4 +279,4 @@ TEST(JsonWriter, MisuseAndUnrepresentableValues) {
 }
 
 }  // namespace
-}  // namespace sen3bot::vda5050::json
+}  // namespace sen3bot::json

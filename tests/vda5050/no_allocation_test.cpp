@@ -15,7 +15,7 @@
 #include "alloc_counter.hpp"
 #include "sen3bot/vda5050/codec.hpp"
 #include "sen3bot/vda5050/extensions.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/vda5050/vehicle.hpp"
 
 namespace sen3bot::vda5050 {

@@ -1,4 +1,4 @@
-// The Foxglove encoders (view/core): each message read back with vda5050::json::Document and
+// The Foxglove encoders (view/core): each message read back with json::Document and
 // its values checked, each validated against the schema the server advertises for it, the
 // JSON writer's base64 and 64-bit integers, overflow, and no allocation while writing.
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@
 
 #include "alloc_counter.hpp"
 #include "sen3bot/view/foxglove.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::view {
 namespace {

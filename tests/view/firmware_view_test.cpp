@@ -17,7 +17,7 @@
 
 #include "firmware.hpp"
 #include "rate_test.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/view/session.hpp"
 #include "sim_rig.hpp"
 #include "ws_client.hpp"
@@ -26,7 +26,7 @@ namespace sen3bot::firmware {
 namespace {
 
 using testing::WsClient;
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 // Subscribes to every advertised channel (subscription id = channel id); returns the topics.
 std::vector<std::string> subscribe_all(WsClient& c, int port) {

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/view/session.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -15,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   session.on_text(text);
   session.on_binary({data, size});
-  static sen3bot::vda5050::json::StaticDocument<64> reply;
+  static sen3bot::json::StaticDocument<64> reply;
   while (session.has_reply()) {
     if (!reply.parse(session.reply()) || !reply.root().find("op").string_equals("status")) std::abort();
     session.pop_reply();

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/view/channel_board.hpp"
 #include "sen3bot/view/server.hpp"
 #include "sen3bot/view/session.hpp"
@@ -207,7 +207,7 @@ TEST(Session, EveryOtherOperationIsRefusedWithAStatusAndChangesNothing) {
   for (const Case& c : cases) {
     s->on_text(c.text);
     const std::string reply = reply_of(*s);
-    vda5050::json::StaticDocument<64> doc;
+    json::StaticDocument<64> doc;
     ASSERT_TRUE(doc.parse(reply)) << c.text << " -> " << reply;
     EXPECT_TRUE(doc.root().find("op").string_equals("status")) << reply;
     EXPECT_EQ(*doc.root().find("level").uint32(), static_cast<std::uint32_t>(c.level)) << c.text;
@@ -239,7 +239,7 @@ TEST(Session, ServerMessagesAreTheProtocolsJson) {
   std::vector<char> buffer(64 * 1024);
   auto advertise = write_advertise(buffer, **board);
   ASSERT_TRUE(advertise);
-  vda5050::json::StaticDocument<4096> doc(vda5050::json::Limits{32, 1 << 20});
+  json::StaticDocument<4096> doc(json::Limits{32, 1 << 20});
   ASSERT_TRUE(doc.parse(*advertise));
   const auto channels = doc.root().find("channels");
   ASSERT_EQ(channels.size(), 2u);

@@ -13,14 +13,14 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/mem/budget_arena.hpp"
 #include "sen3bot/nav/nav_tasks.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/view/session.hpp"
 #include "view_task.hpp"
 
 namespace sen3bot::firmware {
 namespace {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 std::vector<std::uint8_t> base64_decode(std::string_view text) {
   auto value = [](char c) -> int {

@@ -8,13 +8,13 @@
 #include <sstream>
 
 #include "sen3bot/cobot/operations.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::cobot {
 
 namespace {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 // A point is three tokens ([, x, y); the object and its other members need a few more.
 constexpr std::size_t kTokens = 3 * kMaxPathPoints + 16;

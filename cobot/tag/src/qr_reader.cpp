@@ -12,7 +12,7 @@
 #include <opencv2/objdetect.hpp>
 
 #include "sen3bot/cobot/qr_modules.hpp"
-#include "tag_symbol.hpp"
+#include "sen3bot/cobot/tag_symbol.hpp"
 
 namespace sen3bot::cobot {
 

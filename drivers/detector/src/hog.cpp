@@ -56,7 +56,7 @@ Status HogPeopleDetector::init(const HogConfig& config, std::uint32_t width_px, 
   return Status::success();
 }
 
-Status HogPeopleDetector::detect(const ImageView& image, msg::PersonDetections& out) {
+Status HogPeopleDetector::detect(const ImageView& image, Detections& out) {
   out.count = 0;
   if (!impl_) return Error::format(Errc::invalid_argument, "hog detector: not initialised");
   if (image.data == nullptr || image.width_px != width_px_ || image.height_px != height_px_ ||
@@ -96,9 +96,9 @@ Status HogPeopleDetector::detect(const ImageView& image, msg::PersonDetections& 
   const float right = static_cast<float>(width_px_ - 1);
   const float bottom = static_cast<float>(height_px_ - 1);
   for (const std::size_t i : m.order) {
-    if (out.count >= msg::PersonDetections::kMax) break;
+    if (out.count >= Detections::kMax) break;
     const cv::Rect& r = m.found[i];
-    msg::PersonBox box;
+    Box box;
     box.u0 = std::clamp(static_cast<float>(r.x * back), 0.0f, right);
     box.v0 = std::clamp(static_cast<float>(r.y * back), 0.0f, bottom);
     box.u1 = std::clamp(static_cast<float>((r.x + r.width) * back), 0.0f, right);

@@ -86,7 +86,7 @@ std::size_t encode(const Datagram& d, std::span<std::uint8_t> out) noexcept {
   put16(p + 26, d.height_px);
   for (std::size_t b = 0; b < d.count; ++b) {
     std::uint8_t* q = p + kHeaderBytes + b * kBoxBytes;
-    const msg::PersonBox& box = d.boxes[b];
+    const Box& box = d.boxes[b];
     put16(q, pixel(box.u0));
     put16(q + 2, pixel(box.v0));
     put16(q + 4, pixel(box.u1));
@@ -151,7 +151,7 @@ bool DetectionGate::refuse(Reject reason) noexcept {
 }
 
 bool DetectionGate::accept(std::span<const std::uint8_t> bytes, hal::Nanos now_ns, std::int64_t now_unix_ns,
-                           msg::PersonDetections& out) noexcept {
+                           Detections& out) noexcept {
   Datagram d;
   Reject why = Reject::too_short;
   if (!decode(bytes, d, why)) return refuse(why);

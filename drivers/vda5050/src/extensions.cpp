@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::vda5050 {
 

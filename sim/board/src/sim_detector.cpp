@@ -9,7 +9,7 @@ SimDetector::SimDetector(const SimDetectorConfig& config, std::uint64_t seed) : 
   (void)camera_.set(config.camera);  // the firmware checks the same calibration and reports it
 }
 
-bool SimDetector::box_for(double forward_m, double left_m, double size_m, msg::PersonBox& box) noexcept {
+bool SimDetector::box_for(double forward_m, double left_m, double size_m, detector::Box& box) noexcept {
   double ul = 0, vt = 0, ur = 0, vb = 0;
   if (!camera_.project_point(forward_m, left_m + size_m / 2, config_.person_height_m - config_.laser_height_m, ul, vt) ||
       !camera_.project_point(forward_m, left_m - size_m / 2, -config_.laser_height_m, ur, vb))
@@ -55,7 +55,7 @@ void SimDetector::step(hal::Nanos now_ns, std::int64_t unix_now_ns, const world:
       // Hidden behind a wall or another mover: the first thing along the ray is nearer.
       if (world.cast_ray(laser_pose.x_m, laser_pose.y_m, std::atan2(dy, dx), range) < range - size_m / 2 - 0.05) continue;
       if (chance(rng_) < config_.miss_rate) continue;
-      msg::PersonBox box;
+      detector::Box box;
       if (box_for(c * dx + s * dy, -s * dx + c * dy, size_m, box)) d.boxes[d.count++] = box;
     }
     if (d.count < detector::kMaxBoxes && chance(rng_) < config_.false_positive_rate) {

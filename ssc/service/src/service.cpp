@@ -4,7 +4,7 @@
 #include <charconv>
 #include <cmath>
 
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::ssc {
 
@@ -341,7 +341,7 @@ void Service::send_advisory(AgvEntry& agv, const Advisory& advisory, std::int64_
 
 void Service::log(const Event& event, std::int64_t unix_ns) {
   std::array<char, 1024> line{};
-  vda5050::json::Writer w(line);
+  json::Writer w(line);
   w.begin_object();
   w.member_number("timeS", static_cast<double>(event.time) * 1e-9);
   w.member("timestamp", vda5050::iso8601(unix_ns).view());

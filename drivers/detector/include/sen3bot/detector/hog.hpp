@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "sen3bot/hal/result.hpp"
-#include "sen3bot/msg/people.hpp"
+#include "sen3bot/detector/detections.hpp"
 
 namespace sen3bot::detector {
 
@@ -43,9 +43,9 @@ class HogPeopleDetector {
   // For frames of width x height: checks the configuration and allocates the images.
   Status init(const HogConfig& config, std::uint32_t width_px, std::uint32_t height_px);
   // The people in one frame, as boxes in the frame's pixels (class 0, confidence the
-  // logistic of the SVM margin), strongest first, at most PersonDetections::kMax. Sets
+  // logistic of the SVM margin), strongest first, at most Detections::kMax. Sets
   // out.boxes and out.count only. A frame of another size or a bad view is an error.
-  Status detect(const ImageView& image, msg::PersonDetections& out);
+  Status detect(const ImageView& image, Detections& out);
   [[nodiscard]] const HogConfig& config() const noexcept { return config_; }
 
  private:

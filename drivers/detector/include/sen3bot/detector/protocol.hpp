@@ -23,7 +23,7 @@
 #include <span>
 
 #include "sen3bot/hal/clock.hpp"
-#include "sen3bot/msg/people.hpp"
+#include "sen3bot/detector/detections.hpp"
 
 namespace sen3bot::detector {
 
@@ -31,7 +31,7 @@ inline constexpr std::uint8_t kVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 28;
 inline constexpr std::size_t kBoxBytes = 12;
 inline constexpr std::size_t kCrcBytes = 4;
-inline constexpr std::size_t kMaxBoxes = msg::PersonDetections::kMax;
+inline constexpr std::size_t kMaxBoxes = Detections::kMax;
 inline constexpr std::size_t kMaxDatagramBytes = kHeaderBytes + kMaxBoxes * kBoxBytes + kCrcBytes;
 
 struct Datagram {
@@ -41,7 +41,7 @@ struct Datagram {
   std::uint16_t width_px = 0;
   std::uint16_t height_px = 0;
   std::uint8_t count = 0;
-  std::array<msg::PersonBox, kMaxBoxes> boxes{};
+  std::array<Box, kMaxBoxes> boxes{};
 };
 
 // Why a datagram was refused.
@@ -87,7 +87,7 @@ class DetectionGate {
   // now_ns on the firmware's clock, now_unix_ns the wall clock at the same moment; the frame's
   // capture time comes out on the firmware's clock. False when refused (counted).
   bool accept(std::span<const std::uint8_t> bytes, hal::Nanos now_ns, std::int64_t now_unix_ns,
-              msg::PersonDetections& out) noexcept;
+              Detections& out) noexcept;
   [[nodiscard]] std::uint64_t rejected(Reject reason) const noexcept { return rejected_[static_cast<std::size_t>(reason)]; }
   [[nodiscard]] std::uint64_t accepted() const noexcept { return accepted_; }
 

@@ -39,7 +39,7 @@
 #include <string_view>
 
 #include "sen3bot/hal/result.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/vda5050/types.hpp"
 
 namespace sen3bot::vda5050 {

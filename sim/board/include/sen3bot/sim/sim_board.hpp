@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 #include "sen3bot/hal/board.hpp"
 #include "sen3bot/msg/people.hpp"
 #include "sen3bot/sim/referee.hpp"

@@ -51,7 +51,7 @@ class SimDetector final : public hal::DatagramPort {
     std::array<std::uint8_t, detector::kMaxDatagramBytes> bytes{};
   };
   // The box a person of width size_m at (forward, left) of the laser makes; false when not in view.
-  bool box_for(double forward_m, double left_m, double size_m, msg::PersonBox& box) noexcept;
+  bool box_for(double forward_m, double left_m, double size_m, detector::Box& box) noexcept;
 
   SimDetectorConfig config_;
   nav::CameraProjection camera_;

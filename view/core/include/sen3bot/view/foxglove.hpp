@@ -12,11 +12,11 @@
 #include <string_view>
 
 #include "sen3bot/hal/clock.hpp"
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::view {
 
-namespace json = vda5050::json;
+namespace json = sen3bot::json;
 
 // The schemas this server advertises: the well-known Foxglove ones and two of the robot's own
 // (plain JSON objects, described by their JSON Schema in docs/view.md).

@@ -8,7 +8,7 @@
 #include <span>
 
 #include "sen3bot/camera/frame_pool.hpp"
-#include "sen3bot/cobot/tag_scene.hpp"
+#include "sen3bot/sim/cobot/tag_scene.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/nav/geometry.hpp"

@@ -1,4 +1,4 @@
-#include "sen3bot/sim/report/case_figure.hpp"
+#include "sen3bot/nav_figure/case_figure.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,30 +9,15 @@
 #include <numbers>
 #include <utility>
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 
 namespace {
 
 using namespace colours;
 
-constexpr double kTitleSize = 0.6;
-constexpr double kLineSize = 0.45;
-constexpr double kSmallSize = 0.38;
-constexpr int kMargin = 12;
-constexpr int kAxisLeft = 44;    // room for the y tick labels
-constexpr int kAxisBottom = 44;  // tick labels and "x (m)"
-constexpr int kLegendGap = 20;
-constexpr int kSwatch = 28;
-constexpr int kRowPitch = 22;
 // The estimate's dashes; a 2 px line's round caps eat about 2 px of each gap.
 constexpr double kDashPx = 8;
 constexpr double kGapPx = 7;
-
-std::string format(const char* fmt, double v) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
 
 // The header's three lines and their baselines.
 struct Header {
@@ -46,13 +31,6 @@ Header header_layout() {
   h.result_y = h.description_y + 9 + Canvas::text_height(0.5);
   h.height = h.result_y + 34;  // and room for "y (m)" above the plot
   return h;
-}
-
-// Tick spacing that gives at most about ten ticks over extent_m.
-double tick_step(double extent_m) {
-  for (const double step : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0})
-    if (extent_m / step <= 10.5) return step;
-  return 100.0;
 }
 
 // The footprint's outline at a pose, in pixels.
@@ -154,20 +132,6 @@ Rgb cost_shade(std::uint8_t cost) {
   return {mix(kPaper.r, kCost.r), mix(kPaper.g, kCost.g), mix(kPaper.b, kCost.b)};
 }
 
-void draw_arrow(Canvas& canvas, Px from, Px to, Rgb colour, int thickness) {
-  canvas.line(from, to, colour, thickness);
-  const double dx = to.x - from.x, dy = to.y - from.y, len = std::hypot(dx, dy);
-  if (len < 1) return;
-  const double ux = dx / len, uy = dy / len, head = std::min(9.0, len / 2);
-  canvas.line(to, {to.x - head * (ux * 0.87 - uy * 0.5), to.y - head * (uy * 0.87 + ux * 0.5)}, colour, thickness);
-  canvas.line(to, {to.x - head * (ux * 0.87 + uy * 0.5), to.y - head * (uy * 0.87 - ux * 0.5)}, colour, thickness);
-}
-
-void draw_cross(Canvas& canvas, Px c, double half, Rgb colour, int thickness) {
-  canvas.line({c.x - half, c.y - half}, {c.x + half, c.y + half}, colour, thickness);
-  canvas.line({c.x - half, c.y + half}, {c.x + half, c.y - half}, colour, thickness);
-}
-
 std::vector<Px> ellipse_outline(const View& view, const EllipseMark& e) {
   std::vector<Px> pts;
   const double c = std::cos(e.angle_rad), s = std::sin(e.angle_rad);
@@ -187,31 +151,12 @@ void draw_goal(Canvas& canvas, Px c) {
   canvas.disc(c, 2.5, kGoal);
 }
 
-void draw_map(Canvas& canvas, const View& view, const nav::OccupancyMap& map) {
-  const double res = map.resolution_m();
-  for (int row = 0; row < map.height(); ++row)
-    for (int col = 0; col < map.width(); ++col) {
-      const std::int8_t v = map.at(col, row);
-      if (v >= 0 && v < 50) continue;  // free: the paper
-      const double x_m = map.origin_x_m() + col * res, y_m = map.origin_y_m() + row * res;
-      const Px lo = view(x_m, y_m), hi = view(x_m + res, y_m + res);  // hi is up and right
-      const int x0 = static_cast<int>(std::lround(lo.x)), x1 = static_cast<int>(std::lround(hi.x));
-      const int y0 = static_cast<int>(std::lround(hi.y)), y1 = static_cast<int>(std::lround(lo.y));
-      canvas.fill_rect(x0, y0, x1 - x0, y1 - y0, v < 0 ? kUnknown : kWall);
-    }
-}
-
-struct LegendEntry {
-  std::string label;
-  std::function<void(Canvas&, Px)> swatch;  // drawn centred on the point, kSwatch wide
-};
-
 std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
   std::vector<LegendEntry> entries;
   entries.push_back({"wall, rack (map)", [](Canvas& c, Px p) {
                        c.fill_rect(static_cast<int>(p.x) - 10, static_cast<int>(p.y) - 6, 20, 12, kWall);
                      }});
-  if (std::any_of(f.map->cells().begin(), f.map->cells().end(), [](std::int8_t v) { return v < 0; }))
+  if (has_unknown(grid_of(*f.map)))
     entries.push_back({"unknown (map)", [](Canvas& c, Px p) {
                          c.fill_rect(static_cast<int>(p.x) - 10, static_cast<int>(p.y) - 6, 20, 12, kUnknown);
                        }});
@@ -308,29 +253,11 @@ std::vector<LegendEntry> legend_entries(const CaseFigure& f) {
 
 }  // namespace
 
-double scale_bar_length_m(double px_per_m) noexcept {
-  for (const double l : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0})
-    if (l * px_per_m >= 60) return l;
-  return 100.0;
+Grid grid_of(const nav::OccupancyMap& map) noexcept {
+  return {map.width(), map.height(), map.resolution_m(), map.origin_x_m(), map.origin_y_m(), map.cells()};
 }
 
-void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m) {
-  const double length_m = scale_bar_length_m(px_per_m);
-  const int w = static_cast<int>(std::lround(length_m * px_per_m));
-  canvas.fill_rect(x, y, w / 2, 6, kInk);
-  canvas.fill_rect(x + w / 2, y, w - w / 2, 6, kPaper);
-  // The white half's border, on the pixels just outside it.
-  canvas.fill_rect(x + w / 2, y - 1, w - w / 2 + 1, 1, kInk);
-  canvas.fill_rect(x + w / 2, y + 6, w - w / 2 + 1, 1, kInk);
-  canvas.fill_rect(x + w, y, 1, 6, kInk);
-  canvas.text({x - 3.0, y + 22.0}, "0", kInk, kSmallSize);
-  canvas.text({x + w - 6.0, y + 22.0}, format(length_m < 1 ? "%.1f m" : "%.0f m", length_m), kInk, kSmallSize);
-}
-
-double figure_scale(const nav::OccupancyMap& map) noexcept {
-  const double extent_m = std::max(map.width(), map.height()) * map.resolution_m();
-  return extent_m > 9.5 ? 760.0 / extent_m : 80.0;
-}
+double figure_scale(const nav::OccupancyMap& map) noexcept { return figure_scale(grid_of(map)); }
 
 View figure_view(const CaseFigure& figure) noexcept {
   const nav::OccupancyMap& map = *figure.map;
@@ -350,10 +277,9 @@ Canvas draw_case_figure(const CaseFigure& f) {
   const int plot_left = static_cast<int>(view.left_px), plot_top = header.height;
 
   const std::vector<LegendEntry> legend = legend_entries(f);
-  int legend_w = 0;
-  for (const LegendEntry& e : legend) legend_w = std::max(legend_w, kSwatch + 10 + Canvas::text_width(e.label, kLineSize));
+  const int legend_w = legend_width(legend);
   const int legend_x = plot_left + map_w + kLegendGap;
-  const int legend_h = static_cast<int>(legend.size()) * kRowPitch + 60;  // and the scale bar
+  const int legend_h = legend_height(legend);
   const int header_w = std::max({Canvas::text_width(f.title, kTitleSize, 2), Canvas::text_width(f.description, kLineSize),
                                  Canvas::text_width(f.result, 0.5)});
   const int width = std::max(legend_x + legend_w + kMargin, kMargin + header_w + kMargin);
@@ -365,7 +291,8 @@ Canvas draw_case_figure(const CaseFigure& f) {
   canvas.text({kMargin, static_cast<double>(header.description_y)}, f.description, {90, 90, 90}, kLineSize);
   canvas.text({kMargin, static_cast<double>(header.result_y)}, f.result, f.passed ? kPassed : kFailed, 0.5, 1);
 
-  draw_map(canvas, view, map);
+  const Grid grid = grid_of(map);
+  draw_grid(canvas, view, grid);
   if (f.moment.t_s >= 0) {
     // The cells as rotated squares, in the costmap's own frame.
     const double h = f.moment.cell_m / 2, c = std::cos(f.moment.cell_yaw_rad), s = std::sin(f.moment.cell_yaw_rad);
@@ -479,40 +406,9 @@ Canvas draw_case_figure(const CaseFigure& f) {
     }
   labels.draw();
 
-  // The frame, ticks in metres and the axis names.
-  const std::vector<Px> frame{{plot_left - 1.0, plot_top - 1.0},
-                              {static_cast<double>(plot_left + map_w), plot_top - 1.0},
-                              {static_cast<double>(plot_left + map_w), static_cast<double>(plot_top + map_h)},
-                              {plot_left - 1.0, static_cast<double>(plot_top + map_h)}};
-  canvas.outline_polygon(frame, kInk, 1);
-  const double step = tick_step(std::max(width_m, height_m));
-  const char* tick_format = step < 1 ? "%.1f" : "%.0f";
-  for (double m = std::ceil(map.origin_x_m() / step) * step; m <= map.origin_x_m() + width_m + 1e-9; m += step) {
-    const double x = view(m, 0).x;
-    const double y = plot_top + map_h;
-    canvas.line({x, y}, {x, y + 5}, kInk);
-    const std::string label = format(tick_format, m);
-    canvas.text({x - Canvas::text_width(label, kSmallSize) / 2.0, y + 18}, label, kInk, kSmallSize);
-  }
-  for (double m = std::ceil(map.origin_y_m() / step) * step; m <= map.origin_y_m() + height_m + 1e-9; m += step) {
-    const double y = view(0, m).y;
-    const double x = plot_left - 1.0;
-    canvas.line({x - 5, y}, {x, y}, kInk);
-    const std::string label = format(tick_format, m);
-    canvas.text({x - 8 - Canvas::text_width(label, kSmallSize), y + 5}, label, kInk, kSmallSize);
-  }
-  canvas.text({plot_left + map_w / 2.0 - 14, static_cast<double>(plot_top + map_h + 36)}, "x (m)", kInk, kLineSize);
-  canvas.text({kMargin, plot_top - 8.0}, "y (m)", kInk, kLineSize);
-
-  // The legend, then the scale bar under it.
-  double y = plot_top + 10.0;
-  for (const LegendEntry& e : legend) {
-    e.swatch(canvas, {legend_x + kSwatch / 2.0, y});
-    canvas.text({static_cast<double>(legend_x + kSwatch + 10), y + 5}, e.label, kInk, kLineSize);
-    y += kRowPitch;
-  }
-  canvas.text({static_cast<double>(legend_x), y + 8}, "scale", kInk, kLineSize);
-  draw_scale_bar(canvas, legend_x + 52, static_cast<int>(y) + 2, view.px_per_m);
+  // The frame, ticks in metres and the axis names; the legend, then the scale bar under it.
+  draw_axes(canvas, view, grid, plot_left, plot_top, map_w, map_h);
+  draw_legend(canvas, legend_x, plot_top, legend, view.px_per_m);
   return canvas;
 }
 
@@ -548,4 +444,4 @@ std::vector<RobotAt> robot_instants(std::span<const RobotAt> poses, double spaci
   return out;
 }
 
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure

@@ -1,5 +1,5 @@
 #pragma once
-// A raster for report figures: RGB pixels drawn on with anti-aliased lines, polygons, discs
+// A raster for figures: RGB pixels drawn on with anti-aliased lines, polygons, discs
 // and text (OpenCV's Hershey simplex font) at sub-pixel coordinates. Nothing leaves it but
 // its pixels and write_png().
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 
 struct Rgb {
   std::uint8_t r = 0;
@@ -72,4 +72,4 @@ struct View {
   }
 };
 
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure

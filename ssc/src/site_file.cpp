@@ -1,11 +1,14 @@
 // The site file: YAML, every key checked, every error naming the file and the key.
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
+#include <string_view>
 
-#include "sen3bot/ssc/service.hpp"
+#include "sen3bot/ssc/site_file.hpp"
 
 namespace sen3bot::ssc {
 

@@ -1,4 +1,4 @@
-#include "sen3bot/vda5050/json.hpp"
+#include "sen3bot/json/json.hpp"
 
 #include <charconv>
 #include <cstdarg>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-namespace sen3bot::vda5050::json {
+namespace sen3bot::json {
 namespace {
 
 // Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlongs, no surrogates,
@@ -815,4 +815,4 @@ Result<std::string_view> Writer::finish() const noexcept {
   return std::string_view(buffer_.data(), size_);
 }
 
-}  // namespace sen3bot::vda5050::json
+}  // namespace sen3bot::json

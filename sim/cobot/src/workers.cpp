@@ -1,6 +1,6 @@
 // Simulated workers (workers.hpp). A walk is made in two passes: the body's track at a fine
 // time step (routes, style, dwells), then the robot's view of it at the scan rate.
-#include "sen3bot/cobot/workers.hpp"
+#include "sen3bot/sim/cobot/workers.hpp"
 
 #include <algorithm>
 #include <cmath>

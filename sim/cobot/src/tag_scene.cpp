@@ -1,4 +1,4 @@
-#include "sen3bot/cobot/tag_scene.hpp"
+#include "sen3bot/sim/cobot/tag_scene.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <opencv2/objdetect.hpp>
 
 #include "sen3bot/cobot/qr_reader.hpp"
-#include "tag_symbol.hpp"
+#include "sen3bot/cobot/tag_symbol.hpp"
 
 namespace sen3bot::cobot {
 

@@ -1,4 +1,4 @@
-// `sen3bot formation`: the centre's formation controller as a host program on the site's
+// `sen3bot-centre formation`: the centre's formation controller as a host program on the site's
 // broker (docs/formation.md). The decisions are formation::FormationService's; this is its
 // real-time loop: the MQTT link, the example's task, the team, the clock, a step log and the
 // stop signals. On the way out the team is told to stop at once rather than left to its hold.
@@ -13,22 +13,24 @@
 #include <string>
 #include <string_view>
 
+#include "centre_commands.hpp"
 #include "cli_util.hpp"
-#include "commands.hpp"
 #include "sen3bot/formation/examples.hpp"
 #include "sen3bot/formation/service.hpp"
 #include "sen3bot/hal/pubsub.hpp"
 
-namespace sen3bot::firmware {
+namespace sen3bot::centre {
+
+using namespace firmware;  // the command-line helpers (cli_util.hpp)
 
 namespace {
 
 constexpr const char* kFormationUsage =
-    "usage: sen3bot formation --broker URL --example 1|2|3 --team SERIAL,SERIAL,...\n"
-    "                         [--username U --password-file F --ca-file F] [--client-id ID]\n"
-    "                         [--manufacturer M] [--interface NAME] [--v-max M_S] [--w-max RAD_S]\n"
-    "                         [--period S] [--hold S] [--pose-timeout S] [--log FILE.csv]\n"
-    "                         [--duration S]\n";
+    "usage: sen3bot-centre formation --broker URL --example 1|2|3 --team SERIAL,SERIAL,...\n"
+    "                                 [--username U --password-file F --ca-file F] [--client-id ID]\n"
+    "                                 [--manufacturer M] [--interface NAME] [--v-max M_S] [--w-max RAD_S]\n"
+    "                                 [--period S] [--hold S] [--pose-timeout S] [--log FILE.csv]\n"
+    "                                 [--duration S]\n";
 
 bool split_team(std::string_view text, std::vector<formation::TeamMember>& team, const std::string& manufacturer) {
   team.clear();
@@ -57,7 +59,7 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     if (i + 1 >= argc) {
-      std::fprintf(err, "sen3bot formation: %s needs a value\n%s", argv[i], kFormationUsage);
+      std::fprintf(err, "sen3bot-centre formation: %s needs a value\n%s", argv[i], kFormationUsage);
       return 2;
     }
     const std::string value = argv[++i];
@@ -91,17 +93,17 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     } else if (arg == "--duration") {
       ok = parse_double(value, duration_s) && duration_s >= 0;
     } else {
-      std::fprintf(err, "sen3bot formation: unknown option '%s'\n%s", argv[i - 1], kFormationUsage);
+      std::fprintf(err, "sen3bot-centre formation: unknown option '%s'\n%s", argv[i - 1], kFormationUsage);
       return 2;
     }
     if (!ok) {
-      std::fprintf(err, "sen3bot formation: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kFormationUsage);
+      std::fprintf(err, "sen3bot-centre formation: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kFormationUsage);
       return 2;
     }
   }
   const char* missing = args.broker.empty() ? "--broker" : example_number == 0 ? "--example" : team_text.empty() ? "--team" : nullptr;
   if (missing != nullptr) {
-    std::fprintf(err, "sen3bot formation: %s is required\n%s", missing, kFormationUsage);
+    std::fprintf(err, "sen3bot-centre formation: %s is required\n%s", missing, kFormationUsage);
     return 2;
   }
 
@@ -111,23 +113,23 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (v_max > 0) config.controller.v_max_m_s = v_max;
   if (w_max > 0) config.controller.w_max_rad_s = w_max;
   if (!split_team(team_text, config.team, manufacturer)) {
-    std::fprintf(err, "sen3bot formation: --team: serial numbers separated by commas, got '%s'\n", team_text.c_str());
+    std::fprintf(err, "sen3bot-centre formation: --team: serial numbers separated by commas, got '%s'\n", team_text.c_str());
     return 2;
   }
   if (config.team.size() != example.config.robots) {
-    std::fprintf(err, "sen3bot formation: --team: example %d drives %zu robots, got %zu serial numbers\n", example_number,
+    std::fprintf(err, "sen3bot-centre formation: --team: example %d drives %zu robots, got %zu serial numbers\n", example_number,
                  example.config.robots, config.team.size());
     return 2;
   }
 
   Result<hal::PubSubOptions> options = args.options();
   if (!options) {
-    std::fprintf(err, "sen3bot formation: %s\n", options.error().c_str());
+    std::fprintf(err, "sen3bot-centre formation: %s\n", options.error().c_str());
     return 2;
   }
   Result<std::vector<hal::PubSubSubscription>> subscriptions = formation::FormationService::subscriptions(config);
   if (!subscriptions) {
-    std::fprintf(err, "sen3bot formation: %s\n", subscriptions.error().c_str());
+    std::fprintf(err, "sen3bot-centre formation: %s\n", subscriptions.error().c_str());
     return 2;
   }
   hal::PubSubOptions& link = *options;
@@ -138,12 +140,12 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   config.max_payload = link.max_payload;
   Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
   if (!opened) {
-    std::fprintf(err, "sen3bot formation: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
+    std::fprintf(err, "sen3bot-centre formation: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
     return opened.error().code() == Errc::config ? 2 : 1;
   }
   Result<std::unique_ptr<formation::FormationService>> created = formation::FormationService::create(config, std::move(opened.value()));
   if (!created) {
-    std::fprintf(err, "sen3bot formation: %s\n", created.error().c_str());
+    std::fprintf(err, "sen3bot-centre formation: %s\n", created.error().c_str());
     return 2;
   }
   formation::FormationService& service = **created;
@@ -152,12 +154,12 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (!log_path.empty()) {
     log = std::fopen(log_path.c_str(), "w");
     if (log == nullptr) {
-      std::fprintf(err, "sen3bot formation: --log %s: %s\n", log_path.c_str(), std::strerror(errno));
+      std::fprintf(err, "sen3bot-centre formation: --log %s: %s\n", log_path.c_str(), std::strerror(errno));
       return 2;
     }
     std::fprintf(log, "t_s,outcome,scale,lyapunov,gain_set,switched,formation_error_m,min_barrier_m\n");
   }
-  std::fprintf(err, "sen3bot formation: example %d (%s), %zu robots, on %s as %s\n", example_number, example.title,
+  std::fprintf(err, "sen3bot-centre formation: example %d (%s), %zu robots, on %s as %s\n", example_number, example.title,
                config.team.size(), args.broker.c_str(), args.client_id.c_str());
 
   const StopOnSignal stop;
@@ -179,17 +181,17 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     // The operator hears of what changes the team's motion, once each time.
     if (outcome == formation::StepOutcome::stopped && !stopped)
-      std::fprintf(err, "sen3bot formation: a robot's pose is missing or stale: the team is told to stop\n");
+      std::fprintf(err, "sen3bot-centre formation: a robot's pose is missing or stale: the team is told to stop\n");
     if (outcome != formation::StepOutcome::idle) stopped = outcome == formation::StepOutcome::stopped;
     if (service.controller().switches() != switches_seen) {
       switches_seen = service.controller().switches();
-      std::fprintf(err, "sen3bot formation: gains switched to set %zu (switch %" PRIu64 ")\n", service.controller().gain_set(),
+      std::fprintf(err, "sen3bot-centre formation: gains switched to set %zu (switch %" PRIu64 ")\n", service.controller().gain_set(),
                    switches_seen);
     }
     const hal::PubSubStats stats = service.link().stats();
     if (stats.connects != connects_seen) {
       connects_seen = stats.connects;
-      std::fprintf(err, "sen3bot formation: connected to the broker (connection %" PRIu64 ")\n", connects_seen);
+      std::fprintf(err, "sen3bot-centre formation: connected to the broker (connection %" PRIu64 ")\n", connects_seen);
     }
     next += period;
     if (clock_ns(CLOCK_MONOTONIC) > next) {
@@ -220,4 +222,4 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return 0;
 }
 
-}  // namespace sen3bot::firmware
+}  // namespace sen3bot::centre

@@ -17,7 +17,7 @@
 
 #include "sen3bot/hal/result.hpp"
 
-namespace sen3bot::vda5050::json {
+namespace sen3bot::json {
 
 enum class Type : std::uint8_t { null, boolean, number, string, array, object };
 std::string_view to_string(Type type) noexcept;  // "null", "boolean", ...
@@ -229,4 +229,4 @@ class Writer {
   bool done_ = false;  // a complete top-level value was written
 };
 
-}  // namespace sen3bot::vda5050::json
+}  // namespace sen3bot::json

@@ -1,4 +1,4 @@
-// `sen3bot ssc`: the Sensors Synergy Centre as a host program on the site's broker. The
+// `sen3bot-centre ssc`: the Sensors Synergy Centre as a host program on the site's broker. The
 // decisions are ssc::Service's; this is only its real-time loop: the MQTT link, the site file,
 // the event log, the clock and the stop signals.
 #include <time.h>
@@ -11,18 +11,20 @@
 #include <string>
 #include <string_view>
 
+#include "centre_commands.hpp"
 #include "cli_util.hpp"
-#include "commands.hpp"
 #include "sen3bot/hal/pubsub.hpp"
 #include "sen3bot/ssc/service.hpp"
 
-namespace sen3bot::firmware {
+namespace sen3bot::centre {
+
+using namespace firmware;  // the command-line helpers (cli_util.hpp)
 
 namespace {
 
 constexpr const char* kSscUsage =
-    "usage: sen3bot ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
-    "                   [--event-log FILE] [--duration S] [--client-id ID]\n";
+    "usage: sen3bot-centre ssc --broker URL --site SITE.yaml [--username U --password-file F --ca-file F]\n"
+    "                           [--event-log FILE] [--duration S] [--client-id ID]\n";
 
 }  // namespace
 
@@ -34,7 +36,7 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     if (i + 1 >= argc) {
-      std::fprintf(err, "sen3bot ssc: %s needs a value\n%s", argv[i], kSscUsage);
+      std::fprintf(err, "sen3bot-centre ssc: %s needs a value\n%s", argv[i], kSscUsage);
       return 2;
     }
     const std::string value = argv[++i];
@@ -47,28 +49,28 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     } else if (arg == "--duration") {
       ok = parse_double(value, duration_s) && duration_s >= 0;
     } else {
-      std::fprintf(err, "sen3bot ssc: unknown option '%s'\n%s", argv[i - 1], kSscUsage);
+      std::fprintf(err, "sen3bot-centre ssc: unknown option '%s'\n%s", argv[i - 1], kSscUsage);
       return 2;
     }
     if (!ok) {
-      std::fprintf(err, "sen3bot ssc: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kSscUsage);
+      std::fprintf(err, "sen3bot-centre ssc: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kSscUsage);
       return 2;
     }
   }
   if (args.broker.empty() || site_path.empty()) {
-    std::fprintf(err, "sen3bot ssc: %s is required\n%s", args.broker.empty() ? "--broker" : "--site", kSscUsage);
+    std::fprintf(err, "sen3bot-centre ssc: %s is required\n%s", args.broker.empty() ? "--broker" : "--site", kSscUsage);
     return 2;
   }
 
   Result<ssc::SiteFile> site = ssc::load_site(site_path);
   if (!site) {
-    std::fprintf(err, "sen3bot ssc: %s\n", site.error().c_str());
+    std::fprintf(err, "sen3bot-centre ssc: %s\n", site.error().c_str());
     return 2;
   }
 
   Result<hal::PubSubOptions> options = args.options();
   if (!options) {
-    std::fprintf(err, "sen3bot ssc: %s\n", options.error().c_str());
+    std::fprintf(err, "sen3bot-centre ssc: %s\n", options.error().c_str());
     return 2;
   }
   hal::PubSubOptions& link = *options;
@@ -79,7 +81,7 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   link.outbound_slots = 256;
   Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
   if (!opened) {
-    std::fprintf(err, "sen3bot ssc: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
+    std::fprintf(err, "sen3bot-centre ssc: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
     return opened.error().code() == Errc::config ? 2 : 1;
   }
 
@@ -88,19 +90,19 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     // Appended: a restarted centre's decisions follow the earlier ones' in one file.
     event_log = std::fopen(event_log_path.c_str(), "a");
     if (event_log == nullptr) {
-      std::fprintf(err, "sen3bot ssc: --event-log %s: %s\n", event_log_path.c_str(), std::strerror(errno));
+      std::fprintf(err, "sen3bot-centre ssc: --event-log %s: %s\n", event_log_path.c_str(), std::strerror(errno));
       return 2;
     }
   }
 
   Result<std::unique_ptr<ssc::Service>> created = ssc::Service::create(*site, std::move(opened.value()), event_log);
   if (!created) {
-    std::fprintf(err, "sen3bot ssc: %s: %s\n", site_path.c_str(), created.error().c_str());
+    std::fprintf(err, "sen3bot-centre ssc: %s: %s\n", site_path.c_str(), created.error().c_str());
     if (event_log != nullptr) std::fclose(event_log);
     return 2;
   }
   ssc::Service& service = **created;
-  std::fprintf(err, "sen3bot ssc: site %s (%zu robots, %zu areas) on %s as %s\n", site_path.c_str(),
+  std::fprintf(err, "sen3bot-centre ssc: site %s (%zu robots, %zu areas) on %s as %s\n", site_path.c_str(),
                site->robot_serials.size(), site->area_names.size(), args.broker.c_str(), args.client_id.c_str());
 
   const StopOnSignal stop;
@@ -121,11 +123,11 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     const hal::PubSubStats stats = service.link().stats();
     if (stats.connections_refused != refusals_seen) {
       refusals_seen = stats.connections_refused;
-      std::fprintf(err, "sen3bot ssc: the broker refused the connection (credentials or client id); retrying\n");
+      std::fprintf(err, "sen3bot-centre ssc: the broker refused the connection (credentials or client id); retrying\n");
     }
     if (stats.connects != connects_seen) {
       connects_seen = stats.connects;
-      std::fprintf(err, "sen3bot ssc: connected to the broker (connection %llu)\n", static_cast<unsigned long long>(connects_seen));
+      std::fprintf(err, "sen3bot-centre ssc: connected to the broker (connection %llu)\n", static_cast<unsigned long long>(connects_seen));
     }
 
     next += period;
@@ -165,4 +167,4 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return 0;
 }
 
-}  // namespace sen3bot::firmware
+}  // namespace sen3bot::centre

@@ -1,4 +1,4 @@
-#include "sen3bot/canopen/io_node_emulator.hpp"
+#include "sen3bot/sim/canopen/io_node_emulator.hpp"
 
 #include <array>
 

@@ -1,4 +1,4 @@
-#include "sen3bot/sim/report/canvas.hpp"
+#include "sen3bot/figure/canvas.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 
 namespace {
 
@@ -145,4 +145,4 @@ bool Canvas::write_png(const std::string& path) const {
   }
 }
 
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure

@@ -12,9 +12,9 @@
 #include "sen3bot/msg/geometry.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
-#include "sen3bot/sim/report/canvas.hpp"
+#include "sen3bot/figure/map_figure.hpp"
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 
 struct RobotAt {
   double t_s = 0;
@@ -127,12 +127,9 @@ struct CaseFigure {
 // The colour of time t on a time_scale_s scale: dark blue through green to yellow.
 [[nodiscard]] Rgb time_colour(double t_s, double time_scale_s) noexcept;
 
-// The colours, shared by the drawing and its legend (and the tests).
+// The colours, shared by the drawing and its legend (and the tests); the paper, ink, wall
+// and unknown are map_figure.hpp's.
 namespace colours {
-inline constexpr Rgb kPaper{255, 255, 255};
-inline constexpr Rgb kInk{40, 40, 40};
-inline constexpr Rgb kWall{0, 0, 0};
-inline constexpr Rgb kUnknown{175, 175, 175};
 inline constexpr Rgb kWaypoint{0, 80, 255};
 inline constexpr Rgb kPlan{0, 170, 0};
 inline constexpr Rgb kDriven{220, 0, 0};
@@ -156,6 +153,8 @@ inline constexpr Rgb kReplanned{0, 190, 230};    // waypoints of an online re-pl
 inline constexpr Rgb kClosest{0, 90, 200};       // the closest approach
 }  // namespace colours
 
+// The map as the figure reads it (a view: the map must outlive it).
+[[nodiscard]] Grid grid_of(const nav::OccupancyMap& map) noexcept;
 // Pixels per metre for a map: 80, less for maps over 9.5 m (then 760 px across).
 [[nodiscard]] double figure_scale(const nav::OccupancyMap& map) noexcept;
 // Where the map is drawn on draw_case_figure()'s canvas.
@@ -163,14 +162,8 @@ inline constexpr Rgb kClosest{0, 90, 200};       // the closest approach
 // The whole figure; figure.map must be set.
 [[nodiscard]] Canvas draw_case_figure(const CaseFigure& figure);
 
-// A scale bar's length: the first of 0.5, 1, 2, 5, ... m that is at least 60 px long.
-[[nodiscard]] double scale_bar_length_m(double px_per_m) noexcept;
-// The bar, its left end's top at (x, y), 6 px tall: the first half ink, the second half paper
-// framed in ink; "0" and its length under it.
-void draw_scale_bar(Canvas& canvas, int x, int y, double px_per_m);
-
 // The instants to draw the robot at: the first pose, then each after at least spacing_m of
 // travel since the last one chosen, and the last pose.
 [[nodiscard]] std::vector<RobotAt> robot_instants(std::span<const RobotAt> poses, double spacing_m);
 
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure

@@ -1,9 +1,9 @@
-#include "sen3bot/sim/report/sgp_layer.hpp"
+#include "sen3bot/nav_figure/sgp_layer.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace sen3bot::sim::report {
+namespace sen3bot::figure {
 
 void add_sgp_layer(CaseFigure& figure, const nav::SupervisoryPlanner& sgp, int direction, double quiver_spacing_m) {
   const nav::CurveBounds box = nav::intersect(sgp.bounds(), nav::map_extent(*figure.map));
@@ -22,4 +22,4 @@ void add_sgp_layer(CaseFigure& figure, const nav::SupervisoryPlanner& sgp, int d
     }
 }
 
-}  // namespace sen3bot::sim::report
+}  // namespace sen3bot::figure
