@@ -163,14 +163,7 @@ double footprint_box_gap(const nav::Footprint& footprint, const nav::Pose2D& pos
   // Overlap: a box corner inside the footprint, a footprint vertex inside the box, or edges
   // crossing (then one of the two distances below is 0 up to rounding; the caller only needs
   // the minimum, so a crossing shows as a near-zero gap).
-  auto inside = [&](nav::Point2D q) {
-    bool in = false;
-    for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-      const nav::Point2D a = poly[i], b = poly[j];
-      if ((a.y_m > q.y_m) != (b.y_m > q.y_m) && q.x_m < (b.x_m - a.x_m) * (q.y_m - a.y_m) / (b.y_m - a.y_m) + a.x_m) in = !in;
-    }
-    return in;
-  };
+  auto inside = [&](nav::Point2D q) { return msg::inside_polygon(poly, q); };
   double gap = std::numeric_limits<double>::infinity();
   for (const nav::Point2D& q : corners) {
     if (inside(q)) return 0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sen3bot/geometry/point_math.hpp"
+
 namespace sen3bot::ssc {
 namespace {
 
@@ -11,12 +13,7 @@ constexpr double kEps = 1e-9;
 double cross(Point o, Point a, Point b) noexcept { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
 
 double segment_distance(Point p, Point a, Point b) noexcept {
-  const double dx = b.x - a.x;
-  const double dy = b.y - a.y;
-  const double len2 = dx * dx + dy * dy;
-  double t = len2 > 0 ? ((p.x - a.x) * dx + (p.y - a.y) * dy) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  return distance(p, {a.x + t * dx, a.y + t * dy});
+  return geometry::segment_distance({p.x, p.y}, {a.x, a.y}, {b.x, b.y});
 }
 
 // Parameters along a→b where it meets edge c→d (one point, or the ends of a collinear overlap).

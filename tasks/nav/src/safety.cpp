@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
+
+#include "sen3bot/msg/point_math.hpp"
 
 namespace sen3bot::nav {
 
@@ -43,19 +46,9 @@ BodyMover in_body(const SafetyInputs& in, const msg::MovingObstacle& m) noexcept
 // Distance from q (body frame) to the footprint, 0 inside it.
 double footprint_distance(const Footprint& fp, double qx, double qy) noexcept {
   if (fp.vertex_count == 0) return std::max(0.0, std::hypot(qx, qy) - fp.circle_radius_m);
-  bool inside = false;
-  double nearest = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0, j = fp.vertex_count - 1; i < fp.vertex_count; j = i++) {
-    const Point2D a = fp.vertices[j];
-    const Point2D b = fp.vertices[i];
-    if ((b.y_m > qy) != (a.y_m > qy) && qx < (a.x_m - b.x_m) * (qy - b.y_m) / (a.y_m - b.y_m) + b.x_m) inside = !inside;
-    const double ex = b.x_m - a.x_m;
-    const double ey = b.y_m - a.y_m;
-    const double len2 = ex * ex + ey * ey;
-    const double u = len2 > 0.0 ? std::clamp(((qx - a.x_m) * ex + (qy - a.y_m) * ey) / len2, 0.0, 1.0) : 0.0;
-    nearest = std::min(nearest, std::hypot(qx - a.x_m - u * ex, qy - a.y_m - u * ey));
-  }
-  return inside ? 0.0 : nearest;
+  const std::span<const Point2D> outline(fp.vertices.data(), fp.vertex_count);
+  const Point2D q{qx, qy};
+  return msg::inside_polygon(outline, q) ? 0.0 : msg::polygon_edge_distance(outline, q);
 }
 
 // The gap between the body, at pose (x, y, heading) in the body frame of now, and a mover's

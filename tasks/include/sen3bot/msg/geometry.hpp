@@ -1,45 +1,14 @@
 #pragma once
-// Plain geometry values carried by the bus messages: points and poses in the map frame, the
-// laser's mount on the robot, and the little inline math every reader of them needs.
-#include <cmath>
-#include <numbers>
-#include <type_traits>
+// Plain geometry values carried by the bus messages: points and poses in the map frame and the
+// laser's mount on the robot, from the one geometry kit (lib/geometry).
+#include "sen3bot/geometry/geometry.hpp"
 
 namespace sen3bot::msg {
 
-struct Point2D {
-  double x_m = 0.0;
-  double y_m = 0.0;
-};
-static_assert(std::is_trivially_copyable_v<Point2D>);
-
-struct Pose2D {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
-static_assert(std::is_trivially_copyable_v<Pose2D>);
-
-// Pose of a sensor on the robot (robot frame: x forward, y left).
-struct SensorMount {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
-static_assert(std::is_trivially_copyable_v<SensorMount>);
-
-// Wraps to [-pi, pi).
-inline double normalize_angle(double a_rad) noexcept {
-  a_rad = std::fmod(a_rad + std::numbers::pi, 2.0 * std::numbers::pi);
-  if (a_rad < 0.0) a_rad += 2.0 * std::numbers::pi;
-  return a_rad - std::numbers::pi;
-}
-
-// The sensor's pose in the frame the robot pose a is given in.
-inline Pose2D compose(const Pose2D& a, const SensorMount& b) noexcept {
-  const double c = std::cos(a.theta_rad);
-  const double s = std::sin(a.theta_rad);
-  return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, normalize_angle(a.theta_rad + b.theta_rad)};
-}
+using geometry::compose;
+using geometry::normalize_angle;
+using geometry::Point2D;
+using geometry::Pose2D;
+using geometry::SensorMount;
 
 }  // namespace sen3bot::msg
