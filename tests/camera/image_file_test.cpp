@@ -1,0 +1,179 @@
+// JPEG decoding and PNG writing with libjpeg-turbo and libpng directly, checked against the
+// OpenCV image codecs they replace: the same pixels (bit for bit) from the camera's decoder,
+// `sen3bot detect --image` and the figures, and the same PNG bytes as imwrite.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "sen3bot/camera/decoder.hpp"
+#include "sen3bot/camera/frame_pool.hpp"
+#include "sen3bot/camera/image_file.hpp"
+
+namespace sen3bot::camera {
+namespace {
+
+const std::string kData = "/usr/share/doc/opencv-doc/examples/data/";
+
+std::vector<std::uint8_t> file_bytes(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+}
+
+cv::Mat as_mat(const Image& image) {
+  return {static_cast<int>(image.height_px), static_cast<int>(image.width_px), image.channels == 1 ? CV_8UC1 : CV_8UC3,
+          const_cast<std::uint8_t*>(image.pixels.data())};
+}
+
+// Photographs (baseline 4:2:0 and 4:4:4, grey) and re-encodings of one in the other layouts a
+// camera may send: 4:2:2, 4:4:4, progressive, grey, odd sizes.
+std::vector<std::pair<std::string, std::vector<std::uint8_t>>> jpegs() {
+  std::vector<std::pair<std::string, std::vector<std::uint8_t>>> out;
+  for (const char* name : {"building.jpg", "fruits.jpg", "baboon.jpg", "home.jpg", "board.jpg"}) {
+    const std::string path = kData + name;
+    std::vector<std::uint8_t> bytes = file_bytes(path);
+    EXPECT_FALSE(bytes.empty()) << path << " is missing: toolchain/bootstrap.sh installs opencv-doc";
+    out.emplace_back(name, std::move(bytes));
+  }
+  const cv::Mat photo = cv::imread(kData + "fruits.jpg", cv::IMREAD_COLOR);
+  if (photo.empty()) return out;
+  const cv::Mat odd = photo(cv::Rect(3, 5, 317, 211)).clone();
+  const cv::Mat grey = cv::imread(kData + "box.png", cv::IMREAD_GRAYSCALE);
+  struct Variant {
+    const char* name;
+    const cv::Mat* image;
+    std::vector<int> params;
+  };
+  const Variant variants[] = {
+      {"4:2:2", &photo, {cv::IMWRITE_JPEG_SAMPLING_FACTOR, cv::IMWRITE_JPEG_SAMPLING_FACTOR_422}},
+      {"4:4:4", &photo, {cv::IMWRITE_JPEG_SAMPLING_FACTOR, cv::IMWRITE_JPEG_SAMPLING_FACTOR_444}},
+      {"progressive", &photo, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}},
+      {"quality 30, odd size", &odd, {cv::IMWRITE_JPEG_QUALITY, 30}},
+      {"grey", &grey, {}},
+  };
+  for (const Variant& v : variants) {
+    std::vector<std::uint8_t> bytes;
+    EXPECT_TRUE(cv::imencode(".jpg", *v.image, bytes, v.params)) << v.name;
+    out.emplace_back(v.name, std::move(bytes));
+  }
+  return out;
+}
+
+TEST(ImageFile, JpegDecodesToTheSamePixelsAsOpenCvImdecode) {
+  const auto cases = jpegs();
+  ASSERT_GE(cases.size(), 9u);
+  Image image;
+  for (const auto& [name, bytes] : cases) {
+    for (const int channels : {3, 1}) {
+      SCOPED_TRACE(name + (channels == 1 ? " grey" : " colour"));
+      ASSERT_TRUE(decode_jpeg(bytes, channels, image));
+      const cv::Mat expected = cv::imdecode(bytes, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+      ASSERT_FALSE(expected.empty());
+      ASSERT_EQ(image.width_px, static_cast<std::uint32_t>(expected.cols));
+      ASSERT_EQ(image.height_px, static_cast<std::uint32_t>(expected.rows));
+      ASSERT_EQ(image.channels, channels);
+      const cv::Mat decoded = as_mat(image);
+      EXPECT_EQ(cv::norm(decoded, expected, cv::NORM_INF), 0.0);
+      EXPECT_EQ(cv::mean(decoded), cv::mean(expected));
+    }
+  }
+}
+
+TEST(ImageFile, TheCameraDecoderPublishesWhatImdecodeAndResizeGave) {
+  const std::vector<std::uint8_t> bytes = file_bytes(kData + "building.jpg");
+  ASSERT_FALSE(bytes.empty());
+  const cv::Mat source = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  for (const int downscale : {1, 2}) {
+    SCOPED_TRACE(downscale);
+    auto pool = FramePool::create(3, 1280, 720, PixelFormat::bgr8);
+    ASSERT_TRUE(pool);
+    auto decoder = FrameDecoder::create(VideoCodec::jpeg, DecoderOptions{downscale, 2 * 1024 * 1024});
+    ASSERT_TRUE(decoder);
+    EncodedFrame frame;
+    frame.codec = VideoCodec::jpeg;
+    frame.data = bytes;
+    ASSERT_TRUE((*decoder)->decode(frame, **pool, 1));
+    FrameHandle handle = (*pool)->acquire_latest();
+    ASSERT_TRUE(handle);
+    const FrameRef& ref = handle.ref();
+    std::uint32_t w = 0;
+    std::uint32_t h = 0;
+    fit_output_size(static_cast<std::uint32_t>(source.cols), static_cast<std::uint32_t>(source.rows), downscale, 1280,
+                    720, w, h);
+    ASSERT_EQ(ref.width_px, w);
+    ASSERT_EQ(ref.height_px, h);
+    cv::Mat expected;
+    if (w == static_cast<std::uint32_t>(source.cols) && h == static_cast<std::uint32_t>(source.rows)) {
+      expected = source;
+    } else {
+      cv::resize(source, expected, cv::Size(static_cast<int>(w), static_cast<int>(h)), 0, 0, cv::INTER_AREA);
+    }
+    const cv::Mat published(static_cast<int>(h), static_cast<int>(w), CV_8UC3, const_cast<std::uint8_t*>(ref.data),
+                            ref.stride_bytes);
+    EXPECT_EQ(cv::norm(published, expected, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST(ImageFile, BrokenJpegsAreErrorsAndTruncatedOnesDecodeAsImdecodeDoes) {
+  Image image;
+  const std::vector<std::uint8_t> noise = {0xFF, 0xD8, 0xFF, 0xC0, 0x00, 0x03, 0x01, 0x02, 0x03};
+  EXPECT_FALSE(decode_jpeg(noise, 3, image));
+  EXPECT_FALSE(decode_jpeg(std::vector<std::uint8_t>{1, 2, 3, 4, 5}, 3, image));
+  EXPECT_FALSE(decode_jpeg(std::vector<std::uint8_t>{}, 1, image));
+  std::vector<std::uint8_t> cut = file_bytes(kData + "building.jpg");
+  ASSERT_GT(cut.size(), 1000u);
+  cut.resize(cut.size() / 2);
+  const cv::Mat expected = cv::imdecode(cut, cv::IMREAD_COLOR);
+  ASSERT_EQ(decode_jpeg(cut, 3, image).ok(), !expected.empty());
+  if (!expected.empty()) EXPECT_EQ(cv::norm(as_mat(image), expected, cv::NORM_INF), 0.0);
+}
+
+TEST(ImageFile, PngIsWrittenAsImwriteWritesItAndReadsBack) {
+  const cv::Mat colour = cv::imread(kData + "fruits.jpg", cv::IMREAD_COLOR);
+  ASSERT_FALSE(colour.empty());
+  cv::Mat grey;
+  cv::cvtColor(colour, grey, cv::COLOR_BGR2GRAY);
+  const std::string dir = ::testing::TempDir();
+  for (const cv::Mat* image : {&colour, &grey}) {
+    const int channels = image->channels();
+    SCOPED_TRACE(channels);
+    const std::string ours = dir + "/ours.png";
+    const std::string theirs = dir + "/theirs.png";
+    ASSERT_TRUE(write_png(ours, image->data, static_cast<std::uint32_t>(image->cols),
+                          static_cast<std::uint32_t>(image->rows), image->step, channels));
+    ASSERT_TRUE(cv::imwrite(theirs, *image));
+    EXPECT_EQ(file_bytes(ours), file_bytes(theirs));
+    EXPECT_EQ(cv::norm(cv::imread(ours, cv::IMREAD_UNCHANGED), *image, cv::NORM_INF), 0.0);
+    Image back;
+    ASSERT_TRUE(read_image(ours, 3, back));
+    cv::Mat expected = cv::imread(ours, cv::IMREAD_COLOR);
+    EXPECT_EQ(cv::norm(as_mat(back), expected, cv::NORM_INF), 0.0);
+    std::remove(ours.c_str());
+    std::remove(theirs.c_str());
+  }
+}
+
+TEST(ImageFile, ReadImageTakesJpegAndPngAsImreadDoes) {
+  Image image;
+  for (const char* name : {"basketball1.png", "building.jpg", "box.png"}) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(read_image(kData + name, 3, image));
+    const cv::Mat expected = cv::imread(kData + name, cv::IMREAD_COLOR);
+    EXPECT_EQ(cv::norm(as_mat(image), expected, cv::NORM_INF), 0.0);
+  }
+  const Status missing = read_image("/nonexistent/x.png", 3, image);
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().code(), Errc::not_found);
+  EXPECT_FALSE(write_png("/nonexistent/x.png", image.pixels.data(), image.width_px, image.height_px,
+                         image.width_px * 3u, 3));
+}
+
+}  // namespace
+}  // namespace sen3bot::camera
