@@ -28,21 +28,48 @@ void jpeg_error_exit(j_common_ptr info) {
 
 void jpeg_quiet(j_common_ptr, int) {}
 
+// The whole image is in memory: running out of bytes suspends the decoder, which then yields
+// no more rows, as with OpenCV's source (libjpeg's own memory source would invent an end).
+void source_nothing(j_decompress_ptr) {}
+boolean source_exhausted(j_decompress_ptr) { return FALSE; }
+void source_skip(j_decompress_ptr info, long bytes) {
+  jpeg_source_mgr* source = info->src;
+  const std::size_t n = bytes > 0 ? static_cast<std::size_t>(bytes) : 0;
+  const std::size_t skipped = n < source->bytes_in_buffer ? n : source->bytes_in_buffer;
+  source->next_input_byte += skipped;
+  source->bytes_in_buffer -= skipped;
+}
+
 // Plain C state only between setjmp and longjmp: nothing with a destructor is skipped.
 bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, Image& out, char* message) {
   jpeg_decompress_struct info{};
   JpegError error{};
+  jpeg_source_mgr source{};
+  volatile bool rows_read = false;
   info.err = jpeg_std_error(&error.manager);
   error.manager.error_exit = jpeg_error_exit;
   error.manager.emit_message = jpeg_quiet;
   if (setjmp(error.jump) != 0) {
+    // As imdecode: an image whose rows were all read is kept even when finishing fails
+    // (a truncated stream).
     std::memcpy(message, error.message, JMSG_LENGTH_MAX);
+    jpeg_destroy_decompress(&info);
+    return rows_read;
+  }
+  jpeg_create_decompress(&info);
+  source.init_source = source_nothing;
+  source.fill_input_buffer = source_exhausted;
+  source.skip_input_data = source_skip;
+  source.resync_to_restart = jpeg_resync_to_restart;
+  source.term_source = source_nothing;
+  source.next_input_byte = data;
+  source.bytes_in_buffer = size;
+  info.src = &source;
+  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "truncated JPEG header");
     jpeg_destroy_decompress(&info);
     return false;
   }
-  jpeg_create_decompress(&info);
-  jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
-  jpeg_read_header(&info, TRUE);
   // OpenCV reads CMYK through a conversion of its own; camera frames are YCbCr or grey.
   if (info.num_components == 4) {
     std::snprintf(message, JMSG_LENGTH_MAX, "CMYK JPEG not supported");
@@ -50,20 +77,27 @@ bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, 
     return false;
   }
   info.out_color_space = channels == 1 ? JCS_GRAYSCALE : JCS_EXT_BGR;
-  jpeg_start_decompress(&info);
+  if (!jpeg_start_decompress(&info)) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "truncated JPEG data");
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
   const std::size_t row_bytes = static_cast<std::size_t>(info.output_width) * static_cast<std::size_t>(channels);
   out.width_px = info.output_width;
   out.height_px = info.output_height;
   out.channels = static_cast<std::uint8_t>(channels);
   out.pixels.resize(row_bytes * info.output_height);
-  while (info.output_scanline < info.output_height) {
-    JSAMPROW row = out.pixels.data() + row_bytes * info.output_scanline;
-    if (jpeg_read_scanlines(&info, &row, 1) != 1) {
-      std::snprintf(message, JMSG_LENGTH_MAX, "truncated JPEG data");
-      jpeg_destroy_decompress(&info);
-      return false;
+  // Rows after the data ran out repeat the last one decoded, as imdecode leaves them.
+  for (std::size_t y = 0; y < info.output_height; ++y) {
+    JSAMPROW row = out.pixels.data() + row_bytes * y;
+    if (jpeg_read_scanlines(&info, &row, 1) == 1) continue;
+    if (y == 0) {
+      std::memset(row, 0, row_bytes);
+    } else {
+      std::memcpy(row, row - row_bytes, row_bytes);
     }
   }
+  rows_read = true;
   jpeg_finish_decompress(&info);
   jpeg_destroy_decompress(&info);
   return true;
@@ -141,7 +175,6 @@ bool encode_png(std::FILE* file, const std::uint8_t* pixels, std::uint32_t width
   // imwrite's defaults for PNG: speed over size.
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_set_compression_level(png, Z_BEST_SPEED);
-  png_set_compression_mem_level(png, MAX_MEM_LEVEL);
   png_set_compression_strategy(png, Z_RLE);
   const int type = channels == 1 ? PNG_COLOR_TYPE_GRAY : channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA;
   png_set_IHDR(png, info, width, height, 8, type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
