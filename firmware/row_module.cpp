@@ -18,9 +18,9 @@ std::vector<std::string> module_dirs() {
   if (const char* env = std::getenv("SEN3BOT_MODULE_DIR"); env != nullptr && *env != '\0') dirs.emplace_back(env);
   char exe[4096];
   const ssize_t n = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n > 0) {
-    std::string dir(exe, static_cast<std::size_t>(n));
-    dir.erase(dir.find_last_of('/') == std::string::npos ? 0 : dir.find_last_of('/'));
+  const std::string path = n > 0 ? std::string(exe, static_cast<std::size_t>(n)) : std::string();
+  if (const std::size_t slash = path.find_last_of('/'); slash != std::string::npos) {
+    const std::string dir = path.substr(0, slash);
     dirs.push_back(dir);
     dirs.push_back(dir + "/../lib/sen3bot");
   }

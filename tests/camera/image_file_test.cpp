@@ -37,7 +37,9 @@ cv::Mat as_mat(const Image& image) {
 }
 
 // A BGR image as JPEG with the chroma sampling given (OpenCV 4.6's imencode has no setting).
-std::vector<std::uint8_t> encode(const cv::Mat& bgr, int h_samp, int v_samp, bool progressive) {
+// orientation > 0 adds an EXIF block with that orientation, big-endian when motorola.
+std::vector<std::uint8_t> encode(const cv::Mat& bgr, int h_samp, int v_samp, bool progressive, int orientation = 0,
+                                 bool motorola = false) {
   jpeg_compress_struct info{};
   jpeg_error_mgr error{};
   info.err = jpeg_std_error(&error);
@@ -55,6 +57,15 @@ std::vector<std::uint8_t> encode(const cv::Mat& bgr, int h_samp, int v_samp, boo
   info.comp_info[0].v_samp_factor = v_samp;
   if (progressive) jpeg_simple_progression(&info);
   jpeg_start_compress(&info, TRUE);
+  if (orientation > 0) {
+    const auto o = static_cast<std::uint8_t>(orientation);
+    const std::vector<std::uint8_t> exif =
+        motorola ? std::vector<std::uint8_t>{'E', 'x', 'i', 'f', 0, 0, 'M', 'M', 0, 42, 0, 0, 0, 8, 0, 1,
+                                             0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, o, 0, 0, 0, 0, 0, 0}
+                 : std::vector<std::uint8_t>{'E', 'x', 'i', 'f', 0, 0, 'I', 'I', 42, 0, 8, 0, 0, 0, 1, 0,
+                                             0x12, 0x01, 3, 0, 1, 0, 0, 0, o, 0, 0, 0, 0, 0, 0, 0};
+    jpeg_write_marker(&info, JPEG_APP0 + 1, exif.data(), static_cast<unsigned>(exif.size()));
+  }
   while (info.next_scanline < info.image_height) {
     JSAMPROW row = const_cast<JSAMPROW>(bgr.ptr<std::uint8_t>(static_cast<int>(info.next_scanline)));
     jpeg_write_scanlines(&info, &row, 1);
@@ -118,6 +129,26 @@ TEST(ImageFile, JpegDecodesToTheSamePixelsAsOpenCvImdecode) {
       const cv::Mat decoded = as_mat(image);
       EXPECT_EQ(cv::norm(decoded, expected, cv::NORM_INF), 0.0);
       EXPECT_EQ(cv::mean(decoded), cv::mean(expected));
+    }
+  }
+}
+
+TEST(ImageFile, TheExifOrientationIsAppliedAsImdecodeDoes) {
+  const cv::Mat photo = cv::imread(kData + "fruits.jpg", cv::IMREAD_COLOR);
+  ASSERT_FALSE(photo.empty());
+  const cv::Mat corner = photo(cv::Rect(0, 0, 120, 70)).clone();
+  Image image;
+  for (const bool motorola : {false, true}) {
+    for (int orientation = 1; orientation <= 8; ++orientation) {
+      SCOPED_TRACE(std::to_string(orientation) + (motorola ? " MM" : " II"));
+      const std::vector<std::uint8_t> bytes = encode(corner, 2, 2, false, orientation, motorola);
+      for (const int channels : {3, 1}) {
+        const cv::Mat expected = cv::imdecode(bytes, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+        ASSERT_TRUE(decode_jpeg(bytes, channels, image));
+        ASSERT_EQ(image.width_px, static_cast<std::uint32_t>(expected.cols));
+        ASSERT_EQ(image.height_px, static_cast<std::uint32_t>(expected.rows));
+        EXPECT_EQ(cv::norm(as_mat(image), expected, cv::NORM_INF), 0.0);
+      }
     }
   }
 }

@@ -40,8 +40,60 @@ void source_skip(j_decompress_ptr info, long bytes) {
   source->bytes_in_buffer -= skipped;
 }
 
+// EXIF orientation (tag 0x0112 of the first IFD) from an APP1 marker; 1 (as stored) when absent.
+int exif_orientation(const jpeg_decompress_struct& info) {
+  for (jpeg_saved_marker_ptr m = info.marker_list; m != nullptr; m = m->next) {
+    if (m->marker != JPEG_APP0 + 1 || m->data_length < 14 || std::memcmp(m->data, "Exif\0\0", 6) != 0) continue;
+    const std::uint8_t* tiff = m->data + 6;
+    const std::size_t size = m->data_length - 6;
+    const bool little = tiff[0] == 'I' && tiff[1] == 'I';
+    if (!little && !(tiff[0] == 'M' && tiff[1] == 'M')) return 1;
+    auto u16 = [&](std::size_t at) -> std::uint32_t {
+      return little ? tiff[at] | (tiff[at + 1] << 8) : (tiff[at] << 8) | tiff[at + 1];
+    };
+    auto u32 = [&](std::size_t at) -> std::uint32_t { return little ? u16(at) | (u16(at + 2) << 16) : (u16(at) << 16) | u16(at + 2); };
+    const std::size_t ifd = u32(4);
+    if (ifd + 2 > size) return 1;
+    const std::size_t entries = u16(ifd);
+    for (std::size_t e = 0; e < entries && ifd + 2 + 12 * (e + 1) <= size; ++e) {
+      const std::size_t at = ifd + 2 + 12 * e;
+      if (u16(at) == 0x0112 && u16(at + 2) == 3) {
+        const std::uint32_t value = u16(at + 8);
+        return value >= 1 && value <= 8 ? static_cast<int>(value) : 1;
+      }
+    }
+    return 1;
+  }
+  return 1;
+}
+
+// Turns the decoded picture upright as its EXIF orientation says (as imread/imdecode do).
+void apply_orientation(int orientation, Image& image) {
+  if (orientation <= 1) return;
+  const bool transpose = orientation >= 5;
+  const bool flip_x = orientation == 2 || orientation == 3 || orientation == 6 || orientation == 7;
+  const bool flip_y = orientation == 3 || orientation == 4 || orientation == 7 || orientation == 8;
+  const std::size_t w = transpose ? image.height_px : image.width_px;
+  const std::size_t h = transpose ? image.width_px : image.height_px;
+  const std::size_t c = image.channels;
+  std::vector<std::uint8_t> turned(image.pixels.size());
+  for (std::size_t y = 0; y < h; ++y) {
+    for (std::size_t x = 0; x < w; ++x) {
+      const std::size_t x1 = flip_x ? w - 1 - x : x;
+      const std::size_t y1 = flip_y ? h - 1 - y : y;
+      const std::size_t sx = transpose ? y1 : x1;
+      const std::size_t sy = transpose ? x1 : y1;
+      std::memcpy(&turned[(y * w + x) * c], &image.pixels[(sy * image.width_px + sx) * c], c);
+    }
+  }
+  image.pixels.swap(turned);
+  image.width_px = static_cast<std::uint32_t>(w);
+  image.height_px = static_cast<std::uint32_t>(h);
+}
+
 // Plain C state only between setjmp and longjmp: nothing with a destructor is skipped.
-bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, Image& out, char* message) {
+bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, Image& out, int& orientation,
+                      char* message) {
   jpeg_decompress_struct info{};
   JpegError error{};
   jpeg_source_mgr source{};
@@ -65,6 +117,7 @@ bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, 
   source.next_input_byte = data;
   source.bytes_in_buffer = size;
   info.src = &source;
+  jpeg_save_markers(&info, JPEG_APP0 + 1, 0xFFFF);
   if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK) {
     std::snprintf(message, JMSG_LENGTH_MAX, "truncated JPEG header");
     jpeg_destroy_decompress(&info);
@@ -77,6 +130,7 @@ bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, 
     return false;
   }
   info.out_color_space = channels == 1 ? JCS_GRAYSCALE : JCS_EXT_BGR;
+  orientation = exif_orientation(info);
   if (!jpeg_start_decompress(&info)) {
     std::snprintf(message, JMSG_LENGTH_MAX, "truncated JPEG data");
     jpeg_destroy_decompress(&info);
@@ -193,10 +247,12 @@ Status decode_jpeg(std::span<const std::uint8_t> jpeg, int channels, Image& out)
   if (channels != 1 && channels != 3) return Error(Errc::invalid_argument, "decode_jpeg: channels must be 1 or 3");
   if (jpeg.size() < 4 || jpeg[0] != 0xFF || jpeg[1] != 0xD8) return Error(Errc::protocol, "not a JPEG (no SOI marker)");
   char message[JMSG_LENGTH_MAX] = {};
-  if (!decode_jpeg_into(jpeg.data(), jpeg.size(), channels, out, message)) {
+  int orientation = 1;
+  if (!decode_jpeg_into(jpeg.data(), jpeg.size(), channels, out, orientation, message)) {
     out.width_px = out.height_px = 0;
     return Error::format(Errc::protocol, "JPEG: %s", message);
   }
+  apply_orientation(orientation, out);
   return Status::success();
 }
 

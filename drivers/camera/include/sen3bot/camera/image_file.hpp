@@ -20,8 +20,9 @@ struct Image {
 };
 
 // Decodes a baseline or progressive JPEG into grey (channels 1) or BGR (3), as OpenCV's
-// imdecode does with the same library (integer DCT, fancy upsampling; EXIF orientation is not
-// applied: camera streams carry none). The pixel buffer is reused when the size is unchanged.
+// imdecode does with the same library: integer DCT, fancy upsampling, the EXIF orientation
+// applied, and the rows after a truncated stream's end repeating the last one decoded. The
+// pixel buffer is reused when the size is unchanged.
 Status decode_jpeg(std::span<const std::uint8_t> jpeg, int channels, Image& out);
 
 // Reads a JPEG or PNG file (told apart by their signatures) into grey (1) or BGR (3).
