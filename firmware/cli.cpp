@@ -155,30 +155,47 @@ int capture_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return 2;
 }
 
+// The commands whose libraries are heavy run from their module (row_module.hpp).
+int sgp_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  return row_module_command("sgp", "sen3bot sgp", argc, argv, out, err);
+}
+int camera_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  return row_module_command("camera", "sen3bot camera", argc, argv, out, err);
+}
+[[maybe_unused]] int detect_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  return row_module_command("vision", "sen3bot detect", argc, argv, out, err);
+}
+[[maybe_unused]] int recognize_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  return row_module_command("recognition", "sen3bot recognize", argc, argv, out, err);
+}
+[[maybe_unused]] int cobot_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  return row_module_command("qr", "sen3bot cobot", argc, argv, out, err);
+}
+
 }  // namespace
 
 int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   static constexpr Command kCommands[] = {
       {"run", "", run_command},
       {"plan", "", plan_command},
-      {"sgp", "", sgp_command},
+      {"sgp", "", sgp_from_module},
       {"fuse", "", fuse_command},
 #ifdef SEN3BOT_HAS_HOG
-      {"detect", "", detect_command},
+      {"detect", "", detect_from_module},
 #endif
       {"capture", "", capture_command},
       {"decode", "p2os", decode_p2os_command},
       {"decode", "lms200", decode_lms200_command},
       {"drive", "", drive_command},
       {"scan", "", scan_command},
-      {"camera", "", camera_command},
+      {"camera", "", camera_from_module},
       {"can", "dump", can_dump_command},
       {"can", "io", can_io_command},
 #ifdef SEN3BOT_HAS_RECOGNIZER
-      {"recognize", "", recognize_command},
+      {"recognize", "", recognize_from_module},
 #endif
 #ifdef SEN3BOT_HAS_COBOT_TAGS
-      {"cobot", "", cobot_command},
+      {"cobot", "", cobot_from_module},
 #endif
   };
   return dispatch(argc, argv, "sen3bot", SEN3BOT_VERSION, kUsage, kCommands, out, err);

@@ -10,12 +10,10 @@
 #include <sys/stat.h>
 #include <thread>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "cli_util.hpp"
 #include "commands.hpp"
 #include "sen3bot/camera/camera.hpp"
+#include "sen3bot/image/image_file.hpp"
 #include "sen3bot/camera/onvif_client.hpp"
 #include "sen3bot/camera/rtsp_url.hpp"
 
@@ -173,12 +171,10 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
     seen = ref.sequence;
     last_ns = ref.decoded_ns;
     if (!save_dir.empty()) {
-      const cv::Mat image(static_cast<int>(ref.height_px), static_cast<int>(ref.width_px),
-                          ref.format == camera::PixelFormat::gray8 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(ref.data),
-                          ref.stride_bytes);
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%06llu.png", static_cast<unsigned long long>(ref.sequence));
-      cv::imwrite(save_dir + name, image);
+      (void)image::write_png(save_dir + name, ref.data, ref.width_px, ref.height_px, ref.stride_bytes,
+                              static_cast<int>(camera::bytes_per_pixel(ref.format)));
     }
   }
   (*cam)->stop();

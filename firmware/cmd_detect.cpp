@@ -7,11 +7,11 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cli_util.hpp"
 #include "commands.hpp"
+#include "sen3bot/image/image_file.hpp"
 #include "sen3bot/detector/hog.hpp"
 
 namespace sen3bot::firmware {
@@ -54,17 +54,12 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::fprintf(err, "sen3bot detect: --image is required\n%s", kDetectUsage);
     return 2;
   }
-  cv::Mat image;
-  try {
-    image = cv::imread(image_path, cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    std::fprintf(err, "sen3bot detect: %s: %s\n", image_path.c_str(), e.what());
+  image::Image file;
+  if (Status s = image::read_image(image_path, 3, file); !s) {
+    std::fprintf(err, "sen3bot detect: cannot read it as an image: %s\n", s.error().c_str());
     return 1;
   }
-  if (image.empty()) {
-    std::fprintf(err, "sen3bot detect: %s: cannot read it as an image\n", image_path.c_str());
-    return 1;
-  }
+  const cv::Mat image(static_cast<int>(file.height_px), static_cast<int>(file.width_px), CV_8UC3, file.pixels.data());
   detector::HogPeopleDetector hog;
   if (Status s = hog.init(config, static_cast<std::uint32_t>(image.cols), static_cast<std::uint32_t>(image.rows)); !s) {
     std::fprintf(err, "sen3bot detect: %s: %s\n", image_path.c_str(), s.error().c_str());
@@ -106,14 +101,10 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       std::snprintf(label, sizeof label, "person %.2f", box.confidence);
       cv::putText(drawn, label, top_left + cv::Point(2, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 200, 0), 1);
     }
-    bool written = false;
-    try {
-      written = cv::imwrite(png, drawn);
-    } catch (const cv::Exception&) {
-      written = false;
-    }
-    if (!written) {
-      std::fprintf(err, "sen3bot detect: cannot write %s\n", png.c_str());
+    if (Status s = image::write_png(png, drawn.data, static_cast<std::uint32_t>(drawn.cols),
+                                     static_cast<std::uint32_t>(drawn.rows), drawn.step, 3);
+        !s) {
+      std::fprintf(err, "sen3bot detect: cannot write %s: %s\n", png.c_str(), s.error().c_str());
       return 1;
     }
   }

@@ -588,11 +588,15 @@ FirmwareConfig read(const Reader& top, const std::string& source, std::span<cons
 
   if (top.has("realtime")) {
     const Reader rt = top.child("realtime");
-    rt.allow_only({"lock_memory", "max_cpu_wakeup_latency_us", "prefault_stack_bytes"});
+    rt.allow_only({"lock_memory", "max_cpu_wakeup_latency_us", "prefault_stack_bytes", "thread_stack_bytes"});
     if (rt.has("lock_memory")) c.lock_memory = rt.boolean("lock_memory");
     if (rt.has("max_cpu_wakeup_latency_us"))
       c.max_cpu_wakeup_latency_us = static_cast<int>(rt.integer("max_cpu_wakeup_latency_us", -1, 1'000'000));
     if (rt.has("prefault_stack_bytes")) c.prefault_stack_bytes = rt.bytes("prefault_stack_bytes");
+    if (rt.has("thread_stack_bytes")) c.thread_stack_bytes = rt.bytes("thread_stack_bytes");
+    // The prefault and the scheduler's 64 KiB safety margin must fit in every row's stack.
+    if (c.thread_stack_bytes != 0 && c.thread_stack_bytes < c.prefault_stack_bytes + 128 * 1024)
+      rt.fail("thread_stack_bytes", "expected 0 or at least prefault_stack_bytes + 128KiB", YAML::Node());
   }
 
   if (top.has("threads")) {

@@ -136,6 +136,10 @@ struct FirmwareConfig {
   // the platform's choice.
   int max_cpu_wakeup_latency_us = 0;
   std::size_t prefault_stack_bytes = 64 * 1024;
+  // The stack of every thread started after the memory is locked (rows, devices, libraries'
+  // own threads that take the default): mlockall keeps all of it resident. 0: glibc's default,
+  // RLIMIT_STACK (8 MiB).
+  std::size_t thread_stack_bytes = 1024 * 1024;
   std::map<std::string, ThreadConfig, std::less<>> threads;
   std::map<std::string, TaskConfig, std::less<>> tasks;
   int health_stall_periods = 3;

@@ -94,7 +94,11 @@ Status Firmware::create_navigation() {
       vision.rate_hz = n.onboard_rate_hz;
       vision.calibration_width_px = static_cast<std::uint32_t>(camera.width_px);
       vision.calibration_height_px = static_cast<std::uint32_t>(camera.height_px);
-      vision_task_ = std::make_unique<VisionTask>(vision, FrameSource{external_frames_, camera_task_.get()}, nav_detections_);
+      Result<const RowModule*> module = load_row_module("vision");
+      if (!module)
+        return Error::format(module.error().code(), "%s: navigation.people.detector: onboard: %s", file, module.error().c_str());
+      vision_task_ = ModuleRow<VisionTask>(
+          (*module)->vision(vision, FrameSource{external_frames_, camera_task_.get()}, nav_detections_));
 #else
       return Error::format(Errc::config,
                            "%s: navigation.people.detector: onboard: this build has no on-board detector (it needs "
@@ -232,7 +236,10 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
     qr.whole_frame = k.qr_whole_frame;
     qr.camera = camera;
     qr.laser_mount = mount;
-    qr_task_ = std::make_unique<QrTask>(qr, FrameSource{external_frames_, camera_task_.get()}, QrTopics{nav_people_, nav_pose_, nav_tags_});
+    Result<const RowModule*> module = load_row_module("qr");
+    if (!module) return Error::format(module.error().code(), "%s: cobot: the QR tag reader: %s", file, module.error().c_str());
+    qr_task_ = ModuleRow<QrTask>(
+        (*module)->qr(qr, FrameSource{external_frames_, camera_task_.get()}, QrTopics{nav_people_, nav_pose_, nav_tags_}));
 #else
     return Error::format(Errc::config,
                          "%s: cobot: this build has no QR tag reader (it needs OpenCV's objdetect module, "
@@ -246,8 +253,10 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
     recognition.operations_path = k.operations_path;
     recognition.model_path = k.model_path;
     recognition.rate_hz = k.recognition_rate_hz;
-    recognition_task_ = std::make_unique<RecognitionTask>(
-        recognition, RecognitionTopics{nav_worker_path_, nav_operation_, nav_operation_reference_});
+    Result<const RowModule*> module = load_row_module("recognition");
+    if (!module) return Error::format(module.error().code(), "%s: cobot.recognition: %s", file, module.error().c_str());
+    recognition_task_ = ModuleRow<RecognitionTask>(
+        (*module)->recognition(recognition, RecognitionTopics{nav_worker_path_, nav_operation_, nav_operation_reference_}));
 #else
     return Error::format(Errc::config,
                          "%s: cobot.recognition: this build has no operation recognizer (it needs OpenCV's ml module, "
@@ -266,7 +275,12 @@ Status Firmware::create_tasks() {
   if (config_.devices.has_io_node)
     can_io_task_ = std::make_unique<CanIoTask>(config_.devices.io_node, board_,
                                                CanIoTopics{nav_safety_, nav_command_, nav_mode_, nav_io_});
-  if (config_.devices.has_camera) camera_task_ = std::make_unique<CameraTask>(config_.devices.camera, board_, bus_);
+  if (config_.devices.has_camera) {
+    Result<const RowModule*> module = load_row_module("camera");
+    if (!module)
+      return Error::format(module.error().code(), "%s: devices.camera: %s", config_.source_path.c_str(), module.error().c_str());
+    camera_task_ = ModuleRow<CameraTask>((*module)->camera(config_.devices.camera, board_, bus_));
+  }
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
   }

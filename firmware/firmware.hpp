@@ -19,22 +19,13 @@
 #include "sen3bot/nav/nav_tasks.hpp"
 #include "sen3bot/nav/waypoints.hpp"
 #include "base_task.hpp"
-#include "camera_task.hpp"
 #include "can_io_task.hpp"
 #include "cobot_task.hpp"
 #include "detector_task.hpp"
 #include "fleet_task.hpp"
-#ifdef SEN3BOT_HAS_HOG
-#include "vision_task.hpp"
-#endif
-#ifdef SEN3BOT_HAS_QR
-#include "qr_task.hpp"
-#endif
-#ifdef SEN3BOT_HAS_RECOGNITION
-#include "recognition_task.hpp"
-#endif
 #include "laser_task.hpp"
 #include "mission.hpp"
+#include "row_module.hpp"
 #include "view_task.hpp"
 
 namespace sen3bot::firmware {
@@ -186,14 +177,14 @@ class Firmware {
   std::unique_ptr<BaseTask> base_task_;
   std::unique_ptr<LaserTask> laser_task_;
   std::unique_ptr<CanIoTask> can_io_task_;
-  std::unique_ptr<CameraTask> camera_task_;
+  ModuleRow<CameraTask> camera_task_;  // the rows from modules: row_module.hpp
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;
   std::unique_ptr<nav::SafetyTask> safety_task_;
   std::unique_ptr<DetectorTask> detector_task_;
 #ifdef SEN3BOT_HAS_HOG
-  std::unique_ptr<VisionTask> vision_task_;
+  ModuleRow<VisionTask> vision_task_;
 #endif
   std::unique_ptr<nav::PeopleTask> people_task_;
   std::unique_ptr<nav::PeopleRelayTask> people_relay_task_;  // instead, with use_people_source()
@@ -202,10 +193,10 @@ class Firmware {
   std::unique_ptr<CobotTask> cobot_task_;
   std::unique_ptr<ViewTask> view_task_;
 #ifdef SEN3BOT_HAS_QR
-  std::unique_ptr<QrTask> qr_task_;
+  ModuleRow<QrTask> qr_task_;
 #endif
 #ifdef SEN3BOT_HAS_RECOGNITION
-  std::unique_ptr<RecognitionTask> recognition_task_;
+  ModuleRow<RecognitionTask> recognition_task_;
 #endif
   std::vector<const tasks::TaskSpec*> rows_;  // the rows that run, in table order
   bool initialised_ = false;

@@ -191,6 +191,10 @@ int run_firmware(Firmware& fw, hal::Board& board, const FirmwareConfig& config, 
                lockstep == nullptr ? "real-time" : "lockstep simulated", duration_text(config.duration_s).c_str());
 
   if (lockstep == nullptr && config.lock_memory) {
+    if (config.thread_stack_bytes != 0) {
+      if (Status s = hal::set_default_thread_stack(config.thread_stack_bytes); !s)
+        std::fprintf(err, "sen3bot: warning: %s (continuing with the default)\n", s.error().c_str());
+    }
     if (Status s = hal::lock_memory(); !s)
       std::fprintf(err, "sen3bot: warning: %s (continuing without it)\n", s.error().c_str());
   }

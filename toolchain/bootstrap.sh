@@ -30,7 +30,9 @@ NATIVE_PACKAGES=(
   libyaml-cpp-dev
   libopencv-core-dev
   libopencv-imgproc-dev
-  libopencv-imgcodecs-dev
+  libopencv-imgcodecs-dev    # tests only: the firmware's JPEG/PNG are checked against OpenCV's codecs
+  libjpeg62-turbo-dev        # camera: JPEG frames, `sen3bot detect --image` (libjpeg-turbo)
+  libpng-dev                 # PNG figures and saved frames
   libopencv-objdetect-dev    # the on-board people detector (HOG), the QR tag reader
   libopencv-ml-dev           # operation recognition: the worker-path classifier (an MLP)
   opencv-doc                 # its tests: the people in OpenCV's sample images (Apache-2.0)

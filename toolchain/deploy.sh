@@ -6,6 +6,7 @@
 #
 # Copies, in one ssh connection (a tar stream), to the Pi:
 #   <build-dir>/firmware/sen3bot   -> /opt/sen3bot/bin/sen3bot          (replaced atomically)
+#   <build-dir>/firmware/sen3bot-*.so -> /opt/sen3bot/bin/ (the camera and vision rows' modules)
 #   config/*.yaml                  -> /etc/sen3bot/  (a changed file's old copy: *.yaml.previous)
 #   toolchain/sen3bot.service      -> /etc/systemd/system/sen3bot.service
 # then, on the Pi as root (through sudo unless logging in as root): systemctl daemon-reload,
@@ -14,7 +15,7 @@
 #   --arch          aarch64 (64-bit Raspberry Pi OS, default) or armhf (32-bit)
 #   --build-dir     where the cross build is (default <repo>/build-<arch>)
 #   --install-deps  first apt-get install on the Pi the runtime libraries the binary needs:
-#                   its DT_NEEDED entries mapped to Debian packages through the sysroot's index
+#                   its and its modules' DT_NEEDED entries mapped to Debian packages through the sysroot's index
 #                   (toolchain/sysroot.sh), e.g. libyaml-cpp0.7 libopencv-core406
 #   --no-restart    install the files and the unit, but do not enable/restart the service
 #   --dry-run       print every command instead of running it
@@ -26,7 +27,7 @@ set -euo pipefail
 readonly script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 readonly repo_dir="$(cd "${script_dir}/.." && pwd)"
 
-usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; }
 
 target=""
 arch=aarch64
@@ -94,12 +95,16 @@ elif ! readelf -h "${binary}" | grep -q "Machine:.*${elf_machine}"; then
   exit 1
 fi
 
+# The rows whose libraries are heavy, loaded when the configuration uses them (firmware/row_module.hpp).
+mapfile -t modules < <(find "${build_dir}/firmware" -maxdepth 1 -name 'sen3bot-*.so' 2>/dev/null | sort)
+
 # --- Runtime packages for --install-deps ---------------------------------------------------------
 runtime_packages=()
 if [[ "${install_deps}" == 1 ]]; then
   soname_index="${sysroot}/.sen3bot-sysroot.sonames"
   if [[ -f "${binary}" && -f "${soname_index}" ]]; then
-    mapfile -t needed < <(readelf -d "${binary}" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p')
+    mapfile -t needed < <(for f in "${binary}" "${modules[@]}"; do readelf -d "$f"; done |
+                            sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | sort -u)
     for soname in "${needed[@]}"; do
       pkg="$(awk -v so="${soname}" '$1 == so { print $2; exit }' "${soname_index}")"
       if [[ -z "${pkg}" ]]; then
@@ -121,6 +126,7 @@ stage="$(mktemp -d "${TMPDIR:-/tmp}/sen3bot-deploy.XXXXXX")"
 trap 'rm -rf "${stage}"' EXIT
 mkdir -p "${stage}/bin" "${stage}/config"
 if [[ -f "${binary}" ]]; then cp "${binary}" "${stage}/bin/sen3bot"; fi
+for module in "${modules[@]}"; do cp "${module}" "${stage}/bin/"; done
 cp "${repo_dir}"/config/*.yaml "${stage}/config/"
 cp "${script_dir}/sen3bot.service" "${stage}/sen3bot.service"
 
@@ -140,6 +146,11 @@ install -d -m 0755 ${remote_bin_dir} ${remote_config_dir}
 # A new inode, then rename: replaces the binary even while the old one runs.
 install -m 0755 bin/sen3bot ${remote_bin_dir}/.sen3bot.new
 mv -f ${remote_bin_dir}/.sen3bot.new ${remote_bin_dir}/sen3bot
+for m in bin/sen3bot-*.so; do
+  [ -f "\$m" ] || continue
+  install -m 0644 "\$m" ${remote_bin_dir}/.module.new
+  mv -f ${remote_bin_dir}/.module.new ${remote_bin_dir}/\$(basename "\$m")
+done
 for f in config/*.yaml; do
   dest=${remote_config_dir}/\$(basename "\$f")
   if [ -f "\$dest" ] && ! cmp -s "\$f" "\$dest"; then cp -p "\$dest" "\$dest.previous"; fi
@@ -167,7 +178,7 @@ install_cmd() {  # <remote staging dir>
        "rc=\$?; rm -rf $1; exit \$rc"
 }
 
-echo "deploy: ${binary} + config/*.yaml + sen3bot.service -> ${target}"
+echo "deploy: ${binary} + ${#modules[@]} row modules + config/*.yaml + sen3bot.service -> ${target}"
 if [[ "${#runtime_packages[@]}" -gt 0 ]]; then
   echo "deploy: runtime packages for the Pi: ${runtime_packages[*]}"
 fi

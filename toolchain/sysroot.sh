@@ -41,6 +41,7 @@ SYSROOT_PACKAGES=(
   libbenchmark-dev
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev
+  libjpeg62-turbo-dev libpng-dev  # JPEG in, PNG out (OpenCV's imgcodecs only for the tests)
   libopencv-objdetect406       # the on-board people detector (HOG); its -dev package below
   libssl-dev                   # camera: libcrypto (Digest auth)
   libavcodec-dev libavutil-dev libswscale-dev  # camera: H.264 decoding

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 
 #include "posix_error.hpp"
@@ -89,6 +90,20 @@ Status prefault_stack(std::size_t bytes) {
   }
   const long page = ::sysconf(_SC_PAGESIZE);
   touch_stack(bytes, page > 0 ? static_cast<std::size_t>(page) : 4096);
+  return {};
+}
+
+Status set_default_thread_stack(std::size_t bytes) {
+  if (bytes < static_cast<std::size_t>(PTHREAD_STACK_MIN))
+    return Error::format(Errc::invalid_argument, "thread stack: %zu bytes is below the minimum (%zu)", bytes,
+                         static_cast<std::size_t>(PTHREAD_STACK_MIN));
+  pthread_attr_t attr;
+  int err = ::pthread_getattr_default_np(&attr);
+  if (err != 0) return posix::errno_error(Errc::io, err, "pthread_getattr_default_np");
+  err = ::pthread_attr_setstacksize(&attr, bytes);
+  if (err == 0) err = ::pthread_setattr_default_np(&attr);
+  ::pthread_attr_destroy(&attr);
+  if (err != 0) return posix::errno_error(Errc::io, err, "thread stack: %zu bytes", bytes);
   return {};
 }
 

@@ -27,7 +27,7 @@ if(TARGET sen3bot_cobot_recognizer)
 
   sen3bot_test(cobot_recognize_command_tests
     SOURCES recognize_command_test.cpp
-    LIBS sen3bot_firmware
+    LIBS sen3bot_recognition_row
     LABELS cobot firmware)
   target_include_directories(cobot_recognize_command_tests PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
 endif()

@@ -10,7 +10,7 @@ namespace {
 constexpr const char* kValid = R"(
 robot: { name: test-bot }
 run: { clock: realtime, duration_s: 2.5 }
-realtime: { lock_memory: false, prefault_stack_bytes: 128KiB }
+realtime: { lock_memory: false, prefault_stack_bytes: 128KiB, thread_stack_bytes: 2MiB }
 threads:
   control: { cpu: 1 }
   background: { realtime: false }
@@ -34,6 +34,7 @@ TEST(Config, ParsesEveryKey) {
   EXPECT_DOUBLE_EQ(c.duration_s, 2.5);
   EXPECT_FALSE(c.lock_memory);
   EXPECT_EQ(c.prefault_stack_bytes, 128u * 1024);
+  EXPECT_EQ(c.thread_stack_bytes, 2u * 1024 * 1024);
   EXPECT_EQ(c.threads.at("control").cpu, 1);
   EXPECT_TRUE(c.threads.at("control").realtime);
   EXPECT_FALSE(c.threads.at("background").realtime);
@@ -452,6 +453,19 @@ TEST(Config, PeopleKeptWhileHidden) {
   EXPECT_NE(m.find("navigation.people.hidden.cage_growth_m: value -0.1 is outside"), std::string::npos) << m;
   m = message_of(std::string(kNavigation) + "  people: { detector: sim, hidden: { max_age_s: 5 } }\n");
   EXPECT_NE(m.find("navigation.people.hidden.max_age_s: unknown key"), std::string::npos) << m;
+}
+
+TEST(Config, ThreadStacksHoldThePrefault) {
+  const std::string minimal = "robot: { name: a }\nrun: { clock: realtime, duration_s: 1 }\ntasks: {}\n";
+  Result<FirmwareConfig> defaults = parse_config(minimal, "robot.yaml");
+  ASSERT_TRUE(defaults) << defaults.error().c_str();
+  EXPECT_EQ(defaults->thread_stack_bytes, 1024u * 1024);
+  Result<FirmwareConfig> glibc = parse_config(minimal + "realtime: { thread_stack_bytes: 0 }\n", "robot.yaml");
+  ASSERT_TRUE(glibc) << glibc.error().c_str();
+  EXPECT_EQ(glibc->thread_stack_bytes, 0u);
+  const std::string m =
+      message_of(minimal + "realtime: { prefault_stack_bytes: 256KiB, thread_stack_bytes: 256KiB }\n");
+  EXPECT_NE(m.find("realtime.thread_stack_bytes: expected 0 or at least"), std::string::npos) << m;
 }
 
 TEST(Config, AMissingFileSaysSo) {

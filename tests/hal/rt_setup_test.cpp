@@ -2,6 +2,8 @@
 // either success or a message that says what failed, never abort.
 #include <gtest/gtest.h>
 
+#include <pthread.h>
+
 #include <thread>
 
 #include "hal_test_util.hpp"
@@ -41,6 +43,27 @@ TEST(HalRtSetup, PrefaultStack) {
   ASSERT_FALSE(huge.ok());
   EXPECT_EQ(huge.error().code(), Errc::invalid_argument);
   EXPECT_TRUE(testing::contains(huge.error().message(), "stack")) << huge.error().c_str();
+}
+
+TEST(HalRtSetup, DefaultThreadStack) {
+  pthread_attr_t saved;
+  ASSERT_EQ(::pthread_getattr_default_np(&saved), 0);
+  std::size_t saved_bytes = 0;
+  ::pthread_attr_getstacksize(&saved, &saved_bytes);
+  ::pthread_attr_destroy(&saved);
+  ASSERT_TRUE(set_default_thread_stack(512 * 1024));
+  std::size_t seen = 0;
+  std::thread([&] {
+    pthread_attr_t attr;
+    ASSERT_EQ(::pthread_getattr_np(::pthread_self(), &attr), 0);
+    ::pthread_attr_getstacksize(&attr, &seen);
+    ::pthread_attr_destroy(&attr);
+  }).join();
+  EXPECT_EQ(seen, 512u * 1024);
+  EXPECT_EQ(set_default_thread_stack(16).error().code(), Errc::invalid_argument);
+  if (saved_bytes != 0) {
+    EXPECT_TRUE(set_default_thread_stack(saved_bytes));
+  }
 }
 
 TEST(HalRtSetup, FifoPriorityAnswers) {

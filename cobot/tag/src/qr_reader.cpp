@@ -7,10 +7,10 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
+#include "sen3bot/image/image_file.hpp"
 #include "sen3bot/cobot/qr_modules.hpp"
 #include "sen3bot/cobot/tag_symbol.hpp"
 
@@ -367,7 +367,11 @@ Status write_tag_png(const Tag& tag, const std::string& path, int module_px) {
     code.copyTo(page(cv::Rect(quiet_px, quiet_px, code.cols, code.rows)));
     cv::putText(page, caption, cv::Point((side_px - text.width) / 2, side_px + text.height), font, scale,
                 cv::Scalar(0), thickness, cv::LINE_AA);
-    if (!cv::imwrite(path, page)) return Error::format(Errc::io, "tag png: cannot write %s", path.c_str());
+    if (Status s = image::write_png(path, page.data, static_cast<std::uint32_t>(page.cols),
+                                     static_cast<std::uint32_t>(page.rows), page.step, 1);
+        !s) {
+      return Error::format(Errc::io, "tag png: %s", s.error().c_str());
+    }
   } catch (const cv::Exception& e) {
     return Error::format(Errc::io, "tag png: %s: %s", path.c_str(), e.what());
   }

@@ -5,8 +5,9 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "sen3bot/image/image_file.hpp"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -39,19 +40,13 @@ class JpegDecoder final : public FrameDecoder {
 
   bool decode(const EncodedFrame& frame, FramePool& pool, hal::Nanos now_ns) override {
     ++stats_.frames_in;
-    const int flags = pool.format() == PixelFormat::gray8 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR;
-    try {
-      const cv::Mat input(1, static_cast<int>(frame.data.size()), CV_8UC1, const_cast<std::uint8_t*>(frame.data.data()));
-      cv::imdecode(input, flags, &decoded_);  // reuses decoded_ when the size is unchanged
-    } catch (const cv::Exception&) {
-      decoded_.release();
-    }
-    if (decoded_.empty()) {
+    const int channels = pool.format() == PixelFormat::gray8 ? 1 : 3;
+    if (!image::decode_jpeg(frame.data, channels, decoded_)) {
       ++stats_.decode_errors;
       return false;
     }
-    stats_.source_width_px = static_cast<std::uint32_t>(decoded_.cols);
-    stats_.source_height_px = static_cast<std::uint32_t>(decoded_.rows);
+    stats_.source_width_px = decoded_.width_px;
+    stats_.source_height_px = decoded_.height_px;
     const int slot = pool.begin_write();
     if (slot < 0) {
       ++stats_.no_free_slot;
@@ -62,10 +57,12 @@ class JpegDecoder final : public FrameDecoder {
     fit_output_size(stats_.source_width_px, stats_.source_height_px, options_.downscale, pool.width_px(), pool.height_px(), w, h);
     cv::Mat out(static_cast<int>(h), static_cast<int>(w), pool.format() == PixelFormat::gray8 ? CV_8UC1 : CV_8UC3,
                 pool.slot_pixels(slot).data());
+    const cv::Mat decoded(static_cast<int>(decoded_.height_px), static_cast<int>(decoded_.width_px), out.type(),
+                          decoded_.pixels.data());
     if (w == stats_.source_width_px && h == stats_.source_height_px) {
-      decoded_.copyTo(out);
+      decoded.copyTo(out);
     } else {
-      cv::resize(decoded_, out, out.size(), 0, 0, cv::INTER_AREA);
+      cv::resize(decoded, out, out.size(), 0, 0, cv::INTER_AREA);
     }
     pool.publish(slot, w, h, frame.rtp_timestamp, frame.last_packet_ns, now_ns);
     ++stats_.frames_decoded;
@@ -74,7 +71,7 @@ class JpegDecoder final : public FrameDecoder {
 
  private:
   DecoderOptions options_;
-  cv::Mat decoded_;
+  image::Image decoded_;  // reused while the stream's size is unchanged
 };
 
 class H264Decoder final : public FrameDecoder {

@@ -4,8 +4,9 @@
 #include <cmath>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "sen3bot/image/image_file.hpp"
 
 namespace sen3bot::figure {
 
@@ -137,12 +138,9 @@ int Canvas::text_height(double size, int thickness) {
 }
 
 bool Canvas::write_png(const std::string& path) const {
-  const cv::Mat image(height_, width_, CV_8UC3, const_cast<std::uint8_t*>(bgr_.data()));
-  try {
-    return cv::imwrite(path, image);
-  } catch (const cv::Exception&) {
-    return false;
-  }
+  return image::write_png(path, bgr_.data(), static_cast<std::uint32_t>(width_), static_cast<std::uint32_t>(height_),
+                           static_cast<std::size_t>(width_) * 3, 3)
+      .ok();
 }
 
 }  // namespace sen3bot::figure

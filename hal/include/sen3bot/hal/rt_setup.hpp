@@ -22,6 +22,11 @@ Status unlock_memory();  // munlockall, for tests and orderly shutdown
 // stack has less room than that.
 Status prefault_stack(std::size_t bytes);
 
+// The stack size of threads started from now on that do not choose their own (std::thread never
+// does). glibc otherwise gives each RLIMIT_STACK, 8 MiB on Debian, all of which lock_memory()
+// then keeps resident. Errc::invalid_argument below PTHREAD_STACK_MIN.
+Status set_default_thread_stack(std::size_t bytes);
+
 // SCHED_FIFO at priority (1..99) for the calling thread. Needs CAP_SYS_NICE or an
 // RLIMIT_RTPRIO of at least priority; the Error says so.
 Status set_current_thread_fifo(int priority);

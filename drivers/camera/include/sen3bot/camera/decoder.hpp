@@ -1,6 +1,6 @@
 #pragma once
-// Decoders from encoded frames into the frame pool: H.264 with libavcodec, JPEG with OpenCV's
-// imdecode (libjpeg-turbo). Run on a non-real-time thread. A frame that fails to decode is
+// Decoders from encoded frames into the frame pool: H.264 with libavcodec, JPEG with
+// libjpeg-turbo (image_file.hpp). Run on a non-real-time thread. A frame that fails to decode is
 // counted and dropped, never fatal. The libraries allocate inside their decode calls (libjpeg
 // work memory per image, libavcodec reference pictures); our side reuses fixed buffers.
 #include <cstdint>
