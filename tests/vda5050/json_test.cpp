@@ -317,7 +317,7 @@ TEST(JsonWriter, KeepsUtf8AndReplacesInvalidBytes) {
   }
 }
 
-TEST(JsonWriter, FixedDecimalsMatchPrintf) {
+TEST(JsonWriter, FixedAndGeneralMatchPrintf) {
   const double values[] = {0.0, -0.0, 0.0005, 0.0015, 2.675, -1.2345, 1e-7, 123456.789, 1e21, -3.99999, 0.125, 7.0};
   for (const int decimals : {0, 1, 2, 3, 4, 6}) {
     for (const double v : values) {
@@ -327,6 +327,16 @@ TEST(JsonWriter, FixedDecimalsMatchPrintf) {
       char expected[64];
       std::snprintf(expected, sizeof expected, "%.*f", decimals, v);
       EXPECT_EQ(*w.finish(), std::string_view(expected)) << v << " with " << decimals;
+    }
+  }
+  for (const int digits : {1, 3, 6, 17}) {
+    for (const double v : {0.0, 1e-5, 0.0001, 123456.0, 1234567.0, -2.5e-300, 1e300, 0.1, 100.0}) {
+      std::array<char, 64> buf;
+      Writer w(buf);
+      w.general(v, digits);
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "%.*g", digits, v);
+      EXPECT_EQ(*w.finish(), std::string_view(expected)) << v << " with " << digits;
     }
   }
   std::array<char, 64> buf;

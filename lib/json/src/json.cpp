@@ -768,6 +768,23 @@ Writer& Writer::fixed(double value, int decimals) noexcept {
   return *this;
 }
 
+Writer& Writer::general(double value, int digits) noexcept {
+  if (!std::isfinite(value)) {
+    fail(Error(Errc::invalid_argument, "JSON writer: NaN or infinity has no JSON form"));
+    return *this;
+  }
+  if (digits < 1 || digits > 17) {
+    fail(Error::format(Errc::invalid_argument, "JSON writer: %d significant digits (1..17)", digits));
+    return *this;
+  }
+  if (!before_value()) return *this;
+  char buf[40];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, digits);
+  put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
 Writer& Writer::fixed_or_null(double value, int decimals) noexcept {
   return std::isfinite(value) ? fixed(value, decimals) : null();
 }

@@ -234,6 +234,9 @@ class Writer {
   Writer& fixed(double value, int decimals) noexcept;
   // fixed(), or null when the value is NaN or infinite (JSON has neither).
   Writer& fixed_or_null(double value, int decimals) noexcept;
+  // `digits` significant digits, fixed or exponent form, trailing zeros dropped (printf's
+  // "%.*g"; 1 <= digits <= 17).
+  Writer& general(double value, int digits) noexcept;
   Writer& uint32(std::uint32_t value) noexcept;
   Writer& int64(std::int64_t value) noexcept;
   Writer& uint64(std::uint64_t value) noexcept;
