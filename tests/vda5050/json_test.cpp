@@ -318,7 +318,7 @@ TEST(JsonWriter, KeepsUtf8AndReplacesInvalidBytes) {
 }
 
 TEST(JsonWriter, FixedAndGeneralMatchPrintf) {
-  const double values[] = {0.0, -0.0, 0.0005, 0.0015, 2.675, -1.2345, 1e-7, 123456.789, 1e21, -3.99999, 0.125, 7.0};
+  const double values[] = {0.0, -0.0, 0.0005, 0.0015, 2.675, -1.2345, 1e-7, -1e-7, -0.0004, 123456.789, 1e21, -3.99999, 0.125, 7.0};
   for (const int decimals : {0, 1, 2, 3, 4, 6}) {
     for (const double v : values) {
       std::array<char, 64> buf;
