@@ -18,6 +18,7 @@
 #include "sen3bot/formation/examples.hpp"
 #include "sen3bot/formation/service.hpp"
 #include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::centre {
 
@@ -207,14 +208,22 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const formation::FormationCounters& c = service.counters();
   const hal::PubSubStats link_stats = service.link().stats();
   const int signal = StopOnSignal::requested();
-  std::fprintf(out,
-               "{\"stopped_by\":\"%s\",\"run_s\":%.1f,\"poses\":%" PRIu64 ",\"rejected\":%" PRIu64 ",\"controller_steps\":%" PRIu64
-               ",\"stale_steps\":%" PRIu64 ",\"commands_sent\":%" PRIu64 ",\"switches\":%" PRIu64
-               ",\"formation_error_m\":%.4f,\"connects\":%" PRIu64 ",\"publish_dropped\":%" PRIu64 "}\n",
-               signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration",
-               static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, c.poses, c.rejected, c.controller_steps,
-               c.stale_steps, c.commands_sent, service.controller().switches(), service.controller().last().formation_error_m,
-               link_stats.connects, link_stats.publish_dropped);
+  json::FileSink sink(out);
+  json::Writer(sink)
+      .begin_object()
+      .member("stopped_by", signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration")
+      .key("run_s").fixed_or_null(static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, 1)
+      .member_uint64("poses", c.poses)
+      .member_uint64("rejected", c.rejected)
+      .member_uint64("controller_steps", c.controller_steps)
+      .member_uint64("stale_steps", c.stale_steps)
+      .member_uint64("commands_sent", c.commands_sent)
+      .member_uint64("switches", service.controller().switches())
+      .key("formation_error_m").fixed_or_null(service.controller().last().formation_error_m, 4)
+      .member_uint64("connects", link_stats.connects)
+      .member_uint64("publish_dropped", link_stats.publish_dropped)
+      .end_object();
+  std::fputc('\n', out);
   std::fflush(out);
   service.close(1.0);  // the stop goes out, then a clean disconnect
   created.value().reset();

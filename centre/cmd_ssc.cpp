@@ -14,6 +14,7 @@
 #include "centre_commands.hpp"
 #include "cli_util.hpp"
 #include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/ssc/service.hpp"
 
 namespace sen3bot::centre {
@@ -145,21 +146,27 @@ int ssc_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const ssc::ServiceCounters& c = service.counters();
   const hal::PubSubStats link_stats = service.link().stats();
   const int signal = StopOnSignal::requested();
-  std::fprintf(out,
-               "{\"stopped_by\":\"%s\",\"run_s\":%.1f,\"steps\":%llu,\"overruns\":%llu,\"states\":%llu,"
-               "\"people_reports\":%llu,\"rejected\":%llu,\"orders_sent\":%llu,\"cancels_sent\":%llu,"
-               "\"advisories_sent\":%llu,\"pauses_sent\":%llu,\"unknown_agvs\":%llu,\"connects\":%llu,"
-               "\"connection_losses\":%llu,\"receive_dropped\":%llu,\"publish_dropped\":%llu}\n",
-               signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration",
-               static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, static_cast<unsigned long long>(steps),
-               static_cast<unsigned long long>(overruns), static_cast<unsigned long long>(c.states),
-               static_cast<unsigned long long>(c.people_reports), static_cast<unsigned long long>(c.rejected),
-               static_cast<unsigned long long>(c.orders_sent), static_cast<unsigned long long>(c.cancels_sent),
-               static_cast<unsigned long long>(c.advisories_sent), static_cast<unsigned long long>(c.pauses_sent),
-               static_cast<unsigned long long>(c.unknown_agvs), static_cast<unsigned long long>(link_stats.connects),
-               static_cast<unsigned long long>(link_stats.connection_losses),
-               static_cast<unsigned long long>(link_stats.receive_dropped),
-               static_cast<unsigned long long>(link_stats.publish_dropped));
+  json::FileSink sink(out);
+  json::Writer(sink)
+      .begin_object()
+      .member("stopped_by", signal == SIGINT ? "SIGINT" : signal == SIGTERM ? "SIGTERM" : "duration")
+      .key("run_s").fixed_or_null(static_cast<double>(clock_ns(CLOCK_MONOTONIC) - start) * 1e-9, 1)
+      .member_uint64("steps", steps)
+      .member_uint64("overruns", overruns)
+      .member_uint64("states", c.states)
+      .member_uint64("people_reports", c.people_reports)
+      .member_uint64("rejected", c.rejected)
+      .member_uint64("orders_sent", c.orders_sent)
+      .member_uint64("cancels_sent", c.cancels_sent)
+      .member_uint64("advisories_sent", c.advisories_sent)
+      .member_uint64("pauses_sent", c.pauses_sent)
+      .member_uint64("unknown_agvs", c.unknown_agvs)
+      .member_uint64("connects", link_stats.connects)
+      .member_uint64("connection_losses", link_stats.connection_losses)
+      .member_uint64("receive_dropped", link_stats.receive_dropped)
+      .member_uint64("publish_dropped", link_stats.publish_dropped)
+      .end_object();
+  std::fputc('\n', out);
   std::fflush(out);
   service.close(1.0);  // what the last step queued goes out, then a clean disconnect
   created.value().reset();

@@ -9,6 +9,7 @@
 
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::firmware {
 
@@ -26,8 +27,8 @@ class CanIoPeer {
  public:
   virtual ~CanIoPeer() = default;
   virtual void step(hal::Nanos now) = 0;
-  // What the peer adds to the result line (",\"emulator\":{...}").
-  virtual void append_json(std::string& json) const = 0;
+  // What the peer adds to the result line's object (the "emulator" member).
+  virtual void write_json(json::Writer& w) const = 0;
 };
 
 // --iface IFACE|sim --node N [--set OUT=0|1 ...] [--timeout S], the node's configuration
@@ -37,7 +38,7 @@ int parse_can_io(int argc, char** argv, const char* program, const char* usage, 
 // master's state and counters on err.
 int run_can_io(const CanIoOptions& o, hal::CanBus& bus, CanIoPeer* peer, const char* program, std::FILE* out,
                std::FILE* err);
-// ",\"KEY\":\"0xHH\",\"KEY_on\":[1,...]": a byte of eight inputs or outputs.
-void append_can_bits(std::string& out, std::string_view key, std::uint8_t bits);
+// "KEY":"0xHH","KEY_on":[1,...]: a byte of eight inputs or outputs, as two members.
+void write_can_bits(json::Writer& w, std::string_view key, std::uint8_t bits);
 
 }  // namespace sen3bot::firmware

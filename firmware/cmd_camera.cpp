@@ -16,6 +16,7 @@
 #include "sen3bot/image/image_file.hpp"
 #include "sen3bot/camera/onvif_client.hpp"
 #include "sen3bot/camera/rtsp_url.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::firmware {
 namespace {
@@ -71,14 +72,6 @@ bool parse_positive(const char* text, double& out) {
   if (!parse_double(text, v) || !(v > 0)) return false;
   out = v;
   return true;
-}
-
-void json_escape(std::FILE* out, std::string_view s) {
-  for (char c : s) {
-    if (c == '"' || c == '\\') std::fputc('\\', out);
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    std::fputc(c, out);
-  }
 }
 
 int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
@@ -153,10 +146,16 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
     const camera::CameraStatus status = (*cam)->status();
     if (!described && status.state == camera::ClientState::playing) {
       described = true;
-      std::fprintf(out, "{\"event\":\"playing\",\"codec\":\"%s\",\"transport\":\"%s\",\"setup_url\":\"",
-                   camera::to_string(status.stream.codec), camera::to_string(status.stream.transport));
-      json_escape(out, status.stream.setup_url);
-      std::fprintf(out, "\",\"session_timeout_s\":%d}\n", status.stream.session_timeout_s);
+      json::FileSink sink(out);
+      json::Writer w(sink);
+      w.begin_object()
+          .member("event", "playing")
+          .member("codec", camera::to_string(status.stream.codec))
+          .member("transport", camera::to_string(status.stream.transport))
+          .member("setup_url", status.stream.setup_url)
+          .member_int64("session_timeout_s", status.stream.session_timeout_s)
+          .end_object();
+      std::fputc('\n', out);
       std::fflush(out);
     }
     if (status.decoder.frames_decoded >= wanted || status.failed() || std::chrono::steady_clock::now() >= deadline) break;
@@ -193,13 +192,21 @@ int probe(int argc, char** argv, std::FILE* out, std::FILE* err) {
                  static_cast<unsigned long long>(decoded), static_cast<unsigned long long>(wanted), timeout_s,
                  status.last_error.empty() ? "" : "; last error: ", status.last_error.c_str());
   }
-  std::fprintf(out,
-               "{\"codec\":\"%s\",\"width\":%u,\"height\":%u,\"transport\":\"%s\",\"frames_decoded\":%llu,"
-               "\"frames_dropped\":%llu,\"fps\":%.2f,\"latency_ms_p50\":%.2f,\"rtp_packets\":%llu,\"rtp_lost\":%llu}\n",
-               camera::to_string(status.stream.codec), status.decoder.source_width_px, status.decoder.source_height_px,
-               camera::to_string(status.stream.transport), static_cast<unsigned long long>(decoded),
-               static_cast<unsigned long long>(dropped), fps, status.latency_ms_p50,
-               static_cast<unsigned long long>(status.rtsp.rtp_packets), static_cast<unsigned long long>(status.rtsp.rtp_lost));
+  json::FileSink sink(out);
+  json::Writer w(sink);
+  w.begin_object()
+      .member("codec", camera::to_string(status.stream.codec))
+      .member_uint32("width", status.decoder.source_width_px)
+      .member_uint32("height", status.decoder.source_height_px)
+      .member("transport", camera::to_string(status.stream.transport))
+      .member_uint64("frames_decoded", decoded)
+      .member_uint64("frames_dropped", dropped)
+      .key("fps").fixed_or_null(fps, 2)
+      .key("latency_ms_p50").fixed_or_null(status.latency_ms_p50, 2)
+      .member_uint64("rtp_packets", status.rtsp.rtp_packets)
+      .member_uint64("rtp_lost", status.rtsp.rtp_lost)
+      .end_object();
+  std::fputc('\n', out);
   return decoded > 0 && !status.failed() ? 0 : 1;
 }
 
@@ -220,24 +227,17 @@ int discover_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::fprintf(err, "sen3bot camera discover: %s\n", found.error().c_str());
     return 1;
   }
-  std::fputs("[", out);
-  for (std::size_t i = 0; i < found->size(); ++i) {
-    const auto& m = (*found)[i];
-    std::fputs(i == 0 ? "\n  {\"endpoint\":\"" : ",\n  {\"endpoint\":\"", out);
-    json_escape(out, m.endpoint);
-    std::fputs("\",\"xaddrs\":[", out);
-    for (std::size_t k = 0; k < m.xaddrs.size(); ++k) {
-      std::fputs(k == 0 ? "\"" : ",\"", out);
-      json_escape(out, m.xaddrs[k]);
-      std::fputs("\"", out);
-    }
-    std::fputs("],\"types\":\"", out);
-    json_escape(out, m.types);
-    std::fputs("\",\"scopes\":\"", out);
-    json_escape(out, m.scopes);
-    std::fputs("\"}", out);
+  json::FileSink sink(out);
+  json::Writer w(sink);
+  w.begin_array();
+  for (const auto& m : *found) {
+    w.line(2).begin_object().member("endpoint", m.endpoint).key("xaddrs").begin_array();
+    for (const auto& xaddr : m.xaddrs) w.string(xaddr);
+    w.end_array().member("types", m.types).member("scopes", m.scopes).end_object();
   }
-  std::fputs(found->empty() ? "]\n" : "\n]\n", out);
+  if (!found->empty()) w.line(0);
+  w.end_array();
+  std::fputc('\n', out);
   return 0;
 }
 
@@ -297,11 +297,19 @@ int ptz_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (moved) std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
   // Always an explicit Stop: cheap cameras ignore the move's Timeout.
   const Status stopped = (*client)->stop(profile->token);
-  std::fprintf(out, "{\"profile\":\"");
-  json_escape(out, profile->token);
-  std::fprintf(out, "\",\"pan\":%.3f,\"tilt\":%.3f,\"zoom\":%.3f,\"seconds\":%.3f,\"moved\":%s,\"stopped\":%s,\"auth\":\"%s\"}\n",
-               pan, tilt, zoom, seconds, moved ? "true" : "false", stopped ? "true" : "false",
-               camera::onvif::to_string((*client)->auth_mode()));
+  json::FileSink sink(out);
+  json::Writer w(sink);
+  w.begin_object()
+      .member("profile", profile->token)
+      .key("pan").fixed_or_null(pan, 3)
+      .key("tilt").fixed_or_null(tilt, 3)
+      .key("zoom").fixed_or_null(zoom, 3)
+      .key("seconds").fixed_or_null(seconds, 3)
+      .member_bool("moved", static_cast<bool>(moved))
+      .member_bool("stopped", static_cast<bool>(stopped))
+      .member("auth", camera::onvif::to_string((*client)->auth_mode()))
+      .end_object();
+  std::fputc('\n', out);
   if (!moved) std::fprintf(err, "sen3bot camera ptz: %s\n", moved.error().c_str());
   return moved && stopped ? 0 : 1;
 }

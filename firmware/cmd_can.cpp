@@ -26,6 +26,7 @@
 #include "sen3bot/hal/can.hpp"
 #include "sen3bot/hal/candump.hpp"
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::firmware {
 
@@ -50,49 +51,39 @@ constexpr const char* kIoUsage =
   if (n > 0) out.append(text, std::min(static_cast<std::size_t>(n), sizeof text - 1));
 }
 
-// A JSON string: quotes and backslashes escaped, control and non-ASCII bytes as \u00XX (the
-// text comes from a file that may hold anything).
-void append_string(std::string& out, std::string_view key, std::string_view value) {
-  out += ",\"";
-  out += key;
-  out += "\":\"";
-  for (const char ch : value) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (c < 0x20 || c >= 0x7F) {
-      append(out, "\\u%04x", static_cast<unsigned>(c));
-    } else {
-      out += ch;
-    }
-  }
-  out += '"';
+[[gnu::format(printf, 1, 2)]] std::string printed(const char* fmt, ...) {
+  char text[64];
+  va_list args;
+  va_start(args, fmt);
+  const int n = std::vsnprintf(text, sizeof text, fmt, args);
+  va_end(args);
+  return n > 0 ? std::string(text, std::min(static_cast<std::size_t>(n), sizeof text - 1)) : std::string();
 }
 
-void append_hex(std::string& out, std::string_view key, std::span<const std::uint8_t> bytes) {
-  append(out, ",\"%.*s\":\"", static_cast<int>(key.size()), key.data());
-  for (const std::uint8_t b : bytes) append(out, "%02X", static_cast<unsigned>(b));
-  out += '"';
+void member_hex(json::Writer& w, std::string_view key, std::span<const std::uint8_t> bytes) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string hex;
+  for (const std::uint8_t b : bytes) {
+    hex += kHex[b >> 4];
+    hex += kHex[b & 0xF];
+  }
+  w.member(key, hex);
 }
 
 // The 8 bits of a CiA 401 digital byte: "0x05" and the numbers (1..8) of the bits that are set.
-void append_bits(std::string& out, std::string_view key, std::uint8_t bits) {
-  append(out, ",\"%.*s\":\"0x%02X\",\"%.*s_on\":[", static_cast<int>(key.size()), key.data(),
-         static_cast<unsigned>(bits), static_cast<int>(key.size()), key.data());
-  bool first = true;
+void write_bits(json::Writer& w, std::string_view key, std::uint8_t bits) {
+  w.member(key, printed("0x%02X", static_cast<unsigned>(bits)));
+  w.key(std::string(key) + "_on").begin_array();
   for (unsigned i = 0; i < 8; ++i) {
-    if ((bits >> i & 1u) == 0) continue;
-    append(out, first ? "%u" : ",%u", i + 1);
-    first = false;
+    if ((bits >> i & 1u) != 0) w.uint32(i + 1);
   }
-  out += ']';
+  w.end_array();
 }
 
 // Seconds as candump writes them (microseconds), exact rather than through a double.
-void append_time(std::string& out, std::int64_t unix_ns) {
-  append(out, "{\"t_s\":%lld.%06lld", static_cast<long long>(unix_ns / 1'000'000'000),
-         static_cast<long long>(unix_ns % 1'000'000'000 / 1000));
+void member_time(json::Writer& w, std::int64_t unix_ns) {
+  w.key("t_s").raw(printed("%lld.%06lld", static_cast<long long>(unix_ns / 1'000'000'000),
+                           static_cast<long long>(unix_ns % 1'000'000'000 / 1000)));
 }
 
 // --- Error frames --------------------------------------------------------------------------
@@ -123,19 +114,16 @@ constexpr std::array<Bit, 7> kControllerStates = {{
 }};
 
 template <std::size_t N>
-void append_names(std::string& out, std::string_view key, std::uint32_t bits, const std::array<Bit, N>& names) {
-  append(out, ",\"%.*s\":[", static_cast<int>(key.size()), key.data());
-  bool first = true;
+void write_names(json::Writer& w, std::string_view key, std::uint32_t bits, const std::array<Bit, N>& names) {
+  w.key(key).begin_array();
   std::uint32_t known = 0;
   for (const Bit& b : names) {
     known |= b.bit;
-    if ((bits & b.bit) == 0) continue;
-    append(out, first ? "\"%s\"" : ",\"%s\"", b.name);
-    first = false;
+    if ((bits & b.bit) != 0) w.string(b.name);
   }
   // Bits Linux may add later are shown rather than dropped.
-  if ((bits & ~known) != 0) append(out, first ? "\"0x%X\"" : ",\"0x%X\"", static_cast<unsigned>(bits & ~known));
-  out += ']';
+  if ((bits & ~known) != 0) w.string(printed("0x%X", static_cast<unsigned>(bits & ~known)));
+  w.end_array();
 }
 
 // The link state one error frame leads to, by the SocketCAN backend's own rule
@@ -148,49 +136,46 @@ std::optional<hal::CanLinkState> link_after(const CanFrame& f) {
   return from_off;
 }
 
-void describe_error_frame(std::string& out, const CanFrame& f) {
-  out += ",\"kind\":\"error\"";
-  append_names(out, "events", f.id, kErrorClasses);
-  if ((f.id & hal::can_error::kController) != 0 && f.dlc >= 2)
-    append_names(out, "controller", f.data[1], kControllerStates);
-  if (const std::optional<hal::CanLinkState> link = link_after(f))
-    append(out, ",\"link\":\"%s\"", hal::to_string(*link));
-  append_hex(out, "data", f.payload());
+void describe_error_frame(json::Writer& w, const CanFrame& f) {
+  w.member("kind", "error");
+  write_names(w, "events", f.id, kErrorClasses);
+  if ((f.id & hal::can_error::kController) != 0 && f.dlc >= 2) write_names(w, "controller", f.data[1], kControllerStates);
+  if (const std::optional<hal::CanLinkState> link = link_after(f)) w.member("link", hal::to_string(*link));
+  member_hex(w, "data", f.payload());
 }
 
 // --- CANopen ---------------------------------------------------------------------------------
 
-void describe_canopen(std::string& out, const CanFrame& f, const Classified& c) {
-  append(out, ",\"kind\":\"%s\"", canopen::to_string(c.kind));
-  if (c.node != 0) append(out, ",\"node\":%u", static_cast<unsigned>(c.node));
-  if (c.kind == Kind::tpdo || c.kind == Kind::rpdo) append(out, ",\"pdo\":%u", static_cast<unsigned>(c.pdo));
-  if (f.extended) out += ",\"extended\":true";
-  if (f.rtr) append(out, ",\"rtr\":true,\"dlc\":%u", static_cast<unsigned>(f.dlc));
-  else append_hex(out, "data", f.payload());
-  const auto malformed = [&](const Error& e) { append_string(out, "malformed", e.message()); };
+void describe_canopen(json::Writer& w, const CanFrame& f, const Classified& c) {
+  w.member("kind", canopen::to_string(c.kind));
+  if (c.node != 0) w.member_uint32("node", c.node);
+  if (c.kind == Kind::tpdo || c.kind == Kind::rpdo) w.member_uint32("pdo", c.pdo);
+  if (f.extended) w.member_bool("extended", true);
+  if (f.rtr) w.member_bool("rtr", true).member_uint32("dlc", f.dlc);
+  else member_hex(w, "data", f.payload());
+  const auto malformed = [&](const Error& e) { w.member("malformed", e.message()); };
   switch (c.kind) {
     case Kind::nmt:
       if (auto n = canopen::decode_nmt(f)) {
-        append(out, ",\"command\":\"%s\",\"target\":%u", canopen::to_string(n->command),
-               static_cast<unsigned>(n->node));
+        w.member("command", canopen::to_string(n->command)).member_uint32("target", n->node);
       } else {
         malformed(n.error());
       }
       break;
     case Kind::heartbeat:
       if (auto h = canopen::decode_heartbeat(f)) {
-        append(out, ",\"state\":\"%s\"", canopen::to_string(h->state));
-        if (h->toggle) out += ",\"toggle\":true";
+        w.member("state", canopen::to_string(h->state));
+        if (h->toggle) w.member_bool("toggle", true);
       } else {
         malformed(h.error());
       }
       break;
     case Kind::emcy:
       if (auto e = canopen::decode_emergency(f)) {
-        append(out, ",\"code\":\"0x%04X\",\"register\":\"0x%02X\"", static_cast<unsigned>(e->code),
-               static_cast<unsigned>(e->error_register));
-        append_string(out, "description", canopen::describe_emergency(e->code));
-        append_hex(out, "vendor", e->vendor);
+        w.member("code", printed("0x%04X", static_cast<unsigned>(e->code)))
+            .member("register", printed("0x%02X", static_cast<unsigned>(e->error_register)))
+            .member("description", canopen::describe_emergency(e->code));
+        member_hex(w, "vendor", e->vendor);
       } else {
         malformed(e.error());
       }
@@ -198,14 +183,14 @@ void describe_canopen(std::string& out, const CanFrame& f, const Classified& c) 
     case Kind::sdo_request:
     case Kind::sdo_response:
       if (auto s = canopen::decode_sdo(f)) {
-        append(out, ",\"sdo\":\"%s\",\"index\":\"0x%04X\",\"sub\":%u", canopen::to_string(s->type),
-               static_cast<unsigned>(s->at.index), static_cast<unsigned>(s->at.sub));
+        w.member("sdo", canopen::to_string(s->type))
+            .member("index", printed("0x%04X", static_cast<unsigned>(s->at.index)))
+            .member_uint32("sub", s->at.sub);
         if (s->type == canopen::SdoType::abort) {
-          append(out, ",\"abort_code\":\"0x%08X\"", static_cast<unsigned>(s->value));
-          append_string(out, "abort", canopen::describe_abort(s->value));
+          w.member("abort_code", printed("0x%08X", static_cast<unsigned>(s->value)))
+              .member("abort", canopen::describe_abort(s->value));
         } else if (s->size > 0) {
-          append(out, ",\"size\":%u,\"value\":%lu", static_cast<unsigned>(s->size),
-                 static_cast<unsigned long>(s->value));
+          w.member_uint32("size", s->size).member_uint64("value", s->value);
         }
       } else {
         malformed(s.error());
@@ -215,10 +200,10 @@ void describe_canopen(std::string& out, const CanFrame& f, const Classified& c) 
     case Kind::rpdo:
       // PDO1's first byte is the 8 digital inputs (TPDO1) or outputs (RPDO1) of a CiA 401
       // node's default mapping: what the robot's I/O node sends.
-      if (c.pdo == 1 && !f.rtr && f.dlc >= 1) append_bits(out, c.kind == Kind::tpdo ? "inputs" : "outputs", f.data[0]);
+      if (c.pdo == 1 && !f.rtr && f.dlc >= 1) write_bits(w, c.kind == Kind::tpdo ? "inputs" : "outputs", f.data[0]);
       break;
     case Kind::sync:
-      if (f.dlc >= 1 && !f.rtr) append(out, ",\"counter\":%u", static_cast<unsigned>(f.data[0]));
+      if (f.dlc >= 1 && !f.rtr) w.member_uint32("counter", f.data[0]);
       break;
     case Kind::other:
       break;
@@ -229,16 +214,19 @@ void describe_canopen(std::string& out, const CanFrame& f, const Classified& c) 
 std::string describe_frame_json(std::int64_t unix_ns, std::string_view interface, const CanFrame& f, bool error_frame) {
   std::string out;
   out.reserve(256);
-  append_time(out, unix_ns);
-  append_string(out, "interface", interface);
+  json::StringSink sink(out);
+  json::Writer w(sink);
+  w.begin_object();
+  member_time(w, unix_ns);
+  w.member("interface", interface);
   const std::uint32_t logged_id = error_frame ? (f.id | hal::can_error::kFlag) : f.id;
-  append(out, f.extended ? ",\"id\":\"%08X\"" : ",\"id\":\"%03X\"", static_cast<unsigned>(logged_id));
+  w.member("id", printed(f.extended ? "%08X" : "%03X", static_cast<unsigned>(logged_id)));
   if (error_frame) {
-    describe_error_frame(out, f);
+    describe_error_frame(w, f);
   } else {
-    describe_canopen(out, f, canopen::classify(f));
+    describe_canopen(w, f, canopen::classify(f));
   }
-  out += '}';
+  w.end_object();
   return out;
 }
 
@@ -279,9 +267,8 @@ int dump_log(std::FILE* in, const DumpOptions& o, std::FILE* out, std::FILE* err
     if (!line) {
       ++bad_lines;
       std::string obj;
-      append(obj, "{\"line\":%llu", static_cast<unsigned long long>(line_number));
-      append_string(obj, "error", line.error().message());
-      obj += '}';
+      json::StringSink sink(obj);
+      json::Writer(sink).begin_object().member_uint64("line", line_number).member("error", line.error().message()).end_object();
       print_line(out, obj);
       continue;
     }
@@ -338,9 +325,11 @@ int dump_live(hal::CanBus& bus, const DumpOptions& o, std::FILE* out, std::FILE*
     if (const hal::CanLinkState now = bus.link_state(); now != link) {
       link = now;
       std::string obj;
-      append_time(obj, clock.unix_now_ns());
-      append_string(obj, "interface", interface);
-      append(obj, ",\"kind\":\"link\",\"link\":\"%s\"}", hal::to_string(now));
+      json::StringSink sink(obj);
+      json::Writer w(sink);
+      w.begin_object();
+      member_time(w, clock.unix_now_ns());
+      w.member("interface", interface).member("kind", "link").member("link", hal::to_string(now)).end_object();
       print_line(out, obj);
     }
     std::fflush(out);
@@ -448,14 +437,13 @@ bool parse_set(std::string_view text, CanIoOptions& o) {
   return true;
 }
 
-void append_events(std::string& out, const canopen::IoNodeMaster& m) {
-  out += ",\"events\":{";
+void write_events(json::Writer& w, const canopen::IoNodeMaster& m) {
+  w.key("events").begin_object();
   for (std::size_t i = 0; i < canopen::kIoNodeEvents; ++i) {
     const auto e = static_cast<canopen::IoNodeEvent>(i);
-    append(out, i == 0 ? "\"%s\":%llu" : ",\"%s\":%llu", canopen::to_string(e),
-           static_cast<unsigned long long>(m.count(e)));
+    w.member_uint64(canopen::to_string(e), m.count(e));
   }
-  out += '}';
+  w.end_object();
 }
 
 // The master's state and counters, for an error message.
@@ -479,7 +467,7 @@ std::string master_summary(const canopen::IoNodeMaster& m, bool heard, const hal
 
 }  // namespace
 
-void append_can_bits(std::string& out, std::string_view key, std::uint8_t bits) { append_bits(out, key, bits); }
+void write_can_bits(json::Writer& w, std::string_view key, std::uint8_t bits) { write_bits(w, key, bits); }
 
 int parse_can_io(int argc, char** argv, const char* program, const char* usage, CanIoOptions& o, std::FILE* err) {
   for (int i = 0; i < argc; ++i) {
@@ -600,26 +588,34 @@ int run_can_io(const CanIoOptions& o, hal::CanBus& bus, CanIoPeer* peer, const c
     clock.sleep_until(next);
   }
 
-  std::string json;
-  append(json, "{\"iface\":\"%s\",\"node\":%u,\"state\":\"%s\",\"heartbeat\":\"%s\",\"inputs_valid\":%s",
-         o.iface.c_str(), o.node, canopen::to_string(master.state()), canopen::to_string(master.node_state()),
-         master.inputs_valid() ? "true" : "false");
-  append_bits(json, "inputs", master.inputs());
-  append_bits(json, "outputs", master.outputs());
-  append(json, ",\"link\":\"%s\",\"operational_s\":%.3f,\"frames_sent\":%llu,\"frames_received\":%llu",
-         hal::to_string(bus.link_state()), hal::to_seconds(operational_ns - start),
-         static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received));
-  append_events(json, master);
+  std::string line;
+  json::StringSink sink(line);
+  json::Writer w(sink);
+  w.begin_object()
+      .member("iface", o.iface)
+      .member_uint32("node", o.node)
+      .member("state", canopen::to_string(master.state()))
+      .member("heartbeat", canopen::to_string(master.node_state()))
+      .member_bool("inputs_valid", master.inputs_valid());
+  write_bits(w, "inputs", master.inputs());
+  write_bits(w, "outputs", master.outputs());
+  w.member("link", hal::to_string(bus.link_state()))
+      .key("operational_s").fixed_or_null(hal::to_seconds(operational_ns - start), 3)
+      .member_uint64("frames_sent", sent)
+      .member_uint64("frames_received", received);
+  write_events(w, master);
   if (master.count(canopen::IoNodeEvent::emergency) + master.count(canopen::IoNodeEvent::emergency_reset) > 0) {
     const canopen::Emergency& e = master.last_emergency();
-    append(json, ",\"last_emergency\":{\"code\":\"0x%04X\",\"register\":\"0x%02X\"", static_cast<unsigned>(e.code),
-           static_cast<unsigned>(e.error_register));
-    append_string(json, "description", canopen::describe_emergency(e.code));
-    json += '}';
+    w.key("last_emergency")
+        .begin_object()
+        .member("code", printed("0x%04X", static_cast<unsigned>(e.code)))
+        .member("register", printed("0x%02X", static_cast<unsigned>(e.error_register)))
+        .member("description", canopen::describe_emergency(e.code))
+        .end_object();
   }
-  if (peer != nullptr) peer->append_json(json);
-  json += '}';
-  print_line(out, json);
+  if (peer != nullptr) peer->write_json(w);
+  w.end_object();
+  print_line(out, line);
   return 0;
 }
 

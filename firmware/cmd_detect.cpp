@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 #include "commands.hpp"
 #include "sen3bot/image/image_file.hpp"
 #include "sen3bot/detector/hog.hpp"
@@ -81,15 +82,29 @@ int detect_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (times_ms.size() > 1) times_ms.erase(times_ms.begin());
   std::sort(times_ms.begin(), times_ms.end());
   const double median_ms = times_ms[times_ms.size() / 2];
-  std::fprintf(out, "{\"image\": \"%s\", \"width_px\": %d, \"height_px\": %d, \"scale\": %.3f, \"threshold\": %.3f, "
-                    "\"time_ms\": %.3f, \"runs\": %u, \"people\": [",
-               image_path.c_str(), image.cols, image.rows, config.scale, config.hit_threshold, median_ms, repeat);
+  json::FileSink sink(out);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .member("image", image_path)
+      .member_int64("width_px", image.cols)
+      .member_int64("height_px", image.rows)
+      .key("scale").fixed_or_null(config.scale, 3)
+      .key("threshold").fixed_or_null(config.hit_threshold, 3)
+      .key("time_ms").fixed_or_null(median_ms, 3)
+      .member_uint32("runs", repeat)
+      .key("people").begin_array();
   for (std::size_t b = 0; b < found.count; ++b) {
     const detector::Box& box = found.boxes[b];
-    std::fprintf(out, "%s{\"u0\": %.1f, \"v0\": %.1f, \"u1\": %.1f, \"v1\": %.1f, \"confidence\": %.3f}", b ? ", " : "",
-                 box.u0, box.v0, box.u1, box.v1, box.confidence);
+    w.begin_object()
+        .key("u0").fixed_or_null(box.u0, 1)
+        .key("v0").fixed_or_null(box.v0, 1)
+        .key("u1").fixed_or_null(box.u1, 1)
+        .key("v1").fixed_or_null(box.v1, 1)
+        .key("confidence").fixed_or_null(box.confidence, 3)
+        .end_object();
   }
-  std::fprintf(out, "]}\n");
+  w.end_array().end_object();
+  std::fputc('\n', out);
   if (!png.empty()) {
     cv::Mat drawn = image.clone();
     for (std::size_t b = 0; b < found.count; ++b) {

@@ -12,6 +12,7 @@
 
 #include "box_file.hpp"
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 #include "commands.hpp"
 #include "sen3bot/capture/reader.hpp"
 #include "sen3bot/lms200/capture_decode.hpp"
@@ -137,22 +138,27 @@ int fuse_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     std::array<nav::PersonFix, msg::PersonDetections::kMax> fixes{};
     const std::size_t n = fusion.fuse(view, laser, detections, fixes);
     placed += n;
-    std::fprintf(out, "{\"t_s\": %.6f, \"scan_t_s\": %.6f, \"people\": [", frame.t_s, nearest->t_s);
+    json::FileSink sink(out);
+    json::Writer w(sink, json::Style::spaced);
+    w.begin_object().key("t_s").fixed_or_null(frame.t_s, 6).key("scan_t_s").fixed_or_null(nearest->t_s, 6).key("people").begin_array();
     for (std::size_t i = 0; i < n; ++i) {
       const nav::PersonFix& f = fixes[i];
-      std::fprintf(out, "%s{\"box\": %u, \"x_m\": %.3f, \"y_m\": %.3f, \"range_m\": %.3f, \"width_m\": %.3f, \"points\": %u}",
-                   i ? ", " : "", f.box, f.x_m, f.y_m, f.range_m, f.width_m, f.points);
+      w.begin_object()
+          .member_uint32("box", f.box)
+          .key("x_m").fixed_or_null(f.x_m, 3)
+          .key("y_m").fixed_or_null(f.y_m, 3)
+          .key("range_m").fixed_or_null(f.range_m, 3)
+          .key("width_m").fixed_or_null(f.width_m, 3)
+          .member_uint32("points", f.points)
+          .end_object();
     }
-    std::fprintf(out, "], \"boxes\": {");
-    bool first = true;
+    w.end_array().key("boxes").begin_object();
     for (std::size_t v = 0; v < nav::kBoxVerdicts; ++v) {
       const std::uint64_t k = fusion.count(static_cast<nav::BoxVerdict>(v)) - before[v];
-      if (k == 0) continue;
-      std::fprintf(out, "%s\"%s\": %llu", first ? "" : ", ", nav::to_string(static_cast<nav::BoxVerdict>(v)),
-                   static_cast<unsigned long long>(k));
-      first = false;
+      if (k != 0) w.member_uint64(nav::to_string(static_cast<nav::BoxVerdict>(v)), k);
     }
-    std::fprintf(out, "}}\n");
+    w.end_object().end_object();
+    std::fputc('\n', out);
   }
   std::fprintf(err, "%zu scans, %zu frames, %zu people placed", scans.size(), frames->size(), placed);
   for (std::size_t v = 0; v < nav::kBoxVerdicts; ++v)

@@ -16,27 +16,35 @@
 #include "sen3bot/lms200/capture_decode.hpp"
 #include "sen3bot/lms200/device.hpp"
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::firmware {
 
 namespace {
 
 void print_scan_json(const lms200::LaserScan& s, std::FILE* out) {
-  std::fprintf(out,
-               "{\"t_s\":%.6f,\"seq\":%llu,\"angle_min_rad\":%.6f,\"angle_increment_rad\":%.8f,\"units\":\"%s\","
-               "\"baud\":%u,\"status\":\"0x%02x\",\"device_status\":%u,\"fault\":%s,\"count\":%u,\"ranges_m\":[",
-               hal::to_seconds(s.stamp_ns), static_cast<unsigned long long>(s.sequence), s.angle_min_rad,
-               s.angle_increment_rad, lms200::to_string(static_cast<lms200::Units>(s.units)).data(), s.baud, s.status,
-               s.device_status, s.scanner_fault ? "true" : "false", s.count);
+  char status[8];
+  std::snprintf(status, sizeof status, "0x%02x", static_cast<unsigned>(s.status));
+  json::FileSink sink(out);
+  json::Writer w(sink);
+  w.begin_object()
+      .key("t_s").fixed_or_null(hal::to_seconds(s.stamp_ns), 6)
+      .member_uint64("seq", s.sequence)
+      .key("angle_min_rad").fixed_or_null(s.angle_min_rad, 6)
+      .key("angle_increment_rad").fixed_or_null(s.angle_increment_rad, 8)
+      .member("units", lms200::to_string(static_cast<lms200::Units>(s.units)))
+      .member_uint32("baud", s.baud)
+      .member("status", status)
+      .member_uint32("device_status", s.device_status)
+      .member_bool("fault", s.scanner_fault)
+      .member_uint32("count", s.count)
+      .key("ranges_m").begin_array();
   for (std::size_t i = 0; i < s.count; ++i) {
-    if (i) std::fputc(',', out);
-    if (s.valid(i)) {
-      std::fprintf(out, "%.3f", s.ranges_m[i]);
-    } else {
-      std::fputs("null", out);
-    }
+    if (s.valid(i)) w.fixed_or_null(s.ranges_m[i], 3);
+    else w.null();
   }
-  std::fputs("]}\n", out);
+  w.end_array().end_object();
+  std::fputc('\n', out);
   std::fflush(out);
 }
 

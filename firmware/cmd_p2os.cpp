@@ -17,6 +17,7 @@
 #include "sen3bot/p2os/describe.hpp"
 #include "sen3bot/p2os/driver.hpp"
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/hal/board.hpp"
 
 namespace sen3bot::firmware {
@@ -118,8 +119,17 @@ int drive_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     }
     if (driver.take_new_sip()) {
       const p2os::BaseState& s = driver.state();
-      std::fprintf(out, "{\"t_s\":%.3f,\"x_m\":%.4f,\"y_m\":%.4f,\"theta_rad\":%.4f,\"v_m_s\":%.3f,\"battery_v\":%.1f}\n",
-                   hal::to_seconds(now - start), s.x_m, s.y_m, s.theta_rad, s.v_m_s, s.battery_v);
+      json::FileSink sink(out);
+      json::Writer(sink)
+          .begin_object()
+          .key("t_s").fixed_or_null(hal::to_seconds(now - start), 3)
+          .key("x_m").fixed_or_null(s.x_m, 4)
+          .key("y_m").fixed_or_null(s.y_m, 4)
+          .key("theta_rad").fixed_or_null(s.theta_rad, 4)
+          .key("v_m_s").fixed_or_null(s.v_m_s, 3)
+          .key("battery_v").fixed_or_null(s.battery_v, 1)
+          .end_object();
+      std::fputc('\n', out);
       std::fflush(out);
     }
     clock.sleep_until(now + kLoopNs);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 #include "commands.hpp"
 #include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/global_planner.hpp"
@@ -114,17 +115,24 @@ int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       std::fprintf(err, "sen3bot plan: %s after %zu expansions\n", nav::to_string(r.status), r.expansions);
       return 1;
   }
-  std::fprintf(out,
-               "{\"length_m\": %.6f, \"cells\": %zu, \"expansions\": %zu, \"time_ms\": %.3f, \"cost\": %.3f, "
-               "\"waypoints_passed\": %u, \"unit_cost\": %s, \"path\": [",
-               r.length_m, r.cells, r.expansions, time_ms, r.cost, static_cast<unsigned>(r.waypoints_passed),
-               unit_cost ? "true" : "false");
+  json::FileSink sink(out);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .key("length_m").fixed_or_null(r.length_m, 6)
+      .member_uint64("cells", r.cells)
+      .member_uint64("expansions", r.expansions)
+      .key("time_ms").fixed_or_null(time_ms, 3)
+      .key("cost").fixed_or_null(r.cost, 3)
+      .member_uint32("waypoints_passed", r.waypoints_passed)
+      .member_bool("unit_cost", unit_cost)
+      .key("path").begin_array();
   for (std::size_t i = 0; i < r.cells; ++i) {
     double x = 0, y = 0;
     costmap.costmap().cell_to_world(path[i].col, path[i].row, x, y);
-    std::fprintf(out, "%s[%.3f, %.3f]", i ? ", " : "", x, y);
+    w.begin_array().fixed_or_null(x, 3).fixed_or_null(y, 3).end_array();
   }
-  std::fprintf(out, "]}\n");
+  w.end_array().end_object();
+  std::fputc('\n', out);
   return 0;
 }
 

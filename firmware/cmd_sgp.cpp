@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "cli_util.hpp"
+#include "sen3bot/json/json.hpp"
 #include "commands.hpp"
 #include "safe_curve.hpp"
 #include "sen3bot/nav/map.hpp"
@@ -130,23 +131,31 @@ int sgp_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const nav::SgpResult r = sgp.plan(start, goal, direction);
   const double time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
 
-  std::fprintf(out,
-               "{\"stop\": \"%s\", \"direction\": %d, \"length_m\": %.6f, \"iterations\": %d, \"time_ms\": %.3f, "
-               "\"fit_time_ms\": %.3f, \"min_barrier\": %.6g, \"goal_distance_m\": %.6f, \"on_curve\": %s, "
-               "\"waypoints\": [",
-               nav::to_string(r.stop), r.direction, r.length_m, r.steps, time_ms, fit_ms, r.min_barrier, r.goal_distance_m,
-               r.on_curve ? "true" : "false");
-  const std::span<const nav::Point2D> w = sgp.waypoints();
-  for (std::size_t i = 0; i < w.size(); ++i) std::fprintf(out, "%s[%.4f, %.4f]", i ? ", " : "", w[i].x_m, w[i].y_m);
-  std::fprintf(out, "], \"ellipses\": [");
-  const std::span<const nav::Ellipse> held = sgp.obstacles();
-  for (std::size_t i = 0; i < held.size(); ++i) {
-    const nav::Ellipse& e = held[i];
-    std::fprintf(out, "%s{\"centre\": [%.4f, %.4f], \"semi_axes\": [%.4f, %.4f], \"angle_deg\": %.3f, \"cells\": %u}",
-                 i ? ", " : "", e.cx_m, e.cy_m, e.semi_major_m, e.semi_minor_m, e.angle_rad * 180.0 / std::numbers::pi,
-                 e.cells);
+  json::FileSink sink(out);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .member("stop", nav::to_string(r.stop))
+      .member_int64("direction", r.direction)
+      .key("length_m").fixed_or_null(r.length_m, 6)
+      .member_int64("iterations", r.steps)
+      .key("time_ms").fixed_or_null(time_ms, 3)
+      .key("fit_time_ms").fixed_or_null(fit_ms, 3)
+      .key("min_barrier");
+  if (std::isfinite(r.min_barrier)) w.general(r.min_barrier, 6);
+  else w.null();
+  w.key("goal_distance_m").fixed_or_null(r.goal_distance_m, 6).member_bool("on_curve", r.on_curve).key("waypoints").begin_array();
+  for (const nav::Point2D& p : sgp.waypoints()) w.begin_array().fixed_or_null(p.x_m, 4).fixed_or_null(p.y_m, 4).end_array();
+  w.end_array().key("ellipses").begin_array();
+  for (const nav::Ellipse& e : sgp.obstacles()) {
+    w.begin_object()
+        .key("centre").begin_array().fixed_or_null(e.cx_m, 4).fixed_or_null(e.cy_m, 4).end_array()
+        .key("semi_axes").begin_array().fixed_or_null(e.semi_major_m, 4).fixed_or_null(e.semi_minor_m, 4).end_array()
+        .key("angle_deg").fixed_or_null(e.angle_rad * 180.0 / std::numbers::pi, 3)
+        .member_uint32("cells", e.cells)
+        .end_object();
   }
-  std::fprintf(out, "]}\n");
+  w.end_array().end_object();
+  std::fputc('\n', out);
   if (!png.empty() && !write_figure(png, map_path, curve_path, *map, sgp, r, start, goal)) {
     std::fprintf(err, "sen3bot sgp: cannot write %s\n", png.c_str());
     return 1;

@@ -15,6 +15,7 @@
 
 #include "cli_util.hpp"
 #include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/sim/agv.hpp"
 #include "sim_commands.hpp"
 
@@ -133,10 +134,18 @@ int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const std::string offline = connection_text(vda5050::ConnectionState::offline);
   (void)link_handle.publish(connection_topic, {reinterpret_cast<const std::uint8_t*>(offline.data()), offline.size()}, 1, true);
   link_handle.close(1.0);
-  std::fprintf(out, "{\"serial\":\"%s\",\"x\":%.3f,\"y\":%.3f,\"theta\":%.3f,\"paused\":%s,\"advice\":\"%.*s\",\"advisories\":%llu}\n",
-               config.serial_number.c_str(), agv.x(), agv.y(), agv.theta(), agv.vehicle().paused() ? "true" : "false",
-               static_cast<int>(vda5050::to_string(agv.advice()).size()), vda5050::to_string(agv.advice()).data(),
-               static_cast<unsigned long long>(agv.advisories()));
+  json::FileSink sink(out);
+  json::Writer(sink)
+      .begin_object()
+      .member("serial", config.serial_number)
+      .key("x").fixed_or_null(agv.x(), 3)
+      .key("y").fixed_or_null(agv.y(), 3)
+      .key("theta").fixed_or_null(agv.theta(), 3)
+      .member_bool("paused", agv.vehicle().paused())
+      .member("advice", vda5050::to_string(agv.advice()))
+      .member_uint64("advisories", agv.advisories())
+      .end_object();
+  std::fputc('\n', out);
   std::fflush(out);
   return 0;
 }

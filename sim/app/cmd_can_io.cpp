@@ -46,12 +46,10 @@ class EmulatedNode final : public firmware::CanIoPeer {
   }
 
   // What the emulated node itself now has: the outputs arrived, not only went out.
-  void append_json(std::string& json) const override {
-    json += ",\"emulator\":{\"state\":\"";
-    json += canopen::to_string(emulator_.state());
-    json += '"';
-    firmware::append_can_bits(json, "outputs", emulator_.outputs());
-    json += '}';
+  void write_json(json::Writer& w) const override {
+    w.key("emulator").begin_object().member("state", canopen::to_string(emulator_.state()));
+    firmware::write_can_bits(w, "outputs", emulator_.outputs());
+    w.end_object();
   }
 
  private:

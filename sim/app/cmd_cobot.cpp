@@ -22,6 +22,7 @@
 #include "firmware.hpp"
 #include "report_figure.hpp"
 #include "sen3bot/cobot/polygon.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/sim/cobot/operator.hpp"
 #include "sen3bot/sim/cobot/sim_camera.hpp"
 #include "sen3bot/sim/sim_board.hpp"
@@ -445,46 +446,64 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
 bool write_report(const std::string& path, std::uint64_t seed, std::size_t attempts, const std::vector<CaseOutcome>& cases) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
-  std::fprintf(f, "{\n  \"scenario\": \"cobot\",\n  \"seed\": %llu,\n  \"attempts_per_case\": %zu,\n  \"cases\": [",
-               static_cast<unsigned long long>(seed), attempts);
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const CaseOutcome& c = cases[i];
-    std::fprintf(f,
-                 "%s\n    {\"name\": \"%s\", \"passed\": %s, \"attempts\": %zu, \"toggles\": %u, \"expected_toggles\": %u, "
-                 "\"false_toggles\": %u,\n     \"rejections\": {",
-                 i ? "," : "", c.name.c_str(), c.passed ? "true" : "false", c.attempts, c.toggles_on + c.toggles_off,
-                 c.expected_toggles, c.false_toggles);
+  json::FileSink sink(f);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .line(2).member("scenario", "cobot")
+      .line(2).member_uint64("seed", seed)
+      .line(2).member_uint64("attempts_per_case", attempts)
+      .line(2).key("cases").begin_array();
+  for (const CaseOutcome& c : cases) {
+    w.line(4).begin_object()
+        .member("name", c.name)
+        .member_bool("passed", c.passed)
+        .member_uint64("attempts", c.attempts)
+        .member_uint32("toggles", c.toggles_on + c.toggles_off)
+        .member_uint32("expected_toggles", c.expected_toggles)
+        .member_uint32("false_toggles", c.false_toggles);
+    w.line(5).key("rejections").begin_object();
     for (std::size_t r = 0; r < c.rejections.size(); ++r)
-      std::fprintf(f, "%s\"%s\": %u", r ? ", " : "", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)),
-                   c.rejections[r]);
-    std::fprintf(f, ", \"not_the_operator\": %u},\n", c.not_the_operator);
-    std::fprintf(f,
-                 "     \"follow\": {\"samples\": %zu, \"min_m\": %.3f, \"mean_m\": %.3f, \"max_m\": %.3f, \"goals\": %u, "
-                 "\"border_holds\": %u, \"outside_area_s\": %.2f},\n",
-                 c.follow.samples, c.follow.min_m, c.follow.mean_m, c.follow.max_m, c.follow_goals, c.border_holds,
-                 c.outside_area_s);
-    std::fprintf(f,
-                 "     \"wait4col_entries\": %u, \"post_error_m\": %.3f, \"waiting_at_end\": %s, \"contacts\": %llu, "
-                 "\"moving_contacts\": %llu, \"worker_path_points\": %zu,\n",
-                 c.wait4col_entries, c.post_error_m, c.waiting_at_end ? "true" : "false",
-                 static_cast<unsigned long long>(c.contacts), static_cast<unsigned long long>(c.moving_contacts),
-                 c.worker_path_points);
-    std::fprintf(f, "     \"operation\": {\"recognised\": \"%s\", \"probability\": %.4f, \"points\": %u},\n",
-                 c.operation.c_str(), c.operation_probability, c.operation_points);
-    std::fprintf(f, "     \"qr\": {\"frames_rendered\": %llu, \"frames_searched\": %llu, \"tags_read\": %llu},\n",
-                 static_cast<unsigned long long>(c.frames_rendered), static_cast<unsigned long long>(c.frames_searched),
-                 static_cast<unsigned long long>(c.tags_read));
-    std::fprintf(f, "     \"simulated_s\": %.1f, \"wall_s\": %.2f, \"tasks\": [", c.sim_s, c.wall_s);
-    for (std::size_t t = 0; t < c.stats.size(); ++t) {
-      const tasks::TaskStats& s = c.stats[t];
-      std::fprintf(f, "%s{\"name\": \"%.*s\", \"runs\": %llu, \"cpu_mean_us\": %.1f, \"cpu_max_us\": %.1f}", t ? ", " : "",
-                   static_cast<int>(s.name.size()), s.name.data(), static_cast<unsigned long long>(s.runs),
-                   static_cast<double>(s.cpu_mean_ns) / 1e3, static_cast<double>(s.cpu_max_ns) / 1e3);
+      w.member_uint32(::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)), c.rejections[r]);
+    w.member_uint32("not_the_operator", c.not_the_operator).end_object();
+    w.line(5).key("follow").begin_object()
+        .member_uint64("samples", c.follow.samples)
+        .key("min_m").fixed_or_null(c.follow.min_m, 3)
+        .key("mean_m").fixed_or_null(c.follow.mean_m, 3)
+        .key("max_m").fixed_or_null(c.follow.max_m, 3)
+        .member_uint32("goals", c.follow_goals)
+        .member_uint32("border_holds", c.border_holds)
+        .key("outside_area_s").fixed_or_null(c.outside_area_s, 2)
+        .end_object();
+    w.line(5).member_uint32("wait4col_entries", c.wait4col_entries)
+        .key("post_error_m").fixed_or_null(c.post_error_m, 3)
+        .member_bool("waiting_at_end", c.waiting_at_end)
+        .member_uint64("contacts", c.contacts)
+        .member_uint64("moving_contacts", c.moving_contacts)
+        .member_uint64("worker_path_points", c.worker_path_points);
+    w.line(5).key("operation").begin_object()
+        .member("recognised", c.operation)
+        .key("probability").fixed_or_null(c.operation_probability, 4)
+        .member_uint32("points", c.operation_points)
+        .end_object();
+    w.line(5).key("qr").begin_object()
+        .member_uint64("frames_rendered", c.frames_rendered)
+        .member_uint64("frames_searched", c.frames_searched)
+        .member_uint64("tags_read", c.tags_read)
+        .end_object();
+    w.line(5).key("simulated_s").fixed_or_null(c.sim_s, 1).key("wall_s").fixed_or_null(c.wall_s, 2).key("tasks").begin_array();
+    for (const tasks::TaskStats& t : c.stats) {
+      w.begin_object()
+          .member("name", t.name)
+          .member_uint64("runs", t.runs)
+          .key("cpu_mean_us").fixed_or_null(static_cast<double>(t.cpu_mean_ns) / 1e3, 1)
+          .key("cpu_max_us").fixed_or_null(static_cast<double>(t.cpu_max_ns) / 1e3, 1)
+          .end_object();
     }
-    std::fprintf(f, "]}");
+    w.end_array().end_object();
   }
-  std::fprintf(f, "\n  ]\n}\n");
-  return std::fclose(f) == 0;
+  w.line(2).end_array().line(0).end_object();
+  const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+  return std::fclose(f) == 0 && written;
 }
 
 }  // namespace

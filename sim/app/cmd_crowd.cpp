@@ -31,10 +31,10 @@
 #include "sen3bot/crowd/metrics.hpp"
 #include "sen3bot/crowd/recording.hpp"
 #include "sen3bot/crowd/scene.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/msg/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/nav_figure/case_figure.hpp"
-#include "sen3bot/sim/report/json_out.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -579,33 +579,36 @@ void print_table(std::FILE* out, const std::vector<VariantResults>& variants, co
   std::fprintf(out, "\n* successful runs only\n");
 }
 
-void json_rate(std::FILE* f, const char* name, const crowd::Rate& r) {
-  std::fprintf(f, "\"%s\": {\"count\": %zu, \"n\": %zu, \"rate\": %.4f, \"lower\": %.4f, \"upper\": %.4f}", name, r.count, r.n,
-               r.rate, r.lower, r.upper);
+void json_rate(json::Writer& w, std::string_view name, const crowd::Rate& r) {
+  w.key(name).begin_object()
+      .member_uint64("count", r.count)
+      .member_uint64("n", r.n)
+      .key("rate").fixed_or_null(r.rate, 4)
+      .key("lower").fixed_or_null(r.lower, 4)
+      .key("upper").fixed_or_null(r.upper, 4)
+      .end_object();
 }
 
-void json_quartiles(std::FILE* f, const char* name, const crowd::Quartiles& q) {
-  std::fprintf(f, "\"%s\": {\"n\": %zu, \"median\": ", name, q.n);
-  report::write_json_number(f, q.median);
-  std::fputs(", \"q1\": ", f);
-  report::write_json_number(f, q.q1);
-  std::fputs(", \"q3\": ", f);
-  report::write_json_number(f, q.q3);
-  std::fputs(", \"iqr\": ", f);
-  report::write_json_number(f, q.iqr);
-  std::fputs(", \"min\": ", f);
-  report::write_json_number(f, q.min);
-  std::fputs(", \"max\": ", f);
-  report::write_json_number(f, q.max);
-  std::fputs("}", f);
+void json_quartiles(json::Writer& w, std::string_view name, const crowd::Quartiles& q) {
+  w.key(name).begin_object()
+      .member_uint64("n", q.n)
+      .key("median").fixed_or_null(q.median, 4)
+      .key("q1").fixed_or_null(q.q1, 4)
+      .key("q3").fixed_or_null(q.q3, 4)
+      .key("iqr").fixed_or_null(q.iqr, 4)
+      .key("min").fixed_or_null(q.min, 4)
+      .key("max").fixed_or_null(q.max, 4)
+      .end_object();
 }
 
-void json_metrics(std::FILE* f, const crowd::RunMetrics& m) {
-  std::fprintf(f, "\"reached_goal\": %s, \"success\": %s, \"timeout\": %s, \"contacts_any\": %u, \"contacts_by_robot\": %u, "
-                  "\"cage_entries\": %u, \"time_to_goal_s\": ",
-               m.reached_goal ? "true" : "false", m.success ? "true" : "false", m.timeout ? "true" : "false", m.contacts_any,
-               m.contacts_by_robot, m.cage_entries);
-  report::write_json_number(f, m.time_to_goal_s);
+void json_metrics(json::Writer& w, const crowd::RunMetrics& m) {
+  w.member_bool("reached_goal", m.reached_goal)
+      .member_bool("success", m.success)
+      .member_bool("timeout", m.timeout)
+      .member_uint32("contacts_any", m.contacts_any)
+      .member_uint32("contacts_by_robot", m.contacts_by_robot)
+      .member_uint32("cage_entries", m.cage_entries)
+      .key("time_to_goal_s").fixed_or_null(m.time_to_goal_s, 4);
   const std::pair<const char*, double> rest[] = {
       {"time_ratio", m.time_ratio},           {"path_length_m", m.path_length_m},
       {"path_ratio", m.path_ratio},           {"min_distance_m", m.min_distance_m},
@@ -613,73 +616,59 @@ void json_metrics(std::FILE* f, const crowd::RunMetrics& m) {
       {"personal_zone_s", m.personal_zone_s}, {"danger_frequency", m.danger_frequency},
       {"mean_jerk_m_s3", m.mean_jerk_m_s3},   {"max_jerk_m_s3", m.max_jerk_m_s3},
       {"mean_angular_jerk_rad_s3", m.mean_angular_jerk_rad_s3}, {"max_angular_jerk_rad_s3", m.max_angular_jerk_rad_s3}};
-  for (const auto& [key, value] : rest) {
-    std::fprintf(f, ", \"%s\": ", key);
-    report::write_json_number(f, value);
-  }
-  std::fprintf(f, ", \"steps\": %llu", static_cast<unsigned long long>(m.steps));
+  for (const auto& [key, value] : rest) w.key(key).fixed_or_null(value, 4);
+  w.member_uint64("steps", m.steps);
 }
 
 bool write_report_json(const std::string& path, const Options& o, std::size_t people, const std::vector<VariantResults>& variants) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
-  std::fputs("{\n  \"experiment\": \"crowd\",\n  \"scene\": ", f);
-  if (o.trajectories.empty()) report::write_json_string(f, o.scene);
-  else std::fputs("\"recorded\"", f);
-  std::fputs(",\n  \"trajectories\": ", f);
-  if (o.trajectories.empty()) std::fputs("null", f);
-  else report::write_json_string(f, o.trajectories);
-  std::fprintf(f, ",\n  \"people\": %zu,\n  \"behaviour\": ", people);
-  if (!o.trajectories.empty()) std::fputs("\"recorded\"", f);
-  else if (o.behaviour) report::write_json_string(f, crowd::to_string(*o.behaviour));
-  else std::fputs("null", f);
-  std::fprintf(f, ",\n  \"runs\": %llu,\n  \"seed\": %llu,\n  \"jobs\": %ld,\n  \"clock\": \"%s\",\n  \"config\": ",
-               static_cast<unsigned long long>(o.runs), static_cast<unsigned long long>(o.seed), o.jobs,
-               o.realtime ? "realtime" : "lockstep");
-  report::write_json_string(f, o.config_path);
-  std::fputs(",\n  \"variants\": {", f);
-  for (std::size_t i = 0; i < variants.size(); ++i) {
-    const VariantResults& v = variants[i];
+  json::FileSink sink(f);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object().line(2).member("experiment", "crowd").line(2).member("scene", o.trajectories.empty() ? std::string_view(o.scene) : std::string_view("recorded"));
+  w.line(2).key("trajectories");
+  if (o.trajectories.empty()) w.null();
+  else w.string(o.trajectories);
+  w.line(2).member_uint64("people", people).line(2).key("behaviour");
+  if (!o.trajectories.empty()) w.string("recorded");
+  else if (o.behaviour) w.string(crowd::to_string(*o.behaviour));
+  else w.null();
+  w.line(2).member_uint64("runs", o.runs)
+      .line(2).member_uint64("seed", o.seed)
+      .line(2).member_int64("jobs", o.jobs)
+      .line(2).member("clock", o.realtime ? "realtime" : "lockstep")
+      .line(2).member("config", o.config_path);
+  w.line(2).key("variants").begin_object();
+  for (const VariantResults& v : variants) {
     const crowd::Aggregate& a = v.aggregate;
-    std::fprintf(f, "%s\n    \"%s\": {\n      \"aggregate\": {\"runs\": %zu, ", i ? "," : "", name_of(v.variant), a.n);
-    json_rate(f, "success", a.success);
-    std::fputs(", ", f);
-    json_rate(f, "collision", a.collision);
-    std::fputs(", ", f);
-    json_rate(f, "any_contact", v.any_contact);
-    std::fputs(", ", f);
-    json_rate(f, "timeout", a.timeout);
-    std::fputs(",\n        ", f);
-    json_quartiles(f, "time_to_goal_s", a.time_to_goal_s);
-    std::fputs(",\n        ", f);
-    json_quartiles(f, "time_ratio", v.time_ratio);
-    std::fputs(",\n        ", f);
-    json_quartiles(f, "path_ratio", v.path_ratio);
-    std::fputs(",\n        ", f);
-    json_quartiles(f, "min_distance_m", a.min_distance_m);
-    std::fputs(",\n        \"mean_intimate_zone_s\": ", f);
-    report::write_json_number(f, a.mean_intimate_zone_s);
-    std::fputs(", \"mean_personal_zone_s\": ", f);
-    report::write_json_number(f, a.mean_personal_zone_s);
-    std::fputs(", \"mean_danger_frequency\": ", f);
-    report::write_json_number(f, a.mean_danger_frequency);
-    std::fputs(", \"mean_cage_entries\": ", f);
-    report::write_json_number(f, v.mean_cage_entries);
-    std::fputs(", \"mean_jerk_m_s3\": ", f);
-    report::write_json_number(f, v.mean_jerk);
-    std::fputs(", \"max_jerk_m_s3\": ", f);
-    report::write_json_number(f, v.max_jerk);
-    std::fputs("},\n      \"runs\": [", f);
-    for (std::size_t k = 0; k < v.runs.size(); ++k) {
-      const CrowdRun& r = *v.runs[k];
-      std::fprintf(f, "%s\n        {\"seed\": %llu, ", k ? "," : "", static_cast<unsigned long long>(r.seed));
-      json_metrics(f, r.metrics);
-      std::fprintf(f, ", \"sim_s\": %.2f, \"wall_s\": %.3f}", r.sim_s, r.wall_s);
+    w.line(4).key(name_of(v.variant)).begin_object().line(6).key("aggregate").begin_object().member_uint64("runs", a.n);
+    json_rate(w, "success", a.success);
+    json_rate(w, "collision", a.collision);
+    json_rate(w, "any_contact", v.any_contact);
+    json_rate(w, "timeout", a.timeout);
+    json_quartiles(w.line(8), "time_to_goal_s", a.time_to_goal_s);
+    json_quartiles(w.line(8), "time_ratio", v.time_ratio);
+    json_quartiles(w.line(8), "path_ratio", v.path_ratio);
+    json_quartiles(w.line(8), "min_distance_m", a.min_distance_m);
+    w.line(8).key("mean_intimate_zone_s").fixed_or_null(a.mean_intimate_zone_s, 4)
+        .key("mean_personal_zone_s").fixed_or_null(a.mean_personal_zone_s, 4)
+        .key("mean_danger_frequency").fixed_or_null(a.mean_danger_frequency, 4)
+        .key("mean_cage_entries").fixed_or_null(v.mean_cage_entries, 4)
+        .key("mean_jerk_m_s3").fixed_or_null(v.mean_jerk, 4)
+        .key("max_jerk_m_s3").fixed_or_null(v.max_jerk, 4)
+        .end_object();
+    w.line(6).key("runs").begin_array();
+    for (const auto& run : v.runs) {
+      const CrowdRun& r = *run;
+      w.line(8).begin_object().member_uint64("seed", r.seed);
+      json_metrics(w, r.metrics);
+      w.key("sim_s").fixed_or_null(r.sim_s, 2).key("wall_s").fixed_or_null(r.wall_s, 3).end_object();
     }
-    std::fputs("\n      ]\n    }", f);
+    w.line(6).end_array().line(4).end_object();
   }
-  std::fputs("\n  }\n}\n", f);
-  return std::fclose(f) == 0;
+  w.line(2).end_object().line(0).end_object();
+  const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+  return std::fclose(f) == 0 && written;
 }
 
 bool write_runs_csv(const std::string& path, const std::vector<CrowdRun>& runs) {

@@ -28,6 +28,7 @@
 #include "simulated_mission.hpp"
 #include "mission_pool.hpp"
 #include "report_figure.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/nav_figure/case_figure.hpp"
 #include "sen3bot/sim/sim_board.hpp"
@@ -457,48 +458,61 @@ void print_table(std::FILE* out, const Options& o, const std::vector<VariantResu
 bool write_report_json(const std::string& path, const Options& o, const std::vector<VariantResults>& variants) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
-  std::fprintf(f,
-               "{\n  \"experiment\": \"dol\",\n  \"speed_m_s\": %.3f,\n  \"runs\": %llu,\n  \"boxes\": %d,\n  \"seed\": %llu,\n"
-               "  \"mover_prediction\": %s,\n  \"variants\": {",
-               o.speed_m_s, static_cast<unsigned long long>(o.runs), o.boxes, static_cast<unsigned long long>(o.seed),
-               o.prediction ? "true" : "false");
-  for (std::size_t i = 0; i < variants.size(); ++i) {
-    const VariantResults& v = variants[i];
+  json::FileSink sink(f);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .line(2).member("experiment", "dol")
+      .line(2).key("speed_m_s").fixed_or_null(o.speed_m_s, 3)
+      .line(2).member_uint64("runs", o.runs)
+      .line(2).member_int64("boxes", o.boxes)
+      .line(2).member_uint64("seed", o.seed)
+      .line(2).member_bool("mover_prediction", o.prediction)
+      .line(2).key("variants").begin_object();
+  for (const VariantResults& v : variants) {
     const Tally& t = v.tally;
     auto count = [&](const char* name, std::size_t n) {
-      std::fprintf(f, "      \"%s\": {\"count\": %zu, \"percent\": %.2f},\n", name, n, percent(n, t.runs));
+      w.line(6).key(name).begin_object().member_uint64("count", n).key("percent").fixed_or_null(percent(n, t.runs), 2).end_object();
     };
-    std::fprintf(f, "%s\n    \"%s\": {\n      \"runs\": %zu,\n", i ? "," : "", key(v.variant), t.runs);
+    w.line(4).key(key(v.variant)).begin_object().line(6).member_uint64("runs", t.runs);
     count("smooth", t.smooth);
     count("wait_recoveries", t.waits);
     count("collisions", t.collisions);
     count("successful", t.smooth + t.waits);
     count("timeouts", t.timeouts);
     const Quartiles q = quartiles(v.smooth_times);
-    if (q.n == 0)
-      std::fprintf(f, "      \"travel_time_s\": {\"runs\": 0, \"median\": null, \"q1\": null, \"q3\": null, \"iqr\": null, "
-                      "\"min\": null, \"max\": null},\n");
-    else
-      std::fprintf(f,
-                   "      \"travel_time_s\": {\"runs\": %zu, \"median\": %.3f, \"q1\": %.3f, \"q3\": %.3f, \"iqr\": %.3f, "
-                   "\"min\": %.3f, \"max\": %.3f},\n",
-                   q.n, q.median, q.q1, q.q3, q.iqr, q.min, q.max);
-    std::fprintf(f, "      \"missions\": [");
-    for (std::size_t m = 0; m < v.missions.size(); ++m) {
-      const MissionResult& r = *v.missions[m];
-      std::fprintf(f,
-                   "%s\n        {\"seed\": %llu, \"reached\": %s, \"contacts\": %llu, \"moving_contacts\": %llu, "
-                   "\"recoveries\": %u, \"waits\": %u, \"time_s\": %.2f, \"min_clearance_m\": %.3f, \"path_length_m\": %.3f, "
-                   "\"sim_s\": %.1f, \"wall_s\": %.3f, \"state\": \"%s\", \"class\": \"%s\"}",
-                   m ? "," : "", static_cast<unsigned long long>(r.seed), r.reached ? "true" : "false",
-                   static_cast<unsigned long long>(r.contacts), static_cast<unsigned long long>(r.moving_contacts),
-                   r.recoveries, r.waits, r.time_s, r.min_clearance_m, r.path_length_m, r.sim_s, r.wall_s,
-                   firmware::to_string(r.state), to_string(classify(r)));
+    w.line(6).key("travel_time_s").begin_object().member_uint64("runs", q.n);
+    const std::pair<const char*, double> stats[] = {{"median", q.median}, {"q1", q.q1}, {"q3", q.q3},
+                                                    {"iqr", q.iqr},       {"min", q.min}, {"max", q.max}};
+    for (const auto& [name, value] : stats) {
+      w.key(name);
+      if (q.n == 0) w.null();
+      else w.fixed_or_null(value, 3);
     }
-    std::fprintf(f, "\n      ]\n    }");
+    w.end_object();
+    w.line(6).key("missions").begin_array();
+    for (const auto* mission : v.missions) {
+      const MissionResult& r = *mission;
+      w.line(8).begin_object()
+          .member_uint64("seed", r.seed)
+          .member_bool("reached", r.reached)
+          .member_uint64("contacts", r.contacts)
+          .member_uint64("moving_contacts", r.moving_contacts)
+          .member_uint32("recoveries", r.recoveries)
+          .member_uint32("waits", r.waits)
+          .key("time_s").fixed_or_null(r.time_s, 2)
+          .key("min_clearance_m").fixed_or_null(r.min_clearance_m, 3)
+          .key("path_length_m").fixed_or_null(r.path_length_m, 3)
+          .key("sim_s").fixed_or_null(r.sim_s, 1)
+          .key("wall_s").fixed_or_null(r.wall_s, 3)
+          .member("state", firmware::to_string(r.state))
+          .member("class", to_string(classify(r)))
+          .end_object();
+    }
+    w.line(6).end_array().line(4).end_object();
   }
-  std::fprintf(f, "\n  }\n}\n");
-  return std::fclose(f) == 0;
+  w.line(2).end_object().line(0).end_object();
+  const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+  return std::fclose(f) == 0 && written;
 }
 
 }  // namespace

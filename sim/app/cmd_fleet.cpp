@@ -37,6 +37,7 @@
 #include "config.hpp"
 #include "firmware.hpp"
 #include "sen3bot/hal/pubsub.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/nav/map.hpp"
 #include "sen3bot/sim/agv.hpp"
 #include "sen3bot/figure/canvas.hpp"
@@ -555,11 +556,57 @@ struct LatestState {
   double x = 0, y = 0, theta = 0, speed = 0;
 };
 
-std::string json_number_or_null(bool known, double value) {
-  if (!known) return "null";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.2f", value);
-  return text;
+// The members both fleet reports open with: the scenario, its failures, the closest AGV-person
+// distance and the first times (null: never).
+struct ReportHead {
+  std::string_view scenario;
+  bool realtime = false;
+  const std::vector<std::string>* failures = nullptr;
+  double min_agv_person_m = 0;
+  double first_advice_s = -1, own_sensor_s = 0, lead_s = 0, unadvised_sensor_s = -1;
+  bool never_in_range = false;
+};
+
+void write_report_head(json::Writer& w, const ReportHead& h) {
+  w.begin_object().line(2).member("scenario", h.scenario);
+  if (h.realtime) w.line(2).member("mode", "realtime");
+  w.line(2).member_bool("ok", h.failures->empty()).line(2).key("failures").begin_array();
+  for (const std::string& f : *h.failures) w.string(f);
+  w.end_array().line(2).key("min_agv_person_distance_m").fixed_or_null(h.min_agv_person_m, 3);
+  const auto time_or_null = [&](std::string_view key, bool known, double value) {
+    w.line(2).key(key);
+    if (known) w.fixed_or_null(value, 2);
+    else w.null();
+  };
+  time_or_null("first_advice_s", h.first_advice_s >= 0, h.first_advice_s);
+  time_or_null("agv_own_sensor_first_s", !h.never_in_range, h.own_sensor_s);
+  time_or_null("advice_lead_s", h.first_advice_s >= 0 && !h.never_in_range, h.lead_s);
+  time_or_null("unadvised_own_sensor_first_s", h.unadvised_sensor_s >= 0, h.unadvised_sensor_s);
+}
+
+// The centre's event lines (JSON objects), one a line.
+void write_timeline(json::Writer& w, const std::vector<std::string>& events) {
+  w.line(2).key("timeline").begin_array();
+  for (const std::string& e : events) w.line(4).raw(e);
+  w.line(2).end_array();
+}
+
+void write_agv_samples(json::Writer& w, const FleetScenario& scenario, const std::vector<std::vector<AgvSample>>& samples) {
+  w.line(2).key("agvs").begin_array();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    w.line(4).begin_object().member("serial", scenario.agvs[i].serial).key("samples").begin_array();
+    for (const AgvSample& s : samples[i]) {
+      w.begin_object()
+          .key("t_s").fixed_or_null(s.t_s, 1)
+          .key("x").fixed_or_null(s.x, 2)
+          .key("y").fixed_or_null(s.y, 2)
+          .key("speed_m_s").fixed_or_null(s.speed, 3)
+          .member("advice", vda5050::to_string(s.advice))
+          .end_object();
+    }
+    w.end_array().end_object();
+  }
+  w.line(2).end_array();
 }
 
 int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& site_path,
@@ -858,45 +905,37 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
     failures.push_back(std::move(f));
   std::fprintf(out, "\nresult %s (realtime): %s", scenario.name, failures.empty() ? "ok" : "FAILED");
   for (const std::string& f : failures) std::fprintf(out, "; %s", f.c_str());
-  auto seconds = [](double t) { return t < 0 ? std::string("never") : json_number_or_null(true, t) + " s"; };
+  auto seconds = [](double t) {
+    if (t < 0) return std::string("never");
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2f s", t);
+    return std::string(text);
+  };
   std::fprintf(out, "\n  first advice to the AGV %s, its own scanner first in range %s, unadvised %s, closest AGV-person %.2f m\n",
                seconds(first_advice_s[0]).c_str(), seconds(own_sensor_s[0]).c_str(), seconds(unadvised_sensor_s[0]).c_str(),
                min_agv_person_m);
 
   if (!report_dir.empty()) {
     std::string json;
-    json += "{\n  \"scenario\": \"" + std::string(scenario.name) + "\",\n  \"mode\": \"realtime\",\n  \"ok\": " +
-            (failures.empty() ? "true" : "false") + ",\n  \"failures\": [";
-    for (std::size_t i = 0; i < failures.size(); ++i) json += (i ? ", \"" : "\"") + failures[i] + "\"";
-    json += "],\n";
-    char line[512];
-    std::snprintf(line, sizeof line, "  \"min_agv_person_distance_m\": %.3f,\n", min_agv_person_m);
-    json += line;
-    json += "  \"first_advice_s\": " + json_number_or_null(first_advice_s[0] >= 0, first_advice_s[0]) + ",\n";
-    json += "  \"agv_own_sensor_first_s\": " + json_number_or_null(!never_in_range, own_sensor_s[0]) + ",\n";
-    json += "  \"advice_lead_s\": " + json_number_or_null(first_advice_s[0] >= 0 && !never_in_range, lead_s) + ",\n";
-    json += "  \"unadvised_own_sensor_first_s\": " + json_number_or_null(unadvised_sensor_s[0] >= 0, unadvised_sensor_s[0]) + ",\n";
-    json += "  \"robots_online_s\": {";
-    bool first = true;
-    for (const auto& [serial, t] : robots_online) {
-      std::snprintf(line, sizeof line, "%s\"%s\": %.2f", first ? "" : ", ", serial.c_str(), t);
-      json += line;
-      first = false;
-    }
-    json += "},\n  \"timeline\": [\n";
-    for (std::size_t i = 0; i < events.size(); ++i) json += "    " + events[i] + (i + 1 < events.size() ? ",\n" : "\n");
-    json += "  ],\n  \"agvs\": [\n";
-    for (std::size_t i = 0; i < n_agvs; ++i) {
-      json += "    {\"serial\": \"" + std::string(scenario.agvs[i].serial) + "\", \"samples\": [";
-      for (std::size_t k = 0; k < samples[i].size(); ++k) {
-        const AgvSample& s = samples[i][k];
-        std::snprintf(line, sizeof line, "%s{\"t_s\": %.1f, \"x\": %.2f, \"y\": %.2f, \"speed_m_s\": %.3f, \"advice\": \"%s\"}",
-                      k ? ", " : "", s.t_s, s.x, s.y, s.speed, std::string(vda5050::to_string(s.advice)).c_str());
-        json += line;
-      }
-      json += std::string("]}") + (i + 1 < n_agvs ? ",\n" : "\n");
-    }
-    json += "  ],\n  \"centre\": " + centre + "\n}\n";
+    json::StringSink sink(json);
+    json::Writer w(sink, json::Style::spaced);
+    write_report_head(w, {.scenario = scenario.name,
+                          .realtime = true,
+                          .failures = &failures,
+                          .min_agv_person_m = min_agv_person_m,
+                          .first_advice_s = first_advice_s[0],
+                          .own_sensor_s = own_sensor_s[0],
+                          .lead_s = lead_s,
+                          .unadvised_sensor_s = unadvised_sensor_s[0],
+                          .never_in_range = never_in_range});
+    w.line(2).key("robots_online_s").begin_object();
+    for (const auto& [serial, t] : robots_online) w.key(serial).fixed_or_null(t, 2);
+    w.end_object();
+    write_timeline(w, events);
+    write_agv_samples(w, scenario, samples);
+    w.line(2).key("centre").raw(centre).line(0).end_object();
+    if (auto written = w.finish(); !written) return fail(err, std::string("report.json: ") + written.error().c_str(), 1);
+    json += '\n';
     if (!write_text(report_dir + "/report.json", json)) return fail(err, "cannot write " + report_dir + "/report.json", 1);
     std::fprintf(out, "report: %s/report.json, %s/events.jsonl and the programs' logs there\n", report_dir.c_str(), report_dir.c_str());
   }
@@ -1186,47 +1225,31 @@ int fleet_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (!report_dir.empty()) {
     std::string json;
     json.reserve(64 * 1024);
-    json += "{\n  \"scenario\": \"" + std::string(scenario.name) + "\",\n  \"ok\": " + (failures.empty() ? "true" : "false") + ",\n";
-    json += "  \"failures\": [";
-    for (std::size_t i = 0; i < failures.size(); ++i) json += (i ? ", \"" : "\"") + failures[i] + "\"";
-    json += "],\n";
-    char line[512];
-    auto number_or_null = [](bool known, double value) {
-      if (!known) return std::string("null");
-      char text[32];
-      std::snprintf(text, sizeof text, "%.2f", value);
-      return std::string(text);
-    };
-    std::snprintf(line, sizeof line, "  \"min_agv_person_distance_m\": %.3f,\n", min_agv_person_m);
-    json += line;
-    // null: never (no advice; no person within the AGV's own scanner's range).
-    json += "  \"first_advice_s\": " + number_or_null(first_advice_s[0] >= 0, first_advice_s[0]) + ",\n";
-    json += "  \"agv_own_sensor_first_s\": " + number_or_null(!never_in_range, own_sensor_s[0]) + ",\n";
-    json += "  \"advice_lead_s\": " + number_or_null(first_advice_s[0] >= 0 && !never_in_range, lead_s) + ",\n";
-    json += "  \"unadvised_own_sensor_first_s\": " + number_or_null(unadvised_sensor_s[0] >= 0, unadvised_sensor_s[0]) + ",\n";
-    json += "  \"timeline\": [\n";
-    const auto& lines = (*service)->event_lines();
-    for (std::size_t i = 0; i < lines.size(); ++i) json += "    " + lines[i] + (i + 1 < lines.size() ? ",\n" : "\n");
-    json += "  ],\n  \"agvs\": [\n";
-    for (std::size_t i = 0; i < agvs.size(); ++i) {
-      json += "    {\"serial\": \"" + std::string(scenario.agvs[i].serial) + "\", \"samples\": [";
-      for (std::size_t k = 0; k < samples[i].size(); ++k) {
-        const AgvSample& s = samples[i][k];
-        std::snprintf(line, sizeof line, "%s{\"t_s\": %.1f, \"x\": %.2f, \"y\": %.2f, \"speed_m_s\": %.3f, \"advice\": \"%s\"}",
-                      k ? ", " : "", s.t_s, s.x, s.y, s.speed, std::string(vda5050::to_string(s.advice)).c_str());
-        json += line;
-      }
-      json += std::string("]}") + (i + 1 < agvs.size() ? ",\n" : "\n");
-    }
-    json += "  ],\n";
+    json::StringSink sink(json);
+    json::Writer w(sink, json::Style::spaced);
+    write_report_head(w, {.scenario = scenario.name,
+                          .failures = &failures,
+                          .min_agv_person_m = min_agv_person_m,
+                          .first_advice_s = first_advice_s[0],
+                          .own_sensor_s = own_sensor_s[0],
+                          .lead_s = lead_s,
+                          .unadvised_sensor_s = unadvised_sensor_s[0],
+                          .never_in_range = never_in_range});
+    write_timeline(w, (*service)->event_lines());
+    write_agv_samples(w, scenario, samples);
     const ssc::ServiceCounters& c = (*service)->counters();
-    std::snprintf(line, sizeof line,
-                  "  \"centre\": {\"states\": %llu, \"people_reports\": %llu, \"orders_sent\": %llu, \"cancels_sent\": %llu, "
-                  "\"advisories_sent\": %llu, \"rejected\": %llu}\n}\n",
-                  static_cast<unsigned long long>(c.states), static_cast<unsigned long long>(c.people_reports),
-                  static_cast<unsigned long long>(c.orders_sent), static_cast<unsigned long long>(c.cancels_sent),
-                  static_cast<unsigned long long>(c.advisories_sent), static_cast<unsigned long long>(c.rejected));
-    json += line;
+    w.line(2).key("centre").begin_object()
+        .member_uint64("states", c.states)
+        .member_uint64("people_reports", c.people_reports)
+        .member_uint64("orders_sent", c.orders_sent)
+        .member_uint64("cancels_sent", c.cancels_sent)
+        .member_uint64("advisories_sent", c.advisories_sent)
+        .member_uint64("rejected", c.rejected)
+        .end_object()
+        .line(0)
+        .end_object();
+    if (auto written = w.finish(); !written) return fail(err, std::string("report.json: ") + written.error().c_str(), 1);
+    json += '\n';
     if (!write_text(report_dir + "/report.json", json)) return fail(err, "cannot write " + report_dir + "/report.json", 1);
     for (std::size_t i = 0; i < shots.size(); ++i) {
       const std::string png = report_dir + "/site_" + std::to_string(i + 1) + ".png";

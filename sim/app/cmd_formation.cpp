@@ -17,6 +17,7 @@
 
 #include "formation_sim.hpp"
 #include "sen3bot/figure/canvas.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/nav_figure/case_figure.hpp"
 #include "sim_commands.hpp"
 
@@ -305,29 +306,30 @@ std::string distances_csv(const FormationExample& ex, const Record& rec) {
   return csv;
 }
 
-std::string run_json(std::size_t index, const RunResult& r) {
+void write_run(json::Writer& w, std::size_t index, const RunResult& r) {
   const FormationMetrics& m = r.metrics;
-  std::string json = "    {\"run\": " + std::to_string(index) + ", \"passed\": " + (m.passed ? "true" : "false") + ", \"starts\": [";
-  for (std::size_t i = 0; i < r.starts.size(); ++i) {
-    char s[96];
-    std::snprintf(s, sizeof s, "%s[%.4f, %.4f, %.4f]", i ? ", " : "", r.starts[i].x, r.starts[i].y, r.starts[i].theta);
-    json += s;
+  w.begin_object().member_uint64("run", index).member_bool("passed", m.passed).key("starts").begin_array();
+  for (const auto& start : r.starts) {
+    w.begin_array().fixed_or_null(start.x, 4).fixed_or_null(start.y, 4).fixed_or_null(start.theta, 4).end_array();
   }
-  char line[512];
-  std::snprintf(line, sizeof line,
-                "], \"min_robot_distance_m\": %.4f, \"obstacle_contacts\": %llu, \"targets_reached\": %zu, "
-                "\"formation_error_m\": %.4f, \"final_formation_error_m\": %.4f, \"converge_s\": %.1f, \"centre_converge_s\": %.1f, "
-                "\"min_scale\": %.4f, "
-                "\"commands_sent\": %llu, \"stale_steps\": %llu, \"safety_stops\": %llu, \"switch_count\": %zu, \"switches_s\": [",
-                m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
-                m.final_formation_error_m, m.converge_s, m.centre_converge_s, m.min_scale, static_cast<unsigned long long>(m.commands_sent),
-                static_cast<unsigned long long>(m.stale_steps), static_cast<unsigned long long>(m.safety_stops), m.switches_s.size());
-  json += line;
-  for (std::size_t i = 0; i < m.switches_s.size(); ++i) json += (i ? ", " : "") + fmt("%.1f", m.switches_s[i]);
-  json += "], \"failures\": [";
-  for (std::size_t i = 0; i < m.failures.size(); ++i) json += (i ? ", \"" : "\"") + m.failures[i] + "\"";
-  json += "]}";
-  return json;
+  w.end_array()
+      .key("min_robot_distance_m").fixed_or_null(m.min_robot_distance_m, 4)
+      .member_uint64("obstacle_contacts", m.obstacle_contacts)
+      .member_uint64("targets_reached", m.targets_reached)
+      .key("formation_error_m").fixed_or_null(m.formation_error_m, 4)
+      .key("final_formation_error_m").fixed_or_null(m.final_formation_error_m, 4)
+      .key("converge_s").fixed_or_null(m.converge_s, 1)
+      .key("centre_converge_s").fixed_or_null(m.centre_converge_s, 1)
+      .key("min_scale").fixed_or_null(m.min_scale, 4)
+      .member_uint64("commands_sent", m.commands_sent)
+      .member_uint64("stale_steps", m.stale_steps)
+      .member_uint64("safety_stops", m.safety_stops)
+      .member_uint64("switch_count", m.switches_s.size())
+      .key("switches_s").begin_array();
+  for (const double t : m.switches_s) w.fixed_or_null(t, 1);
+  w.end_array().key("failures").begin_array();
+  for (const std::string& f : m.failures) w.string(f);
+  w.end_array().end_object();
 }
 
 }  // namespace
@@ -452,24 +454,36 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
                all_converged ? fmt("%.1f s", worst_converge).c_str() : "never (a run did not converge)");
 
   if (!report_dir.empty()) {
-    std::string json = "{\n";
-    json += "  \"example\": " + std::to_string(ex.number) + ",\n  \"name\": \"" + ex.name + "\",\n";
-    json += "  \"description\": \"" + std::string(ex.description) + "\",\n";
-    json += "  \"robots\": " + std::to_string(ex.starts.size()) + ",\n";
-    json += "  \"robot_radius_m\": " + fmt("%.2f", kFormationRadiusM) + ",\n  \"offset_m\": " + fmt("%.2f", kFormationOffsetM) + ",\n";
-    json += "  \"duration_s\": " + fmt("%.1f", duration_s) + ",\n  \"seed\": " + std::to_string(seed) + ",\n";
-    json += "  \"runs\": [\n";
-    for (std::size_t i = 0; i < results.size(); ++i) json += run_json(i, results[i]) + (i + 1 < results.size() ? ",\n" : "\n");
-    json += "  ],\n  \"summary\": {";
-    char line[512];
-    std::snprintf(line, sizeof line,
-                  "\"runs\": %zu, \"runs_passed\": %zu, \"min_robot_distance_m\": %.4f, \"obstacle_contacts\": %llu, "
-                  "\"targets_reached\": %zu, \"formation_error_m\": %.4f, \"converge_s\": %.1f, \"centre_converge_s\": %.1f, "
-                  "\"min_scale\": %.4f}\n}\n",
-                  results.size(), passed, worst_distance, static_cast<unsigned long long>(contacts),
-                  ex.config.task == formation::TaskKind::targets ? min_targets : std::size_t{0}, worst_error,
-                  all_converged ? worst_converge : -1.0, worst_centre_converge, least_scale);
-    json += line;
+    std::string json;
+    json::StringSink sink(json);
+    json::Writer w(sink, json::Style::spaced);
+    w.begin_object()
+        .line(2).member_int64("example", ex.number)
+        .line(2).member("name", ex.name)
+        .line(2).member("description", ex.description)
+        .line(2).member_uint64("robots", ex.starts.size())
+        .line(2).key("robot_radius_m").fixed_or_null(kFormationRadiusM, 2)
+        .line(2).key("offset_m").fixed_or_null(kFormationOffsetM, 2)
+        .line(2).key("duration_s").fixed_or_null(duration_s, 1)
+        .line(2).member_uint64("seed", seed)
+        .line(2).key("runs").begin_array();
+    for (std::size_t i = 0; i < results.size(); ++i) write_run(w.line(4), i, results[i]);
+    w.line(2).end_array()
+        .line(2).key("summary").begin_object()
+        .member_uint64("runs", results.size())
+        .member_uint64("runs_passed", passed)
+        .key("min_robot_distance_m").fixed_or_null(worst_distance, 4)
+        .member_uint64("obstacle_contacts", contacts)
+        .member_uint64("targets_reached", ex.config.task == formation::TaskKind::targets ? min_targets : std::size_t{0})
+        .key("formation_error_m").fixed_or_null(worst_error, 4)
+        .key("converge_s").fixed_or_null(all_converged ? worst_converge : -1.0, 1)
+        .key("centre_converge_s").fixed_or_null(worst_centre_converge, 1)
+        .key("min_scale").fixed_or_null(least_scale, 4)
+        .end_object()
+        .line(0)
+        .end_object();
+    if (auto written = w.finish(); !written) return fail(err, std::string("formation.json: ") + written.error().c_str(), 1);
+    json += '\n';
     const std::string base = report_dir + "/";
     if (!write_text(base + "formation.json", json)) return fail(err, "cannot write " + base + "formation.json", 1);
     if (!write_text(base + "distances.csv", distances_csv(ex, record))) return fail(err, "cannot write " + base + "distances.csv", 1);

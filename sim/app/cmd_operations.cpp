@@ -18,7 +18,7 @@
 
 #include "cli_util.hpp"
 #include "operations_report.hpp"
-#include "sen3bot/sim/report/json_out.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/path_file.hpp"
 #include "sen3bot/cobot/recognizer.hpp"
@@ -273,22 +273,31 @@ struct ExperimentOptions {
   TrainingPlan baseline_plan{.encoding = FeatureEncoding::occupancy};
 };
 
-void write_evaluation(std::FILE* f, const Evaluation& e, const char* indent) {
-  std::fprintf(f, "%s\"paths\": %zu,\n%s\"accuracy\": %.6f,\n", indent, e.paths, indent, e.accuracy);
-  std::fprintf(f, "%s\"confusion\": {\"rows\": \"true operation\", \"columns\": \"recognised\", \"classes\": [", indent);
-  for (std::size_t i = 0; i < e.classes.size(); ++i) std::fprintf(f, "%s%s", i ? ", " : "", report::json_quoted(e.classes[i]).c_str());
-  std::fprintf(f, "], \"matrix\": [");
-  for (std::size_t r = 0; r < e.confusion.size(); ++r) {
-    std::fprintf(f, "%s[", r ? ", " : "");
-    for (std::size_t c = 0; c < e.confusion[r].size(); ++c) std::fprintf(f, "%s%zu", c ? ", " : "", e.confusion[r][c]);
-    std::fprintf(f, "]");
+// The evaluation's members, one a line at `indent` spaces (the progressive rows 2 deeper).
+void write_evaluation(json::Writer& w, const Evaluation& e, std::size_t indent) {
+  w.line(indent).member_uint64("paths", e.paths).line(indent).key("accuracy").fixed_or_null(e.accuracy, 6);
+  w.line(indent).key("confusion").begin_object()
+      .member("rows", "true operation")
+      .member("columns", "recognised")
+      .key("classes").begin_array();
+  for (const std::string& name : e.classes) w.string(name);
+  w.end_array().key("matrix").begin_array();
+  for (const auto& row : e.confusion) {
+    w.begin_array();
+    for (const std::size_t n : row) w.uint64(n);
+    w.end_array();
   }
-  std::fprintf(f, "]},\n%s\"progressive\": [", indent);
-  for (std::size_t s = 0; s < cobot::kProgressSteps; ++s)
-    std::fprintf(f, "%s\n%s  {\"walked\": %.1f, \"right_probability\": %.6f, \"right_above_0_95\": %.6f, \"accuracy\": %.6f}",
-                 s ? "," : "", indent, cobot::kPrefixFractions[s], e.right_probability[s], e.confident[s],
-                 e.step_accuracy[s]);
-  std::fprintf(f, "\n%s],\n%s\"classify_us_median\": %.3f", indent, indent, e.median_us);
+  w.end_array().end_object();
+  w.line(indent).key("progressive").begin_array();
+  for (std::size_t s = 0; s < cobot::kProgressSteps; ++s) {
+    w.line(indent + 2).begin_object()
+        .key("walked").fixed_or_null(cobot::kPrefixFractions[s], 1)
+        .key("right_probability").fixed_or_null(e.right_probability[s], 6)
+        .key("right_above_0_95").fixed_or_null(e.confident[s], 6)
+        .key("accuracy").fixed_or_null(e.step_accuracy[s], 6)
+        .end_object();
+  }
+  w.line(indent).end_array().line(indent).key("classify_us_median").fixed_or_null(e.median_us, 3);
 }
 
 void print_table(std::FILE* out, const char* label, const Evaluation& e) {
@@ -503,30 +512,45 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
     const std::string json_path = o.report_dir + "/report.json";
     std::FILE* f = std::fopen(json_path.c_str(), "w");
     if (!f) return bad(err, kExperimentName, "--report: cannot write " + json_path);
-    std::fprintf(f, "{\n  \"experiment\": \"operations\",\n  \"operations_file\": %s,\n  \"model\": %s,\n",
-                 report::json_quoted(o.operations_path).c_str(), report::json_quoted(o.model_path).c_str());
-    std::fprintf(f, "  \"style\": %s,\n  \"held_out_style\": %s,\n  \"runs_per_operation\": %zu,\n  \"seed\": %llu,\n",
-                 report::json_quoted(style.name).c_str(), held_out ? "true" : "false", o.runs,
-                 static_cast<unsigned long long>(o.seed));
-    std::fprintf(f, "  \"recorded_from_first_task\": %s,\n", o.first_task ? "true" : "false");
-    write_evaluation(f, *ours, "  ");
-    std::fprintf(f, ",\n  \"targets\": {\"accuracy\": %.2f, \"accuracy_met\": %s, \"confident_at_60_percent\": %.2f, "
-                    "\"confident_met\": %s},\n",
-                 kTargetAccuracy, accuracy_met ? "true" : "false", kTargetConfident, progressive_met ? "true" : "false");
+    json::FileSink sink(f);
+    json::Writer w(sink, json::Style::spaced);
+    w.begin_object()
+        .line(2).member("experiment", "operations")
+        .line(2).member("operations_file", o.operations_path)
+        .line(2).member("model", o.model_path)
+        .line(2).member("style", style.name)
+        .line(2).member_bool("held_out_style", held_out)
+        .line(2).member_uint64("runs_per_operation", o.runs)
+        .line(2).member_uint64("seed", o.seed)
+        .line(2).member_bool("recorded_from_first_task", o.first_task);
+    write_evaluation(w, *ours, 2);
+    w.line(2).key("targets").begin_object()
+        .key("accuracy").fixed_or_null(kTargetAccuracy, 2)
+        .member_bool("accuracy_met", accuracy_met)
+        .key("confident_at_60_percent").fixed_or_null(kTargetConfident, 2)
+        .member_bool("confident_met", progressive_met)
+        .end_object();
     if (results.size() > 1) {
-      std::fprintf(f, "  \"source_style\": {\n    \"encoding\": \"occupancy\",\n    \"training_walks_per_operation\": %zu,\n",
-                   o.baseline_plan.per_class);
-      std::fprintf(f, "    \"training_s\": %.3f,\n    \"generation_s\": %.3f,\n", baseline_report.seconds, baseline_generate_s);
-      write_evaluation(f, results[1].evaluation, "    ");
-      std::fprintf(f, "\n  },\n");
+      w.line(2).key("source_style").begin_object()
+          .line(4).member("encoding", "occupancy")
+          .line(4).member_uint64("training_walks_per_operation", o.baseline_plan.per_class)
+          .line(4).key("training_s").fixed_or_null(baseline_report.seconds, 3)
+          .line(4).key("generation_s").fixed_or_null(baseline_generate_s, 3);
+      write_evaluation(w, results[1].evaluation, 4);
+      w.line(2).end_object();
     }
-    std::fprintf(f, "  \"reversal\": {\"paths\": %zu, \"order_encoded_accuracy\": %.6f", reversals.front().paths,
-                 reversals.front().accuracy());
-    if (reversals.size() > 1) std::fprintf(f, ", \"occupancy_only_accuracy\": %.6f", reversals[1].accuracy());
-    std::fprintf(f, "},\n");
-    std::fprintf(f, "  \"timing\": {\"classify_us_median\": %.3f, \"points_mean\": %.1f}\n}\n", ours->median_us,
-                 mean_points(*test));
-    std::fclose(f);
+    w.line(2).key("reversal").begin_object()
+        .member_uint64("paths", reversals.front().paths)
+        .key("order_encoded_accuracy").fixed_or_null(reversals.front().accuracy(), 6);
+    if (reversals.size() > 1) w.key("occupancy_only_accuracy").fixed_or_null(reversals[1].accuracy(), 6);
+    w.end_object();
+    w.line(2).key("timing").begin_object()
+        .key("classify_us_median").fixed_or_null(ours->median_us, 3)
+        .key("points_mean").fixed_or_null(mean_points(*test), 1)
+        .end_object();
+    w.line(0).end_object();
+    const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+    if (std::fclose(f) != 0 || !written) return bad(err, kExperimentName, "--report: cannot write " + json_path);
 
     const std::string subtitle = std::to_string(o.runs) + " " + style.name + " workers per operation (" +
                                  (held_out ? "a walking style not used in training" : "a training style") +

@@ -27,7 +27,7 @@
 #include "report_figure.hpp"
 #include "runner.hpp"
 #include "sen3bot/crowd/crowd.hpp"
-#include "sen3bot/sim/report/json_out.hpp"
+#include "sen3bot/json/json.hpp"
 #include "sen3bot/sim/sim_board.hpp"
 #include "sen3bot/sim/sim_config.hpp"
 #include "sim_commands.hpp"
@@ -267,89 +267,113 @@ struct CaseResult {
 bool write_json(const std::string& path, const Scenario& scenario, std::uint64_t seed, const std::vector<CaseResult>& results) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
-  std::fprintf(f, "{\n  \"scenario\": ");
-  report::write_json_string(f, scenario.name);
-  std::fprintf(f, ",\n  \"seed\": %llu,\n  \"cases\": [", static_cast<unsigned long long>(seed));
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const CaseResult& c = results[i];
+  json::FileSink sink(f);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object().line(2).member("scenario", scenario.name).line(2).member_uint64("seed", seed).line(2).key("cases");
+  w.begin_array();
+  for (const CaseResult& c : results) {
     const MissionReport& r = c.report;
     const RefereeReport& truth = c.truth;
     double time_s = 0;
     for (std::size_t g = 0; g < r.goals_reached; ++g) time_s += r.goal_time_s[g];
-    std::fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
-    report::write_json_string(f, c.name);
-    std::fprintf(f,
-                 ", \"reached\": %s, \"collisions\": %llu, \"contacts\": %llu, \"time_s\": %.2f, "
-                 "\"path_length_m\": %.3f, \"min_clearance_m\": %.3f, \"recoveries\": %u, \"replans\": %u, "
-                 "\"plan_failures\": %u, \"safety_limited_steps\": %llu, \"localization_error_max_m\": %.3f, "
-                 "\"simulated_s\": %.2f, \"wall_s\": %.3f,",
-                 r.state == MissionState::complete ? "true" : "false",
-                 static_cast<unsigned long long>(truth.moving_contacts), static_cast<unsigned long long>(truth.contacts),
-                 time_s, truth.true_path_length_m, truth.min_clearance_m, r.recoveries, r.plans > 0 ? r.plans - 1 : 0,
-                 r.plan_failures, static_cast<unsigned long long>(r.safety_limited_steps),
-                 truth.localization_error_max_m, c.sim_time_s,
-                 c.wall_time_s);
-    std::fprintf(f, " \"separation\": {\"limited_steps\": %llu, \"min_cap_m_s\": ",
-                 static_cast<unsigned long long>(r.separation_limited_steps));
-    report::write_json_number(f, r.separation_min_cap_m_s, "%.3f");
-    std::fprintf(f, ", \"gap_at_min_m\": ");
-    report::write_json_number(f, r.separation_gap_at_min_m, "%.3f");
-    std::fprintf(f, "},");
-    std::fprintf(f, " \"final_pose\": {\"x\": %.4f, \"y\": %.4f, \"theta\": %.4f},", c.final_pose.x_m, c.final_pose.y_m,
-                 c.final_pose.theta_rad);
-    std::fprintf(f, "\n     \"contact_events\": [");
-    for (std::size_t k = 0; k < c.contacts.size(); ++k)
-      std::fprintf(f, "%s{\"t_s\": %.2f, \"x\": %.3f, \"y\": %.3f, \"by_robot\": %s, \"with\": \"%s\"}", k ? ", " : "",
-                   c.contacts[k].t_s, c.contacts[k].pose.x_m, c.contacts[k].pose.y_m, c.contacts[k].moving ? "true" : "false",
-                   c.contacts[k].person ? "person" : "map or box");
-    std::fprintf(f, "],");
+    w.line(4).begin_object()
+        .member("name", c.name)
+        .member_bool("reached", r.state == MissionState::complete)
+        .member_uint64("collisions", truth.moving_contacts)
+        .member_uint64("contacts", truth.contacts)
+        .key("time_s").fixed_or_null(time_s, 2)
+        .key("path_length_m").fixed_or_null(truth.true_path_length_m, 3)
+        .key("min_clearance_m").fixed_or_null(truth.min_clearance_m, 3)
+        .member_uint32("recoveries", r.recoveries)
+        .member_uint32("replans", r.plans > 0 ? r.plans - 1 : 0)
+        .member_uint32("plan_failures", r.plan_failures)
+        .member_uint64("safety_limited_steps", r.safety_limited_steps)
+        .key("localization_error_max_m").fixed_or_null(truth.localization_error_max_m, 3)
+        .key("simulated_s").fixed_or_null(c.sim_time_s, 2)
+        .key("wall_s").fixed_or_null(c.wall_time_s, 3);
+    w.key("separation").begin_object()
+        .member_uint64("limited_steps", r.separation_limited_steps)
+        .key("min_cap_m_s").fixed_or_null(r.separation_min_cap_m_s, 3)
+        .key("gap_at_min_m").fixed_or_null(r.separation_gap_at_min_m, 3)
+        .end_object();
+    w.key("final_pose").begin_object()
+        .key("x").fixed_or_null(c.final_pose.x_m, 4)
+        .key("y").fixed_or_null(c.final_pose.y_m, 4)
+        .key("theta").fixed_or_null(c.final_pose.theta_rad, 4)
+        .end_object();
+    w.line(5).key("contact_events").begin_array();
+    for (const TimedPose& contact : c.contacts) {
+      w.begin_object()
+          .key("t_s").fixed_or_null(contact.t_s, 2)
+          .key("x").fixed_or_null(contact.pose.x_m, 3)
+          .key("y").fixed_or_null(contact.pose.y_m, 3)
+          .member_bool("by_robot", contact.moving)
+          .member("with", contact.person ? "person" : "map or box")
+          .end_object();
+    }
+    w.end_array();
     if (c.kidnapped) {
-      if (truth.relocalization_s >= 0) std::fprintf(f, " \"relocalization_s\": %.2f,", truth.relocalization_s);
-      else std::fprintf(f, " \"relocalization_s\": null,");
+      w.key("relocalization_s");
+      if (truth.relocalization_s >= 0) w.fixed_or_null(truth.relocalization_s, 2);
+      else w.null();
     }
-    if (c.sgp)
-      std::fprintf(f,
-                   "\n     \"safe_path\": {\"source\": \"sgp\", \"runs\": %u, \"stop\": \"%s\", \"waypoints\": %zu, "
-                   "\"length_m\": %.3f, \"time_ms\": %.3f},",
-                   c.sgp_runs, nav::to_string(c.sgp_result.stop), c.safe_path_points, c.sgp_result.length_m, c.sgp_time_ms);
-    else
-      std::fprintf(f, "\n     \"safe_path\": {\"source\": \"file\", \"waypoints\": %zu},", c.safe_path_points);
-    if (c.safety_io)
-      std::fprintf(f,
-                   "\n     \"safety_io\": {\"trips\": %llu, \"speed_at_event_m_s\": %.3f, \"stop_s\": %.3f, "
-                   "\"stop_distance_m\": %.3f, \"held_s\": %.2f},",
-                   static_cast<unsigned long long>(c.io_trips), c.io_speed_at_event_m_s, c.io_stop_s,
-                   c.io_stop_distance_m, c.io_held_s);
-    if (c.people)
-      std::fprintf(f,
-                   "\n     \"replans_triggered\": %llu, \"min_person_distance_m\": %.3f, \"cage_entries\": %llu, "
-                   "\"cage_entries_by_person\": %llu, \"person_boxes_located\": %llu,\n     \"person_error\": {\"samples\": %zu, \"median_m\": %.3f, "
-                   "\"p95_m\": %.3f, \"false_people\": %llu},",
-                   static_cast<unsigned long long>(c.replans_triggered), truth.min_person_distance_m,
-                   static_cast<unsigned long long>(c.cage_entries),
-                   static_cast<unsigned long long>(c.cage_entries_by_person), static_cast<unsigned long long>(c.boxes_located),
-                   c.person_errors.samples, c.person_errors.median_m, c.person_errors.p95_m,
-                   static_cast<unsigned long long>(c.person_errors.false_people));
-    std::fprintf(f, "\n     \"tasks\": [");
-    for (std::size_t t = 0; t < c.stats.size(); ++t) {
-      const tasks::TaskStats& s = c.stats[t];
-      std::fprintf(f, "%s\n       {\"name\": ", t ? "," : "");
-      report::write_json_string(f, s.name);
-      std::fprintf(f,
-                   ", \"period_us\": %lld, \"budget_us\": %lld, \"runs\": %llu, \"overruns\": %llu, \"slips\": %llu, "
-                   "\"skips\": %llu, \"exec_mean_us\": %.1f, \"exec_max_us\": %.1f, \"jitter_p99_us\": %.1f, "
-                   "\"cpu_mean_us\": %.1f, \"cpu_max_us\": %.1f, \"cpu_overruns\": %llu}",
-                   static_cast<long long>(s.period_us), static_cast<long long>(s.budget_us),
-                   static_cast<unsigned long long>(s.runs), static_cast<unsigned long long>(s.overruns),
-                   static_cast<unsigned long long>(s.slips), static_cast<unsigned long long>(s.skips),
-                   static_cast<double>(s.exec_mean_ns) / 1e3, static_cast<double>(s.exec_max_ns) / 1e3,
-                   static_cast<double>(s.jitter_p99_ns) / 1e3, static_cast<double>(s.cpu_mean_ns) / 1e3,
-                   static_cast<double>(s.cpu_max_ns) / 1e3, static_cast<unsigned long long>(s.cpu_overruns));
+    w.line(5).key("safe_path").begin_object();
+    if (c.sgp) {
+      w.member("source", "sgp")
+          .member_uint32("runs", c.sgp_runs)
+          .member("stop", nav::to_string(c.sgp_result.stop))
+          .member_uint64("waypoints", c.safe_path_points)
+          .key("length_m").fixed_or_null(c.sgp_result.length_m, 3)
+          .key("time_ms").fixed_or_null(c.sgp_time_ms, 3);
+    } else {
+      w.member("source", "file").member_uint64("waypoints", c.safe_path_points);
     }
-    std::fprintf(f, "]}");
+    w.end_object();
+    if (c.safety_io) {
+      w.line(5).key("safety_io").begin_object()
+          .member_uint64("trips", c.io_trips)
+          .key("speed_at_event_m_s").fixed_or_null(c.io_speed_at_event_m_s, 3)
+          .key("stop_s").fixed_or_null(c.io_stop_s, 3)
+          .key("stop_distance_m").fixed_or_null(c.io_stop_distance_m, 3)
+          .key("held_s").fixed_or_null(c.io_held_s, 2)
+          .end_object();
+    }
+    if (c.people) {
+      w.line(5).member_uint64("replans_triggered", c.replans_triggered)
+          .key("min_person_distance_m").fixed_or_null(truth.min_person_distance_m, 3)
+          .member_uint64("cage_entries", c.cage_entries)
+          .member_uint64("cage_entries_by_person", c.cage_entries_by_person)
+          .member_uint64("person_boxes_located", c.boxes_located);
+      w.line(5).key("person_error").begin_object()
+          .member_uint64("samples", c.person_errors.samples)
+          .key("median_m").fixed_or_null(c.person_errors.median_m, 3)
+          .key("p95_m").fixed_or_null(c.person_errors.p95_m, 3)
+          .member_uint64("false_people", c.person_errors.false_people)
+          .end_object();
+    }
+    w.line(5).key("tasks").begin_array();
+    for (const tasks::TaskStats& t : c.stats) {
+      w.line(7).begin_object()
+          .member("name", t.name)
+          .member_int64("period_us", t.period_us)
+          .member_int64("budget_us", t.budget_us)
+          .member_uint64("runs", t.runs)
+          .member_uint64("overruns", t.overruns)
+          .member_uint64("slips", t.slips)
+          .member_uint64("skips", t.skips)
+          .key("exec_mean_us").fixed_or_null(static_cast<double>(t.exec_mean_ns) / 1e3, 1)
+          .key("exec_max_us").fixed_or_null(static_cast<double>(t.exec_max_ns) / 1e3, 1)
+          .key("jitter_p99_us").fixed_or_null(static_cast<double>(t.jitter_p99_ns) / 1e3, 1)
+          .key("cpu_mean_us").fixed_or_null(static_cast<double>(t.cpu_mean_ns) / 1e3, 1)
+          .key("cpu_max_us").fixed_or_null(static_cast<double>(t.cpu_max_ns) / 1e3, 1)
+          .member_uint64("cpu_overruns", t.cpu_overruns)
+          .end_object();
+    }
+    w.end_array().end_object();
   }
-  std::fprintf(f, "\n  ]\n}\n");
-  return std::fclose(f) == 0;
+  w.line(2).end_array().line(0).end_object();
+  const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+  return std::fclose(f) == 0 && written;
 }
 
 // The case's walkers (people walking a two-point path back and forth) as a crowd's social or

@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   for (const PathRecord& p : *paths) {
     if (p.points() > kMaxPathPoints || p.xy.size() % 2 != 0) __builtin_trap();
-    // A name that is not valid UTF-8 is left out by the writer; the points always survive.
+    // Names read back are valid UTF-8 (the reader checks), so the line reads back whole.
     sen3bot::Result<PathRecord> again = parse_path_line(path_line(p));
     if (!again) __builtin_trap();
     if (again->xy.size() != p.xy.size()) __builtin_trap();

@@ -1,13 +1,16 @@
 // The JSON reader refuses what RFC 8259 refuses (with the byte offset and the reason) and what
-// exceeds its limits; the writer escapes, round-trips doubles and reports overflow.
+// exceeds its limits; the writer escapes, keeps UTF-8, round-trips doubles, prints fixed
+// decimals as printf does, writes to every sink alike and reports overflow.
 #include "sen3bot/json/json.hpp"
 
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "sen3bot/vda5050/types.hpp"
 
@@ -258,11 +261,6 @@ TEST(JsonWriter, MisuseAndUnrepresentableValues) {
   }
   {
     Writer w(buf);
-    w.string("\xff");
-    EXPECT_FALSE(w.finish());
-  }
-  {
-    Writer w(buf);
     w.begin_array().raw("{\"a\":1}").raw("[1,]").end_array();
     EXPECT_FALSE(w.finish());
   }
@@ -276,6 +274,135 @@ TEST(JsonWriter, MisuseAndUnrepresentableValues) {
     w.uint32(1).uint32(2);
     EXPECT_FALSE(w.finish());
   }
+}
+
+TEST(JsonWriter, EscapesEveryControlCharacter) {
+  std::string text;
+  for (int c = 0; c < 0x20; ++c) text += static_cast<char>(c);
+  text += "\"\\/\x7f";
+  std::array<char, 256> buf;
+  Writer w(buf);
+  w.string(text);
+  auto r = w.finish();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(*r,
+            "\"\\u0000\\u0001\\u0002\\u0003\\u0004\\u0005\\u0006\\u0007\\b\\t\\n\\u000b\\f\\r\\u000e\\u000f"
+            "\\u0010\\u0011\\u0012\\u0013\\u0014\\u0015\\u0016\\u0017\\u0018\\u0019\\u001a\\u001b\\u001c\\u001d"
+            "\\u001e\\u001f\\\"\\\\/\x7f\"");
+  StaticDocument<4> doc;
+  ASSERT_TRUE(doc.parse(*r));
+  char back[64];
+  EXPECT_EQ(std::string(back, *doc.root().string(back)), text);
+}
+
+TEST(JsonWriter, KeepsUtf8AndReplacesInvalidBytes) {
+  std::array<char, 128> buf;
+  {
+    // Two-, three- and four-byte sequences come out byte for byte.
+    Writer w(buf);
+    w.begin_object().member("caf\xc3\xa9", "\xe2\x82\xac \xf0\x9f\xa4\x96").end_object();
+    EXPECT_EQ(*w.finish(), "{\"caf\xc3\xa9\":\"\xe2\x82\xac \xf0\x9f\xa4\x96\"}");
+  }
+  {
+    // A stray continuation byte, a Latin-1 byte, a truncated sequence, an overlong form and an
+    // encoded surrogate: each byte that starts no valid sequence becomes U+FFFD.
+    Writer w(buf);
+    w.string("a\x80" "b\xe9" "c\xe2\x82" "d\xc0\xaf" "e\xed\xa0\x80");
+    auto r = w.finish();
+    ASSERT_TRUE(r);
+    const std::string bad = "\xef\xbf\xbd";
+    EXPECT_EQ(*r, "\"a" + bad + "b" + bad + "c" + bad + bad + "d" + bad + bad + "e" + bad + bad + bad + "\"");
+    StaticDocument<4> doc;
+    EXPECT_TRUE(doc.parse(*r));
+  }
+}
+
+TEST(JsonWriter, FixedAndGeneralMatchPrintf) {
+  const double values[] = {0.0, -0.0, 0.0005, 0.0015, 2.675, -1.2345, 1e-7, -1e-7, -0.0004, 123456.789, 1e21, -3.99999, 0.125, 7.0};
+  for (const int decimals : {0, 1, 2, 3, 4, 6}) {
+    for (const double v : values) {
+      std::array<char, 64> buf;
+      Writer w(buf);
+      w.fixed(v, decimals);
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "%.*f", decimals, v);
+      EXPECT_EQ(*w.finish(), std::string_view(expected)) << v << " with " << decimals;
+    }
+  }
+  for (const int digits : {1, 3, 6, 17}) {
+    for (const double v : {0.0, 1e-5, 0.0001, 123456.0, 1234567.0, -2.5e-300, 1e300, 0.1, 100.0}) {
+      std::array<char, 64> buf;
+      Writer w(buf);
+      w.general(v, digits);
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "%.*g", digits, v);
+      EXPECT_EQ(*w.finish(), std::string_view(expected)) << v << " with " << digits;
+    }
+  }
+  std::array<char, 64> buf;
+  Writer w(buf);
+  w.begin_array().fixed_or_null(std::nan(""), 3).fixed_or_null(HUGE_VAL, 3).fixed_or_null(1.5, 3).end_array();
+  EXPECT_EQ(*w.finish(), "[null,null,1.500]");
+  Writer bad(buf);
+  bad.fixed(HUGE_VAL, 2);
+  EXPECT_EQ(bad.finish().error().code(), Errc::invalid_argument);
+}
+
+TEST(JsonWriter, SpacedStyleAndLineBreaks) {
+  std::string out;
+  StringSink sink(out);
+  Writer w(sink, Style::spaced);
+  w.begin_object().line(2).member("name", "a").key("n").uint32(1).line(2).key("list").begin_array();
+  w.line(4).begin_object().member_fixed("x", 1.0, 2).end_object();
+  w.line(4).begin_object().member_fixed("x", 2.0, 2).end_object();
+  w.line(2).end_array().key("empty").begin_array().end_array().line(0).end_object();
+  ASSERT_TRUE(w.finish());
+  EXPECT_EQ(out,
+            "{\n  \"name\": \"a\", \"n\": 1,\n  \"list\": [\n    {\"x\": 1.00},\n    {\"x\": 2.00}\n  ], "
+            "\"empty\": []\n}");
+  EXPECT_EQ(w.size(), out.size());
+}
+
+TEST(JsonWriter, StringSinkGrowsAndFileSinkWrites) {
+  std::vector<std::uint8_t> bytes(1000);
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7);
+  // The same document into a fixed buffer, a string and a file is the same text.
+  const auto write = [&](Writer& w) {
+    w.begin_object().member("s", std::string(3000, 'x')).key("b").base64(bytes).key("n").number(0.1).end_object();
+  };
+  std::array<char, 8192> buf;
+  Writer fixed(buf);
+  write(fixed);
+  auto text = fixed.finish();
+  ASSERT_TRUE(text);
+  std::string out;
+  StringSink string_sink(out);
+  Writer to_string(string_sink);
+  write(to_string);
+  ASSERT_TRUE(to_string.finish());
+  EXPECT_EQ(out, *text);
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  FileSink file_sink(f);
+  Writer to_file(file_sink);
+  write(to_file);
+  ASSERT_TRUE(to_file.finish());
+  std::rewind(f);
+  std::string read(text->size() + 1, '\0');
+  read.resize(std::fread(read.data(), 1, read.size(), f));
+  std::fclose(f);
+  EXPECT_EQ(read, *text);
+}
+
+TEST(JsonWriter, FailedSinkWriteIsReported) {
+  struct Full final : Sink {
+    bool write(std::string_view) noexcept override { return false; }
+  } full;
+  Writer w(full);
+  w.begin_array().end_array();
+  auto r = w.finish();
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code(), Errc::io);
 }
 
 }  // namespace

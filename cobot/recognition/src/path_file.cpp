@@ -111,23 +111,19 @@ Result<std::vector<PathRecord>> load_paths(const std::string& path) {
 }
 
 std::string path_line(const PathRecord& record) {
-  // The names go through the JSON writer, which escapes them (and refuses invalid UTF-8: then
-  // the record is written without them rather than as broken JSON).
-  std::array<char, 8 * kMaxNameBytes + 64> buf{};
-  json::Writer w(buf);
+  std::string line;
+  json::StringSink sink(line);
+  json::Writer w(sink);
   w.begin_object().member("name", record.name);
   if (!record.operation.empty()) w.member("operation", record.operation);
-  w.key("points").begin_array().end_array().end_object();
-  Result<std::string_view> head = w.finish();
-  std::string line = head ? std::string(*head) : std::string("{\"points\":[]}");
-  line.resize(line.size() - 2);  // "...\"points\":[" : the points go here
-  char point[64];
+  w.key("points").begin_array();
   for (std::size_t i = 0; i + 1 < record.xy.size(); i += 2) {
-    std::snprintf(point, sizeof point, "%s[%.3f,%.3f]", i ? "," : "", static_cast<double>(record.xy[i]),
-                  static_cast<double>(record.xy[i + 1]));
-    line += point;
+    w.begin_array()
+        .fixed_or_null(static_cast<double>(record.xy[i]), 3)
+        .fixed_or_null(static_cast<double>(record.xy[i + 1]), 3)
+        .end_array();
   }
-  line += "]}";
+  w.end_array().end_object();
   return line;
 }
 

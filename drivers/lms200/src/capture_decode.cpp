@@ -1,9 +1,13 @@
 #include "sen3bot/lms200/capture_decode.hpp"
 
+#include <array>
 #include <cmath>
-#include <cstdarg>
+#include <cstdio>
 #include <limits>
+#include <string>
 #include <vector>
+
+#include "sen3bot/json/json.hpp"
 
 #include "sen3bot/lms200/device.hpp"
 #include "sen3bot/lms200/parser.hpp"
@@ -13,19 +17,40 @@ namespace sen3bot::lms200 {
 
 namespace {
 
-// fprintf, or nothing without a stream (for_each_scan decodes without printing).
-[[gnu::format(printf, 2, 3)]] void put(std::FILE* out, const char* format, ...) {
-  if (out == nullptr) return;
-  va_list args;
-  va_start(args, format);
-  std::vfprintf(out, format, args);
-  va_end(args);
+std::string hex(std::span<const std::uint8_t> bytes) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string text;
+  for (const std::uint8_t b : bytes) {
+    text += kHex[b >> 4];
+    text += kHex[b & 0xF];
+  }
+  return text;
 }
 
-void print_hex(std::FILE* out, std::span<const std::uint8_t> bytes) {
-  put(out, "%c", '"');
-  for (std::uint8_t b : bytes) put(out, "%02x", b);
-  put(out, "%c", '"');
+std::string hex_byte(unsigned value) {
+  char text[8];
+  std::snprintf(text, sizeof text, "0x%02x", value);
+  return text;
+}
+
+// A fixed-size text field up to its first NUL.
+template <std::size_t N>
+std::string_view text_field(const std::array<char, N>& field) {
+  std::size_t n = 0;
+  while (n < N && field[n] != '\0') ++n;
+  return {field.data(), n};
+}
+
+// One JSON object a line on `out`, or nothing without a stream (for_each_scan decodes without
+// printing).
+void print_line(std::FILE* out, const auto& write) {
+  if (out == nullptr) return;
+  json::FileSink sink(out);
+  json::Writer w(sink);
+  w.begin_object();
+  write(w);
+  w.end_object();
+  std::fputc('\n', out);
 }
 
 struct Decoder {
@@ -38,9 +63,13 @@ struct Decoder {
 
   void request(double t_s, FrameView f) {
     ++summary.requests;
-    put(out, "{\"t_s\":%.6f,\"dir\":\"tx\",\"cmd\":\"0x%02x\",\"len\":%u,\"bytes\":", t_s, f.code(), f.len());
-    print_hex(out, f.bytes);
-    put(out, "%s", "}\n");
+    print_line(out, [&](json::Writer& w) {
+      w.key("t_s").fixed_or_null(t_s, 6)
+          .member("dir", "tx")
+          .member("cmd", hex_byte(f.code()))
+          .member_uint32("len", f.len())
+          .member("bytes", hex(f.bytes));
+    });
     // A configuration write changes how later scans are read.
     if (f.code() == static_cast<std::uint8_t>(Command::write_config) && f.len() > 1 + config_offset::kMeasuringMode) {
       const std::uint8_t m = f.payload()[1 + config_offset::kMeasuringMode];
@@ -49,80 +78,92 @@ struct Decoder {
   }
 
   void reply(double t_s, FrameView f) {
-    put(out, "{\"t_s\":%.6f,\"dir\":\"rx\",\"code\":\"0x%02x\",\"status\":\"0x%02x\"", t_s, f.code(),
-             f.reply_status());
-    switch (f.code()) {
-      case kReplyModeChange:
-        if (auto r = decode_mode_change(f)) put(out, ",\"result\":%u", r->result);
-        break;
-      case kReplyStatus:
-        if (auto r = decode_status(f))
-          put(out, ",\"version\":\"%s\",\"mode\":\"0x%02x\",\"angle_deg\":%u,\"resolution_cdeg\":%u,\"baud\":%u",
-              r->software_version.data(), r->operating_mode, r->variant.angle_deg,
-              r->variant.resolution_cdeg, r->baud);
-        break;
-      case kReplyType:
-        if (auto r = decode_type(f)) put(out, ",\"type\":\"%s\"", r->type.data());
-        break;
-      case kReplyVariant:
-        if (auto r = decode_variant(f))
-          put(out, ",\"accepted\":%s,\"angle_deg\":%u,\"resolution_cdeg\":%u", r->accepted ? "true" : "false",
-              r->variant.angle_deg, r->variant.resolution_cdeg);
-        break;
-      case kReplyReadConfig:
-      case kReplyWriteConfig: {
-        auto r = f.code() == kReplyReadConfig ? decode_read_config(f) : decode_write_config(f);
-        if (r) {
-          put(out, ",\"accepted\":%s,\"config_bytes\":%u,\"units\":%u,\"measuring_mode\":\"0x%02x\"",
-              r->accepted ? "true" : "false", r->block.size, r->block.units(), r->block.measuring_mode());
-          if (valid_measuring_mode(r->block.measuring_mode()) && r->block.size > config_offset::kUnits)
-            mode = static_cast<MeasuringMode>(r->block.measuring_mode());
-        }
-        break;
+    // Decoded (and visited) whether or not it is printed; printed with the mode it was read in.
+    const MeasuringMode read_mode = mode;
+    Result<ScanTelegram> telegram = Error(Errc::not_found, "not a scan");
+    const bool is_scan = f.code() == kReplyScan || f.code() == kReplyMeanScan || f.code() == kReplySubrangeScan;
+    if (is_scan) {
+      telegram = decode_any_scan(f);
+      if (telegram) {
+        ++summary.scans;
+        if (visit != nullptr) visit_scan(t_s, f, *telegram, metres_per_unit(telegram->units));
       }
-      case kReplyScan:
-      case kReplyMeanScan:
-      case kReplySubrangeScan: scan(t_s, f); break;
-      default: break;
     }
-    put(out, "%s", "}\n");
+    print_line(out, [&](json::Writer& w) {
+      w.key("t_s").fixed_or_null(t_s, 6)
+          .member("dir", "rx")
+          .member("code", hex_byte(f.code()))
+          .member("status", hex_byte(f.reply_status()));
+      switch (f.code()) {
+        case kReplyModeChange:
+          if (auto r = decode_mode_change(f)) w.member_uint32("result", r->result);
+          break;
+        case kReplyStatus:
+          if (auto r = decode_status(f))
+            w.member("version", text_field(r->software_version))
+                .member("mode", hex_byte(r->operating_mode))
+                .member_uint32("angle_deg", r->variant.angle_deg)
+                .member_uint32("resolution_cdeg", r->variant.resolution_cdeg)
+                .member_uint32("baud", r->baud);
+          break;
+        case kReplyType:
+          if (auto r = decode_type(f)) w.member("type", text_field(r->type));
+          break;
+        case kReplyVariant:
+          if (auto r = decode_variant(f))
+            w.member_bool("accepted", r->accepted)
+                .member_uint32("angle_deg", r->variant.angle_deg)
+                .member_uint32("resolution_cdeg", r->variant.resolution_cdeg);
+          break;
+        case kReplyReadConfig:
+        case kReplyWriteConfig: {
+          auto r = f.code() == kReplyReadConfig ? decode_read_config(f) : decode_write_config(f);
+          if (r)
+            w.member_bool("accepted", r->accepted)
+                .member_uint32("config_bytes", r->block.size)
+                .member_uint32("units", r->block.units())
+                .member("measuring_mode", hex_byte(r->block.measuring_mode()));
+          break;
+        }
+        default:
+          if (is_scan) print_scan(w, telegram, read_mode);
+          break;
+      }
+    });
+    if (f.code() == kReplyReadConfig || f.code() == kReplyWriteConfig) {
+      auto r = f.code() == kReplyReadConfig ? decode_read_config(f) : decode_write_config(f);
+      if (r && valid_measuring_mode(r->block.measuring_mode()) && r->block.size > config_offset::kUnits)
+        mode = static_cast<MeasuringMode>(r->block.measuring_mode());
+    }
     ++summary.replies;
   }
 
-  void scan(double t_s, FrameView f) {
-    Result<ScanTelegram> s = decode_any_scan(f);
+  static void print_scan(json::Writer& w, const Result<ScanTelegram>& s, MeasuringMode mode) {
     if (!s) {
-      put(out, ",\"error\":\"%s\"", s.error().c_str());
+      w.member("error", s.error().message());
       return;
     }
-    ++summary.scans;
     const double unit = metres_per_unit(s->units);
-    if (visit != nullptr) visit_scan(t_s, f, *s, unit);
-    put(out, ",\"count\":%u,\"units\":\"%s\",\"partial\":%s,\"offset_qdeg\":%u,\"measuring_mode\":\"0x%02x\"",
-             s->count, to_string(s->units).data(), s->partial ? "true" : "false", s->partial_offset_qdeg,
-             static_cast<unsigned>(mode));
-    if (s->code == kReplyMeanScan) put(out, ",\"mean_samples\":%u", s->mean_samples);
-    if (s->code == kReplySubrangeScan) put(out, ",\"first\":%u,\"last\":%u", s->first_index, s->last_index);
-    if (s->has_indices) put(out, ",\"scan_index\":%u,\"telegram_index\":%u", s->scan_index, s->telegram_index);
-    put(out, "%s", ",\"ranges_m\":[");
+    w.member_uint32("count", s->count)
+        .member("units", to_string(s->units))
+        .member_bool("partial", s->partial)
+        .member_uint32("offset_qdeg", s->partial_offset_qdeg)
+        .member("measuring_mode", hex_byte(static_cast<unsigned>(mode)));
+    if (s->code == kReplyMeanScan) w.member_uint32("mean_samples", s->mean_samples);
+    if (s->code == kReplySubrangeScan) w.member_uint32("first", s->first_index).member_uint32("last", s->last_index);
+    if (s->has_indices) w.member_uint32("scan_index", s->scan_index).member_uint32("telegram_index", s->telegram_index);
+    w.key("ranges_m").begin_array();
     for (std::size_t i = 0; i < s->count; ++i) {
       const ScanValue v = decode_value(s->words[i], mode);
-      if (i) put(out, "%c", ',');
-      if (v.reason == InvalidReason::none) {
-        put(out, "%.3f", v.distance * unit);
-      } else {
-        put(out, "%s", "null");
-      }
+      if (v.reason == InvalidReason::none) w.fixed_or_null(v.distance * unit, 3);
+      else w.null();
     }
-    put(out, "%s", "],\"invalid\":{");
-    bool first = true;
+    w.end_array().key("invalid").begin_object();
     for (std::size_t i = 0; i < s->count; ++i) {
       const ScanValue v = decode_value(s->words[i], mode);
-      if (v.reason == InvalidReason::none) continue;
-      put(out, "%s\"%zu\":\"%s\"", first ? "" : ",", i, to_string(v.reason).data());
-      first = false;
+      if (v.reason != InvalidReason::none) w.member(std::to_string(i), to_string(v.reason));
     }
-    put(out, "%c", '}');
+    w.end_object();
   }
 
   void visit_scan(double t_s, FrameView f, const ScanTelegram& s, double unit) {
@@ -189,7 +230,7 @@ static Result<CaptureDecodeSummary> walk(const capture::CaptureFile& capture, st
       } else if (from_device) {
         const bool ack = e.kind == TelegramParser::Kind::ack;
         ++(ack ? d.summary.acks : d.summary.naks);
-        put(out, "{\"t_s\":%.6f,\"dir\":\"rx\",\"%s\":true}\n", t_s, ack ? "ack" : "nak");
+        print_line(out, [&](json::Writer& w) { w.key("t_s").fixed_or_null(t_s, 6).member("dir", "rx").member_bool(ack ? "ack" : "nak", true); });
       }
     }
   };
@@ -211,7 +252,7 @@ static Result<CaptureDecodeSummary> walk(const capture::CaptureFile& capture, st
         // Bytes of a telegram cut by the switch will never complete.
         rx.reset();
         d.baud = r.baud;
-        put(out, "{\"t_s\":%.6f,\"event\":\"baud\",\"baud\":%u}\n", t_s, r.baud);
+        print_line(out, [&](json::Writer& w) { w.key("t_s").fixed_or_null(t_s, 6).member("event", "baud").member_uint32("baud", r.baud); });
         break;
       default: break;
     }

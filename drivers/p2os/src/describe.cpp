@@ -1,90 +1,82 @@
 #include "sen3bot/p2os/describe.hpp"
 
-#include <cstdio>
 #include <string_view>
+
+#include "sen3bot/json/json.hpp"
 
 namespace sen3bot::p2os {
 
 namespace {
 
-void append(std::string& out, const char* fmt, auto... args) {
-  char text[160];
-  const int n = std::snprintf(text, sizeof text, fmt, args...);
-  if (n > 0) out.append(text, static_cast<std::size_t>(n) < sizeof text ? static_cast<std::size_t>(n) : sizeof text - 1);
+// A NUL-terminated field of at most `capacity` bytes.
+std::string_view field(const char* value, std::size_t capacity) {
+  std::size_t n = 0;
+  while (n < capacity && value[n] != '\0') ++n;
+  return {value, n};
 }
 
-void append_string(std::string& out, std::string_view key, const char* value, std::size_t capacity) {
-  out += ",\"";
-  out += key;
-  out += "\":\"";
-  for (std::size_t i = 0; i < capacity && value[i] != '\0'; ++i) {
-    const auto c = static_cast<unsigned char>(value[i]);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20 || c >= 0x7F) {
-      append(out, "\\u%04x", static_cast<unsigned>(c));
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  out += '"';
-}
-
-void describe_command(std::string& out, const Frame& frame) {
-  append(out, ",\"type\":\"%s\",\"cmd\":%u", std::string(command_name(frame.type)).c_str(),
-         static_cast<unsigned>(frame.type));
+void describe_command(json::Writer& w, const Frame& frame) {
+  w.member("type", command_name(frame.type)).member_uint32("cmd", frame.type);
   const CommandArgument arg = decode_argument(frame.payload);
   if (arg.kind == ArgKind::integer) {
-    append(out, ",\"arg\":%d", arg.value);
+    w.member_int64("arg", arg.value);
     if (frame.type == static_cast<std::uint8_t>(Command::vel2)) {
       const Vel2Units units = decode_vel2(arg);
-      append(out, ",\"left\":%d,\"right\":%d", units.left, units.right);
+      w.member_int64("left", units.left).member_int64("right", units.right);
     }
   } else if (arg.kind == ArgKind::string) {
-    out += ",\"text\":\"";
-    for (const std::uint8_t b : arg.text) append(out, "%02x", static_cast<unsigned>(b));
-    out += '"';
+    static constexpr char kHex[] = "0123456789abcdef";
+    std::string hex;
+    for (const std::uint8_t b : arg.text) {
+      hex += kHex[b >> 4];
+      hex += kHex[b & 0xF];
+    }
+    w.member("text", hex);
   }
 }
 
-void describe_server(std::string& out, const Frame& frame) {
-  append(out, ",\"type\":\"%s\",\"code\":%u", std::string(server_type_name(frame.type)).c_str(),
-         static_cast<unsigned>(frame.type));
+void describe_server(json::Writer& w, const Frame& frame) {
+  w.member("type", server_type_name(frame.type)).member_uint32("code", frame.type);
   if (auto sip = decode_sip(frame)) {
-    append(out, ",\"moving\":%s,\"x\":%u,\"y\":%u,\"th\":%d,\"lvel\":%d,\"rvel\":%d", sip->moving ? "true" : "false",
-           static_cast<unsigned>(sip->x_raw), static_cast<unsigned>(sip->y_raw), sip->theta_raw, sip->left_vel_mm_s,
-           sip->right_vel_mm_s);
-    append(out, ",\"battery_dv\":%u,\"stallbump\":%u,\"control\":%d,\"flags\":%u,\"compass\":%u,\"sonar\":%u",
-           static_cast<unsigned>(sip->battery_dv), static_cast<unsigned>(sip->stall_bumpers), sip->control_raw,
-           static_cast<unsigned>(sip->flags), static_cast<unsigned>(sip->compass_2deg),
-           static_cast<unsigned>(sip->sonar_count));
-    if (sip->has_rot_vel) append(out, ",\"rotvel_ddeg_s\":%d", sip->rot_vel_ddeg_s);
-    if (sip->has_battery_x10) append(out, ",\"battery_x10\":%u", static_cast<unsigned>(sip->battery_x10));
+    w.member_bool("moving", sip->moving)
+        .member_uint32("x", sip->x_raw)
+        .member_uint32("y", sip->y_raw)
+        .member_int64("th", sip->theta_raw)
+        .member_int64("lvel", sip->left_vel_mm_s)
+        .member_int64("rvel", sip->right_vel_mm_s)
+        .member_uint32("battery_dv", sip->battery_dv)
+        .member_uint32("stallbump", sip->stall_bumpers)
+        .member_int64("control", sip->control_raw)
+        .member_uint32("flags", sip->flags)
+        .member_uint32("compass", sip->compass_2deg)
+        .member_uint32("sonar", sip->sonar_count);
+    if (sip->has_rot_vel) w.member_int64("rotvel_ddeg_s", sip->rot_vel_ddeg_s);
+    if (sip->has_battery_x10) w.member_uint32("battery_x10", sip->battery_x10);
     return;
   }
   if (auto reply = decode_sync2_reply(frame)) {
-    append_string(out, "name", reply->name.data(), reply->name.size());
-    append_string(out, "class", reply->robot_class.data(), reply->robot_class.size());
-    append_string(out, "subclass", reply->subclass.data(), reply->subclass.size());
+    w.member("name", field(reply->name.data(), reply->name.size()))
+        .member("class", field(reply->robot_class.data(), reply->robot_class.size()))
+        .member("subclass", field(reply->subclass.data(), reply->subclass.size()));
     return;
   }
   if (auto config = decode_config(frame)) {
-    append_string(out, "class", config->robot_class.data(), config->robot_class.size());
-    append_string(out, "subclass", config->subclass.data(), config->subclass.size());
-    append_string(out, "serial", config->serial.data(), config->serial.size());
-    append_string(out, "name", config->name.data(), config->name.size());
-    append(out, ",\"sip_cycle_ms\":%u,\"watchdog_ms\":%u,\"auto_baud\":%u,\"trans_vel_max\":%u,\"rot_vel_max\":%u",
-           static_cast<unsigned>(config->sip_cycle_ms), static_cast<unsigned>(config->watchdog_ms),
-           static_cast<unsigned>(config->auto_baud), static_cast<unsigned>(config->trans_vel_max_mm_s),
-           static_cast<unsigned>(config->rot_vel_max_deg_s));
+    w.member("class", field(config->robot_class.data(), config->robot_class.size()))
+        .member("subclass", field(config->subclass.data(), config->subclass.size()))
+        .member("serial", field(config->serial.data(), config->serial.size()))
+        .member("name", field(config->name.data(), config->name.size()))
+        .member_uint32("sip_cycle_ms", config->sip_cycle_ms)
+        .member_uint32("watchdog_ms", config->watchdog_ms)
+        .member_uint32("auto_baud", config->auto_baud)
+        .member_uint32("trans_vel_max", config->trans_vel_max_mm_s)
+        .member_uint32("rot_vel_max", config->rot_vel_max_deg_s);
     return;
   }
   if (auto enc = decode_encoder(frame)) {
-    append(out, ",\"left_ticks\":%d,\"right_ticks\":%d", enc->left_ticks, enc->right_ticks);
+    w.member_int64("left_ticks", enc->left_ticks).member_int64("right_ticks", enc->right_ticks);
     return;
   }
-  if (frame.type == kTypeSipStopped || frame.type == kTypeSipMoving) out += ",\"malformed\":true";
+  if (frame.type == kTypeSipStopped || frame.type == kTypeSipMoving) w.member_bool("malformed", true);
 }
 
 }  // namespace
@@ -92,13 +84,15 @@ void describe_server(std::string& out, const Frame& frame) {
 std::string describe_packet_json(double t_s, PacketDirection direction, const Frame& frame) {
   std::string out;
   out.reserve(256);
-  append(out, "{\"t_s\":%.6f,\"dir\":\"%s\"", t_s, direction == PacketDirection::to_robot ? "tx" : "rx");
+  json::StringSink sink(out);
+  json::Writer w(sink);
+  w.begin_object().key("t_s").fixed_or_null(t_s, 6).member("dir", direction == PacketDirection::to_robot ? "tx" : "rx");
   if (direction == PacketDirection::to_robot) {
-    describe_command(out, frame);
+    describe_command(w, frame);
   } else {
-    describe_server(out, frame);
+    describe_server(w, frame);
   }
-  append(out, ",\"bytes\":%zu}", frame.raw.size());
+  w.member_uint64("bytes", frame.raw.size()).end_object();
   return out;
 }
 
@@ -130,19 +124,25 @@ Status decode_capture(const capture::CaptureFile& capture, std::string_view chan
                      [&](const Frame& f) { emit(describe_packet_json(t_s, PacketDirection::to_robot, f)); });
     } else if (record.kind == capture::RecordKind::baud_change) {
       std::string line;
-      append(line, "{\"t_s\":%.6f,\"baud\":%u}", t_s, static_cast<unsigned>(record.baud));
+      json::StringSink sink(line);
+      json::Writer(sink).begin_object().key("t_s").fixed_or_null(t_s, 6).member_uint32("baud", record.baud).end_object();
       emit(line);
     }
   }
   std::string summary;
   const ParserStats& rx = rx_parser.stats();
   const ParserStats& tx = tx_parser.stats();
-  append(summary, "{\"summary\":true,\"rx_packets\":%llu,\"tx_packets\":%llu,\"rx_bad_checksums\":%llu,",
-         static_cast<unsigned long long>(rx.frames), static_cast<unsigned long long>(tx.frames),
-         static_cast<unsigned long long>(rx.bad_checksums));
-  append(summary, "\"tx_bad_checksums\":%llu,\"rx_discarded_bytes\":%llu,\"tx_discarded_bytes\":%llu}",
-         static_cast<unsigned long long>(tx.bad_checksums), static_cast<unsigned long long>(rx.discarded_bytes),
-         static_cast<unsigned long long>(tx.discarded_bytes));
+  json::StringSink sink(summary);
+  json::Writer(sink)
+      .begin_object()
+      .member_bool("summary", true)
+      .member_uint64("rx_packets", rx.frames)
+      .member_uint64("tx_packets", tx.frames)
+      .member_uint64("rx_bad_checksums", rx.bad_checksums)
+      .member_uint64("tx_bad_checksums", tx.bad_checksums)
+      .member_uint64("rx_discarded_bytes", rx.discarded_bytes)
+      .member_uint64("tx_discarded_bytes", tx.discarded_bytes)
+      .end_object();
   emit(summary);
   return Status::success();
 }

@@ -564,6 +564,10 @@ void Writer::fail(Error error) noexcept {
 
 void Writer::put(char c) noexcept {
   if (failed_) return;
+  if (sink_ != nullptr) {
+    put(std::string_view(&c, 1));
+    return;
+  }
   if (size_ == buffer_.size()) {
     fail(Error::format(Errc::capacity, "JSON output exceeds the %zu-byte buffer", buffer_.size()));
     return;
@@ -573,6 +577,14 @@ void Writer::put(char c) noexcept {
 
 void Writer::put(std::string_view text) noexcept {
   if (failed_) return;
+  if (sink_ != nullptr) {
+    if (!sink_->write(text)) {
+      fail(Error::format(Errc::io, "JSON writer: writing %zu bytes after byte %zu failed", text.size(), size_));
+      return;
+    }
+    size_ += text.size();
+    return;
+  }
   if (text.size() > buffer_.size() - size_) {
     fail(Error::format(Errc::capacity, "JSON output exceeds the %zu-byte buffer", buffer_.size()));
     return;
@@ -598,9 +610,32 @@ bool Writer::before_value() noexcept {
     after_key_ = false;
     return true;
   }
-  if (nonempty_bits_ & bit) put(',');
+  const bool comma = (nonempty_bits_ & bit) != 0;
+  if (comma) put(',');
+  separator(comma);
   nonempty_bits_ |= bit;
   return !failed_;
+}
+
+void Writer::separator(bool after_comma) noexcept {
+  if (line_pending_) {
+    line_pending_ = false;
+    put('\n');
+    static constexpr std::string_view kSpaces = "                                ";
+    for (std::size_t left = line_indent_; left > 0;) {
+      const std::size_t n = left < kSpaces.size() ? left : kSpaces.size();
+      put(kSpaces.substr(0, n));
+      left -= n;
+    }
+  } else if (after_comma && style_ == Style::spaced) {
+    put(' ');
+  }
+}
+
+Writer& Writer::line(std::size_t indent) noexcept {
+  line_pending_ = true;
+  line_indent_ = indent;
+  return *this;
 }
 
 Writer& Writer::open(char c, bool object) noexcept {
@@ -628,6 +663,7 @@ Writer& Writer::close(char c, bool object) noexcept {
     return *this;
   }
   --depth_;
+  if (line_pending_) separator(false);
   put(c);
   if (depth_ == 0) done_ = true;
   return *this;
@@ -645,10 +681,12 @@ Writer& Writer::key(std::string_view name) noexcept {
     fail(Error(Errc::invalid_argument, "JSON writer: a key outside an object"));
     return *this;
   }
-  if (nonempty_bits_ & bit) put(',');
+  const bool comma = (nonempty_bits_ & bit) != 0;
+  if (comma) put(',');
+  separator(comma);
   nonempty_bits_ |= bit;
   escaped(name);
-  put(':');
+  put(style_ == Style::spaced ? std::string_view(": ") : std::string_view(":"));
   after_key_ = true;
   return *this;
 }
@@ -689,8 +727,9 @@ void Writer::escaped(std::string_view text) noexcept {
     } else {
       const std::size_t n = utf8_length(u + i, text.size() - i);
       if (n == 0) {
-        fail(Error::format(Errc::invalid_argument, "JSON writer: invalid UTF-8 at byte %zu of a string", i));
-        break;
+        put("\xef\xbf\xbd");  // U+FFFD for the byte that starts no valid sequence
+        ++i;
+        continue;
       }
       put(text.substr(i, n));
       i += n;
@@ -710,6 +749,44 @@ Writer& Writer::number(double value) noexcept {
   put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
   if (depth_ == 0) done_ = true;
   return *this;
+}
+
+Writer& Writer::fixed(double value, int decimals) noexcept {
+  if (!std::isfinite(value)) {
+    fail(Error(Errc::invalid_argument, "JSON writer: NaN or infinity has no JSON form"));
+    return *this;
+  }
+  if (decimals < 0 || decimals > 17) {
+    fail(Error::format(Errc::invalid_argument, "JSON writer: %d decimals (0..17)", decimals));
+    return *this;
+  }
+  if (!before_value()) return *this;
+  char buf[348];  // the largest double in fixed notation with 17 decimals
+  const auto r = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::fixed, decimals);
+  put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
+Writer& Writer::general(double value, int digits) noexcept {
+  if (!std::isfinite(value)) {
+    fail(Error(Errc::invalid_argument, "JSON writer: NaN or infinity has no JSON form"));
+    return *this;
+  }
+  if (digits < 1 || digits > 17) {
+    fail(Error::format(Errc::invalid_argument, "JSON writer: %d significant digits (1..17)", digits));
+    return *this;
+  }
+  if (!before_value()) return *this;
+  char buf[40];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, digits);
+  put(std::string_view(buf, static_cast<std::size_t>(r.ptr - buf)));
+  if (depth_ == 0) done_ = true;
+  return *this;
+}
+
+Writer& Writer::fixed_or_null(double value, int decimals) noexcept {
+  return std::isfinite(value) ? fixed(value, decimals) : null();
 }
 
 Writer& Writer::uint32(std::uint32_t value) noexcept {
@@ -754,6 +831,32 @@ Writer& Writer::base64(std::span<const std::uint8_t> bytes) noexcept {
   const std::size_t whole = n / 3 * 3;
   // Checked once up front (the quotes included), so the loop writes without checks.
   const std::size_t need = 2 + (n + 2) / 3 * 4;
+  if (sink_ != nullptr) {
+    // In pieces through a small buffer: the same encoding, written as it goes.
+    std::array<char, 256> chunk;
+    std::size_t used = 0;
+    const auto emit = [&](char c) {
+      chunk[used++] = c;
+      if (used == chunk.size()) {
+        put(std::string_view(chunk.data(), used));
+        used = 0;
+      }
+    };
+    emit('"');
+    for (std::size_t i = 0; i < n; i += 3) {
+      const std::size_t left = n - i;
+      const std::uint32_t v = (std::uint32_t{bytes[i]} << 16) | (left > 1 ? std::uint32_t{bytes[i + 1]} << 8 : 0u) |
+                              (left > 2 ? bytes[i + 2] : 0u);
+      emit(kAlphabet[v >> 18]);
+      emit(kAlphabet[(v >> 12) & 0x3F]);
+      emit(left > 1 ? kAlphabet[(v >> 6) & 0x3F] : '=');
+      emit(left > 2 ? kAlphabet[v & 0x3F] : '=');
+    }
+    emit('"');
+    put(std::string_view(chunk.data(), used));
+    if (depth_ == 0) done_ = true;
+    return *this;
+  }
   if (need > buffer_.size() - size_) {
     fail(Error::format(Errc::capacity, "JSON output exceeds the %zu-byte buffer", buffer_.size()));
     return *this;
@@ -812,6 +915,7 @@ Writer& Writer::raw(std::string_view json) noexcept {
 Result<std::string_view> Writer::finish() const noexcept {
   if (failed_) return error_;
   if (depth_ != 0 || !done_) return Error(Errc::invalid_argument, "JSON writer: the value is incomplete");
+  if (sink_ != nullptr) return std::string_view();
   return std::string_view(buffer_.data(), size_);
 }
 

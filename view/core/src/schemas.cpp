@@ -1,167 +1,269 @@
-// The advertised schemas. Each text describes exactly what the writers in foxglove.cpp (and
-// the server, for the robot's own two) emit: every member they write is listed and required.
-// The fragments are macros so that the whole text of each schema is one string literal.
+// The advertised schemas. Each describes exactly what the writers in foxglove.cpp (and the
+// server, for the robot's own two) emit: every member they write is listed and required. They
+// are written once, with the JSON writer, into static buffers on the first call.
+#include <array>
+#include <initializer_list>
+
 #include "sen3bot/view/foxglove.hpp"
 
 namespace sen3bot::view {
 namespace {
 
-#define S3_OBJ(title, props, req) \
-  "{\"type\":\"object\",\"title\":\"" title "\",\"properties\":{" props "},\"required\":[" req "]}"
-#define S3_NUM "{\"type\":\"number\"}"
-#define S3_INT "{\"type\":\"integer\"}"
-#define S3_UINT "{\"type\":\"integer\",\"minimum\":0}"
-#define S3_STR "{\"type\":\"string\"}"
-#define S3_BOOL "{\"type\":\"boolean\"}"
-#define S3_BASE64 "{\"type\":\"string\",\"contentEncoding\":\"base64\"}"
-#define S3_ARRAY(items) "{\"type\":\"array\",\"items\":" items "}"
-#define S3_NSEC "{\"type\":\"integer\",\"minimum\":0,\"maximum\":999999999}"
-#define S3_TIME S3_OBJ("time", "\"sec\":" S3_UINT ",\"nsec\":" S3_NSEC, "\"sec\",\"nsec\"")
-#define S3_DURATION S3_OBJ("duration", "\"sec\":" S3_INT ",\"nsec\":" S3_NSEC, "\"sec\",\"nsec\"")
-#define S3_XYZ "\"x\":" S3_NUM ",\"y\":" S3_NUM ",\"z\":" S3_NUM
-#define S3_VECTOR2 S3_OBJ("foxglove.Vector2", "\"x\":" S3_NUM ",\"y\":" S3_NUM, "\"x\",\"y\"")
-#define S3_VECTOR3 S3_OBJ("foxglove.Vector3", S3_XYZ, "\"x\",\"y\",\"z\"")
-#define S3_POINT3 S3_OBJ("foxglove.Point3", S3_XYZ, "\"x\",\"y\",\"z\"")
-#define S3_QUATERNION S3_OBJ("foxglove.Quaternion", S3_XYZ ",\"w\":" S3_NUM, "\"x\",\"y\",\"z\",\"w\"")
-#define S3_POSE \
-  S3_OBJ("foxglove.Pose", "\"position\":" S3_VECTOR3 ",\"orientation\":" S3_QUATERNION, "\"position\",\"orientation\"")
-#define S3_COLOR                                                                                    \
-  S3_OBJ("foxglove.Color", "\"r\":" S3_NUM ",\"g\":" S3_NUM ",\"b\":" S3_NUM ",\"a\":" S3_NUM, \
-         "\"r\",\"g\",\"b\",\"a\"")
-#define S3_ENUM(max) "{\"type\":\"integer\",\"minimum\":0,\"maximum\":" #max "}"
-#define S3_XY_THETA "\"x\":" S3_NUM ",\"y\":" S3_NUM ",\"theta\":" S3_NUM
+using json::Writer;
+using Names = std::initializer_list<std::string_view>;
 
-constexpr std::string_view kGrid = S3_OBJ(
-    "foxglove.Grid",
-    "\"timestamp\":" S3_TIME ",\"frame_id\":" S3_STR ",\"pose\":" S3_POSE ",\"column_count\":" S3_UINT
-    ",\"cell_size\":" S3_VECTOR2 ",\"row_stride\":" S3_UINT ",\"cell_stride\":" S3_UINT
-    ",\"fields\":" S3_ARRAY(S3_OBJ("foxglove.PackedElementField",
-                                   "\"name\":" S3_STR ",\"offset\":" S3_UINT ",\"type\":" S3_ENUM(8),
-                                   "\"name\",\"offset\",\"type\"")) ",\"data\":" S3_BASE64,
-    "\"timestamp\",\"frame_id\",\"pose\",\"column_count\",\"cell_size\",\"row_stride\",\"cell_stride\",\"fields\","
-    "\"data\"");
+// {"type":"object","title":TITLE,"properties":{...},"required":[...]}: `properties` writes the
+// members, `required` names them.
+template <typename Properties>
+void object(Writer& w, std::string_view title, const Properties& properties, Names required) {
+  w.begin_object().member("type", "object").member("title", title).key("properties").begin_object();
+  properties(w);
+  w.end_object().key("required").begin_array();
+  for (const std::string_view name : required) w.string(name);
+  w.end_array().end_object();
+}
 
-constexpr std::string_view kLaserScan = S3_OBJ(
-    "foxglove.LaserScan",
-    "\"timestamp\":" S3_TIME ",\"frame_id\":" S3_STR ",\"pose\":" S3_POSE ",\"start_angle\":" S3_NUM
-    ",\"end_angle\":" S3_NUM ",\"ranges\":" S3_ARRAY(S3_NUM) ",\"intensities\":" S3_ARRAY(S3_NUM),
-    "\"timestamp\",\"frame_id\",\"pose\",\"start_angle\",\"end_angle\",\"ranges\",\"intensities\"");
+void typed(Writer& w, std::string_view type) { w.begin_object().member("type", type).end_object(); }
+void number(Writer& w) { typed(w, "number"); }
+void integer(Writer& w) { typed(w, "integer"); }
+void string(Writer& w) { typed(w, "string"); }
+void boolean(Writer& w) { typed(w, "boolean"); }
+void uint(Writer& w) { w.begin_object().member("type", "integer").member_uint32("minimum", 0).end_object(); }
+void enumeration(Writer& w, std::uint32_t max) {
+  w.begin_object().member("type", "integer").member_uint32("minimum", 0).member_uint32("maximum", max).end_object();
+}
+void nsec(Writer& w) { enumeration(w, 999999999); }
+void base64(Writer& w) { w.begin_object().member("type", "string").member("contentEncoding", "base64").end_object(); }
+template <typename Items>
+void array(Writer& w, const Items& items) {
+  w.begin_object().member("type", "array").key("items");
+  items(w);
+  w.end_object();
+}
+// An array whose items the robot never sends: described as objects only.
+void unused(Writer& w) {
+  array(w, [](Writer& a) { typed(a, "object"); });
+}
 
-constexpr std::string_view kFrameTransform = S3_OBJ(
-    "foxglove.FrameTransform",
-    "\"timestamp\":" S3_TIME ",\"parent_frame_id\":" S3_STR ",\"child_frame_id\":" S3_STR
-    ",\"translation\":" S3_VECTOR3 ",\"rotation\":" S3_QUATERNION,
-    "\"timestamp\",\"parent_frame_id\",\"child_frame_id\",\"translation\",\"rotation\"");
+// One member: its name, then what `write` writes.
+template <typename Write>
+void property(Writer& w, std::string_view name, const Write& write) {
+  w.key(name);
+  write(w);
+}
 
-constexpr std::string_view kPosesInFrame = S3_OBJ(
-    "foxglove.PosesInFrame", "\"timestamp\":" S3_TIME ",\"frame_id\":" S3_STR ",\"poses\":" S3_ARRAY(S3_POSE),
-    "\"timestamp\",\"frame_id\",\"poses\"");
+void time_object(Writer& w, std::string_view title, void (*seconds)(Writer&)) {
+  object(w, title, [&](Writer& o) { property(o, "sec", seconds); property(o, "nsec", nsec); }, {"sec", "nsec"});
+}
+void time(Writer& w) { time_object(w, "time", uint); }
+void duration(Writer& w) { time_object(w, "duration", integer); }
+void xyz(Writer& w) { property(w, "x", number); property(w, "y", number); property(w, "z", number); }
+void vector2(Writer& w) {
+  object(w, "foxglove.Vector2", [](Writer& o) { property(o, "x", number); property(o, "y", number); }, {"x", "y"});
+}
+void vector3(Writer& w) { object(w, "foxglove.Vector3", xyz, {"x", "y", "z"}); }
+void point3(Writer& w) { object(w, "foxglove.Point3", xyz, {"x", "y", "z"}); }
+void quaternion(Writer& w) {
+  object(w, "foxglove.Quaternion", [](Writer& o) { xyz(o); property(o, "w", number); }, {"x", "y", "z", "w"});
+}
+void pose(Writer& w) {
+  object(w, "foxglove.Pose", [](Writer& o) { property(o, "position", vector3); property(o, "orientation", quaternion); },
+         {"position", "orientation"});
+}
+void color(Writer& w) {
+  object(w, "foxglove.Color",
+         [](Writer& o) { property(o, "r", number); property(o, "g", number); property(o, "b", number); property(o, "a", number); },
+         {"r", "g", "b", "a"});
+}
+// An object or null: {"type":["object","null"],"properties":{...},"required":[...]}.
+template <typename Properties>
+void object_or_null(Writer& w, const Properties& properties, Names required) {
+  w.begin_object().key("type").begin_array().string("object").string("null").end_array().key("properties").begin_object();
+  properties(w);
+  w.end_object().key("required").begin_array();
+  for (const std::string_view name : required) w.string(name);
+  w.end_array().end_object();
+}
 
-constexpr std::string_view kCompressedImage = S3_OBJ(
-    "foxglove.CompressedImage",
-    "\"timestamp\":" S3_TIME ",\"frame_id\":" S3_STR ",\"data\":" S3_BASE64 ",\"format\":" S3_STR,
-    "\"timestamp\",\"frame_id\",\"data\",\"format\"");
+void grid(Writer& w) {
+  object(w, "foxglove.Grid", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "frame_id", string); property(o, "pose", pose);
+    property(o, "column_count", uint); property(o, "cell_size", vector2); property(o, "row_stride", uint);
+    property(o, "cell_stride", uint);
+    property(o, "fields", [](Writer& a) {
+      array(a, [](Writer& f) {
+        object(f, "foxglove.PackedElementField", [](Writer& e) {
+          property(e, "name", string); property(e, "offset", uint); property(e, "type", [](Writer& t) { enumeration(t, 8); });
+        }, {"name", "offset", "type"});
+      });
+    });
+    property(o, "data", base64);
+  }, {"timestamp", "frame_id", "pose", "column_count", "cell_size", "row_stride", "cell_stride", "fields", "data"});
+}
 
-// Primitives the robot never sends are described as objects only: their arrays stay empty.
-#define S3_ARROW                                                                                                    \
-  S3_OBJ("foxglove.ArrowPrimitive",                                                                                 \
-         "\"pose\":" S3_POSE ",\"shaft_length\":" S3_NUM ",\"shaft_diameter\":" S3_NUM ",\"head_length\":" S3_NUM \
-         ",\"head_diameter\":" S3_NUM ",\"color\":" S3_COLOR,                                                       \
-         "\"pose\",\"shaft_length\",\"shaft_diameter\",\"head_length\",\"head_diameter\",\"color\"")
-#define S3_CYLINDER                                                                                               \
-  S3_OBJ("foxglove.CylinderPrimitive",                                                                            \
-         "\"pose\":" S3_POSE ",\"size\":" S3_VECTOR3 ",\"bottom_scale\":" S3_NUM ",\"top_scale\":" S3_NUM        \
-         ",\"color\":" S3_COLOR,                                                                                  \
-         "\"pose\",\"size\",\"bottom_scale\",\"top_scale\",\"color\"")
-#define S3_LINE                                                                                                    \
-  S3_OBJ("foxglove.LinePrimitive",                                                                                 \
-         "\"type\":" S3_ENUM(2) ",\"pose\":" S3_POSE ",\"thickness\":" S3_NUM ",\"scale_invariant\":" S3_BOOL     \
-         ",\"points\":" S3_ARRAY(S3_POINT3) ",\"color\":" S3_COLOR ",\"colors\":" S3_ARRAY(S3_COLOR)             \
-         ",\"indices\":" S3_ARRAY(S3_UINT),                                                                        \
-         "\"type\",\"pose\",\"thickness\",\"scale_invariant\",\"points\",\"color\",\"colors\",\"indices\"")
-#define S3_TEXT                                                                                                      \
-  S3_OBJ("foxglove.TextPrimitive",                                                                                   \
-         "\"pose\":" S3_POSE ",\"billboard\":" S3_BOOL ",\"font_size\":" S3_NUM ",\"scale_invariant\":" S3_BOOL     \
-         ",\"color\":" S3_COLOR ",\"text\":" S3_STR,                                                                 \
-         "\"pose\",\"billboard\",\"font_size\",\"scale_invariant\",\"color\",\"text\"")
-#define S3_KEY_VALUE S3_OBJ("foxglove.KeyValuePair", "\"key\":" S3_STR ",\"value\":" S3_STR, "\"key\",\"value\"")
-#define S3_UNUSED "{\"type\":\"array\",\"items\":{\"type\":\"object\"}}"
-#define S3_ENTITY                                                                                                     \
-  S3_OBJ("foxglove.SceneEntity",                                                                                      \
-         "\"timestamp\":" S3_TIME ",\"frame_id\":" S3_STR ",\"id\":" S3_STR ",\"lifetime\":" S3_DURATION              \
-         ",\"frame_locked\":" S3_BOOL ",\"metadata\":" S3_ARRAY(S3_KEY_VALUE) ",\"arrows\":" S3_ARRAY(S3_ARROW)       \
-         ",\"cubes\":" S3_UNUSED ",\"spheres\":" S3_UNUSED ",\"cylinders\":" S3_ARRAY(S3_CYLINDER)                    \
-         ",\"lines\":" S3_ARRAY(S3_LINE) ",\"triangles\":" S3_UNUSED ",\"texts\":" S3_ARRAY(S3_TEXT)                  \
-         ",\"models\":" S3_UNUSED,                                                                                    \
-         "\"timestamp\",\"frame_id\",\"id\",\"lifetime\",\"frame_locked\",\"metadata\",\"arrows\",\"cubes\","         \
-         "\"spheres\",\"cylinders\",\"lines\",\"triangles\",\"texts\",\"models\"")
-#define S3_DELETION                                                                                             \
-  S3_OBJ("foxglove.SceneEntityDeletion", "\"timestamp\":" S3_TIME ",\"type\":" S3_ENUM(1) ",\"id\":" S3_STR, \
-         "\"timestamp\",\"type\",\"id\"")
+void laser_scan(Writer& w) {
+  object(w, "foxglove.LaserScan", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "frame_id", string); property(o, "pose", pose);
+    property(o, "start_angle", number); property(o, "end_angle", number);
+    property(o, "ranges", [](Writer& a) { array(a, number); });
+    property(o, "intensities", [](Writer& a) { array(a, number); });
+  }, {"timestamp", "frame_id", "pose", "start_angle", "end_angle", "ranges", "intensities"});
+}
 
-constexpr std::string_view kSceneUpdate =
-    S3_OBJ("foxglove.SceneUpdate", "\"deletions\":" S3_ARRAY(S3_DELETION) ",\"entities\":" S3_ARRAY(S3_ENTITY),
-           "\"deletions\",\"entities\"");
+void frame_transform(Writer& w) {
+  object(w, "foxglove.FrameTransform", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "parent_frame_id", string); property(o, "child_frame_id", string);
+    property(o, "translation", vector3); property(o, "rotation", quaternion);
+  }, {"timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"});
+}
 
-#define S3_TASK                                                                                                     \
-  S3_OBJ("sen3bot.TaskStats.Task",                                                                                 \
-         "\"name\":" S3_STR ",\"thread\":" S3_STR ",\"period_us\":" S3_UINT ",\"budget_us\":" S3_UINT              \
-         ",\"runs\":" S3_UINT ",\"overruns\":" S3_UINT ",\"slips\":" S3_UINT ",\"skips\":" S3_UINT                 \
-         ",\"exec_mean_us\":" S3_NUM ",\"exec_max_us\":" S3_NUM ",\"cpu_mean_us\":" S3_NUM ",\"cpu_max_us\":" S3_NUM \
-         ",\"jitter_p99_us\":" S3_NUM,                                                                              \
-         "\"name\",\"thread\",\"period_us\",\"budget_us\",\"runs\",\"overruns\",\"slips\",\"skips\","              \
-         "\"exec_mean_us\",\"exec_max_us\",\"cpu_mean_us\",\"cpu_max_us\",\"jitter_p99_us\"")
-#define S3_VIEW_COUNTERS                                                                                           \
-  S3_OBJ("sen3bot.TaskStats.View",                                                                                 \
-         "\"clients\":" S3_UINT ",\"sent\":" S3_UINT ",\"dropped\":" S3_UINT ",\"rejected\":" S3_UINT,             \
-         "\"clients\",\"sent\",\"dropped\",\"rejected\"")
+void poses_in_frame(Writer& w) {
+  object(w, "foxglove.PosesInFrame", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "frame_id", string);
+    property(o, "poses", [](Writer& a) { array(a, pose); });
+  }, {"timestamp", "frame_id", "poses"});
+}
 
-constexpr std::string_view kTaskStats = S3_OBJ(
-    "sen3bot.TaskStats",
-    "\"timestamp\":" S3_TIME ",\"uptime_s\":" S3_NUM ",\"tasks\":" S3_ARRAY(S3_TASK) ",\"view\":" S3_VIEW_COUNTERS,
-    "\"timestamp\",\"uptime_s\",\"tasks\",\"view\"");
+void compressed_image(Writer& w) {
+  object(w, "foxglove.CompressedImage", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "frame_id", string); property(o, "data", base64);
+    property(o, "format", string);
+  }, {"timestamp", "frame_id", "data", "format"});
+}
 
-constexpr std::string_view kMission = S3_OBJ(
-    "sen3bot.Mission",
-    "\"timestamp\":" S3_TIME ",\"state\":" S3_STR ",\"goals_reached\":" S3_UINT ",\"goals_total\":" S3_UINT
-    ",\"goal\":{\"type\":[\"object\",\"null\"],\"properties\":{\"x\":" S3_NUM ",\"y\":" S3_NUM
-    "},\"required\":[\"x\",\"y\"]},\"pose\":" S3_OBJ("sen3bot.Pose2", S3_XY_THETA, "\"x\",\"y\",\"theta\"")
-    ",\"localized\":" S3_BOOL ",\"lost\":" S3_BOOL ",\"v\":" S3_NUM ",\"w\":" S3_NUM ",\"controller\":" S3_STR
-    ",\"safety\":" S3_ARRAY(S3_STR) ",\"separation\":{\"type\":[\"object\",\"null\"],\"properties\":{\"cap\":" S3_NUM
-    ",\"gap\":" S3_NUM ",\"approach\":" S3_NUM "},\"required\":[\"cap\",\"gap\",\"approach\"]}",
-    "\"timestamp\",\"state\",\"goals_reached\",\"goals_total\",\"goal\",\"pose\",\"localized\",\"lost\",\"v\",\"w\","
-    "\"controller\",\"safety\",\"separation\"");
+void arrow(Writer& w) {
+  object(w, "foxglove.ArrowPrimitive", [](Writer& o) {
+    property(o, "pose", pose); property(o, "shaft_length", number); property(o, "shaft_diameter", number);
+    property(o, "head_length", number); property(o, "head_diameter", number); property(o, "color", color);
+  }, {"pose", "shaft_length", "shaft_diameter", "head_length", "head_diameter", "color"});
+}
 
-#undef S3_OBJ
-#undef S3_NUM
-#undef S3_INT
-#undef S3_UINT
-#undef S3_STR
-#undef S3_BOOL
-#undef S3_BASE64
-#undef S3_ARRAY
-#undef S3_NSEC
-#undef S3_TIME
-#undef S3_DURATION
-#undef S3_XYZ
-#undef S3_VECTOR2
-#undef S3_VECTOR3
-#undef S3_POINT3
-#undef S3_QUATERNION
-#undef S3_POSE
-#undef S3_COLOR
-#undef S3_ENUM
-#undef S3_XY_THETA
-#undef S3_ARROW
-#undef S3_CYLINDER
-#undef S3_LINE
-#undef S3_TEXT
-#undef S3_KEY_VALUE
-#undef S3_UNUSED
-#undef S3_ENTITY
-#undef S3_DELETION
-#undef S3_TASK
-#undef S3_VIEW_COUNTERS
+void cylinder(Writer& w) {
+  object(w, "foxglove.CylinderPrimitive", [](Writer& o) {
+    property(o, "pose", pose); property(o, "size", vector3); property(o, "bottom_scale", number);
+    property(o, "top_scale", number); property(o, "color", color);
+  }, {"pose", "size", "bottom_scale", "top_scale", "color"});
+}
+
+void line(Writer& w) {
+  object(w, "foxglove.LinePrimitive", [](Writer& o) {
+    property(o, "type", [](Writer& t) { enumeration(t, 2); });
+    property(o, "pose", pose); property(o, "thickness", number); property(o, "scale_invariant", boolean);
+    property(o, "points", [](Writer& a) { array(a, point3); });
+    property(o, "color", color);
+    property(o, "colors", [](Writer& a) { array(a, color); });
+    property(o, "indices", [](Writer& a) { array(a, uint); });
+  }, {"type", "pose", "thickness", "scale_invariant", "points", "color", "colors", "indices"});
+}
+
+void text(Writer& w) {
+  object(w, "foxglove.TextPrimitive", [](Writer& o) {
+    property(o, "pose", pose); property(o, "billboard", boolean); property(o, "font_size", number);
+    property(o, "scale_invariant", boolean); property(o, "color", color); property(o, "text", string);
+  }, {"pose", "billboard", "font_size", "scale_invariant", "color", "text"});
+}
+
+void key_value(Writer& w) {
+  object(w, "foxglove.KeyValuePair", [](Writer& o) { property(o, "key", string); property(o, "value", string); },
+         {"key", "value"});
+}
+
+void entity(Writer& w) {
+  object(w, "foxglove.SceneEntity", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "frame_id", string); property(o, "id", string);
+    property(o, "lifetime", duration); property(o, "frame_locked", boolean);
+    property(o, "metadata", [](Writer& a) { array(a, key_value); });
+    property(o, "arrows", [](Writer& a) { array(a, arrow); });
+    property(o, "cubes", unused); property(o, "spheres", unused);
+    property(o, "cylinders", [](Writer& a) { array(a, cylinder); });
+    property(o, "lines", [](Writer& a) { array(a, line); });
+    property(o, "triangles", unused);
+    property(o, "texts", [](Writer& a) { array(a, text); });
+    property(o, "models", unused);
+  }, {"timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata", "arrows", "cubes", "spheres", "cylinders",
+      "lines", "triangles", "texts", "models"});
+}
+
+void deletion(Writer& w) {
+  object(w, "foxglove.SceneEntityDeletion", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "type", [](Writer& t) { enumeration(t, 1); }); property(o, "id", string);
+  }, {"timestamp", "type", "id"});
+}
+
+void scene_update(Writer& w) {
+  object(w, "foxglove.SceneUpdate", [](Writer& o) {
+    property(o, "deletions", [](Writer& a) { array(a, deletion); });
+    property(o, "entities", [](Writer& a) { array(a, entity); });
+  }, {"deletions", "entities"});
+}
+
+void task(Writer& w) {
+  object(w, "sen3bot.TaskStats.Task", [](Writer& o) {
+    property(o, "name", string); property(o, "thread", string); property(o, "period_us", uint);
+    property(o, "budget_us", uint); property(o, "runs", uint); property(o, "overruns", uint);
+    property(o, "slips", uint); property(o, "skips", uint); property(o, "exec_mean_us", number);
+    property(o, "exec_max_us", number); property(o, "cpu_mean_us", number); property(o, "cpu_max_us", number);
+    property(o, "jitter_p99_us", number);
+  }, {"name", "thread", "period_us", "budget_us", "runs", "overruns", "slips", "skips", "exec_mean_us", "exec_max_us",
+      "cpu_mean_us", "cpu_max_us", "jitter_p99_us"});
+}
+
+void view_counters(Writer& w) {
+  object(w, "sen3bot.TaskStats.View", [](Writer& o) {
+    property(o, "clients", uint); property(o, "sent", uint); property(o, "dropped", uint); property(o, "rejected", uint);
+  }, {"clients", "sent", "dropped", "rejected"});
+}
+
+void task_stats(Writer& w) {
+  object(w, "sen3bot.TaskStats", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "uptime_s", number);
+    property(o, "tasks", [](Writer& a) { array(a, task); });
+    property(o, "view", view_counters);
+  }, {"timestamp", "uptime_s", "tasks", "view"});
+}
+
+void mission(Writer& w) {
+  object(w, "sen3bot.Mission", [](Writer& o) {
+    property(o, "timestamp", time); property(o, "state", string); property(o, "goals_reached", uint);
+    property(o, "goals_total", uint);
+    property(o, "goal", [](Writer& g) {
+      object_or_null(g, [](Writer& p) { property(p, "x", number); property(p, "y", number); }, {"x", "y"});
+    });
+    property(o, "pose", [](Writer& p) {
+      object(p, "sen3bot.Pose2", [](Writer& q) { property(q, "x", number); property(q, "y", number); property(q, "theta", number); },
+             {"x", "y", "theta"});
+    });
+    property(o, "localized", boolean); property(o, "lost", boolean); property(o, "v", number); property(o, "w", number);
+    property(o, "controller", string);
+    property(o, "safety", [](Writer& a) { array(a, string); });
+    property(o, "separation", [](Writer& s) {
+      object_or_null(s, [](Writer& p) { property(p, "cap", number); property(p, "gap", number); property(p, "approach", number); },
+                     {"cap", "gap", "approach"});
+    });
+  }, {"timestamp", "state", "goals_reached", "goals_total", "goal", "pose", "localized", "lost", "v", "w", "controller",
+      "safety", "separation"});
+}
+
+// Every schema's text, written once.
+struct Schemas {
+  std::array<char, 16384> buffer{};
+  std::array<std::string_view, kSchemaCount> text{};
+
+  Schemas() noexcept {
+    void (*const writers[kSchemaCount])(Writer&) = {grid,         laser_scan,       frame_transform, poses_in_frame,
+                                                    scene_update, compressed_image, task_stats,      mission};
+    std::size_t used = 0;
+    for (std::size_t i = 0; i < kSchemaCount; ++i) {
+      Writer w(std::span<char>(buffer).subspan(used));
+      writers[i](w);
+      // The buffer is sized for all of them (a test checks each parses); a failure leaves "".
+      if (auto done = w.finish()) {
+        text[i] = *done;
+        used += done->size();
+      }
+    }
+  }
+};
 
 }  // namespace
 
@@ -180,17 +282,9 @@ std::string_view schema_name(Schema schema) noexcept {
 }
 
 std::string_view json_schema(Schema schema) noexcept {
-  switch (schema) {
-    case Schema::grid: return kGrid;
-    case Schema::laser_scan: return kLaserScan;
-    case Schema::frame_transform: return kFrameTransform;
-    case Schema::poses_in_frame: return kPosesInFrame;
-    case Schema::scene_update: return kSceneUpdate;
-    case Schema::compressed_image: return kCompressedImage;
-    case Schema::task_stats: return kTaskStats;
-    case Schema::mission: return kMission;
-  }
-  return {};
+  static const Schemas schemas;
+  const auto i = static_cast<std::size_t>(schema);
+  return i < kSchemaCount ? schemas.text[i] : std::string_view();
 }
 
 }  // namespace sen3bot::view

@@ -7,12 +7,21 @@
 // duplicate member names, nesting deeper than the limit, more tokens than the array holds,
 // input longer than the size limit, numbers a double cannot hold. Nothing is allocated.
 //
-// The writer appends to a caller's buffer and inserts commas itself; an overflow, a NaN or an
-// unbalanced structure is reported by finish() instead of yielding truncated text.
+// The writer inserts commas itself and writes either into a caller's fixed buffer (nothing is
+// allocated: the robot's real-time paths) or to a Sink (a std::string or a FILE*: commands and
+// reports). An overflow, a failed write, a NaN or an unbalanced structure is reported by
+// finish() instead of yielding truncated text.
+//
+// Strings are escaped as RFC 8259 asks: \" \\ \b \f \n \r \t, the other control characters
+// as \u00XX; every other byte is copied unchanged, so UTF-8 stays as it is. A byte that does not
+// belong to a valid UTF-8 sequence is written as U+FFFD (the output is always valid UTF-8, and
+// text from a device or a file still comes out instead of failing the whole document).
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "sen3bot/hal/result.hpp"
@@ -170,17 +179,64 @@ class StaticDocument : public Document {
 // JSON text). At most 256 tokens; a bigger value is Errc::capacity.
 Status validate(std::string_view text) noexcept;
 
+// Where a Writer's text goes when it is not a fixed buffer.
+class Sink {
+ public:
+  // Appends text; false when it could not be written (the writer then fails with Errc::io).
+  virtual bool write(std::string_view text) noexcept = 0;
+
+ protected:
+  ~Sink() = default;
+};
+
+// Appends to a std::string (allocates: not for the real-time paths).
+class StringSink final : public Sink {
+ public:
+  explicit StringSink(std::string& out) noexcept : out_(out) {}
+  bool write(std::string_view text) noexcept override {
+    out_.append(text);
+    return true;
+  }
+
+ private:
+  std::string& out_;
+};
+
+// Writes to a stdio stream; a short write fails the writer.
+class FileSink final : public Sink {
+ public:
+  explicit FileSink(std::FILE* file) noexcept : file_(file) {}
+  bool write(std::string_view text) noexcept override {
+    return std::fwrite(text.data(), 1, text.size(), file_) == text.size();
+  }
+
+ private:
+  std::FILE* file_;
+};
+
+// The whitespace between tokens. compact: {"a":1,"b":[1,2]}. spaced: {"a": 1, "b": [1, 2]},
+// the form the simulator's reports have always printed. line() adds line breaks to either.
+enum class Style : std::uint8_t { compact, spaced };
+
 class Writer {
  public:
-  explicit Writer(std::span<char> buffer) noexcept : buffer_(buffer) {}
+  explicit Writer(std::span<char> buffer, Style style = Style::compact) noexcept : buffer_(buffer), style_(style) {}
+  explicit Writer(Sink& sink, Style style = Style::compact) noexcept : sink_(&sink), style_(style) {}
 
   Writer& begin_object() noexcept;
   Writer& end_object() noexcept;
   Writer& begin_array() noexcept;
   Writer& end_array() noexcept;
   Writer& key(std::string_view name) noexcept;  // inside an object, before each value
-  Writer& string(std::string_view text) noexcept;  // escaped; invalid UTF-8 is an error
+  Writer& string(std::string_view text) noexcept;  // escaped; invalid UTF-8 bytes as U+FFFD
   Writer& number(double value) noexcept;  // shortest text that reads back the same double
+  // Fixed notation with `decimals` digits after the point (printf's "%.*f"; decimals <= 17).
+  Writer& fixed(double value, int decimals) noexcept;
+  // fixed(), or null when the value is NaN or infinite (JSON has neither).
+  Writer& fixed_or_null(double value, int decimals) noexcept;
+  // `digits` significant digits, fixed or exponent form, trailing zeros dropped (printf's
+  // "%.*g"; 1 <= digits <= 17).
+  Writer& general(double value, int digits) noexcept;
   Writer& uint32(std::uint32_t value) noexcept;
   Writer& int64(std::int64_t value) noexcept;
   Writer& uint64(std::uint64_t value) noexcept;
@@ -192,22 +248,31 @@ class Writer {
   Writer& null() noexcept;
   Writer& raw(std::string_view json) noexcept;  // a complete JSON value, validated first
 
+  // The next separator (after a comma, after an opening bracket or before a closing one) is a
+  // line break and `indent` spaces instead of the style's space or nothing.
+  Writer& line(std::size_t indent) noexcept;
+
   // Shorthands for a member: key(name) then the value.
   Writer& member(std::string_view name, std::string_view text) noexcept { return key(name).string(text); }
   Writer& member_number(std::string_view name, double value) noexcept { return key(name).number(value); }
+  Writer& member_fixed(std::string_view name, double value, int decimals) noexcept {
+    return key(name).fixed(value, decimals);
+  }
   Writer& member_uint32(std::string_view name, std::uint32_t value) noexcept { return key(name).uint32(value); }
   Writer& member_int64(std::string_view name, std::int64_t value) noexcept { return key(name).int64(value); }
   Writer& member_uint64(std::string_view name, std::uint64_t value) noexcept { return key(name).uint64(value); }
   Writer& member_bool(std::string_view name, bool value) noexcept { return key(name).boolean(value); }
 
-  // The text written, or the first error (Errc::capacity on overflow, invalid_argument on
-  // misuse, NaN/infinity, invalid UTF-8 or an unclosed container).
+  // The text written (empty when writing to a sink), or the first error (Errc::capacity on
+  // overflow, Errc::io when the sink failed, invalid_argument on misuse, NaN/infinity or an
+  // unclosed container).
   [[nodiscard]] Result<std::string_view> finish() const noexcept;
   [[nodiscard]] bool failed() const noexcept { return failed_; }
-  [[nodiscard]] std::size_t size() const noexcept { return size_; }
+  [[nodiscard]] std::size_t size() const noexcept { return size_; }  // bytes written so far
 
  private:
   bool before_value() noexcept;
+  void separator(bool after_comma) noexcept;
   void put(std::string_view text) noexcept;
   void put(char c) noexcept;
   void fail(Error error) noexcept;
@@ -218,13 +283,17 @@ class Writer {
   Writer& close(char c, bool object) noexcept;
 
   std::span<char> buffer_;
+  Sink* sink_ = nullptr;
   std::size_t size_ = 0;
   bool failed_ = false;
+  Style style_ = Style::compact;
   Error error_;
   // Per open container: is it an object, has it a first element yet. Bit i = depth i.
   std::uint64_t object_bits_ = 0;
   std::uint64_t nonempty_bits_ = 0;
   std::size_t depth_ = 0;
+  std::size_t line_indent_ = 0;
+  bool line_pending_ = false;
   bool after_key_ = false;
   bool done_ = false;  // a complete top-level value was written
 };

@@ -33,7 +33,8 @@ enum class Schema : std::uint8_t {
 inline constexpr std::size_t kSchemaCount = 8;
 std::string_view schema_name(Schema schema) noexcept;  // "foxglove.Grid", ...
 // The schema as JSON Schema text (draft 2020-12 keywords only where needed), the `schema`
-// field of an advertised channel. Static text; valid JSON.
+// field of an advertised channel. Written once, on the first call, into static memory (nothing
+// is allocated); valid JSON.
 std::string_view json_schema(Schema schema) noexcept;
 
 // A time or duration as the schemas' {sec, nsec}, under `name`: negative clamps to 0, beyond the
