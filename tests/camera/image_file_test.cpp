@@ -214,6 +214,25 @@ TEST(ImageFile, BrokenJpegsAreErrorsAndTruncatedOnesDecodeAsImdecodeDoes) {
   EXPECT_GT(images, 20);
 }
 
+TEST(ImageFile, AHeaderClaimingAHugeImageIsRefusedBeforeItsMemoryIsTaken) {
+  std::vector<std::uint8_t> bytes;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::Mat(8, 8, CV_8UC3, cv::Scalar(10, 20, 30)), bytes));
+  Image image;
+  ASSERT_TRUE(decode_jpeg(bytes, 3, image));
+  // The baseline frame header (FF C0, length, precision, height, width): 65000 x 65000.
+  std::size_t sof = 0;
+  while (sof + 9 < bytes.size() && !(bytes[sof] == 0xFF && bytes[sof + 1] == 0xC0)) ++sof;
+  ASSERT_LT(sof + 9, bytes.size());
+  for (const std::size_t at : {sof + 5, sof + 7}) {
+    bytes[at] = 0xFD;
+    bytes[at + 1] = 0xE8;
+  }
+  const Status refused = decode_jpeg(bytes, 3, image);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(std::string(refused.error().c_str()).find("65000 x 65000"), std::string::npos) << refused.error().c_str();
+  EXPECT_EQ(image.width_px, 0u);
+}
+
 TEST(ImageFile, PngIsWrittenAsImwriteWritesItAndReadsBack) {
   const cv::Mat colour = cv::imread(kData + "fruits.jpg", cv::IMREAD_COLOR);
   ASSERT_FALSE(colour.empty());

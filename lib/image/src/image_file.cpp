@@ -123,6 +123,12 @@ bool decode_jpeg_into(const std::uint8_t* data, std::size_t size, int channels, 
     jpeg_destroy_decompress(&info);
     return false;
   }
+  if (static_cast<std::uint64_t>(info.image_width) * info.image_height > kMaxPixels) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "%u x %u pixels: more than %llu", info.image_width, info.image_height,
+                  static_cast<unsigned long long>(kMaxPixels));
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
   // OpenCV reads CMYK through a conversion of its own; camera frames are YCbCr or grey.
   if (info.num_components == 4) {
     std::snprintf(message, JMSG_LENGTH_MAX, "CMYK JPEG not supported");
@@ -199,6 +205,13 @@ bool decode_png_into(std::span<const std::uint8_t> bytes, int channels, Image& o
   png_read_update_info(png, info);
   out.width_px = png_get_image_width(png, info);
   out.height_px = png_get_image_height(png, info);
+  if (static_cast<std::uint64_t>(out.width_px) * out.height_px > kMaxPixels) {
+    std::snprintf(message, 200, "%u x %u pixels: more than %llu", out.width_px, out.height_px,
+                  static_cast<unsigned long long>(kMaxPixels));
+    png_destroy_read_struct(&png, &info, nullptr);
+    out.width_px = out.height_px = 0;
+    return false;
+  }
   out.channels = static_cast<std::uint8_t>(channels);
   const std::size_t row_bytes = png_get_rowbytes(png, info);
   if (row_bytes != static_cast<std::size_t>(out.width_px) * static_cast<std::size_t>(channels)) {

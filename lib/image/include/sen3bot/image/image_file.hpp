@@ -11,6 +11,10 @@
 
 namespace sen3bot::image {
 
+// Larger images are refused before any pixel memory is taken: a corrupt or hostile header can
+// claim 65535 x 65535 (12 GiB in BGR), which a Pi cannot hold. An 8K frame is 33 Mpx.
+inline constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 26;
+
 // Row-major pixels, rows packed (stride = width x channels): 1 channel grey, 3 BGR, 4 BGRA.
 struct Image {
   std::uint32_t width_px = 0;
