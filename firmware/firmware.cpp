@@ -98,7 +98,7 @@ Status Firmware::create_navigation() {
       if (!module)
         return Error::format(module.error().code(), "%s: navigation.people.detector: onboard: %s", file, module.error().c_str());
       vision_task_ = ModuleRow<VisionTask>(
-          (*module)->vision(vision, FrameSource{external_frames_, camera_task_.get()}, nav_detections_));
+          (*module)->vision(vision, frame_source(), nav_detections_));
 #else
       return Error::format(Errc::config,
                            "%s: navigation.people.detector: onboard: this build has no on-board detector (it needs "
@@ -239,7 +239,7 @@ Status Firmware::create_cobot(const msg::SensorMount& mount, const nav::CameraCa
     Result<const RowModule*> module = load_row_module("qr");
     if (!module) return Error::format(module.error().code(), "%s: cobot: the QR tag reader: %s", file, module.error().c_str());
     qr_task_ = ModuleRow<QrTask>(
-        (*module)->qr(qr, FrameSource{external_frames_, camera_task_.get()}, QrTopics{nav_people_, nav_pose_, nav_tags_}));
+        (*module)->qr(qr, frame_source(), QrTopics{nav_people_, nav_pose_, nav_tags_}));
 #else
     return Error::format(Errc::config,
                          "%s: cobot: this build has no QR tag reader (it needs OpenCV's objdetect module, "
@@ -279,7 +279,7 @@ Status Firmware::create_tasks() {
     Result<const RowModule*> module = load_row_module("camera");
     if (!module)
       return Error::format(module.error().code(), "%s: devices.camera: %s", config_.source_path.c_str(), module.error().c_str());
-    camera_task_ = ModuleRow<CameraTask>((*module)->camera(config_.devices.camera, board_, bus_));
+    camera_task_ = ModuleRow<CameraTask>((*module)->camera(config_.devices.camera, board_, bus_, &camera_pool_));
   }
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;
@@ -299,7 +299,7 @@ Status Firmware::create_tasks() {
 
 ViewSources Firmware::view_sources() {
   ViewSources s{.scheduler = scheduler_, .clock = board_.clock()};
-  s.frames = FrameSource{external_frames_, camera_task_.get()};
+  s.frames = frame_source();
   s.laser_mount = {config_.laser_mount.x_m, config_.laser_mount.y_m, config_.laser_mount.theta_rad};
   if (config_.devices.has_laser || config_.navigation.enabled) s.scan = &nav_scan_;
   if (!config_.navigation.enabled) return s;

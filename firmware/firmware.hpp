@@ -79,7 +79,7 @@ class Firmware {
   // The newest decoded frames, for readers on any thread; null without a camera.
   [[nodiscard]] camera::FramePool* camera_frames() {
     if (external_frames_ != nullptr) return external_frames_;
-    return camera_task_ && camera_task_->camera() ? &camera_task_->camera()->frames() : nullptr;
+    return camera_pool_;
   }
   [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
   // Null without a `navigation` section.
@@ -110,12 +110,6 @@ class Firmware {
   [[nodiscard]] const tasks::Topic<msg::PathMessage>& operation_reference() const { return nav_operation_reference_; }
   // For a test standing in for the QR row.
   [[nodiscard]] tasks::Topic<msg::TagFrame>& tags_topic() { return nav_tags_; }
-#ifdef SEN3BOT_HAS_QR
-  [[nodiscard]] const QrTask* qr() const { return qr_task_.get(); }
-#endif
-#ifdef SEN3BOT_HAS_RECOGNITION
-  [[nodiscard]] const RecognitionTask* recognition() const { return recognition_task_.get(); }
-#endif
   // The waypoints the global planner follows: the file's, or the supervisory planner's path
   // for the newest goal. The planner task, for its supervisory planner. Null or empty without
   // a `navigation` section; read while the scheduler is stopped.
@@ -130,6 +124,10 @@ class Firmware {
   Status create_navigation();
   Status create_cobot(const msg::SensorMount& mount, const nav::CameraCalibration& camera);
   ViewSources view_sources();
+  // The frames of a given pool, else of the camera row (null slot without one).
+  [[nodiscard]] FrameSource frame_source() const noexcept {
+    return {external_frames_, camera_task_ ? &camera_pool_ : nullptr};
+  }
 
   const FirmwareConfig& config_;
   hal::Board& board_;
@@ -178,6 +176,7 @@ class Firmware {
   std::unique_ptr<LaserTask> laser_task_;
   std::unique_ptr<CanIoTask> can_io_task_;
   ModuleRow<CameraTask> camera_task_;  // the rows from modules: row_module.hpp
+  camera::FramePool* camera_pool_ = nullptr;  // the camera row's, from its init()
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;

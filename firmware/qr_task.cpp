@@ -67,6 +67,8 @@ void QrTask::step(const tasks::StepContext& context) {
     return;
   }
   ++searched_;
+  out_.frames_searched = searched_;
+  out_.tags_read = qr_.tags_read();
   topics_.tags.publish(out_, context.start_ns);
 }
 

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <utility>
 
 #include "camera_task.hpp"
 #include "sen3bot/hal/result.hpp"
@@ -23,7 +24,24 @@
 namespace sen3bot::firmware {
 
 // Bumped when RowModule or a row's constructor arguments change.
-inline constexpr std::uint32_t kRowModuleAbi = 1;
+inline constexpr std::uint32_t kRowModuleAbi = 2;
+
+// A row as its module built it: owned through its tasks::Task base, so that its destructor is
+// the module's, and its own type's pointer taken in the module. Outside the module a downcast
+// or a member call on the row's class needs that class's type_info, which only the module has
+// (-fsanitize=vptr checks both); the firmware calls none and gets the pointer from here.
+template <class T>
+struct BuiltRow {
+  std::unique_ptr<tasks::Task> task;
+  T* row = nullptr;
+};
+
+template <class T, class... Args>
+BuiltRow<T> build_row(Args&&... args) {
+  auto made = std::make_unique<T>(std::forward<Args>(args)...);
+  T* row = made.get();
+  return {std::move(made), row};
+}
 
 struct RowModule {
   std::uint32_t abi = kRowModuleAbi;
@@ -34,11 +52,12 @@ struct RowModule {
   std::uint32_t recognition_size = sizeof(RecognitionTask);
   const char* version = nullptr;
   // A module sets its own row's factory and its command; the others stay null.
-  std::unique_ptr<tasks::Task> (*camera)(const camera::CameraConfig&, hal::Board&, tasks::Bus&) = nullptr;
-  std::unique_ptr<tasks::Task> (*vision)(const VisionTaskConfig&, const FrameSource&,
-                                         tasks::Topic<msg::PersonDetections>&) = nullptr;
-  std::unique_ptr<tasks::Task> (*qr)(const QrTaskConfig&, const FrameSource&, const QrTopics&) = nullptr;
-  std::unique_ptr<tasks::Task> (*recognition)(const RecognitionTaskConfig&, const RecognitionTopics&) = nullptr;
+  BuiltRow<CameraTask> (*camera)(const camera::CameraConfig&, hal::Board&, tasks::Bus&,
+                                 camera::FramePool** frames_out) = nullptr;
+  BuiltRow<VisionTask> (*vision)(const VisionTaskConfig&, const FrameSource&,
+                                 tasks::Topic<msg::PersonDetections>&) = nullptr;
+  BuiltRow<QrTask> (*qr)(const QrTaskConfig&, const FrameSource&, const QrTopics&) = nullptr;
+  BuiltRow<RecognitionTask> (*recognition)(const RecognitionTaskConfig&, const RecognitionTopics&) = nullptr;
   int (*command)(int argc, char** argv, std::FILE* out, std::FILE* err) = nullptr;
 };
 
@@ -50,14 +69,12 @@ Result<const RowModule*> load_row_module(const char* name);
 int row_module_command(const char* module, const char* program, int argc, char** argv, std::FILE* out,
                        std::FILE* err);
 
-// A row built by a module: owned through its tasks::Task base, so that its destructor is the
-// module's, and used through its own type.
+// A row built by a module (BuiltRow), kept for the firmware's life.
 template <class T>
 class ModuleRow {
  public:
   ModuleRow() = default;
-  explicit ModuleRow(std::unique_ptr<tasks::Task> owned) noexcept
-      : owned_(std::move(owned)), row_(static_cast<T*>(owned_.get())) {}
+  explicit ModuleRow(BuiltRow<T> built) noexcept : owned_(std::move(built.task)), row_(built.row) {}
   [[nodiscard]] T* get() const noexcept { return row_; }
   T* operator->() const noexcept { return row_; }
   explicit operator bool() const noexcept { return row_ != nullptr; }

@@ -21,6 +21,7 @@
 #include "config.hpp"
 #include "firmware.hpp"
 #include "report_figure.hpp"
+#include "sen3bot/cobot/operations.hpp"
 #include "sen3bot/cobot/polygon.hpp"
 #include "sen3bot/json/json.hpp"
 #include "sen3bot/sim/cobot/operator.hpp"
@@ -184,6 +185,17 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     config.cobot.model_path = folder + "cobot/operations-model.yaml.gz";
   }
 
+  // The operations' names for the report, read as the recognition row reads them.
+  std::vector<std::string> operation_names;
+  if (config.cobot.recognition) {
+    Result<sen3bot::cobot::OperationsConfig> operations = sen3bot::cobot::load_operations(config.cobot.operations_path);
+    if (!operations) {
+      std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, operations.error().c_str());
+      return 1;
+    }
+    for (const sen3bot::cobot::Operation& o : operations->operations) operation_names.push_back(o.name);
+  }
+
   SimulationConfig world = base_world;
   world.start_pose = kPost;
   world.seed = seed + index;
@@ -286,10 +298,7 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     tasks::Sample<msg::OperationEstimate> estimate;
     if (collaborative && stage == Stage::following && fw.operation().read(estimate) && estimate.value.best >= 0) {
       const auto best = static_cast<std::size_t>(estimate.value.best);
-#ifdef SEN3BOT_HAS_RECOGNITION
-      if (fw.recognition() != nullptr && best < fw.recognition()->operations().operations.size())
-        result.operation = fw.recognition()->operations().operations[best].name;
-#endif
+      if (best < operation_names.size()) result.operation = operation_names[best];
       result.operation_probability = estimate.value.probability[best];
       result.operation_points = estimate.value.points;
     }
@@ -395,12 +404,10 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
   result.contacts = board.referee().report().contacts;
   result.moving_contacts = board.referee().report().moving_contacts;
   result.frames_rendered = (*camera)->frames_rendered();
-#ifdef SEN3BOT_HAS_QR
-  if (fw.qr() != nullptr) {
-    result.frames_searched = fw.qr()->frames_searched();
-    result.tags_read = fw.qr()->reader().tags_read();
+  if (tasks::Sample<msg::TagFrame> tags; fw.tags().read(tags)) {
+    result.frames_searched = tags.value.frames_searched;
+    result.tags_read = tags.value.tags_read;
   }
-#endif
   result.worker_path_points = task.recorder().size();
   for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
   result.passed = check(result);

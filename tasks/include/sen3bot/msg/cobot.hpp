@@ -31,6 +31,8 @@ struct TagFrame {
   std::uint8_t count = 0;
   std::uint64_t frame_sequence = 0;  // the camera's frame number
   hal::Nanos capture_ns = 0;         // when the frame was taken, firmware clock
+  std::uint64_t frames_searched = 0;  // the reader's totals, this frame included
+  std::uint64_t tags_read = 0;
 };
 static_assert(std::is_trivially_copyable_v<TagFrame>);
 
