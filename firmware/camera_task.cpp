@@ -7,7 +7,7 @@ Status CameraTask::init(std::pmr::memory_resource&) {
   Result<std::unique_ptr<camera::Camera>> created = camera::Camera::create(config_, board_.clock());
   if (!created) return Error::format(created.error().code(), "camera: %s", created.error().c_str());
   camera_ = std::move(*created);
-  if (frames_out_ != nullptr) *frames_out_ = &camera_->frames();
+  if (camera_out_ != nullptr) *camera_out_ = camera_.get();
   return Status::success();
 }
 

@@ -16,11 +16,11 @@ namespace sen3bot::firmware {
 
 class CameraTask final : public tasks::Task {
  public:
-  // At init() the frame pool's address is written to *frames_out (when given): the firmware
-  // reads it there, without calling into this class, which lives in a module.
+  // At init() the camera's address is written to *camera_out (when given): the firmware reads
+  // its frames and status there, without calling into this class, which lives in a module.
   CameraTask(const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus,
-             camera::FramePool** frames_out = nullptr)
-      : config_(config), board_(board), bus_(bus), frames_out_(frames_out) {}
+             camera::Camera** camera_out = nullptr)
+      : config_(config), board_(board), bus_(bus), camera_out_(camera_out) {}
 
   // Builds the client, the decoder's converter and the frame pool (slots x the largest frame,
   // from the configuration: the camera's memory, sized once here). Connecting happens in step().
@@ -37,24 +37,25 @@ class CameraTask final : public tasks::Task {
   camera::CameraConfig config_;
   hal::Board& board_;
   tasks::Bus& bus_;
-  camera::FramePool** frames_out_;
+  camera::Camera** camera_out_;
   std::unique_ptr<camera::Camera> camera_;
   bool failure_reported_ = false;
 };
 
-// Where a frame reader's frames come from: the camera row's pool, written to a slot once that
-// row's init() ran (it runs first: the readers' rows come after it in the table), or a pool
-// given outright (a simulated camera). A slot, not the row: the row's class lives in its module,
-// and code outside it must not call it (with -fsanitize=vptr each call needs its type_info).
+// Where a frame reader's frames come from: the camera's pool, its camera written to a slot once
+// the camera row's init() ran (it runs first: the readers' rows come after it in the table), or
+// a pool given outright (a simulated camera). A slot, not the row: the row's class lives in its
+// module, and code outside it must not call it (with -fsanitize=vptr each call needs its
+// type_info, which only the module has).
 struct FrameSource {
   // From a pool alone, or from the camera row's slot when pool is null.
-  FrameSource(camera::FramePool* frames = nullptr, camera::FramePool* const* camera_slot = nullptr) noexcept  // NOLINT(google-explicit-constructor)
+  FrameSource(camera::FramePool* frames = nullptr, camera::Camera* const* camera_slot = nullptr) noexcept  // NOLINT(google-explicit-constructor)
       : pool(frames), camera(camera_slot) {}
   camera::FramePool* pool;
-  camera::FramePool* const* camera;  // null without a camera row
+  camera::Camera* const* camera;  // null without a camera row
   [[nodiscard]] camera::FramePool* get() const noexcept {
     if (pool != nullptr) return pool;
-    return camera != nullptr ? *camera : nullptr;
+    return camera != nullptr && *camera != nullptr ? &(*camera)->frames() : nullptr;
   }
 };
 

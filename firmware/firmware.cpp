@@ -279,7 +279,7 @@ Status Firmware::create_tasks() {
     Result<const RowModule*> module = load_row_module("camera");
     if (!module)
       return Error::format(module.error().code(), "%s: devices.camera: %s", config_.source_path.c_str(), module.error().c_str());
-    camera_task_ = ModuleRow<CameraTask>((*module)->camera(config_.devices.camera, board_, bus_, &camera_pool_));
+    camera_task_ = ModuleRow<CameraTask>((*module)->camera(config_.devices.camera, board_, bus_, &camera_device_));
   }
   if (config_.navigation.enabled) {
     if (Status s = create_navigation(); !s) return s;

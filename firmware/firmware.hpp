@@ -79,9 +79,11 @@ class Firmware {
   // The newest decoded frames, for readers on any thread; null without a camera.
   [[nodiscard]] camera::FramePool* camera_frames() {
     if (external_frames_ != nullptr) return external_frames_;
-    return camera_pool_;
+    return camera_device_ != nullptr ? &camera_device_->frames() : nullptr;
   }
-  [[nodiscard]] CameraTask* camera() { return camera_task_.get(); }
+  // The camera row's camera (its status, whether it failed for good); null without one or
+  // before init().
+  [[nodiscard]] camera::Camera* camera() { return camera_device_; }
   // Null without a `navigation` section.
   [[nodiscard]] const MissionTask* mission() const { return mission_task_.get(); }
   // Null without a `fleet` section.
@@ -126,7 +128,7 @@ class Firmware {
   ViewSources view_sources();
   // The frames of a given pool, else of the camera row (null slot without one).
   [[nodiscard]] FrameSource frame_source() const noexcept {
-    return {external_frames_, camera_task_ ? &camera_pool_ : nullptr};
+    return {external_frames_, camera_task_ ? &camera_device_ : nullptr};
   }
 
   const FirmwareConfig& config_;
@@ -176,7 +178,7 @@ class Firmware {
   std::unique_ptr<LaserTask> laser_task_;
   std::unique_ptr<CanIoTask> can_io_task_;
   ModuleRow<CameraTask> camera_task_;  // the rows from modules: row_module.hpp
-  camera::FramePool* camera_pool_ = nullptr;  // the camera row's, from its init()
+  camera::Camera* camera_device_ = nullptr;  // the camera row's, from its init()
   std::unique_ptr<nav::LocalizationTask> localization_task_;
   std::unique_ptr<nav::PlannerTask> planner_task_;
   std::unique_ptr<nav::ControllerTask> controller_task_;

@@ -53,7 +53,7 @@ struct RowModule {
   const char* version = nullptr;
   // A module sets its own row's factory and its command; the others stay null.
   BuiltRow<CameraTask> (*camera)(const camera::CameraConfig&, hal::Board&, tasks::Bus&,
-                                 camera::FramePool** frames_out) = nullptr;
+                                 camera::Camera** camera_out) = nullptr;
   BuiltRow<VisionTask> (*vision)(const VisionTaskConfig&, const FrameSource&,
                                  tasks::Topic<msg::PersonDetections>&) = nullptr;
   BuiltRow<QrTask> (*qr)(const QrTaskConfig&, const FrameSource&, const QrTopics&) = nullptr;

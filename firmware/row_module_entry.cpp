@@ -12,8 +12,8 @@ RowModule make() {
   RowModule m;
   m.version = SEN3BOT_VERSION;
 #if defined(SEN3BOT_ROW_CAMERA)
-  m.camera = [](const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus, camera::FramePool** frames_out) {
-    return build_row<CameraTask>(config, board, bus, frames_out);
+  m.camera = [](const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus, camera::Camera** camera_out) {
+    return build_row<CameraTask>(config, board, bus, camera_out);
   };
   m.command = camera_command;
 #elif defined(SEN3BOT_ROW_VISION)

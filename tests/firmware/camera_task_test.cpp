@@ -58,11 +58,11 @@ TEST(CameraTask, TheCameraRowDecodesFramesOnItsOwnThread) {
   std::fclose(sink);
 
   camera::FrameHandle frame = fw.camera_frames()->acquire_latest();
-  ASSERT_TRUE(frame) << fw.camera()->camera()->status().last_error;
+  ASSERT_TRUE(frame) << fw.camera()->status().last_error;
   EXPECT_GE(frame.ref().sequence, 30u);
   EXPECT_EQ(frame.ref().width_px, 640u);
   EXPECT_EQ(frame.ref().height_px, 360u);
-  const camera::CameraStatus status = fw.camera()->camera()->status();
+  const camera::CameraStatus status = fw.camera()->status();
   EXPECT_EQ(status.decoder.decode_errors, 0u);
 
   // The view row found the camera row's frames and sent them as JPEG, shrunk to 320 wide.
@@ -126,7 +126,7 @@ TEST(CameraTask, ACameraThatFailedForGoodIsReportedAndTheFirmwareRunsWithoutIt) 
   fw.shutdown();
 
   EXPECT_TRUE(fw.camera()->failed());
-  const camera::CameraStatus status = fw.camera()->camera()->status();
+  const camera::CameraStatus status = fw.camera()->status();
   EXPECT_EQ(status.state, camera::ClientState::failed);
   EXPECT_EQ(status.last_error, "the camera offers only H265 video (rtpmap H265/90000); supported: H264, JPEG");
   EXPECT_EQ(fake.accepted(), 1);
