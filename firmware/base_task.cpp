@@ -5,6 +5,8 @@
 
 #include "adapters.hpp"
 #include "sen3bot/p2os/sonar.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -107,6 +109,17 @@ void BaseTask::shutdown() {
     clock.sleep_until(clock.now() + hal::millis(2));
   }
   publish(clock.now());
+}
+
+Status make_base(Wiring& w) {
+  if (!w.config.devices.has_base) return w.absent("needs devices.base");
+  const p2os::P2osConfig& base = w.config.devices.base;
+  w.takes("P2OS server information packets on " + base.port + " (odometry, motor and bumper flags, sonar)");
+  w.sends("P2OS commands: VEL2/RVEL from the command, the watchdog's PULSE");
+  w.make<BaseTask>(base, w.board,
+                   BaseTopics{w.reads(&Topics::command), w.writes(&Topics::odometry), w.writes(&Topics::base_flags),
+                              w.writes_if(true, &Topics::sonar)});
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "task_table.hpp"
+#include "wiring.hpp"
+
 namespace sen3bot::firmware {
 
 namespace {
@@ -94,7 +97,7 @@ void CanIoTask::step(const tasks::StepContext& context) {
                       static_cast<double>(now - command.stamp_ns) <= config_.driving_hold_s * 1e9 &&
                       (command.value.v_m_s != 0.0 || command.value.w_rad_s != 0.0);
   tasks::Sample<msg::OperatingMode> mode;
-  const bool wait4col = topics_.mode.read(mode) && mode.value.wait4col;
+  const bool wait4col = topics_.mode != nullptr && topics_.mode->read(mode) && mode.value.wait4col;
   light_ = light_mode(reasons, moving, wait4col);
   const double period_ns = config_.buzzer_period_s * 1e9;
   const bool buzzer_on =
@@ -129,6 +132,18 @@ void CanIoTask::step(const tasks::StepContext& context) {
     reset_level_ = reset;
   }
   topics_.io.publish(io_, now);
+}
+
+Status make_can_io(Wiring& w) {
+  if (!w.config.devices.has_io_node) return w.absent("needs devices.io_node");
+  const CanIoConfig& io = w.config.devices.io_node;
+  w.takes("CANopen frames on " + io.interface + " from node " + std::to_string(io.master.node) +
+          ": inputs (e-stop chain, reset, bumpers) by TPDO, heartbeat");
+  w.sends("CANopen RPDO to the node's outputs (status light), NMT, SDO set-up");
+  w.make<CanIoTask>(io, w.board,
+                    CanIoTopics{w.reads(&Topics::safety_output), w.reads(&Topics::command), w.writes(&Topics::safety_io),
+                                w.reads_if(w.config.cobot.enabled && w.config.navigation.enabled, &Topics::operating_mode)});
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

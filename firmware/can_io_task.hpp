@@ -54,8 +54,8 @@ std::uint8_t output_levels(const CanIoConfig& config, msg::LightMode mode, bool 
 struct CanIoTopics {
   const tasks::Topic<msg::SafetyOutput>& safety;      // the reasons a safety stop holds
   const tasks::Topic<msg::VelocityCommand>& command;  // what goes to the base
-  const tasks::Topic<msg::OperatingMode>& mode;       // wait4col
   tasks::Topic<msg::SafetyIo>& io;
+  const tasks::Topic<msg::OperatingMode>* mode = nullptr;  // the collaborative mode's wait4col
 };
 
 class CanIoTask final : public tasks::Task {

@@ -32,6 +32,13 @@ constexpr const char* kUsage =
     "        section) and task statistics. --duration overrides run.duration_s (0:\n"
     "        until a signal). A configuration with a simulated robot runs with\n"
     "        sen3bot-sim.\n"
+    "  graph --config FILE [--mermaid]\n"
+    "        The data flow the configuration wires, without starting anything: each\n"
+    "        thread's rows with the devices they talk to and the topics they read and\n"
+    "        write, then each topic's writer and readers, then the rows left out and\n"
+    "        why. --mermaid prints it as a Mermaid flowchart instead (a figure where\n"
+    "        Markdown is rendered). docs/architecture.md quotes this for the robot's\n"
+    "        configuration.\n"
     "  plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]\n"
     "        One global plan (A* with waypoint attraction) on the map's costmap, as\n"
     "        JSON: length_m, cells, expansions, time_ms, path [[x, y], ...] in metres.\n"
@@ -143,6 +150,48 @@ int run_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   return run_firmware(fw, board, config, out, err);
 }
 
+int graph_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  std::string config_path;
+  bool mermaid = false;
+  for (int i = 0; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--config" && i + 1 < argc) {
+      config_path = argv[++i];
+    } else if (arg == "--mermaid") {
+      mermaid = true;
+    } else {
+      std::fprintf(err, "sen3bot graph: unknown argument '%s'\nusage: sen3bot graph --config FILE [--mermaid]\n",
+                   argv[i]);
+      return 2;
+    }
+  }
+  if (config_path.empty()) {
+    std::fprintf(err, "usage: sen3bot graph --config FILE [--mermaid]\n");
+    return 2;
+  }
+  // A simulated robot's configuration names sections of the simulator's board: accepted here,
+  // as the wiring does not depend on them.
+  static constexpr std::string_view kBoardSections[] = {"sim"};
+  Result<FirmwareConfig> loaded = load_config(config_path, kBoardSections);
+  if (!loaded) {
+    std::fprintf(err, "sen3bot graph: %s\n", loaded.error().c_str());
+    return 2;
+  }
+  hal::PosixBoard board(hal::PosixBoard::Lines{});  // no line opened: nothing starts
+  Firmware fw(*loaded, board, out);
+  if (Status s = fw.wire(); !s) {
+    std::fprintf(err, "sen3bot graph: %s\n", s.error().c_str());
+    return 2;
+  }
+  if (mermaid) {
+    print_graph_mermaid(fw.wiring(), out);
+  } else {
+    std::fprintf(out, "sen3bot data flow: %s\n\n", config_path.c_str());
+    print_graph(fw.wiring(), out);
+  }
+  return 0;
+}
+
 int capture_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   if (argc == 2 && std::string_view(argv[0]) == "dump") {
     if (Status s = capture::dump(argv[1], out); !s) {
@@ -177,6 +226,7 @@ int camera_from_module(int argc, char** argv, std::FILE* out, std::FILE* err) {
 int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
   static constexpr Command kCommands[] = {
       {"run", "", run_command},
+      {"graph", "", graph_command},
       {"plan", "", plan_command},
       {"sgp", "", sgp_from_module},
       {"fuse", "", fuse_command},

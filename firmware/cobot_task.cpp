@@ -3,6 +3,9 @@
 #include <cmath>
 
 #include "sen3bot/cobot/polygon.hpp"
+#include "sen3bot/ssc/site_file.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -312,6 +315,41 @@ void CobotTask::step(const tasks::StepContext& context) {
   state_.stamp_ns = now;
   topics_.state.publish(state_, now);
   topics_.light.publish(msg::OperatingMode{m.mode == msg::CobotMode::wait4col}, now);
+}
+
+Status make_cobot(Wiring& w) {
+  const CobotSection& k = w.config.cobot;
+  if (!k.enabled) return w.absent("needs a cobot section");
+  if (!w.config.navigation.enabled) return w.absent("needs a navigation section");
+  Result<ssc::SiteFile> site = ssc::load_site(k.site_path);
+  if (!site) return Error::format(site.error().code(), "%s: cobot.site: %s", w.file(), site.error().c_str());
+  CobotTaskConfig task = k.task;
+  task.laser_mount = w.shared.laser_mount;
+  task.camera = nav::CameraCalibration{};
+  task.area_count = 0;
+  for (const ssc::Area& a : site->site.areas) {
+    if (task.area_count == CobotTaskConfig::kMaxAreas)
+      return Error::format(Errc::config, "%s: cobot.site: more than %zu areas", w.file(), CobotTaskConfig::kMaxAreas);
+    CobotArea& area = task.areas[task.area_count++];
+    switch (a.type) {
+      case ssc::AreaType::blind_intersection: area.type = cobot::AreaType::critical_1_1; break;
+      case ssc::AreaType::transition: area.type = cobot::AreaType::critical_1_2; break;
+      case ssc::AreaType::workstation: area.type = cobot::AreaType::sub_critical_2; break;
+      case ssc::AreaType::not_monitored: area.type = cobot::AreaType::not_monitored_3; break;
+    }
+    if (a.outline.size() > CobotArea::kMaxVertices)
+      return Error::format(Errc::config, "%s: cobot.site: an area of more than %zu corners", w.file(),
+                           CobotArea::kMaxVertices);
+    for (const ssc::Point& p : a.outline) area.outline[area.vertices++] = {p.x, p.y};
+  }
+  w.make<CobotTask>(task,
+                    CobotTopics{w.reads(&Topics::people), w.reads(&Topics::pose), w.reads(&Topics::odometry),
+                                w.reads(&Topics::scan), w.reads(&Topics::tags), w.reads(&Topics::cooperative_goal),
+                                w.reads(&Topics::path), w.reads(&Topics::controller_status), w.writes(&Topics::goal),
+                                w.writes(&Topics::cobot_state), w.writes(&Topics::operating_mode),
+                                w.writes(&Topics::worker_path)},
+                    &w.shared.map);
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

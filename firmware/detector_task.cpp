@@ -1,6 +1,8 @@
 #include "detector_task.hpp"
 
 #include "adapters.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -25,6 +27,22 @@ void DetectorTask::step(const tasks::StepContext& context) {
     to_person_detections(frame_, message_);
     topic_.publish(message_, context.start_ns);
   }
+}
+
+Status make_detector(Wiring& w) {
+  const NavigationSection& n = w.config.navigation;
+  if (!n.enabled || !n.people_enabled) return w.absent("needs navigation.people");
+  if (w.shared.external_people != nullptr) return w.absent("the people come from the simulator: no detector");
+  if (n.people_detector == "onboard") return w.absent("navigation.people.detector: onboard (the vision row)");
+  const nav::CameraCalibration camera;
+  DetectorTaskConfig detector;
+  detector.address = n.people_detector;
+  detector.gate.max_age_s = n.detection_max_age_s;
+  detector.gate.width_px = static_cast<std::uint16_t>(camera.width_px);
+  detector.gate.height_px = static_cast<std::uint16_t>(camera.height_px);
+  w.takes("person detector datagrams on " + n.people_detector + " (detector::Detections, adapters.cpp)");
+  w.make<DetectorTask>(detector, w.board, w.writes(&Topics::detections));
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

@@ -7,6 +7,8 @@
 
 #include "cli_util.hpp"
 #include "sen3bot/vda5050/extensions.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -447,6 +449,32 @@ void FleetTask::shutdown() {
   if (!link_) return;
   publish_connection(vda5050::ConnectionState::offline);
   link_->close(1.0);
+}
+
+Status make_fleet(Wiring& w) {
+  if (!w.config.has_fleet) return w.absent("needs a fleet section");
+  if (!w.config.navigation.enabled) return w.absent("needs a navigation section");
+  const NavigationSection& n = w.config.navigation;
+  const DevicesConfig& devices = w.config.devices;
+  // The centre's formation commands are refused beyond what the DWA may ask of the robot (and
+  // beyond what the base driver would clip it to).
+  FleetConfig fleet = w.config.fleet;
+  fleet.formation_max_v_m_s = n.dwa.max_v_m_s;
+  fleet.formation_max_w_rad_s = n.dwa.max_w_rad_s;
+  if (devices.has_base && devices.base.max_v_m_s > 0 && devices.base.max_omega_rad_s > 0) {
+    fleet.formation_max_v_m_s = std::min(fleet.formation_max_v_m_s, devices.base.max_v_m_s);
+    fleet.formation_max_w_rad_s = std::min(fleet.formation_max_w_rad_s, devices.base.max_omega_rad_s);
+  }
+  w.takes("VDA 5050 orders and instant actions, the centre's formation commands (MQTT, " + fleet.broker + ")");
+  w.sends("VDA 5050 state, connection, visualization; the people seen (MQTT)");
+  tasks::Topic<msg::NavGoal>& goals =
+      w.config.cobot.enabled ? w.writes(&Topics::cooperative_goal) : w.writes(&Topics::goal);
+  w.make<FleetTask>(fleet, w.board,
+                    FleetTopics{w.reads(&Topics::pose), w.reads(&Topics::odometry), w.reads(&Topics::base_flags),
+                                w.reads(&Topics::controller_status), w.reads(&Topics::path),
+                                w.reads(&Topics::safety_output), w.reads(&Topics::people), goals,
+                                w.writes_if(true, &Topics::formation)});
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

@@ -4,6 +4,8 @@
 
 #include "adapters.hpp"
 #include "sen3bot/hal/serial.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -85,6 +87,16 @@ void LaserTask::shutdown() {
     device_->step(clock.now());
     clock.sleep_until(clock.now() + hal::millis(1));
   }
+}
+
+Status make_laser(Wiring& w) {
+  if (!w.config.devices.has_laser) return w.absent("needs devices.laser");
+  const lms200::Lms200Config& laser = w.config.devices.laser;
+  w.takes("LMS200 telegrams on " + laser.port + " at " + std::to_string(laser.baud) +
+          " baud (lms200::Scan, adapters.cpp)");
+  w.sends("LMS200 requests: the mode, the variant, the baud rate, continuous output");
+  w.make<LaserTask>(laser, w.board, w.writes(&Topics::scan));
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

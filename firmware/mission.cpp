@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "task_table.hpp"
+#include "wiring.hpp"
+
 namespace sen3bot::firmware {
 
 const char* to_string(MissionState state) noexcept {
@@ -110,6 +113,19 @@ void MissionTask::print_report(std::FILE* out) const {
     std::fprintf(out, "  speed and separation: %llu steps slowed, down to %.2f m/s at %.2f m from a cage\n",
                  static_cast<unsigned long long>(r.separation_limited_steps), r.separation_min_cap_m_s,
                  r.separation_gap_at_min_m);
+}
+
+Status make_mission(Wiring& w) {
+  if (!w.config.navigation.enabled) return w.absent("needs a navigation section");
+  if (w.config.has_fleet) return w.absent("the fleet gives the goals: no mission");
+  // With the collaborative mode the mission's goals are the cooperative ones: the cobot row
+  // passes them on.
+  tasks::Topic<msg::NavGoal>& goals =
+      w.config.cobot.enabled ? w.writes(&Topics::cooperative_goal) : w.writes(&Topics::goal);
+  w.make<MissionTask>(w.config.navigation.mission,
+                      MissionTopics{goals, w.reads(&Topics::controller_status), w.reads(&Topics::path),
+                                    w.reads(&Topics::pose), w.reads(&Topics::safety_output)});
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

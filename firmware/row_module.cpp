@@ -10,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "task_table.hpp"
+#include "wiring.hpp"
+
 namespace sen3bot::firmware {
 namespace {
 
@@ -78,6 +81,116 @@ int row_module_command(const char* module, const char* program, int argc, char**
     return 2;
   }
   return (*loaded)->command(argc, argv, out, err);
+}
+
+
+// --- The rows in modules (task_table.hpp) ----------------------------------------------------
+
+namespace {
+
+// Where the vision and QR rows take their frames: a simulated camera's pool, or the camera row's.
+FrameSource frame_source(Wiring& w) {
+  if (w.shared.external_frames != nullptr) {
+    w.takes("frames of a simulated camera");
+    return FrameSource{w.shared.external_frames};
+  }
+  if (w.uses("camera") == nullptr) return FrameSource{};
+  return FrameSource{nullptr, &w.shared.camera};
+}
+
+}  // namespace
+
+Status make_camera(Wiring& w) {
+  if (!w.config.devices.has_camera) return w.absent("needs devices.camera");
+  Result<const RowModule*> module = load_row_module("camera");
+  if (!module) return Error::format(module.error().code(), "%s: devices.camera: %s", w.file(), module.error().c_str());
+  std::string url = w.config.devices.camera.rtsp.url;
+  if (const std::size_t at = url.find('@'); at != std::string::npos && url.find("://") != std::string::npos)
+    url.erase(url.find("://") + 3, at - url.find("://") - 2);  // no credentials in a graph
+  w.takes("RTSP/RTP from " + url + ": H.264/MJPEG decoded into the frame pool");
+  w.sends("RTSP requests (OPTIONS, DESCRIBE, SETUP, PLAY, keep-alive), RTCP receiver reports");
+  w.adopt((*module)->camera(w.config.devices.camera, w.board, w.bus, &w.shared.camera));
+  return Status::success();
+}
+
+Status make_vision(Wiring& w) {
+  const NavigationSection& n = w.config.navigation;
+  if (!n.enabled || !n.people_enabled || n.people_detector != "onboard" || w.shared.external_people != nullptr)
+    return w.absent("needs navigation.people.detector: onboard");
+#ifdef SEN3BOT_HAS_HOG
+  if (!w.config.devices.has_camera && w.shared.external_frames == nullptr)
+    return Error::format(Errc::config, "%s: navigation.people.detector: onboard needs devices.camera", w.file());
+  const nav::CameraCalibration camera;
+  VisionTaskConfig vision;
+  vision.hog = n.onboard_hog;
+  vision.rate_hz = n.onboard_rate_hz;
+  vision.calibration_width_px = static_cast<std::uint32_t>(camera.width_px);
+  vision.calibration_height_px = static_cast<std::uint32_t>(camera.height_px);
+  Result<const RowModule*> module = load_row_module("vision");
+  if (!module)
+    return Error::format(module.error().code(), "%s: navigation.people.detector: onboard: %s", w.file(),
+                         module.error().c_str());
+  w.adopt((*module)->vision(vision, frame_source(w), w.writes(&Topics::detections)));
+  return Status::success();
+#else
+  return Error::format(Errc::config,
+                       "%s: navigation.people.detector: onboard: this build has no on-board detector (it needs "
+                       "OpenCV's objdetect module, libopencv-objdetect-dev)",
+                       w.file());
+#endif
+}
+
+Status make_qr(Wiring& w) {
+  const CobotSection& k = w.config.cobot;
+  if (!k.enabled || !w.config.navigation.enabled) return w.absent("needs a cobot section and a camera");
+  if (w.shared.external_frames == nullptr && !w.config.devices.has_camera)
+    return w.absent("needs a cobot section and a camera");
+#ifdef SEN3BOT_HAS_QR
+  QrTaskConfig qr;
+  qr.rate_hz = k.qr_rate_hz;
+  qr.reach_m = k.qr_reach_m;
+  qr.band_height_m = k.task.band_height_m;
+  qr.laser_height_m = k.task.laser_height_m;
+  qr.tag_side_m = k.tag_side_m;
+  qr.whole_frame = k.qr_whole_frame;
+  qr.camera = nav::CameraCalibration{};
+  qr.laser_mount = w.shared.laser_mount;
+  Result<const RowModule*> module = load_row_module("qr");
+  if (!module)
+    return Error::format(module.error().code(), "%s: cobot: the QR tag reader: %s", w.file(), module.error().c_str());
+  const FrameSource frames = frame_source(w);
+  w.adopt((*module)
+              ->qr(qr, frames, QrTopics{w.reads(&Topics::people), w.reads(&Topics::pose), w.writes(&Topics::tags)}));
+  return Status::success();
+#else
+  return Error::format(Errc::config,
+                       "%s: cobot: this build has no QR tag reader (it needs OpenCV's objdetect module, "
+                       "libopencv-objdetect-dev)",
+                       w.file());
+#endif
+}
+
+Status make_recognition(Wiring& w) {
+  const CobotSection& k = w.config.cobot;
+  if (!k.enabled || !k.recognition || !w.config.navigation.enabled) return w.absent("needs cobot.recognition");
+#ifdef SEN3BOT_HAS_RECOGNITION
+  RecognitionTaskConfig recognition;
+  recognition.operations_path = k.operations_path;
+  recognition.model_path = k.model_path;
+  recognition.rate_hz = k.recognition_rate_hz;
+  Result<const RowModule*> module = load_row_module("recognition");
+  if (!module) return Error::format(module.error().code(), "%s: cobot.recognition: %s", w.file(), module.error().c_str());
+  w.adopt((*module)
+              ->recognition(recognition,
+                            RecognitionTopics{w.reads(&Topics::worker_path), w.writes(&Topics::operation),
+                                              w.writes(&Topics::operation_reference)}));
+  return Status::success();
+#else
+  return Error::format(Errc::config,
+                       "%s: cobot.recognition: this build has no operation recognizer (it needs OpenCV's ml module, "
+                       "libopencv-ml-dev)",
+                       w.file());
+#endif
 }
 
 }  // namespace sen3bot::firmware

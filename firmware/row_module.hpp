@@ -12,7 +12,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
-#include <utility>
 
 #include "camera_task.hpp"
 #include "sen3bot/hal/result.hpp"
@@ -26,23 +25,6 @@ namespace sen3bot::firmware {
 // Bumped when RowModule or a row's constructor arguments change.
 inline constexpr std::uint32_t kRowModuleAbi = 2;
 
-// A row as its module built it: owned through its tasks::Task base, so that its destructor is
-// the module's, and its own type's pointer taken in the module. Outside the module a downcast
-// or a member call on the row's class needs that class's type_info, which only the module has
-// (-fsanitize=vptr checks both); the firmware calls none and gets the pointer from here.
-template <class T>
-struct BuiltRow {
-  std::unique_ptr<tasks::Task> task;
-  T* row = nullptr;
-};
-
-template <class T, class... Args>
-BuiltRow<T> build_row(Args&&... args) {
-  auto made = std::make_unique<T>(std::forward<Args>(args)...);
-  T* row = made.get();
-  return {std::move(made), row};
-}
-
 struct RowModule {
   std::uint32_t abi = kRowModuleAbi;
   // The rows' sizes as the module was built: a module from another build is refused.
@@ -52,12 +34,15 @@ struct RowModule {
   std::uint32_t recognition_size = sizeof(RecognitionTask);
   const char* version = nullptr;
   // A module sets its own row's factory and its command; the others stay null.
-  BuiltRow<CameraTask> (*camera)(const camera::CameraConfig&, hal::Board&, tasks::Bus&,
-                                 camera::Camera** camera_out) = nullptr;
-  BuiltRow<VisionTask> (*vision)(const VisionTaskConfig&, const FrameSource&,
-                                 tasks::Topic<msg::PersonDetections>&) = nullptr;
-  BuiltRow<QrTask> (*qr)(const QrTaskConfig&, const FrameSource&, const QrTopics&) = nullptr;
-  BuiltRow<RecognitionTask> (*recognition)(const RecognitionTaskConfig&, const RecognitionTopics&) = nullptr;
+  // Each row is owned through its tasks::Task base, so that its destructor is the module's. The
+  // firmware never calls or downcasts a row's own class: only the module has its type_info
+  // (with -fsanitize=vptr each such call needs it); what it shares goes through plain slots.
+  std::unique_ptr<tasks::Task> (*camera)(const camera::CameraConfig&, hal::Board&, tasks::Bus&,
+                                         camera::Camera** camera_out) = nullptr;
+  std::unique_ptr<tasks::Task> (*vision)(const VisionTaskConfig&, const FrameSource&,
+                                         tasks::Topic<msg::PersonDetections>&) = nullptr;
+  std::unique_ptr<tasks::Task> (*qr)(const QrTaskConfig&, const FrameSource&, const QrTopics&) = nullptr;
+  std::unique_ptr<tasks::Task> (*recognition)(const RecognitionTaskConfig&, const RecognitionTopics&) = nullptr;
   int (*command)(int argc, char** argv, std::FILE* out, std::FILE* err) = nullptr;
 };
 
@@ -68,20 +53,5 @@ Result<const RowModule*> load_row_module(const char* name);
 // Runs a module's command (`sen3bot camera ...`), or says why the module cannot be loaded (2).
 int row_module_command(const char* module, const char* program, int argc, char** argv, std::FILE* out,
                        std::FILE* err);
-
-// A row built by a module (BuiltRow), kept for the firmware's life.
-template <class T>
-class ModuleRow {
- public:
-  ModuleRow() = default;
-  explicit ModuleRow(BuiltRow<T> built) noexcept : owned_(std::move(built.task)), row_(built.row) {}
-  [[nodiscard]] T* get() const noexcept { return row_; }
-  T* operator->() const noexcept { return row_; }
-  explicit operator bool() const noexcept { return row_ != nullptr; }
-
- private:
-  std::unique_ptr<tasks::Task> owned_;
-  T* row_ = nullptr;
-};
 
 }  // namespace sen3bot::firmware

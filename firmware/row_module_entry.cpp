@@ -12,24 +12,24 @@ RowModule make() {
   RowModule m;
   m.version = SEN3BOT_VERSION;
 #if defined(SEN3BOT_ROW_CAMERA)
-  m.camera = [](const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus, camera::Camera** camera_out) {
-    return build_row<CameraTask>(config, board, bus, camera_out);
+  m.camera = [](const camera::CameraConfig& config, hal::Board& board, tasks::Bus& bus, camera::Camera** camera_out) -> std::unique_ptr<tasks::Task> {
+    return std::make_unique<CameraTask>(config, board, bus, camera_out);
   };
   m.command = camera_command;
 #elif defined(SEN3BOT_ROW_VISION)
   m.vision = [](const VisionTaskConfig& config, const FrameSource& frames,
-                tasks::Topic<msg::PersonDetections>& topic) {
-    return build_row<VisionTask>(config, frames, topic);
+                tasks::Topic<msg::PersonDetections>& topic) -> std::unique_ptr<tasks::Task> {
+    return std::make_unique<VisionTask>(config, frames, topic);
   };
   m.command = detect_command;
 #elif defined(SEN3BOT_ROW_QR)
-  m.qr = [](const QrTaskConfig& config, const FrameSource& frames, const QrTopics& topics) {
-    return build_row<QrTask>(config, frames, topics);
+  m.qr = [](const QrTaskConfig& config, const FrameSource& frames, const QrTopics& topics) -> std::unique_ptr<tasks::Task> {
+    return std::make_unique<QrTask>(config, frames, topics);
   };
   m.command = cobot_command;
 #elif defined(SEN3BOT_ROW_RECOGNITION)
-  m.recognition = [](const RecognitionTaskConfig& config, const RecognitionTopics& topics) {
-    return build_row<RecognitionTask>(config, topics);
+  m.recognition = [](const RecognitionTaskConfig& config, const RecognitionTopics& topics) -> std::unique_ptr<tasks::Task> {
+    return std::make_unique<RecognitionTask>(config, topics);
   };
   m.command = recognize_command;
 #elif defined(SEN3BOT_ROW_SGP)

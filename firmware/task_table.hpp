@@ -7,10 +7,40 @@
 #include <string_view>
 
 #include "sen3bot/hal/clock.hpp"
+#include "sen3bot/hal/result.hpp"
 #include "sen3bot/tasks/scheduler.hpp"
 #include "sen3bot/tasks/utilization.hpp"
 
 namespace sen3bot::firmware {
+
+class Wiring;
+// A row's factory: takes its topics and devices from the Wiring and makes the row's task, or
+// says why this configuration runs none (wiring.hpp). Each is defined beside its task.
+using RowFactory = Status (*)(Wiring&);
+Status make_laser(Wiring&);         // laser_task.cpp
+Status make_can_io(Wiring&);        // can_io_task.cpp
+Status make_safety(Wiring&);        // nav_rows.cpp: navigation's rows
+Status make_base(Wiring&);          // base_task.cpp
+Status make_detector(Wiring&);      // detector_task.cpp
+Status make_localization(Wiring&);  // nav_rows.cpp
+Status make_people(Wiring&);        // nav_rows.cpp
+Status make_controller(Wiring&);    // nav_rows.cpp
+Status make_cobot(Wiring&);         // cobot_task.cpp
+Status make_health(Wiring&);        // firmware.cpp
+Status make_planner(Wiring&);       // nav_rows.cpp
+Status make_mission(Wiring&);       // mission.cpp
+Status make_fleet(Wiring&);         // fleet_task.cpp
+Status make_telemetry(Wiring&);     // firmware.cpp
+Status make_camera(Wiring&);        // row_module.cpp: the rows in modules
+Status make_vision(Wiring&);        // row_module.cpp
+Status make_qr(Wiring&);            // row_module.cpp
+Status make_recognition(Wiring&);   // row_module.cpp
+Status make_view(Wiring&);          // view_task.cpp
+
+struct Row {
+  tasks::TaskSpec spec;
+  RowFactory make;
+};
 
 // Threads: "io" runs the reflex path from the laser to the wheels, "control" localization and
 // the local planner, "background" whatever may block (planning, logs, files, network),
@@ -25,37 +55,44 @@ namespace sen3bot::firmware {
 // `cobot` (qr with a camera, recognition with cobot.recognition), the view under `view`; the rest always. Budgets are for the Pi 3; the camera's allows one
 // 15 fps stream decoded at up to 1280 x 720; the controller's a worst DWA cycle among movers
 // (docs/navigation.md, benchmarks).
-inline constexpr std::array kTaskTable = {
-    //                 name         period_us  budget_us  priority  thread
-    tasks::TaskSpec{"laser",        5'000,     500,       75,       "io"},
+inline constexpr auto kRows = std::to_array<Row>({
+    //  name           period_us  budget_us  prio thread        factory
+    {{"laser",        5'000,     500,       75,  "io"},        make_laser},
     // Before safety: the e-stop chain read in a cycle stops the base in that cycle.
-    tasks::TaskSpec{"can_io",       10'000,    300,       74,       "io"},
-    tasks::TaskSpec{"safety",       10'000,    1'000,     73,       "io"},
-    tasks::TaskSpec{"base",         10'000,    500,       72,       "io"},
-    tasks::TaskSpec{"detector",     20'000,    300,       71,       "io"},
-    tasks::TaskSpec{"localization", 50'000,    15'000,    66,       "control"},
-    tasks::TaskSpec{"people",       100'000,   2'000,     65,       "control"},
-    tasks::TaskSpec{"controller",   100'000,   20'000,    64,       "control"},
+    {{"can_io",       10'000,    300,       74,  "io"},        make_can_io},
+    {{"safety",       10'000,    1'000,     73,  "io"},        make_safety},
+    {{"base",         10'000,    500,       72,  "io"},        make_base},
+    {{"detector",     20'000,    300,       71,  "io"},        make_detector},
+    {{"localization", 50'000,    15'000,    66,  "control"},   make_localization},
+    {{"people",       100'000,   2'000,     65,  "control"},   make_people},
+    {{"controller",   100'000,   20'000,    64,  "control"},   make_controller},
     // After the people: the collaborative mode reads this cycle's tracks.
-    tasks::TaskSpec{"cobot",        100'000,   1'000,     63,       "control"},
-    tasks::TaskSpec{"health",       100'000,   500,       60,       "control"},
-    tasks::TaskSpec{"planner",      500'000,   30'000,    10,       "background"},
-    tasks::TaskSpec{"mission",      100'000,   500,       5,        "background"},
+    {{"cobot",        100'000,   1'000,     63,  "control"},   make_cobot},
+    {{"health",       100'000,   500,       60,  "control"},   make_health},
+    {{"planner",      500'000,   30'000,    10,  "background"}, make_planner},
+    {{"mission",      100'000,   500,       5,   "background"}, make_mission},
     // Decoding a full order takes ~1 ms on a Pi 3 (benchmarks); the network is the link's thread.
-    tasks::TaskSpec{"fleet",        100'000,   5'000,     4,        "background"},
-    tasks::TaskSpec{"telemetry",    100'000,   5'000,     0,        "background"},
-    tasks::TaskSpec{"camera",       20'000,    12'000,    0,        "camera"},
+    {{"fleet",        100'000,   5'000,     4,   "background"}, make_fleet},
+    {{"telemetry",    100'000,   5'000,     0,   "background"}, make_telemetry},
+    {{"camera",       20'000,    12'000,    0,   "camera"},    make_camera},
     // After the camera: its init() reads the camera's frame pool.
-    tasks::TaskSpec{"vision",       500'000,   300'000,   0,        "vision"},
+    {{"vision",       500'000,   300'000,   0,   "vision"},    make_vision},
     // The collaborative mode's OpenCV work, off the real-time threads: reading the operators'
     // tags near the people within reach, and recognising a worker's operation from their path.
-    tasks::TaskSpec{"qr",           200'000,   120'000,   1,        "cobot"},
-    tasks::TaskSpec{"recognition",  1'000'000, 50'000,    0,        "cobot"},
+    {{"qr",           200'000,   120'000,   1,   "cobot"},     make_qr},
+    {{"recognition",  1'000'000, 50'000,    0,   "cobot"},     make_recognition},
     // The live view (docs/view.md), on the planner's and the mission's thread, whose state it
     // reads; last, so that its init() finds the camera row's frames. A step with the map and the
     // global costmap is its longest.
-    tasks::TaskSpec{"view",         50'000,    5'000,     0,        "background"},
-};
+    {{"view",         50'000,    5'000,     0,   "background"}, make_view},
+});
+
+// The rows' timing alone, as the scheduler and the reports take it.
+inline constexpr auto kTaskTable = [] {
+  std::array<tasks::TaskSpec, kRows.size()> specs{};
+  for (std::size_t i = 0; i < kRows.size(); ++i) specs[i] = kRows[i].spec;
+  return specs;
+}();
 static_assert(tasks::threads_fit(kTaskTable), "a thread's budgets claim more than tasks::kMaxThreadUtilization");
 
 constexpr const tasks::TaskSpec& row(std::string_view name) {

@@ -7,6 +7,8 @@
 
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/sgp.hpp"
+#include "task_table.hpp"
+#include "wiring.hpp"
 
 namespace sen3bot::firmware {
 
@@ -496,6 +498,43 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
     }
   }
   return false;
+}
+
+Status make_view(Wiring& w) {
+  if (!w.config.view.enabled) return w.absent("needs a view section");
+  const FirmwareConfig& config = w.config;
+  ViewSources s{.scheduler = w.scheduler, .clock = w.board.clock()};
+  if (w.shared.external_frames != nullptr) {
+    w.takes("frames of a simulated camera");
+    s.frames = FrameSource{w.shared.external_frames};
+  } else if (w.uses("camera") != nullptr) {
+    s.frames = FrameSource{nullptr, &w.shared.camera};
+  }
+  s.laser_mount = w.shared.laser_mount;
+  s.scan = w.reads_if(config.devices.has_laser || config.navigation.enabled, &Topics::scan);
+  if (config.navigation.enabled) {
+    s.map = &w.shared.map;
+    s.odometry = &w.reads(&Topics::odometry);
+    s.pose = &w.reads(&Topics::pose);
+    s.path = &w.reads(&Topics::path);
+    s.request = &w.reads(&Topics::request);
+    s.safety = &w.reads(&Topics::safety_output);
+    s.controller = &w.reads(&Topics::controller_status);
+    s.movers = &w.reads(&Topics::movers);
+    s.people = w.reads_if(w.runs("people"), &Topics::people);
+    const double local_s = config.view.task.period_s[static_cast<std::size_t>(ViewChannel::local_costmap)];
+    s.local_costmap = w.reads_if(local_s > 0, &Topics::local_costmap);
+    // Same thread as these rows: their costmap, safe path and report are read in place.
+    s.planner = static_cast<const nav::PlannerTask*>(w.uses("planner"));
+    s.mission = static_cast<const MissionTask*>(w.uses("mission"));
+    s.goal_count = config.navigation.mission.goal_count;
+    s.rollout_s = config.navigation.dwa.sim_time_s;
+  }
+  const int port = config.view.task.server.port;
+  if (w.shared.external_view == nullptr)
+    w.sends("the live view: HTTP and WebSocket on port " + std::to_string(port) + " (JSON and JPEG channels)");
+  w.make<ViewTask>(config.view.task, s, w.shared.external_view);
+  return Status::success();
 }
 
 }  // namespace sen3bot::firmware

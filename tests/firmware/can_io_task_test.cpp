@@ -112,14 +112,14 @@ msg::SafetyIo latest(const TaskRig& rig) {
 TEST(CanIoTask, OpensTheBusOrSaysWhyNot) {
   TaskRig rig;
   rig.config.interface = "can7";
-  CanIoTask missing(rig.config, rig.board, CanIoTopics{rig.safety, rig.command, rig.mode, rig.io});
+  CanIoTask missing(rig.config, rig.board, CanIoTopics{rig.safety, rig.command, rig.io, &rig.mode});
   std::pmr::monotonic_buffer_resource arena;
   const Status s = missing.init(arena);
   ASSERT_FALSE(s);
   EXPECT_NE(std::string(s.error().c_str()).find("no such CAN interface"), std::string::npos);
   rig.config.interface = "test";
   rig.config.reset_input = 1;
-  CanIoTask bad(rig.config, rig.board, CanIoTopics{rig.safety, rig.command, rig.mode, rig.io});
+  CanIoTask bad(rig.config, rig.board, CanIoTopics{rig.safety, rig.command, rig.io, &rig.mode});
   const Status b = bad.init(arena);
   ASSERT_FALSE(b);
   EXPECT_NE(std::string(b.error().c_str()).find("devices.io_node.inputs.reset"), std::string::npos) << b.error().c_str();

@@ -113,6 +113,25 @@ TEST(Cli, RunRejectsBadArguments) {
   EXPECT_NE(o.err.find("/no/such.yaml: cannot open"), std::string::npos);
 }
 
+// The data flow of a configuration, without starting anything; bad arguments and files are
+// errors naming them.
+TEST(Cli, GraphPrintsTheWiringAndRefusesBadInput) {
+  Outcome o = run({"graph", "--config", kSim});
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("thread io\n  laser "), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("  scan                 laser -> safety, localization, controller, planner"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("  camera       needs devices.camera"), std::string::npos) << o.out;
+  o = run({"graph", "--config", kSim, "--mermaid"});
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_EQ(o.out.rfind("flowchart LR\n", 0), 0u) << o.out;
+  EXPECT_NE(o.out.find("  safety --> t_command\n"), std::string::npos) << o.out;
+  EXPECT_EQ(run({"graph"}).code, 2);
+  EXPECT_EQ(run({"graph", "--config", kSim, "--dot"}).code, 2);
+  o = run({"graph", "--config", "/no/such.yaml"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("/no/such.yaml: cannot open"), std::string::npos) << o.err;
+}
+
 TEST(Cli, LockstepRunPrintsStatusAndStatistics) {
   // A duration shorter than the mission: the run ends on time, the mission is reported as
   // still driving, and that is not a failure.

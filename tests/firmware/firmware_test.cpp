@@ -99,7 +99,7 @@ TEST(Firmware, ACameraBudgetWithoutACameraIsAConfigurationError) {
   Firmware fw(config, *rig.board, stdout);
   const Status s = fw.init();
   ASSERT_FALSE(s);
-  EXPECT_NE(std::string(s.error().message()).find("tasks.camera: this task is not enabled by the configuration (needs its device under devices)"),
+  EXPECT_NE(std::string(s.error().message()).find("tasks.camera: this task is not enabled by the configuration (needs devices.camera)"),
             std::string::npos)
       << s.error().c_str();
 }

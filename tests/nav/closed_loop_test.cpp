@@ -87,13 +87,13 @@ Outcome run(Scenario scenario) {
   sc.safety.scan_period_s = 0.1;
   sc.safety.laser_mount = mount;
 
-  LocalizationTask localization(lc, map, scan_topic, odom_topic, pose_topic);
-  PlannerTask planner(pc, map, *waypoints, goal_topic, pose_topic, scan_topic, path_topic);
+  LocalizationTask localization(lc, map, {scan_topic, odom_topic, pose_topic});
+  PlannerTask planner(pc, map, *waypoints, {goal_topic, pose_topic, scan_topic, path_topic});
   tasks::Topic<msg::MovingObstacles> movers_topic;
-  ControllerTask controller(cc, map, pose_topic, odom_topic, scan_topic, path_topic, request_topic, controller_topic,
-                            movers_topic);
-  SafetyTask safety(sc, request_topic, scan_topic, odom_topic, base_topic, pose_topic, movers_topic, command_topic,
-                    safety_topic);
+  ControllerTask controller(cc, map,
+                            {pose_topic, odom_topic, scan_topic, path_topic, request_topic, controller_topic, movers_topic});
+  SafetyTask safety(sc, {request_topic, scan_topic, odom_topic, base_topic, pose_topic, movers_topic, command_topic,
+                         safety_topic});
   tasks::Task* all[4] = {&localization, &planner, &controller, &safety};
   for (int i = 0; i < 4; ++i) {
     const Status s = all[i]->init(arenas[i]);

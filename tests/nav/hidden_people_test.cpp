@@ -334,8 +334,7 @@ TEST(HiddenPeople, ThePeopleTaskKeepsAPersonBehindAPostUntilTheSonarLooksPast) {
   tasks::Topic<msg::Sonar> sonar;
   PeopleTaskConfig with_hidden;
   with_hidden.tracker.keep_hidden = true;
-  PeopleTask task(with_hidden, map, scans, poses, detections, people);
-  task.use_sonar(&sonar);
+  PeopleTask task(with_hidden, map, {.scan = scans, .pose = poses, .detections = detections, .people = people, .sonar = &sonar});
   mem::BudgetArena arena{"people task", 1 << 20};
   ASSERT_TRUE(task.init(arena));
   const Pose2D robot{1.0, 5.0, 0.0};

@@ -145,10 +145,10 @@ TEST(SchedulerLoop, TaskTableDrivesTheRobotToTheGoal) {
 
   SimulatedRobot robot(truth, mount, scan, odom, base, command);
   tasks::Topic<msg::MovingObstacles> movers;
-  SafetyTask safety(sc, request, scan, odom, base, pose, movers, command, safety_status);
-  LocalizationTask localization(lc, *map, scan, odom, pose);
-  ControllerTask controller(cc, *map, pose, odom, scan, path, request, controller_status, movers);
-  PlannerTask planner(pc, *map, *waypoints, goal, pose, scan, path);
+  SafetyTask safety(sc, {request, scan, odom, base, pose, movers, command, safety_status});
+  LocalizationTask localization(lc, *map, {scan, odom, pose});
+  ControllerTask controller(cc, *map, {pose, odom, scan, path, request, controller_status, movers});
+  PlannerTask planner(pc, *map, *waypoints, {goal, pose, scan, path});
 
   ASSERT_TRUE(safety.init(safety_arena));
   ASSERT_TRUE(localization.init(localization_arena));

@@ -71,7 +71,7 @@ struct CanIoRig {
     config.reset_input = 2;
     config.bumper_inputs = 0x0C;
     config.buzzer_output = 5;
-    task = std::make_unique<firmware::CanIoTask>(config, board, firmware::CanIoTopics{safety, command, mode, io});
+    task = std::make_unique<firmware::CanIoTask>(config, board, firmware::CanIoTopics{safety, command, io, &mode});
     node.set_inputs(0x01);
     node.power_up(0);
   }

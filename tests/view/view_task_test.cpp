@@ -140,7 +140,7 @@ TEST(ViewTask, APersonKeptHiddenIsLabelledAndGreyed) {
   tasks::Topic<msg::ScanMessage> scan;
   tasks::Topic<msg::PathMessage> path;
   tasks::Topic<msg::People> people;
-  nav::PlannerTask planner(nav::PlannerTaskConfig{}, map, {}, goal, pose, scan, path);  // only there: not run
+  nav::PlannerTask planner(nav::PlannerTaskConfig{}, map, {}, {goal, pose, scan, path});  // only there: not run
   ViewTaskConfig config;
   config.server.port = 0;
   config.period_s.fill(0.0);

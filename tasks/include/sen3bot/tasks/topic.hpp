@@ -26,6 +26,11 @@ class Topic {
                 "bus messages cross thread boundaries by copy: no pointers to heap, no std::vector");
 
  public:
+  Topic() = default;
+  // The name the data-flow graph shows (firmware/topics.hpp names each).
+  explicit constexpr Topic(const char* name) noexcept : name_(name) {}
+  [[nodiscard]] const char* name() const noexcept { return name_; }
+
   // Single writer.
   void publish(const T& value, hal::Nanos stamp_ns) noexcept {
     const std::uint64_t seq = seq_.load(std::memory_order_relaxed);
@@ -68,6 +73,7 @@ class Topic {
   static constexpr std::size_t kWords = kValueWords + 2;
   static constexpr int kMaxAttempts = 64;
 
+  const char* name_ = "";
   std::atomic<std::uint64_t> seq_{0};
   std::array<std::atomic<std::uint64_t>, kWords> words_{};
 };

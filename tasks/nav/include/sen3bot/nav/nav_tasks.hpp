@@ -47,11 +47,16 @@ struct LocalizationTaskConfig {
   MclConfig mcl;
 };
 
+struct LocalizationTopics {
+  const tasks::Topic<ScanMessage>& scan;
+  const tasks::Topic<Odometry>& odometry;
+  tasks::Topic<PoseEstimate>& pose;  // out
+};
+
 class LocalizationTask final : public tasks::Task {
  public:
-  LocalizationTask(const LocalizationTaskConfig& config, const OccupancyMap& map, const tasks::Topic<ScanMessage>& scan,
-                   const tasks::Topic<Odometry>& odom, tasks::Topic<PoseEstimate>& estimate) noexcept
-      : config_(config), map_(map), scan_(scan), odom_(odom), estimate_(estimate) {}
+  LocalizationTask(const LocalizationTaskConfig& config, const OccupancyMap& map, const LocalizationTopics& topics) noexcept
+      : config_(config), map_(map), scan_(topics.scan), odom_(topics.odometry), estimate_(topics.pose) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   // Thread-safe: the next step spreads the particles over the whole map.
@@ -111,14 +116,20 @@ struct PlannerTaskConfig {
   OsgpConfig osgp;
 };
 
+struct PlannerTopics {
+  const tasks::Topic<NavGoal>& goal;
+  const tasks::Topic<PoseEstimate>& pose;
+  const tasks::Topic<ScanMessage>& scan;
+  tasks::Topic<PathMessage>& path;  // out
+  const tasks::Topic<msg::People>* people = nullptr;  // with PlannerTaskConfig::use_people
+};
+
 class PlannerTask final : public tasks::Task {
  public:
   PlannerTask(const PlannerTaskConfig& config, const OccupancyMap& map, std::span<const Point2D> waypoints,
-              const tasks::Topic<NavGoal>& goal, const tasks::Topic<PoseEstimate>& pose,
-              const tasks::Topic<ScanMessage>& scan, tasks::Topic<PathMessage>& path,
-              const tasks::Topic<msg::People>* people = nullptr) noexcept
-      : config_(config), map_(map), waypoints_in_(waypoints), goal_(goal), pose_(pose), scan_(scan), path_(path),
-        people_(people), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+              const PlannerTopics& topics) noexcept
+      : config_(config), map_(map), waypoints_in_(waypoints), goal_(topics.goal), pose_(topics.pose), scan_(topics.scan),
+        path_(topics.path), people_(topics.people), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
         people_layer_(people_copy_, config.people_layer), inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
@@ -210,16 +221,27 @@ struct ControllerTaskConfig {
   double mover_keep_out_m = 0.0;  // added to a mover's radius (the cages' safety radius)
 };
 
+struct ControllerTopics {
+  const tasks::Topic<PoseEstimate>& pose;
+  const tasks::Topic<Odometry>& odometry;
+  const tasks::Topic<ScanMessage>& scan;
+  const tasks::Topic<PathMessage>& path;
+  tasks::Topic<VelocityCommand>& request;            // out: what it asks the safety filter for
+  tasks::Topic<ControllerStatus>& status;            // out
+  tasks::Topic<msg::MovingObstacles>& movers;        // out: the dynamic obstacle layer's tracks
+  const tasks::Topic<msg::People>* people = nullptr;
+  const tasks::Topic<msg::FormationCommand>* formation = nullptr;  // a fleet's formation commands
+  // The base's sonar ring, which clears the obstacle layer's marks behind the laser
+  // (ObstacleLayerConfig::sonar_clearing).
+  const tasks::Topic<msg::Sonar>* sonar = nullptr;
+};
+
 class ControllerTask final : public tasks::Task {
  public:
-  ControllerTask(const ControllerTaskConfig& config, const OccupancyMap& map, const tasks::Topic<PoseEstimate>& pose,
-                 const tasks::Topic<Odometry>& odom, const tasks::Topic<ScanMessage>& scan,
-                 const tasks::Topic<PathMessage>& path, tasks::Topic<VelocityCommand>& command,
-                 tasks::Topic<ControllerStatus>& status, tasks::Topic<msg::MovingObstacles>& movers,
-                 const tasks::Topic<msg::People>* people = nullptr,
-                 const tasks::Topic<msg::FormationCommand>* formation = nullptr) noexcept
-      : config_(config), map_(map), pose_(pose), odom_(odom), scan_(scan), path_(path), command_(command), status_(status),
-        movers_(movers), people_(people), formation_(formation), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
+  ControllerTask(const ControllerTaskConfig& config, const OccupancyMap& map, const ControllerTopics& topics) noexcept
+      : config_(config), map_(map), pose_(topics.pose), odom_(topics.odometry), scan_(topics.scan), path_(topics.path),
+        command_(topics.request), status_(topics.status), movers_(topics.movers), people_(topics.people),
+        formation_(topics.formation), sonar_(topics.sonar), static_layer_(map, config.static_layer), obstacle_layer_(config.obstacle),
         dynamic_layer_(config.dynamic_obstacles, &map, &obstacle_layer_), people_layer_(people_copy_, config.people_layer),
         inflation_layer_(config.inflation) {}
   Status init(std::pmr::memory_resource& arena) override;
@@ -232,9 +254,6 @@ class ControllerTask final : public tasks::Task {
     snapshot_topic_ = topic;
     snapshot_every_ = every_cycles < 1 ? 1 : every_cycles;
   }
-  // Before init: the base's sonar ring, which clears the obstacle layer's marks behind the
-  // laser (ObstacleLayerConfig::sonar_clearing).
-  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
   // Null when the configuration turns the layer off.
   [[nodiscard]] const DynamicObstacleLayer* dynamic_layer() const noexcept {
     return config_.dynamic_obstacles.enabled ? &dynamic_layer_ : nullptr;
@@ -314,14 +333,21 @@ struct PeopleTaskConfig {
 // Camera-laser fusion on the bus: each detector frame is fused with the scan nearest it in
 // time, placed from the pose the localization gave that scan; the tracks, predicted to the
 // cycle, are published as People (the cages' source). Scans and frames wait in fixed rings.
+struct PeopleTopics {
+  const tasks::Topic<ScanMessage>& scan;
+  const tasks::Topic<PoseEstimate>& pose;
+  const tasks::Topic<msg::PersonDetections>& detections;
+  tasks::Topic<msg::People>& people;  // out
+  const tasks::Topic<msg::CobotState>* cobot = nullptr;  // whose operator it is
+  // The base's sonar ring: weak evidence about people hidden behind the robot.
+  const tasks::Topic<msg::Sonar>* sonar = nullptr;
+};
+
 class PeopleTask final : public tasks::Task {
  public:
-  PeopleTask(const PeopleTaskConfig& config, const OccupancyMap& map, const tasks::Topic<ScanMessage>& scan,
-             const tasks::Topic<PoseEstimate>& pose, const tasks::Topic<msg::PersonDetections>& detections,
-             tasks::Topic<msg::People>& people, const tasks::Topic<msg::CobotState>* cobot = nullptr) noexcept
-      : config_(config), map_(map), scan_(scan), pose_(pose), detections_(detections), people_(people), cobot_(cobot) {}
-  // Before init: the base's sonar ring, weak evidence about people hidden behind the robot.
-  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
+  PeopleTask(const PeopleTaskConfig& config, const OccupancyMap& map, const PeopleTopics& topics) noexcept
+      : config_(config), map_(map), scan_(topics.scan), pose_(topics.pose), detections_(topics.detections),
+        people_(topics.people), cobot_(topics.cobot), sonar_(topics.sonar) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] const PeopleFusion& fusion() const noexcept { return fusion_; }
@@ -402,22 +428,30 @@ struct SafetyTaskConfig {
   bool io_reset_at_start = false;  // SafetyLatch
 };
 
+struct SafetyTopics {
+  const tasks::Topic<VelocityCommand>& request;
+  const tasks::Topic<ScanMessage>& scan;
+  const tasks::Topic<Odometry>& odometry;
+  const tasks::Topic<BaseFlags>& base_flags;
+  const tasks::Topic<PoseEstimate>& pose;
+  const tasks::Topic<msg::MovingObstacles>& movers;
+  tasks::Topic<VelocityCommand>& command;  // out: what the base drives
+  tasks::Topic<SafetyOutput>& status;      // out
+  const tasks::Topic<msg::People>* people = nullptr;
+  const tasks::Topic<msg::SafetyIo>* io = nullptr;  // the safety I/O node's e-stop chain
+  // The base's sonar ring, for reversing and turning on the spot.
+  const tasks::Topic<msg::Sonar>* sonar = nullptr;
+};
+
 class SafetyTask final : public tasks::Task {
  public:
-  SafetyTask(const SafetyTaskConfig& config, const tasks::Topic<VelocityCommand>& requested,
-             const tasks::Topic<ScanMessage>& scan, const tasks::Topic<Odometry>& odom,
-             const tasks::Topic<BaseFlags>& base, const tasks::Topic<PoseEstimate>& pose,
-             const tasks::Topic<msg::MovingObstacles>& movers, tasks::Topic<VelocityCommand>& command,
-             tasks::Topic<SafetyOutput>& status, const tasks::Topic<msg::People>* people = nullptr,
-             const tasks::Topic<msg::SafetyIo>* io = nullptr) noexcept
-      : config_(config), filter_(config.safety), latch_(config.io_reset_at_start), requested_(requested), scan_(scan),
-        odom_(odom), base_(base), pose_(pose), movers_(movers), people_(people), io_(io), command_(command),
-        status_(status) {}
+  SafetyTask(const SafetyTaskConfig& config, const SafetyTopics& topics) noexcept
+      : config_(config), filter_(config.safety), latch_(config.io_reset_at_start), requested_(topics.request),
+        scan_(topics.scan), odom_(topics.odometry), base_(topics.base_flags), pose_(topics.pose), movers_(topics.movers),
+        people_(topics.people), io_(topics.io), command_(topics.command), status_(topics.status), sonar_(topics.sonar) {}
   Status init(std::pmr::memory_resource& arena) override;
   void step(const tasks::StepContext& context) override;
   [[nodiscard]] std::uint64_t stops() const noexcept { return stops_; }
-  // Before init: the base's sonar ring, for reversing and turning on the spot.
-  void use_sonar(const tasks::Topic<msg::Sonar>* sonar) noexcept { sonar_ = sonar; }
   // Null without the safety I/O.
   [[nodiscard]] const SafetyLatch* latch() const noexcept { return io_ != nullptr ? &latch_ : nullptr; }
 
