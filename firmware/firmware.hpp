@@ -132,7 +132,7 @@ class Firmware {
   // run and the rows this configuration leaves out, with why).
   [[nodiscard]] const Topics& topics() const { return topics_; }
   [[nodiscard]] std::span<const RowWiring> wiring() const { return wiring_; }
-  // Makes the configured rows' tasks without starting anything: what `sen3bot --graph` prints.
+  // Makes the configured rows' tasks without starting anything: what `sen3bot graph` prints.
   Status wire();
 
  private:

@@ -83,7 +83,6 @@ int row_module_command(const char* module, const char* program, int argc, char**
   return (*loaded)->command(argc, argv, out, err);
 }
 
-
 // --- The rows in modules (task_table.hpp) ----------------------------------------------------
 
 namespace {
@@ -104,9 +103,13 @@ Status make_camera(Wiring& w) {
   if (!w.config.devices.has_camera) return w.absent("needs devices.camera");
   Result<const RowModule*> module = load_row_module("camera");
   if (!module) return Error::format(module.error().code(), "%s: devices.camera: %s", w.file(), module.error().c_str());
+  // The URL without its credentials (user:password@ before the host).
   std::string url = w.config.devices.camera.rtsp.url;
-  if (const std::size_t at = url.find('@'); at != std::string::npos && url.find("://") != std::string::npos)
-    url.erase(url.find("://") + 3, at - url.find("://") - 2);  // no credentials in a graph
+  if (const std::size_t scheme = url.find("://"); scheme != std::string::npos) {
+    const std::size_t host = scheme + 3;
+    const std::size_t at = url.rfind('@', url.find('/', host));
+    if (at != std::string::npos && at >= host) url.erase(host, at + 1 - host);
+  }
   w.takes("RTSP/RTP from " + url + ": H.264/MJPEG decoded into the frame pool");
   w.sends("RTSP requests (OPTIONS, DESCRIBE, SETUP, PLAY, keep-alive), RTCP receiver reports");
   w.adopt((*module)->camera(w.config.devices.camera, w.board, w.bus, &w.shared.camera));

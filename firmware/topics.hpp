@@ -1,7 +1,7 @@
 #pragma once
 // The firmware's bus: every message that passes between rows, declared once. The rows' factories
 // (firmware/rows.hpp) take what each row reads and writes from here through a Wiring, which
-// notes it; `sen3bot --graph` prints the flow that results and docs/architecture.md quotes it.
+// notes it; `sen3bot graph` prints the flow that results and docs/architecture.md quotes it.
 #include "sen3bot/msg/messages.hpp"
 #include "sen3bot/tasks/topic.hpp"
 

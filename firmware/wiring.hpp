@@ -2,7 +2,7 @@
 // How the rows are built. Each row of the task table names its factory (task_table.hpp); the
 // factory takes the topics its task reads and writes from the Wiring, names the devices it
 // talks to and the other rows whose state it reads, and makes the task. The Wiring notes every
-// one of those, so the graph `sen3bot --graph` prints is the flow the firmware runs.
+// one of those, so the graph `sen3bot graph` prints is the flow the firmware runs.
 #include <cstdio>
 #include <memory>
 #include <span>
