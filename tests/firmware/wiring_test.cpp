@@ -95,6 +95,20 @@ TEST(Wiring, EachTopicHasOneWriterWithTheCobotOrTheFleet) {
   }
 }
 
+// The graph names the camera's stream without its credentials.
+TEST(Wiring, TheCamerasCredentialsStayOutOfTheGraph) {
+  testing::SimRig rig = testing::load_sim_rig();
+  FirmwareConfig config = rig.config;
+  config.devices.has_camera = true;
+  config.devices.camera.rtsp.url = "rtsp://operator:s3cret@10.0.0.5:554/live@main";
+  Firmware fw(config, *rig.board, stdout);
+  ASSERT_TRUE(fw.wire());
+  const RowWiring& camera = row_wiring(fw, "camera");
+  ASSERT_FALSE(camera.devices.empty());
+  EXPECT_EQ(camera.devices[0].find("RTSP/RTP from rtsp://10.0.0.5:554/live@main:"), 3u) << camera.devices[0];
+  for (const std::string& d : camera.devices) EXPECT_EQ(d.find("s3cret"), std::string::npos) << d;
+}
+
 // A row the configuration leaves out says why, and a budget for it is refused with that reason.
 TEST(Wiring, ARowLeftOutSaysWhy) {
   testing::SimRig rig = testing::load_sim_rig();
