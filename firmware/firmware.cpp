@@ -1,7 +1,7 @@
 #include "firmware.hpp"
 
-#include <algorithm>
-
+#include "sen3bot/tasks/health.hpp"
+#include "sen3bot/tasks/telemetry.hpp"
 #include "task_table.hpp"
 
 namespace sen3bot::firmware {

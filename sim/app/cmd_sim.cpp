@@ -104,14 +104,6 @@ world::MoverScript box_at(double x_m, double y_m, double appear_s) {
   return box;
 }
 
-world::MoverScript person_standing(double x_m, double y_m) {
-  world::MoverScript person;
-  person.path = {{x_m, y_m}};
-  person.size_m = 0.45;
-  person.person = true;
-  return person;
-}
-
 // How fast a walker slows down and sets off again at the ends of a walk.
 constexpr double kWalkerAccelMS2 = 1.0;
 
@@ -196,9 +188,9 @@ std::vector<Scenario> scenarios() {
        "maps/lab_curve.yaml",
        "",
        {{"person-on-path", "a person standing by the right-hand rack, 0.45 m beside the safe path: re-plan, pass at a distance",
-         {person_standing(4.3, 5.7)}},
+         {world::standing_person(4.3, 5.7)}},
         {"person-far", "a person standing 1.3 m beyond the goal, off the route: caged, no re-plan",
-         {person_standing(3.3, 1.0)}},
+         {world::standing_person(3.3, 1.0)}},
         {"box-on-path", "a 40 cm box where the person of case 1 stands: the local planner goes round it, no re-plan",
          {box_at(4.3, 5.7, 0.0)}}},
        true},

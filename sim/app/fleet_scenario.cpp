@@ -8,6 +8,8 @@
 
 namespace sen3bot::sim::fleet {
 
+namespace {
+
 world::MoverScript walker(std::vector<world::Point2D> path, double speed, double start_s, double vanish_s) {
   world::MoverScript m;
   m.path = std::move(path);
@@ -20,13 +22,7 @@ world::MoverScript walker(std::vector<world::Point2D> path, double speed, double
   return m;
 }
 
-world::MoverScript stander(double x, double y) {
-  world::MoverScript m;
-  m.path = {{x, y}};
-  m.size_m = 0.45;
-  m.person = true;
-  return m;
-}
+}  // namespace
 
 std::vector<FleetScenario> scenarios() {
   return {
@@ -51,7 +47,7 @@ std::vector<FleetScenario> scenarios() {
        "monitoring request on the AGV's route.",
        {"r1", "r3"},
        {{"agv1", {{23.0, 8.3}, {17.0, 8.3}, {11.8, 8.3}, {11.8, 11.5}}, 0.6, 20.0}},
-       {stander(19.0, 11.1), stander(20.2, 11.1)},
+       {world::standing_person(19.0, 11.1), world::standing_person(20.2, 11.1)},
        140.0},
   };
 }

@@ -41,8 +41,6 @@ struct FleetScenario {
   double duration_s;
 };
 
-world::MoverScript walker(std::vector<world::Point2D> path, double speed, double start_s, double vanish_s);
-world::MoverScript stander(double x, double y);
 std::vector<FleetScenario> scenarios();
 
 struct RobotRun {

@@ -57,6 +57,15 @@ struct MoverScript {
   bool legs = false;
 };
 
+// A person standing still at (x, y): a 0.45 m body, as the scenarios' people are.
+inline MoverScript standing_person(double x_m, double y_m) {
+  MoverScript person;
+  person.path = {{x_m, y_m}};
+  person.size_m = 0.45;
+  person.person = true;
+  return person;
+}
+
 struct WorldConfig {
   int occupied_threshold = 50;  // map cells with occupancy >= this are solid (unknown is free)
   double range_noise_sigma_m = 0.0;  // Gaussian range noise added by noisy_scan()
