@@ -59,9 +59,14 @@ case "${1:-}" in
     section "native build and tests"
     configure_and_build build
     ctest --test-dir build --output-on-failure -j "$jobs"
+    # One clang tree for the sanitized suite and the fuzzers (with SEN3BOT_LIBFUZZER everything
+    # carries libFuzzer's coverage counters): one build of the tree fewer than a tree for each.
+    sanitize_args=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DSEN3BOT_SANITIZE=ON
+                   -DSEN3BOT_BENCH=OFF)
+    if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then sanitize_args+=(-DSEN3BOT_LIBFUZZER=ON); fi
     if [[ "${SEN3BOT_SKIP_SANITIZE:-0}" != 1 ]]; then
-      section "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-      configure_and_build build-sanitize -DSEN3BOT_SANITIZE=ON -DSEN3BOT_BENCH=OFF
+      section "AddressSanitizer + UndefinedBehaviorSanitizer build (clang) and tests"
+      configure_and_build build-sanitize "${sanitize_args[@]}"
       # MRPT's client and the 30 s keep-alive run test peers and wall-clock time, not our memory
       # use; the native suite runs them.
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -71,17 +76,15 @@ case "${1:-}" in
     if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then
       fuzz_s=${SEN3BOT_FUZZ_SECONDS:-15}
       section "coverage-guided fuzzing: libFuzzer + ASan + UBSan, ${fuzz_s} s per parser"
-      # Everything instrumented for coverage, so the parsers' own branches guide the search.
-      CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DSEN3BOT_LIBFUZZER=ON -DSEN3BOT_BENCH=OFF \
-        -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-        -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined" >/dev/null
-      mapfile -t fuzz_targets < build-fuzz/fuzz_targets.txt
+      configure build-sanitize "${sanitize_args[@]}"
+      mapfile -t fuzz_targets < build-sanitize/fuzz_targets.txt
       targets=()
       for line in "${fuzz_targets[@]}"; do [[ -n "$line" ]] && targets+=("${line%% *}"); done
-      cmake --build build-fuzz -j "$jobs" --target "${targets[@]}"
+      # Built already unless the sanitized suite was skipped.
+      cmake --build build-sanitize -j "$jobs" --target "${targets[@]}"
       for line in "${fuzz_targets[@]}"; do
         [[ -n "$line" ]] || continue
-        binary=$(find build-fuzz -type f -name "${line%% *}" | head -n 1)
+        binary=$(find build-sanitize -type f -name "${line%% *}" | head -n 1)
         seeds=${line#* }
         work=$(mktemp -d)  # new inputs go here; the checked-in corpus stays as it is
         echo "fuzz: ${line%% *} (seeds: ${seeds#"$root"/})"

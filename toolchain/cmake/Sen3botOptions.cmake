@@ -9,11 +9,22 @@ if(SEN3BOT_WERROR)
 endif()
 if(SEN3BOT_SANITIZE)
   target_compile_options(sen3bot_options INTERFACE
-    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     # GCC 12 reports false maybe-uninitialized warnings in sanitizer-instrumented code.
-    -Wno-maybe-uninitialized)
+    target_compile_options(sen3bot_options INTERFACE -Wno-maybe-uninitialized)
+  endif()
   target_link_options(sen3bot_options INTERFACE -fsanitize=address,undefined)
   target_compile_definitions(sen3bot_options INTERFACE SEN3BOT_SANITIZED=1)
+  if(SEN3BOT_LIBFUZZER)
+    # One tree for the sanitized suite and the fuzzers: everything carries libFuzzer's coverage
+    # counters, so the parsers' own branches guide the search, and the tests link without the
+    # fuzzer's main (the sanitizer runtime defines the counters' hooks).
+    target_compile_options(sen3bot_options INTERFACE -fsanitize=fuzzer-no-link)
+  endif()
+endif()
+if(SEN3BOT_LIBFUZZER AND NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  message(FATAL_ERROR "SEN3BOT_LIBFUZZER needs clang (CC=clang CXX=clang++)")
 endif()
 
 # Every library in the tree: static, position independent, with the project options.
