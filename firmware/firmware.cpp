@@ -27,7 +27,7 @@ Status make_health(Wiring& w) {
 Status make_telemetry(Wiring& w) {
   w.sends("telemetry: one status line every " + std::to_string(w.config.telemetry_status_period_ms) +
           " ms and the event log, on standard output");
-  w.make<tasks::TelemetryTask>(w.scheduler, w.bus, w.board.clock(), w.out,
+  w.make<tasks::TelemetryTask>(w.scheduler, w.bus, w.out,
                                tasks::TelemetryConfig{w.config.telemetry_status_period_ms, 512});
   return Status::success();
 }

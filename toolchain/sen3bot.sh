@@ -82,20 +82,40 @@ case "${1:-}" in
       for line in "${fuzz_targets[@]}"; do [[ -n "$line" ]] && targets+=("${line%% *}"); done
       # Built already unless the sanitized suite was skipped.
       cmake --build build-sanitize -j "$jobs" --target "${targets[@]}"
-      for line in "${fuzz_targets[@]}"; do
-        [[ -n "$line" ]] || continue
-        binary=$(find build-sanitize -type f -name "${line%% *}" | head -n 1)
-        seeds=${line#* }
-        work=$(mktemp -d)  # new inputs go here; the checked-in corpus stays as it is
-        echo "fuzz: ${line%% *} (seeds: ${seeds#"$root"/})"
+      # One libFuzzer process per core at a time (each is single-threaded); each reports when done.
+      fuzz_one() {  # <binary name> <seed corpus> <work dir>
+        local binary
+        binary=$(find build-sanitize -type f -name "$1" | head -n 1)
         "$binary" -max_total_time="$fuzz_s" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
-          -artifact_prefix="$work/" "$work" "$seeds" 2>&1 | grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb|==|SUMMARY|.*(crash|leak|timeout)-)' || true
-        if compgen -G "$work/crash-*" >/dev/null || compgen -G "$work/leak-*" >/dev/null || compgen -G "$work/timeout-*" >/dev/null; then
-          echo "fuzz: ${line%% *} found a failing input (kept in $work)" >&2
-          exit 1
+          -artifact_prefix="$3/" "$3" "$2" >"$3.log" 2>&1 || true
+      }
+      fuzz_report() {  # <binary name> <seed corpus> <work dir>: 1 when it found a failing input
+        echo "fuzz: $1 (seeds: ${2#"$root"/})"
+        grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb|==|SUMMARY|.*(crash|leak|timeout)-)' "$3.log" || true
+        if compgen -G "$3/crash-*" >/dev/null || compgen -G "$3/leak-*" >/dev/null || compgen -G "$3/timeout-*" >/dev/null; then
+          echo "fuzz: $1 found a failing input (kept in $3)" >&2
+          return 1
         fi
-        rm -rf "$work"
+        rm -rf "$3" "$3.log"
+      }
+      pending=()
+      fuzz_failed=0
+      for line in "${fuzz_targets[@]}" ""; do
+        if [[ -n "$line" ]]; then
+          work=$(mktemp -d)  # new inputs go here; the checked-in corpus stays as it is
+          fuzz_one "${line%% *}" "${line#* }" "$work" &
+          pending+=("${line%% *}|${line#* }|$work|$!")
+        fi
+        if (( ${#pending[@]} >= jobs )) || [[ -z "$line" ]]; then
+          for entry in "${pending[@]}"; do
+            IFS='|' read -r name seeds work pid <<<"$entry"
+            wait "$pid"
+            fuzz_report "$name" "$seeds" "$work" || fuzz_failed=1
+          done
+          pending=()
+        fi
       done
+      (( fuzz_failed == 0 )) || exit 1
     fi
     if [[ "${SEN3BOT_SKIP_CROSS:-0}" != 1 ]]; then
       section "aarch64 cross build, tests under qemu-aarch64"

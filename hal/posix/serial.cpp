@@ -113,7 +113,6 @@ constexpr tcflag_t kRawInputClear = IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | 
     ;
 constexpr tcflag_t kRawOutputClear = OPOST;
 constexpr tcflag_t kRawLocalClear = ECHO | ECHOE | ECHOK | ECHONL | ICANON | ISIG | IEXTEN;
-constexpr tcflag_t kControlChecked = CSIZE | PARENB | CSTOPB | CRTSCTS | CLOCAL | CREAD;
 constexpr tcflag_t kControlWanted = CS8 | CLOCAL | CREAD;
 
 void make_raw_8n1(termios& t) {

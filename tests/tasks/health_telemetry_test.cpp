@@ -120,7 +120,7 @@ TEST(HealthTask, ReportsATaskWhoseDeviceFailed) {
   ASSERT_NE(out, nullptr);
   DeviceTask device;
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
-  TelemetryTask telemetry(rig.scheduler, rig.bus, rig.clock, out, TelemetryConfig{1'000, 256});
+  TelemetryTask telemetry(rig.scheduler, rig.bus, out, TelemetryConfig{1'000, 256});
   ASSERT_TRUE(rig.scheduler.add({"device", 50'000, 10'000, 50, "io"}, device));
   ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
   ASSERT_TRUE(rig.scheduler.add({"telemetry", 200'000, 5'000, 0, "background"}, telemetry));
@@ -164,7 +164,7 @@ TEST(HealthTask, ReportsAMissingDeviceAndItsReturn) {
   ASSERT_NE(out, nullptr);
   MissingDeviceTask device;
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
-  TelemetryTask telemetry(rig.scheduler, rig.bus, rig.clock, out, TelemetryConfig{1'000, 256});
+  TelemetryTask telemetry(rig.scheduler, rig.bus, out, TelemetryConfig{1'000, 256});
   ASSERT_TRUE(rig.scheduler.add({"laser", 50'000, 10'000, 50, "io"}, device));
   ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
   ASSERT_TRUE(rig.scheduler.add({"telemetry", 200'000, 5'000, 0, "background"}, telemetry));
@@ -213,7 +213,7 @@ TEST(TelemetryTask, WritesEventsAndPeriodicStatusLines) {
     if (c.cycle % 10 == 0) rig.bus.events.post(c.start_ns, Severity::warning, "chatty", "cycle %llu", static_cast<unsigned long long>(c.cycle));
   });
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
-  TelemetryTask telemetry(rig.scheduler, rig.bus, rig.clock, out, TelemetryConfig{1'000, 256});
+  TelemetryTask telemetry(rig.scheduler, rig.bus, out, TelemetryConfig{1'000, 256});
   ASSERT_TRUE(rig.scheduler.add({"chatty", 100'000, 1'000, 50, "io"}, chatty));
   ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 60, "control"}, health));
   ASSERT_TRUE(rig.scheduler.add({"telemetry", 200'000, 5'000, 0, "background"}, telemetry));

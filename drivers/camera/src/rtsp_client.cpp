@@ -18,7 +18,6 @@ constexpr int kRtspStatusSessionNotFound = 454;
 constexpr int kRtspStatusAggregateNotAllowed = 459;
 constexpr int kRtspStatusOnlyAggregate = 460;
 constexpr int kRtspStatusUnsupportedTransport = 461;
-constexpr int kRtspStatusNotImplemented = 501;
 
 hal::Nanos ms(int v) { return hal::millis(v); }
 

@@ -18,8 +18,8 @@ struct TelemetryConfig {
 
 class TelemetryTask final : public Task {
  public:
-  TelemetryTask(const Scheduler& scheduler, Bus& bus, const hal::Clock& clock, std::FILE* out, TelemetryConfig config)
-      : scheduler_(scheduler), bus_(bus), clock_(clock), out_(out), config_(config) {}
+  TelemetryTask(const Scheduler& scheduler, Bus& bus, std::FILE* out, TelemetryConfig config)
+      : scheduler_(scheduler), bus_(bus), out_(out), config_(config) {}
 
   Status init(std::pmr::memory_resource& arena) override;
   void step(const StepContext& context) override;
@@ -35,7 +35,6 @@ class TelemetryTask final : public Task {
 
   const Scheduler& scheduler_;
   Bus& bus_;
-  const hal::Clock& clock_;
   std::FILE* out_;
   TelemetryConfig config_;
   std::span<char> line_;
