@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The two README commands.
-#   toolchain/sen3bot.sh mission   install what is missing, build the simulator (sen3bot-sim
-#                                  only), run the simulated robot through the thesis' three
-#                                  cases (report in build/report)
+#   toolchain/sen3bot.sh mission   install what building the simulator needs, build it
+#                                  (sen3bot-sim only), run the simulated robot through the
+#                                  thesis' three cases (report in build/report)
 #   toolchain/sen3bot.sh test      install what is missing, build, run every test suite:
 #                                  native (-Werror), ASan+UBSan, and aarch64 under qemu-user
 #                                  and a bounded coverage-guided fuzzing run of every parser
@@ -41,12 +41,13 @@ use_ccache() {
 case "${1:-}" in
   mission)
     section "installing missing packages"
-    toolchain/bootstrap.sh
+    toolchain/bootstrap.sh --mission
     use_ccache
     section "building the simulator"
-    # Only what the mission runs: the tests and benchmarks are the test command's. The build
-    # directory is configured as for the test command, so either can follow the other.
-    configure build
+    # Only what the mission runs: the tests and benchmarks (and their packages) are the test
+    # command's. The compile flags are the test command's, so either can follow the other and
+    # reuse the other's objects.
+    configure build -DSEN3BOT_TESTS=OFF -DSEN3BOT_BENCH=OFF
     cmake --build build -j "$jobs" --target sen3bot-sim
     section "running the simulated robot: the thesis' supervised-planning cases"
     exec build/firmware/sen3bot-sim sim --scenario thesis-sgp --report build/report
@@ -57,7 +58,7 @@ case "${1:-}" in
     if [[ "${SEN3BOT_SKIP_CROSS:-0}" == 1 ]]; then toolchain/bootstrap.sh; else toolchain/bootstrap.sh --cross; fi
     use_ccache
     section "native build and tests"
-    configure_and_build build
+    configure_and_build build -DSEN3BOT_TESTS=ON -DSEN3BOT_BENCH=ON
     ctest --test-dir build --output-on-failure -j "$jobs"
     # One clang tree for the sanitized suite and the fuzzers (with SEN3BOT_LIBFUZZER everything
     # carries libFuzzer's coverage counters): one build of the tree fewer than a tree for each.
