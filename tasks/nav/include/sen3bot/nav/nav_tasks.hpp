@@ -166,9 +166,6 @@ class PlannerTask final : public tasks::Task {
   const tasks::Topic<ScanMessage>& scan_;
   tasks::Topic<PathMessage>& path_;
   const tasks::Topic<msg::People>* people_;
-  // The centre's formation commands (null: none): while one is fresh it is the request.
-  const tasks::Topic<msg::FormationCommand>* formation_;
-  tasks::Sample<msg::FormationCommand> formation_sample_;
   msg::People people_copy_;  // the layer paints from this, copied before each update
   StaticLayer static_layer_;
   ObstacleLayer obstacle_layer_;
