@@ -129,7 +129,7 @@ int scan_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   device.start(clock.now());
   std::uint32_t printed = 0;
   lms200::LaserScan scan;
-  while (printed < count && clock.now() < give_up && !StopOnSignal::requested() != 0) {
+  while (printed < count && clock.now() < give_up && StopOnSignal::requested() == 0) {
     device.step(clock.now());
     if (device.take_new_scan(scan)) {
       print_scan_json(scan, out);

@@ -108,7 +108,7 @@ int drive_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   const hal::Nanos end = start + static_cast<hal::Nanos>(seconds * 1e9);
   (void)driver.take_new_sip();
   int rc = 0;
-  while (clock.now() < end && !StopOnSignal::requested() != 0) {
+  while (clock.now() < end && StopOnSignal::requested() == 0) {
     const hal::Nanos now = clock.now();
     driver.set_setpoint(p2os::BaseSetpoint{vel_m_s, rvel_rad_s, true}, now);
     driver.step(now);
