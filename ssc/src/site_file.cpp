@@ -1,95 +1,22 @@
-// The site file: YAML, every key checked, every error naming the file and the key.
-#include <yaml-cpp/yaml.h>
-
+// The site file: YAML, every key checked, every error naming the file and the key (lib/yaml).
 #include <algorithm>
-#include <cmath>
 #include <fstream>
+#include <numbers>
 #include <sstream>
-#include <stdexcept>
 #include <string_view>
 
 #include "sen3bot/ssc/site_file.hpp"
+#include "sen3bot/yaml/reader.hpp"
 
 namespace sen3bot::ssc {
 
 namespace {
 
-struct SiteError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-class Reader {
- public:
-  Reader(YAML::Node node, std::string file, std::string path) : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
-  [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
-    const YAML::Mark mark = node_.Mark();
-    throw SiteError(file_ + ": " + full(key) + ": " + problem +
-                    (mark.line >= 0 ? " (line " + std::to_string(mark.line + 1) + ")" : std::string()));
-  }
-  void allow_only(std::initializer_list<std::string_view> keys) const {
-    if (!node_.IsMap()) fail("", "expected a mapping");
-    for (const auto& kv : node_) {
-      const std::string name = kv.first.as<std::string>();
-      if (std::find(keys.begin(), keys.end(), name) == keys.end()) fail(name, "unknown key");
-    }
-  }
-  [[nodiscard]] bool has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
-  [[nodiscard]] Reader child(const std::string& key) const {
-    if (!has(key)) fail(key, "missing");
-    return Reader(node_[key], file_, full(key));
-  }
-  [[nodiscard]] std::string text(const std::string& key) const {
-    if (!has(key) || !node_[key].IsScalar()) fail(key, "missing or not a value");
-    return node_[key].Scalar();
-  }
-  [[nodiscard]] double number(const std::string& key, double lo, double hi) const {
-    const std::string t = text(key);
-    char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
-    if (end == t.c_str() || *end != '\0' || !std::isfinite(v)) fail(key, "expected a number, got '" + t + "'");
-    if (v < lo || v > hi) fail(key, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return v;
-  }
-  [[nodiscard]] bool boolean(const std::string& key) const {
-    const std::string t = text(key);
-    if (t == "true") return true;
-    if (t == "false") return false;
-    fail(key, "expected true or false");
-  }
-  [[nodiscard]] std::vector<Reader> sequence(const std::string& key) const {
-    if (!has(key) || !node_[key].IsSequence()) fail(key, "expected a list");
-    std::vector<Reader> out;
-    for (std::size_t i = 0; i < node_[key].size(); ++i) out.emplace_back(node_[key][i], file_, full(key) + "[" + std::to_string(i) + "]");
-    return out;
-  }
-  // [x, y] or [x, y, theta_deg]
-  [[nodiscard]] std::vector<double> numbers_here(std::size_t min, std::size_t max) const {
-    if (!node_.IsSequence() || node_.size() < min || node_.size() > max)
-      fail("", "expected a list of " + std::to_string(min) + (min == max ? "" : " to " + std::to_string(max)) + " numbers");
-    std::vector<double> out;
-    for (std::size_t i = 0; i < node_.size(); ++i) {
-      const std::string t = node_[i].Scalar();
-      char* end = nullptr;
-      const double v = std::strtod(t.c_str(), &end);
-      if (end == t.c_str() || *end != '\0' || !std::isfinite(v)) fail("", "expected numbers, got '" + t + "'");
-      out.push_back(v);
-    }
-    return out;
-  }
-  [[nodiscard]] std::string full(const std::string& key) const {
-    if (key.empty()) return path_.empty() ? "(top level)" : path_;
-    return path_.empty() ? key : path_ + "." + key;
-  }
-
- private:
-  YAML::Node node_;
-  std::string file_;
-  std::string path_;
-};
+using yaml::Reader;
 
 Pose pose_of(const Reader& r) {
-  const std::vector<double> v = r.numbers_here(2, 3);
-  return Pose{v[0], v[1], v.size() > 2 ? v[2] * 3.14159265358979323846 / 180.0 : 0.0};
+  const std::vector<double> v = r.numbers_here("[x, y] or [x, y, theta_deg]", 2, 3);
+  return Pose{v[0], v[1], v.size() > 2 ? v[2] * std::numbers::pi / 180.0 : 0.0};
 }
 
 SiteFile read(const Reader& top) {
@@ -109,21 +36,12 @@ SiteFile read(const Reader& top) {
     area.id = static_cast<AreaId>(f.area_names.size());
     const std::string name = a.text("name");
     area.name.assign(name);
-    const std::string type = a.text("type");
-    if (type == "1.1") {
-      area.type = AreaType::blind_intersection;
-    } else if (type == "1.2") {
-      area.type = AreaType::transition;
-    } else if (type == "2") {
-      area.type = AreaType::workstation;
-    } else if (type == "3") {
-      area.type = AreaType::not_monitored;
-    } else {
-      a.fail("type", "expected \"1.1\", \"1.2\", \"2\" or \"3\", got '" + type + "'");
-    }
+    constexpr AreaType kTypes[] = {AreaType::blind_intersection, AreaType::transition, AreaType::workstation,
+                                   AreaType::not_monitored};
+    area.type = kTypes[a.choice("type", {"1.1", "1.2", "2", "3"})];
     for (const Reader& p : a.sequence("outline")) {
-      const std::vector<double> v = p.numbers_here(2, 2);
-      if (!area.outline.push_back(Point{v[0], v[1]})) a.fail("outline", "at most " + std::to_string(kMaxVertices) + " vertices");
+      const geometry::Point2D v = p.point();
+      if (!area.outline.push_back(Point{v.x_m, v.y_m})) a.fail("outline", "at most " + std::to_string(kMaxVertices) + " vertices");
     }
     if (a.has("sentries"))
       for (const Reader& p : a.sequence("sentries"))
@@ -172,21 +90,14 @@ SiteFile read(const Reader& top) {
     if (a.has("direct_pause")) f.service.direct_pause = a.boolean("direct_pause");
     if (a.has("advisory_repeat_s")) f.service.advisory_repeat_s = a.number("advisory_repeat_s", 0.1, 3600);
   }
-  if (Status s = f.site.validate(); !s) top.fail("", s.error().c_str());
+  if (Status s = f.site.validate(); !s) top.fail_here(s.error().c_str());
   return f;
 }
 
 }  // namespace
 
 Result<SiteFile> parse_site(const std::string& yaml_text, const std::string& source_name) {
-  try {
-    const YAML::Node root = YAML::Load(yaml_text);
-    return read(Reader(root, source_name, ""));
-  } catch (const SiteError& e) {
-    return Error(Errc::config, e.what());
-  } catch (const YAML::Exception& e) {
-    return Error::format(Errc::config, "%s: %s", source_name.c_str(), e.what());
-  }
+  return yaml::parse<SiteFile>(yaml_text, source_name, [](const Reader& top) { return read(top); });
 }
 
 Result<SiteFile> load_site(const std::string& path) {

@@ -83,9 +83,9 @@ TEST(OperationsFile, MistakesNameTheKey) {
       {"map: lab.yaml\n", "", "map: missing"},
       {"cell_m: 0.5", "cell_m: 0.01", "grid.cell_m: expected at least 0.05 m"},
       {"cell_m: 0.5", "cell_m: half", "grid.cell_m: expected a number, got 'half'"},
-      {"cols: 4", "cols: 0", "grid.cols: expected an integer from 1 to 1024"},
+      {"cols: 4", "cols: 0", "grid.cols: value 0 is outside [1, 1024]"},
       {"cols: 4, rows: 4", "cols: 64, rows: 64", "grid: cols x rows is 4096 cells, more than 1024"},
-      {"origin: [0, 0]", "origin: [0]", "grid.origin: expected [x, y] in metres"},
+      {"origin: [0, 0]", "origin: [0]", "grid.origin: expected [x, y]"},
       {"map: lab.yaml\n", "map: lab.yaml\nmaps: x\n", "maps: unknown key"},
       {"{name: a, position: [0.5, 0.5]}", "{name: a, place: [0.5, 0.5]}", "stations[0].place: unknown key"},
       {"{name: b, position", "{name: a, position", "stations[1].name: 'a' is already a station"},
@@ -119,7 +119,7 @@ TEST(OperationsFile, NotYamlOrEmpty) {
   EXPECT_FALSE(parse_operations("", "e").ok());
   Result<OperationsConfig> c = parse_operations("map: [unclosed", "broken.yaml");
   ASSERT_FALSE(c.ok());
-  EXPECT_NE(std::string(c.error().c_str()).find("broken.yaml: not YAML"), std::string::npos) << c.error().c_str();
+  EXPECT_NE(std::string(c.error().c_str()).find("broken.yaml: not valid YAML"), std::string::npos) << c.error().c_str();
   EXPECT_FALSE(parse_operations("- just\n- a list\n", "list").ok());
 }
 

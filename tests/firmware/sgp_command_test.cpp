@@ -93,7 +93,7 @@ TEST(SafeCurveFile, BadFilesGiveClearErrors) {
       {"shape: circle\ncentre: [1, 2]\nradius_m: 0\n", "radius_m: value 0 is outside"},
       {"shape: line\nthrough: [[1, 1], [1, 1]]\n", "the two points coincide"},
       {"shape: line\nthrough: [[1, 1]]\n", "expected two points"},
-      {"shape: line\nthrough: [[1, 1], [2, x]]\n", "expected two numbers"},
+      {"shape: line\nthrough: [[1, 1], [2, x]]\n", "through[1][1]: expected a number, got 'x'"},
       {"shape: ellipse\ncentre: [0, 0]\nsemi_major_m: 1\nsemi_minor_m: 2\n", "larger than semi_major_m"},
       {"shape: polynomial\nterms: [[3, 2, 1.0]]\n", "degree 5 is above 4"},
       {"shape: polynomial\nterms: [[5, 0, 1.0]]\n", "terms[0][0]: value 5 is outside [0, 4]"},

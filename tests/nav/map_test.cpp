@@ -47,19 +47,20 @@ TEST(MapYaml, ErrorsNameFileAndKey) {
     const char* text;
     const char* expect;
   } cases[] = {
-      {"resolution: 0.1\norigin: [0,0,0]\n", "required key 'image'"},
-      {"image: a.pgm\norigin: [0,0,0]\n", "required key 'resolution'"},
-      {"image: a.pgm\nresolution: 0.1\n", "required key 'origin'"},
-      {"image: a.pgm\nresolution: -1\norigin: [0,0,0]\n", "key 'resolution'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0]\n", "key 'origin'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0,1]\n", "key 'origin'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: 0\n", "key 'origin'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nnegate: 2\n", "key 'negate'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nmode: fancy\n", "key 'mode'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\noccupied_thresh: 1.5\n", "key 'occupied_thresh'"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nfree_thresh: 0.9\n", "free_thresh"},
-      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\ncolour: red\n", "key 'colour'"},
-      {"image: a.pgm\nresolution 0.1\n", "expected 'key: value'"},
+      {"resolution: 0.1\norigin: [0,0,0]\n", "image: missing"},
+      {"image: a.pgm\norigin: [0,0,0]\n", "resolution: missing"},
+      {"image: a.pgm\nresolution: 0.1\n", "origin: missing"},
+      {"image: a.pgm\nresolution: -1\norigin: [0,0,0]\n", "resolution: expected a number > 0"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0]\n", "origin: expected [x, y, yaw]"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0,1]\n", "origin: expected [x, y, yaw]"},
+      {"image: a.pgm\nresolution: 0.1\norigin: 0\n", "origin: expected [x, y, yaw]"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,x,0]\n", "origin[1]: expected a number, got 'x'"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nnegate: 2\n", "negate: expected 0, false, 1 or true, got '2'"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nmode: fancy\n", "mode: expected trinary, scale or raw, got 'fancy'"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\noccupied_thresh: 1.5\n", "occupied_thresh: value 1.5 is outside [0, 1]"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\nfree_thresh: 0.9\n", "free_thresh: 0.9 must be below occupied_thresh 0.65"},
+      {"image: a.pgm\nresolution: 0.1\norigin: [0,0,0]\ncolour: red\n", "colour: unknown key"},
+      {"image: a.pgm\nresolution 0.1\n", "resolution 0.1: unknown key"},
   };
   for (const auto& c : cases) {
     auto y = parse_map_yaml(c.text, "site.yaml");
@@ -67,6 +68,7 @@ TEST(MapYaml, ErrorsNameFileAndKey) {
     const std::string msg(y.error().message());
     EXPECT_NE(msg.find("site.yaml"), std::string::npos) << msg;
     EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+    EXPECT_NE(msg.find("(line "), std::string::npos) << msg;
   }
 }
 
@@ -192,7 +194,7 @@ TEST(LoadMap, ImagePathIsRelativeToTheYaml) {
   EXPECT_EQ(m->at(1, 0), -1);  // 205: gmapping's unknown grey
   auto missing = load_map((dir / "missing.yaml").string());
   ASSERT_FALSE(missing.ok());
-  EXPECT_NE(std::string(missing.error().message()).find("key 'image'"), std::string::npos);
+  EXPECT_NE(std::string(missing.error().message()).find("missing.yaml: image: "), std::string::npos);
   EXPECT_FALSE(load_map((dir / "nothing.yaml").string()).ok());
 }
 

@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <filesystem>
+#include <cstdio>
 #include <fstream>
-#include <iterator>
+#include <limits>
 #include <string>
+
+#include "sen3bot/yaml/reader.hpp"
 
 namespace sen3bot::nav {
 
@@ -18,155 +19,37 @@ OccupancyMap::OccupancyMap(int width, int height, double resolution_m, double or
 
 namespace {
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front())) != 0) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back())) != 0) s.remove_suffix(1);
-  return s;
-}
+constexpr double kAnyNumber = std::numeric_limits<double>::max();
 
-std::string_view unquote(std::string_view s) {
-  if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) {
-    return s.substr(1, s.size() - 2);
+MapYaml read_map_yaml(const yaml::Reader& r) {
+  r.allow_only({"image", "resolution", "origin", "occupied_thresh", "free_thresh", "negate", "mode"});
+  MapYaml y;
+  y.image = r.text("image");
+  if (y.image.empty()) r.fail("image", "is empty");
+  y.resolution_m = r.number("resolution", -kAnyNumber, kAnyNumber);
+  if (y.resolution_m <= 0.0) r.fail("resolution", "expected a number > 0 (metres per cell)");
+  const std::vector<double> origin = r.child("origin").numbers_here("[x, y, yaw]", 3, 3);
+  y.origin_x_m = origin[0];
+  y.origin_y_m = origin[1];
+  y.origin_yaw_rad = origin[2];
+  if (r.has("occupied_thresh")) y.occupied_thresh = r.number("occupied_thresh", 0.0, 1.0);
+  if (r.has("free_thresh")) y.free_thresh = r.number("free_thresh", 0.0, 1.0);
+  // map_server writes 0 or 1.
+  if (r.has("negate")) y.negate = r.choice("negate", {"0", "false", "1", "true"}) >= 2;
+  constexpr MapMode kModes[] = {MapMode::trinary, MapMode::scale, MapMode::raw};
+  if (r.has("mode")) y.mode = kModes[r.choice("mode", {"trinary", "scale", "raw"})];
+  if (y.free_thresh >= y.occupied_thresh) {
+    char problem[96];
+    std::snprintf(problem, sizeof problem, "%g must be below occupied_thresh %g", y.free_thresh, y.occupied_thresh);
+    r.fail("free_thresh", problem);
   }
-  return s;
-}
-
-// Strips a '#' comment that is not inside quotes.
-std::string_view strip_comment(std::string_view line) {
-  char quote = 0;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quote != 0) {
-      if (c == quote) quote = 0;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-    } else if (c == '#') {
-      return line.substr(0, i);
-    }
-  }
-  return line;
-}
-
-bool parse_double(std::string_view text, double& out) {
-  text = trim(text);
-  if (text.empty()) return false;
-  if (text.front() == '+') text.remove_prefix(1);
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(text.data(), end, out);
-  return ec == std::errc() && ptr == end && std::isfinite(out);
-}
-
-Error key_error(std::string_view source, int line, std::string_view key, const char* what) {
-  return Error::format(Errc::config, "%.*s:%d: key '%.*s': %s", static_cast<int>(source.size()),
-                       source.data(), line, static_cast<int>(key.size()), key.data(), what);
+  return y;
 }
 
 }  // namespace
 
 Result<MapYaml> parse_map_yaml(std::string_view text, std::string_view source) {
-  MapYaml yaml;
-  bool have_image = false;
-  bool have_resolution = false;
-  bool have_origin = false;
-  bool have_occupied = false;
-  bool have_free = false;
-  int line_number = 0;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t eol = text.find('\n', pos);
-    std::string_view line = text.substr(pos, eol == std::string_view::npos ? std::string_view::npos : eol - pos);
-    pos = eol == std::string_view::npos ? text.size() + 1 : eol + 1;
-    ++line_number;
-    line = trim(strip_comment(line));
-    if (line.empty() || line == "---") continue;
-    const std::size_t colon = line.find(':');
-    if (colon == std::string_view::npos) {
-      return Error::format(Errc::config, "%.*s:%d: expected 'key: value', got '%.*s'",
-                           static_cast<int>(source.size()), source.data(), line_number,
-                           static_cast<int>(std::min<std::size_t>(line.size(), 60)), line.data());
-    }
-    const std::string_view key = trim(line.substr(0, colon));
-    const std::string_view value = trim(line.substr(colon + 1));
-    if (value.empty()) return key_error(source, line_number, key, "has no value");
-    if (key == "image") {
-      const std::string_view path = unquote(value);
-      if (path.empty()) return key_error(source, line_number, key, "is empty");
-      yaml.image.assign(path);
-      have_image = true;
-    } else if (key == "resolution") {
-      if (!parse_double(value, yaml.resolution_m) || yaml.resolution_m <= 0.0) {
-        return key_error(source, line_number, key, "must be a number > 0 (metres per cell)");
-      }
-      have_resolution = true;
-    } else if (key == "origin") {
-      if (value.size() < 2 || value.front() != '[' || value.back() != ']') {
-        return key_error(source, line_number, key, "must be a list [x, y, yaw]");
-      }
-      std::string_view items = value.substr(1, value.size() - 2);
-      double numbers[3] = {};
-      int count = 0;
-      while (true) {
-        const std::size_t comma = items.find(',');
-        const std::string_view item = items.substr(0, comma);
-        if (count == 3 || !parse_double(item, numbers[count])) {
-          return key_error(source, line_number, key, "must hold exactly three numbers [x, y, yaw]");
-        }
-        ++count;
-        if (comma == std::string_view::npos) break;
-        items.remove_prefix(comma + 1);
-      }
-      if (count != 3) return key_error(source, line_number, key, "must hold exactly three numbers [x, y, yaw]");
-      yaml.origin_x_m = numbers[0];
-      yaml.origin_y_m = numbers[1];
-      yaml.origin_yaw_rad = numbers[2];
-      have_origin = true;
-    } else if (key == "occupied_thresh" || key == "free_thresh") {
-      double v = 0.0;
-      if (!parse_double(value, v) || v < 0.0 || v > 1.0) {
-        return key_error(source, line_number, key, "must be a number in [0, 1]");
-      }
-      (key == "occupied_thresh" ? yaml.occupied_thresh : yaml.free_thresh) = v;
-      (key == "occupied_thresh" ? have_occupied : have_free) = true;
-    } else if (key == "negate") {
-      const std::string_view v = unquote(value);
-      if (v == "0" || v == "false") {
-        yaml.negate = false;
-      } else if (v == "1" || v == "true") {
-        yaml.negate = true;
-      } else {
-        return key_error(source, line_number, key, "must be 0, 1, true or false");
-      }
-    } else if (key == "mode") {
-      const std::string_view v = unquote(value);
-      if (v == "trinary") {
-        yaml.mode = MapMode::trinary;
-      } else if (v == "scale") {
-        yaml.mode = MapMode::scale;
-      } else if (v == "raw") {
-        yaml.mode = MapMode::raw;
-      } else {
-        return key_error(source, line_number, key, "must be trinary, scale or raw");
-      }
-    } else {
-      return key_error(source, line_number, key, "is not a map key (image, resolution, origin, "
-                                                 "occupied_thresh, free_thresh, negate, mode)");
-    }
-  }
-  const auto missing = [&](const char* key) {
-    return Error::format(Errc::config, "%.*s: required key '%s' is missing",
-                         static_cast<int>(source.size()), source.data(), key);
-  };
-  if (!have_image) return missing("image");
-  if (!have_resolution) return missing("resolution");
-  if (!have_origin) return missing("origin");
-  (void)have_occupied;
-  (void)have_free;
-  if (yaml.free_thresh >= yaml.occupied_thresh) {
-    return Error::format(Errc::config, "%.*s: free_thresh %g must be below occupied_thresh %g",
-                         static_cast<int>(source.size()), source.data(), yaml.free_thresh,
-                         yaml.occupied_thresh);
-  }
-  return yaml;
+  return yaml::parse<MapYaml>(text, std::string(source), read_map_yaml);
 }
 
 namespace {
@@ -304,18 +187,14 @@ Result<std::string> read_whole_file(const std::string& path, std::size_t limit) 
 Result<OccupancyMap> load_map(const std::string& yaml_path) {
   auto text = read_whole_file(yaml_path, 64 * 1024);
   if (!text) return text.error();
-  auto yaml = parse_map_yaml(*text, yaml_path);
-  if (!yaml) return yaml.error();
-  std::filesystem::path image_path(yaml->image);
-  if (image_path.is_relative()) image_path = std::filesystem::path(yaml_path).parent_path() / image_path;
-  const std::string image_name = image_path.string();
+  auto map_yaml = parse_map_yaml(*text, yaml_path);
+  if (!map_yaml) return map_yaml.error();
+  const std::string image_name = yaml::relative_to(yaml_path, map_yaml->image);
   auto bytes = read_whole_file(image_name, 2 * kMaxMapCells + 4096);
-  if (!bytes) {
-    return Error::format(bytes.error().code(), "%s: key 'image': %s", yaml_path.c_str(), bytes.error().c_str());
-  }
+  if (!bytes) return Error::format(bytes.error().code(), "%s: image: %s", yaml_path.c_str(), bytes.error().c_str());
   auto image = parse_pgm(*bytes, image_name);
   if (!image) return image.error();
-  return occupancy_from_image(*image, *yaml);
+  return occupancy_from_image(*image, *map_yaml);
 }
 
 }  // namespace sen3bot::nav
