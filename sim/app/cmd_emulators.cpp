@@ -106,7 +106,7 @@ int p2os_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* err)
   }
   std::fflush(out);
   hal::PosixClock clock;
-  while (!StopOnSignal::requested() != 0) clock.sleep_until(clock.now() + hal::millis(50));
+  while (StopOnSignal::requested() == 0) clock.sleep_until(clock.now() + hal::millis(50));
   runner->stop();
   const p2os::EmulatorStats stats = runner->with_emulator([](p2os::P2osEmulator& e) { return e.stats(); });
   std::fprintf(out,
@@ -298,7 +298,7 @@ int lms200_emulator_command(int argc, char** argv, std::FILE* out, std::FILE* er
                map_path.empty() ? "built-in room" : map_path.c_str(), p.x_m, p.y_m, p.theta_rad);
   std::fflush(out);
   hal::PosixClock clock;
-  while (!StopOnSignal::requested() != 0) clock.sleep_until(clock.now() + hal::millis(50));
+  while (StopOnSignal::requested() == 0) clock.sleep_until(clock.now() + hal::millis(50));
   (*runner)->stop();
   (*runner)->with_emulator([out](lms200::Lms200Emulator& e) {
     const lms200::EmulatorCounters& c = e.counters();
