@@ -51,8 +51,9 @@ TEST_PACKAGES=(
   libopencv-imgcodecs-dev    # tests only: the firmware's JPEG/PNG are checked against OpenCV's codecs
   opencv-doc                 # its tests: the people in OpenCV's sample images (Apache-2.0)
   rt-tests                   # cyclictest, compared against by the jitter benchmark
-  clang                      # the sanitized suite and the bounded libFuzzer run (SEN3BOT_LIBFUZZER=ON)
-  libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes for clang 14
+  clang-16                   # the sanitized suite and the bounded libFuzzer run (SEN3BOT_LIBFUZZER=ON);
+                             # 16: the first with C++20's conditionally trivial members (StaticVector)
+  libclang-rt-16-dev         # libFuzzer and the sanitizer runtimes for clang 16
   libmrpt-hwdrivers-dev      # lms200 tests: MRPT's CSickLaserSerial, a third-party LMS200 client
   python3-jsonschema         # vda5050 tests: encoder output checked against the VDA 5050 JSON schemas
   python3-gi                 # camera tests: the RTSP peer is gst-rtsp-server driven from Python

@@ -62,7 +62,7 @@ case "${1:-}" in
     ctest --test-dir build --output-on-failure -j "$jobs"
     # One clang tree for the sanitized suite and the fuzzers (with SEN3BOT_LIBFUZZER everything
     # carries libFuzzer's coverage counters): one build of the tree fewer than a tree for each.
-    sanitize_args=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DSEN3BOT_SANITIZE=ON
+    sanitize_args=(-DCMAKE_C_COMPILER=clang-16 -DCMAKE_CXX_COMPILER=clang++-16 -DSEN3BOT_SANITIZE=ON
                    -DSEN3BOT_BENCH=OFF)
     if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then sanitize_args+=(-DSEN3BOT_LIBFUZZER=ON); fi
     if [[ "${SEN3BOT_SKIP_SANITIZE:-0}" != 1 ]]; then

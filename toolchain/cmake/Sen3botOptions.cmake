@@ -24,7 +24,7 @@ if(SEN3BOT_SANITIZE)
   endif()
 endif()
 if(SEN3BOT_LIBFUZZER AND NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
-  message(FATAL_ERROR "SEN3BOT_LIBFUZZER needs clang (CC=clang CXX=clang++)")
+  message(FATAL_ERROR "SEN3BOT_LIBFUZZER needs clang 16 or later (CC=clang-16 CXX=clang++-16)")
 endif()
 
 # Every library in the tree: static, position independent, with the project options.
