@@ -47,39 +47,43 @@ bool split_team(std::string_view text, std::vector<formation::TeamMember>& team,
   return !team.empty();
 }
 
-}  // namespace
-
-int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
-  BrokerArgs args;
-  args.client_id = "ssc";
+// What the command line asks for.
+struct FormationOptions {
+  BrokerArgs mqtt;
   std::string team_text, log_path, manufacturer = "Sen3Bot", interface_name = "uagv";
   int example_number = 0;
   double duration_s = 0;
   double v_max = -1, w_max = -1;
   formation::FormationServiceConfig config;
+};
+
+// False, with the problem and the usage on err, for a command line that is not one.
+bool parse_options(int argc, char** argv, FormationOptions& o, std::FILE* err) {
+  o.mqtt.client_id = "ssc";
+  formation::FormationServiceConfig& config = o.config;
   for (int i = 0; i < argc; ++i) {
     const std::string_view arg = argv[i];
     if (i + 1 >= argc) {
       std::fprintf(err, "sen3bot-centre formation: %s needs a value\n%s", argv[i], kFormationUsage);
-      return 2;
+      return false;
     }
     const std::string value = argv[++i];
     bool ok = !value.empty();
     double number = 0;
-    if (args.take(arg, value)) {
+    if (o.mqtt.take(arg, value)) {
     } else if (arg == "--example") {
       ok = value == "1" || value == "2" || value == "3";
-      if (ok) example_number = value[0] - '0';
+      if (ok) o.example_number = value[0] - '0';
     } else if (arg == "--team") {
-      team_text = value;
+      o.team_text = value;
     } else if (arg == "--manufacturer") {
-      manufacturer = value;
+      o.manufacturer = value;
     } else if (arg == "--interface") {
-      interface_name = value;
+      o.interface_name = value;
     } else if (arg == "--v-max") {
-      ok = parse_double(value, v_max) && v_max > 0;
+      ok = parse_double(value, o.v_max) && o.v_max > 0;
     } else if (arg == "--w-max") {
-      ok = parse_double(value, w_max) && w_max > 0;
+      ok = parse_double(value, o.w_max) && o.w_max > 0;
     } else if (arg == "--period") {
       ok = parse_double(value, number) && number > 0;
       config.period_s = number;
@@ -90,48 +94,63 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       ok = parse_double(value, number) && number > 0;
       config.pose_timeout_s = number;
     } else if (arg == "--log") {
-      log_path = value;
+      o.log_path = value;
     } else if (arg == "--duration") {
-      ok = parse_double(value, duration_s) && duration_s >= 0;
+      ok = parse_double(value, o.duration_s) && o.duration_s >= 0;
     } else {
       std::fprintf(err, "sen3bot-centre formation: unknown option '%s'\n%s", argv[i - 1], kFormationUsage);
-      return 2;
+      return false;
     }
     if (!ok) {
       std::fprintf(err, "sen3bot-centre formation: bad value '%s' for %s\n%s", argv[i], argv[i - 1], kFormationUsage);
-      return 2;
+      return false;
     }
   }
-  const char* missing = args.broker.empty() ? "--broker" : example_number == 0 ? "--example" : team_text.empty() ? "--team" : nullptr;
+  const char* missing = o.mqtt.broker.empty()    ? "--broker"
+                        : o.example_number == 0 ? "--example"
+                        : o.team_text.empty()   ? "--team"
+                                                : nullptr;
   if (missing != nullptr) {
     std::fprintf(err, "sen3bot-centre formation: %s is required\n%s", missing, kFormationUsage);
-    return 2;
+    return false;
   }
+  return true;
+}
 
-  const formation::Example example = formation::example(example_number);
-  config.interface_name = interface_name;
+// The example's controller with the limits asked for, and the team, which must be as large as
+// the example's; false with the problem on err.
+bool configure(FormationOptions& o, const formation::Example& example, std::FILE* err) {
+  formation::FormationServiceConfig& config = o.config;
+  config.interface_name = o.interface_name;
   config.controller = example.config;
-  if (v_max > 0) config.controller.v_max_m_s = v_max;
-  if (w_max > 0) config.controller.w_max_rad_s = w_max;
-  if (!split_team(team_text, config.team, manufacturer)) {
-    std::fprintf(err, "sen3bot-centre formation: --team: serial numbers separated by commas, got '%s'\n", team_text.c_str());
-    return 2;
+  if (o.v_max > 0) config.controller.v_max_m_s = o.v_max;
+  if (o.w_max > 0) config.controller.w_max_rad_s = o.w_max;
+  if (!split_team(o.team_text, config.team, o.manufacturer)) {
+    std::fprintf(err, "sen3bot-centre formation: --team: serial numbers separated by commas, got '%s'\n", o.team_text.c_str());
+    return false;
   }
   if (config.team.size() != example.config.robots) {
-    std::fprintf(err, "sen3bot-centre formation: --team: example %d drives %zu robots, got %zu serial numbers\n", example_number,
+    std::fprintf(err, "sen3bot-centre formation: --team: example %d drives %zu robots, got %zu serial numbers\n", o.example_number,
                  example.config.robots, config.team.size());
-    return 2;
+    return false;
   }
+  return true;
+}
 
-  Result<hal::PubSubOptions> options = args.options();
+// The service on its MQTT link; null, with the problem on err and the exit status in `status`,
+// when either cannot be made.
+std::unique_ptr<formation::FormationService> open_service(FormationOptions& o, std::FILE* err, int& status) {
+  status = 2;
+  formation::FormationServiceConfig& config = o.config;
+  Result<hal::PubSubOptions> options = o.mqtt.options();
   if (!options) {
     std::fprintf(err, "sen3bot-centre formation: %s\n", options.error().c_str());
-    return 2;
+    return nullptr;
   }
   Result<std::vector<hal::PubSubSubscription>> subscriptions = formation::FormationService::subscriptions(config);
   if (!subscriptions) {
     std::fprintf(err, "sen3bot-centre formation: %s\n", subscriptions.error().c_str());
-    return 2;
+    return nullptr;
   }
   hal::PubSubOptions& link = *options;
   link.subscriptions = std::move(*subscriptions);
@@ -141,30 +160,24 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
   config.max_payload = link.max_payload;
   Result<std::unique_ptr<hal::PubSub>> opened = hal::open_mqtt(link);
   if (!opened) {
-    std::fprintf(err, "sen3bot-centre formation: --broker %s: %s\n", args.broker.c_str(), opened.error().c_str());
-    return opened.error().code() == Errc::config ? 2 : 1;
+    std::fprintf(err, "sen3bot-centre formation: --broker %s: %s\n", o.mqtt.broker.c_str(), opened.error().c_str());
+    status = opened.error().code() == Errc::config ? 2 : 1;
+    return nullptr;
   }
   Result<std::unique_ptr<formation::FormationService>> created = formation::FormationService::create(config, std::move(opened.value()));
   if (!created) {
     std::fprintf(err, "sen3bot-centre formation: %s\n", created.error().c_str());
-    return 2;
+    return nullptr;
   }
-  formation::FormationService& service = **created;
+  return std::move(created.value());
+}
 
-  std::FILE* log = nullptr;
-  if (!log_path.empty()) {
-    log = std::fopen(log_path.c_str(), "w");
-    if (log == nullptr) {
-      std::fprintf(err, "sen3bot-centre formation: --log %s: %s\n", log_path.c_str(), std::strerror(errno));
-      return 2;
-    }
-    std::fprintf(log, "t_s,outcome,scale,lyapunov,gain_set,switched,formation_error_m,min_barrier_m\n");
-  }
-  std::fprintf(err, "sen3bot-centre formation: example %d (%s), %zu robots, on %s as %s\n", example_number, example.title,
-               config.team.size(), args.broker.c_str(), args.client_id.c_str());
-
-  const StopOnSignal stop;
-  const auto period = static_cast<std::int64_t>(config.period_s * 1e9 / 4.0);  // messages are taken between steps too
+// Steps the service until a stop signal or the end of `duration_s` (0: none), a line of the log
+// for each step that did something; the operator hears of what changes the team's motion.
+// Returns when the loop started (CLOCK_MONOTONIC).
+std::int64_t run_steps(formation::FormationService& service, double period_s, double duration_s, std::FILE* log,
+                       std::FILE* err) {
+  const auto period = static_cast<std::int64_t>(period_s * 1e9 / 4.0);  // messages are taken between steps too
   const std::int64_t start = clock_ns(CLOCK_MONOTONIC);
   const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
   std::int64_t next = start;
@@ -203,8 +216,11 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR && StopOnSignal::requested() == 0) {
     }
   }
+  return start;
+}
 
-  service.stop_team(clock_ns(CLOCK_REALTIME));
+// The run's counters as one JSON line on out.
+void print_summary(formation::FormationService& service, std::int64_t start, std::FILE* out) {
   const formation::FormationCounters& c = service.counters();
   const hal::PubSubStats link_stats = service.link().stats();
   const int signal = StopOnSignal::requested();
@@ -225,8 +241,38 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
       .end_object();
   std::fputc('\n', out);
   std::fflush(out);
+}
+
+}  // namespace
+
+int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  FormationOptions o;
+  if (!parse_options(argc, argv, o, err)) return 2;
+  const formation::Example example = formation::example(o.example_number);
+  if (!configure(o, example, err)) return 2;
+  int status = 0;
+  std::unique_ptr<formation::FormationService> created = open_service(o, err, status);
+  if (!created) return status;
+  formation::FormationService& service = *created;
+
+  std::FILE* log = nullptr;
+  if (!o.log_path.empty()) {
+    log = std::fopen(o.log_path.c_str(), "w");
+    if (log == nullptr) {
+      std::fprintf(err, "sen3bot-centre formation: --log %s: %s\n", o.log_path.c_str(), std::strerror(errno));
+      return 2;
+    }
+    std::fprintf(log, "t_s,outcome,scale,lyapunov,gain_set,switched,formation_error_m,min_barrier_m\n");
+  }
+  std::fprintf(err, "sen3bot-centre formation: example %d (%s), %zu robots, on %s as %s\n", o.example_number, example.title,
+               o.config.team.size(), o.mqtt.broker.c_str(), o.mqtt.client_id.c_str());
+
+  const StopOnSignal stop;
+  const std::int64_t start = run_steps(service, o.config.period_s, o.duration_s, log, err);
+  service.stop_team(clock_ns(CLOCK_REALTIME));
+  print_summary(service, start, out);
   service.close(1.0);  // the stop goes out, then a clean disconnect
-  created.value().reset();
+  created.reset();
   if (log != nullptr) std::fclose(log);
   return 0;
 }

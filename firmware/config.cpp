@@ -207,6 +207,179 @@ void read_dynamic_obstacles(const Reader& r, nav::DynamicObstacleConfig& d) {
   if (r.has("min_speed_m_s")) k.min_speed_m_s = r.number("min_speed_m_s", 0.0, 10.0);
 }
 
+// navigation.people.keep_out: the safety filter's cage check.
+void read_keep_out(const Reader& o, NavigationSection& n) {
+  o.allow_only({"enabled", "margin_m", "movers"});
+  if (o.has("enabled") && !o.boolean("enabled")) n.safety.cage_margin_m = -1.0;
+  if (o.has("margin_m")) n.safety.cage_margin_m = o.number("margin_m", 0.0, 2.0);
+  if (o.has("movers")) n.cage_movers = o.boolean("movers");
+}
+
+// navigation.people.hidden: people kept while out of sight until their place is seen empty.
+void read_hidden(const Reader& o, nav::PersonTrackerConfig& t) {
+  o.allow_only({"enabled", "max_s", "max_sigma_m", "cage_growth_m", "wander_m2_s"});
+  if (o.has("enabled")) t.keep_hidden = o.boolean("enabled");
+  if (o.has("max_s")) t.hidden_max_s = o.number("max_s", 0.1, 600.0);
+  if (o.has("max_sigma_m")) t.hidden_max_sigma_m = o.number("max_sigma_m", 0.05, 10.0);
+  if (o.has("cage_growth_m")) t.hidden_cage_growth_m = o.number("cage_growth_m", 0.0, 2.0);
+  if (o.has("wander_m2_s")) t.hidden_wander_m2_s = o.number("wander_m2_s", 0.0, 10.0);
+}
+
+// navigation.people.onboard: the on-board detector's search (detector: onboard).
+void read_onboard(const Reader& o, NavigationSection& n) {
+  o.allow_only({"rate_hz", "scale", "threshold", "min_height_px"});
+  if (o.has("rate_hz")) n.onboard_rate_hz = o.number("rate_hz", 0.05, 30.0);
+  if (o.has("scale")) n.onboard_hog.scale = o.number("scale", 0.1, 2.0);
+  if (o.has("threshold")) n.onboard_hog.hit_threshold = o.number("threshold", -5.0, 10.0);
+  if (o.has("min_height_px")) n.onboard_hog.min_height_px = o.number("min_height_px", 0.0, 4096.0);
+}
+
+// navigation.people.online_sgp: re-running the supervisory planner when a person pushed the
+// robot off its safe path.
+void read_online_sgp(const Reader& o, NavigationSection& n) {
+  o.allow_only({"enabled", "trigger_distance_m", "deviation_m", "delay_s", "cooldown_s", "person_timeout_s"});
+  if (o.has("enabled")) n.osgp_enabled = o.boolean("enabled");
+  if (o.has("trigger_distance_m")) n.osgp.trigger_distance_m = o.number("trigger_distance_m", 0.1, 20.0);
+  if (o.has("deviation_m")) n.osgp.deviation_m = o.number("deviation_m", 0.05, 10.0);
+  if (o.has("delay_s")) n.osgp.delay_s = o.number("delay_s", 0.0, 60.0);
+  if (o.has("cooldown_s")) n.osgp.cooldown_s = o.number("cooldown_s", 0.0, 600.0);
+  if (o.has("person_timeout_s")) n.osgp.person_timeout_s = o.number("person_timeout_s", 0.0, 60.0);
+}
+
+// navigation.people: camera-laser fusion and the cages (docs/people.md).
+void read_people(const Reader& p, NavigationSection& n) {
+  p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
+                "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
+                "robot_clearance_m", "online_sgp", "onboard", "keep_out", "hidden"});
+  n.people_enabled = true;
+  n.people_detector = p.text("detector");
+  if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
+  if (p.has("dynamic_after_m")) n.person_tracker.dynamic_after_m = p.number("dynamic_after_m", 0.0, 20.0);
+  if (p.has("expire_s")) n.person_tracker.expire_s = n.cages.expire_s = p.number("expire_s", 0.1, 60.0);
+  if (p.has("match_window_s")) n.fusion.match_window_s = p.number("match_window_s", 0.0, 2.0);
+  if (p.has("max_age_s")) n.detection_max_age_s = p.number("max_age_s", 0.05, 10.0);
+  if (p.has("min_confidence")) n.fusion.min_confidence = static_cast<float>(p.number("min_confidence", 0.0, 1.0));
+  if (p.has("confirm_boxes"))
+    n.person_tracker.confirm_hits = static_cast<std::uint32_t>(p.integer("confirm_boxes", 1, 100));
+  if (p.has("laser_follow_s")) n.person_tracker.laser_follow_s = p.number("laser_follow_s", 0.0, 60.0);
+  if (p.has("follow_gate_m")) n.person_tracker.follow_gate_m = p.number("follow_gate_m", 0.05, 2.0);
+  if (p.has("max_body_radius_m")) n.fusion.max_body_radius_m = p.number("max_body_radius_m", 0.0, 1.0);
+  if (p.has("robot_clearance_m")) n.cages.robot_clearance_m = p.number("robot_clearance_m", 0.0, 2.0);
+  if (p.has("keep_out")) read_keep_out(p.child("keep_out"), n);
+  if (p.has("hidden")) read_hidden(p.child("hidden"), n.person_tracker);
+  if (p.has("onboard")) read_onboard(p.child("onboard"), n);
+  if (p.has("online_sgp")) read_online_sgp(p.child("online_sgp"), n);
+}
+
+// navigation.sgp: the supervisory planner's integration (sgp.hpp); used with safe_curve.
+void read_sgp(const Reader& p, nav::SgpConfig& sgp) {
+  p.allow_only({"step_m", "max_steps", "waypoint_spacing_m", "barrier_k", "zeta", "on_curve_m", "max_waypoints"});
+  if (p.has("step_m")) sgp.step_m = p.number("step_m", 0.001, 0.5);
+  if (p.has("max_steps")) sgp.max_steps = static_cast<int>(p.integer("max_steps", 10, 1'000'000));
+  if (p.has("waypoint_spacing_m")) sgp.waypoint_spacing_m = p.number("waypoint_spacing_m", 0.02, 5.0);
+  if (p.has("barrier_k")) sgp.barrier_k = p.number("barrier_k", 0.0, 100.0);
+  if (p.has("zeta")) sgp.zeta = p.number("zeta", 0.01, 100.0);
+  if (p.has("on_curve_m")) sgp.on_curve_m = p.number("on_curve_m", 0.005, 1.0);
+  if (p.has("max_waypoints")) sgp.max_waypoints = static_cast<std::size_t>(p.integer("max_waypoints", 2, 65'536));
+  if (sgp.waypoint_spacing_m < sgp.step_m) p.fail("waypoint_spacing_m", "is shorter than step_m", YAML::Node());
+}
+
+// navigation.particles and navigation.recovery: the particle filter's size and its
+// random-particle injection (AMCL's recovery_alpha_slow/fast; 0 for either turns it off).
+void read_particles(const Reader& p, nav::MclConfig& mcl) {
+  p.allow_only({"min", "max"});
+  mcl.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
+  mcl.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
+  if (mcl.max_particles < mcl.min_particles) p.fail("max", "must be at least min", YAML::Node());
+}
+
+void read_recovery(const Reader& p, nav::MclConfig& mcl) {
+  p.allow_only({"alpha_slow", "alpha_fast", "lost_ratio", "headings"});
+  if (p.has("alpha_slow")) mcl.recovery_alpha_slow = p.number("alpha_slow", 0.0, 1.0);
+  if (p.has("alpha_fast")) mcl.recovery_alpha_fast = p.number("alpha_fast", 0.0, 1.0);
+  if (p.has("lost_ratio")) mcl.lost_likelihood_ratio = p.number("lost_ratio", 0.0, 0.99);
+  if (p.has("headings")) mcl.injection_headings = static_cast<std::size_t>(p.integer("headings", 1, 360));
+  if (mcl.recovery_alpha_slow > 0.0 && mcl.recovery_alpha_fast > 0.0 &&
+      !(mcl.recovery_alpha_slow < mcl.recovery_alpha_fast))
+    p.fail("alpha_fast", "must be larger than alpha_slow (or 0 for either to turn recovery off)", YAML::Node());
+}
+
+// navigation.approach: the safety filter's check against tracked movers coming from the side
+// (safety.hpp).
+void read_approach(const Reader& p, nav::SafetyConfig& safety) {
+  p.allow_only({"horizon_s", "margin_m", "min_speed_m_s", "candidates"});
+  if (p.has("horizon_s")) safety.approach_horizon_s = p.number("horizon_s", 0.0, 5.0);
+  if (p.has("margin_m")) safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
+  if (p.has("min_speed_m_s")) safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
+  if (p.has("candidates")) safety.approach_candidates = p.boolean("candidates");
+}
+
+// navigation.make_way: moving out of a walker's way when the robot would stand in it
+// (crossings.hpp).
+void read_make_way(const Reader& p, nav::MakeWayConfig& m) {
+  p.allow_only({"enabled", "horizon_s", "forward_m_s", "reverse_m_s", "slack_s"});
+  if (p.has("enabled")) m.enabled = p.boolean("enabled");
+  if (p.has("horizon_s")) m.horizon_s = p.number("horizon_s", 0.5, 20.0);
+  if (p.has("forward_m_s")) m.forward_m_s = p.number("forward_m_s", 0.05, 2.0);
+  if (p.has("reverse_m_s")) m.reverse_m_s = p.number("reverse_m_s", 0.05, 1.0);
+  if (p.has("slack_s")) m.slack_s = p.number("slack_s", 0.0, 5.0);
+}
+
+// navigation.separation: the safety filter's speed and separation limit near people
+// (safety.hpp).
+void read_separation(const Reader& p, nav::SafetyConfig& safety) {
+  p.allow_only({"enabled", "spread_m_s"});
+  const bool on = !p.has("enabled") || p.boolean("enabled");
+  if (p.has("spread_m_s")) safety.separation_spread_m_s = p.number("spread_m_s", 0.0, 2.0);
+  if (!on) safety.separation_spread_m_s = -1.0;
+}
+
+// navigation.crossings: the crossing gate and the lanes (nav/crossings.hpp).
+void read_crossings(const Reader& p, NavigationSection& n) {
+  p.allow_only({"enabled", "lookahead_m", "horizon_s", "spread_m_s", "margin_m", "go_share", "lane_decay_s",
+                "lane_band_weight"});
+  nav::CrossingConfig& x = n.crossings;
+  if (p.has("enabled")) x.enabled = p.boolean("enabled");
+  if (p.has("lookahead_m")) x.lookahead_m = p.number("lookahead_m", 0.5, 12.0);
+  if (p.has("horizon_s")) x.horizon_s = p.number("horizon_s", 0.5, 12.0);
+  if (p.has("spread_m_s")) x.spread_m_s = p.number("spread_m_s", 0.0, 2.0);
+  if (p.has("margin_m")) x.margin_m = p.number("margin_m", 0.0, 2.0);
+  if (p.has("go_share")) x.go_share = p.number("go_share", 0.1, 1.0);
+  if (p.has("lane_decay_s")) n.lanes.decay_s = p.number("lane_decay_s", 1.0, 3600.0);
+  if (p.has("lane_band_weight")) n.lanes.band_weight = p.number("lane_band_weight", 0.01, 0.99);
+}
+
+// navigation.local_costmap: a larger window with longer marking sees movers earlier (costing
+// memory and time).
+void read_local_costmap(const Reader& p, NavigationSection& n) {
+  p.allow_only({"size_m", "obstacle_range_m", "raytrace_range_m", "sonar_clearing"});
+  if (p.has("size_m")) n.local_costmap_size_m = p.number("size_m", 2.0, 20.0);
+  if (p.has("obstacle_range_m")) n.local_obstacles.obstacle_max_range_m = p.number("obstacle_range_m", 0.5, 10.0);
+  if (p.has("raytrace_range_m")) n.local_obstacles.raytrace_max_range_m = p.number("raytrace_range_m", 0.5, 10.0);
+  // The base's sonar echoes clear marks the laser cannot see any more (beside and behind).
+  if (p.has("sonar_clearing")) n.local_obstacles.sonar_clearing = p.boolean("sonar_clearing");
+  if (n.local_obstacles.raytrace_max_range_m < n.local_obstacles.obstacle_max_range_m)
+    p.fail("raytrace_range_m", "must be at least obstacle_range_m (a mark must be clearable)", YAML::Node());
+  if (n.local_obstacles.raytrace_max_range_m > n.local_costmap_size_m / 2.0)
+    p.fail("raytrace_range_m", "reaches beyond the window (size_m / 2)", YAML::Node());
+}
+
+// navigation.mover_prediction: the DWA's time-aware check against the tracked movers
+// (local_planner.hpp).
+void read_mover_prediction(const Reader& p, nav::DwaConfig& dwa) {
+  p.allow_only({"enabled", "horizon_s", "stay_horizon_s", "margin_m", "weight", "max_yield_s", "brake_delay_s",
+                "brake_decel_m_s2", "may_return"});
+  if (p.has("enabled")) dwa.mover_prediction = p.boolean("enabled");
+  if (p.has("horizon_s")) dwa.mover_horizon_s = p.number("horizon_s", 0.1, 10.0);
+  if (p.has("margin_m")) dwa.mover_margin_m = p.number("margin_m", 0.0, 2.0);
+  if (p.has("stay_horizon_s")) dwa.mover_stay_horizon_s = p.number("stay_horizon_s", 0.0, 60.0);
+  if (p.has("brake_delay_s")) dwa.mover_brake_delay_s = p.number("brake_delay_s", 0.0, 2.0);
+  if (p.has("brake_decel_m_s2")) dwa.mover_brake_decel_m_s2 = p.number("brake_decel_m_s2", 0.05, 5.0);
+  if (p.has("may_return")) dwa.mover_may_return = p.boolean("may_return");
+  if (p.has("weight")) dwa.mover_weight = p.number("weight", 0.0, 100.0);
+  if (p.has("max_yield_s")) dwa.max_yield_s = p.number("max_yield_s", 0.0, 600.0);
+}
+
 void read_navigation(const Reader& r, FirmwareConfig& c) {
   r.allow_only({"map", "waypoints", "initial_pose", "initial_std_m", "particles", "recovery", "max_v_m_s", "max_w_rad_s",
                 "goal_tolerance_m", "stop_distance_m", "approach", "goals", "start_delay_s", "goal_timeout_s",
@@ -222,177 +395,23 @@ void read_navigation(const Reader& r, FirmwareConfig& c) {
              YAML::Node());
     n.safe_curve_path = relative_to(r.file(), r.text("safe_curve"));
   }
-  if (r.has("people")) {
-    // Camera-laser fusion and the cages (docs/people.md).
-    const Reader p = r.child("people");
-    p.allow_only({"detector", "safety_radius_m", "dynamic_after_m", "expire_s", "match_window_s", "max_age_s",
-                  "min_confidence", "confirm_boxes", "laser_follow_s", "follow_gate_m", "max_body_radius_m",
-                  "robot_clearance_m", "online_sgp", "onboard", "keep_out", "hidden"});
-    n.people_enabled = true;
-    n.people_detector = p.text("detector");
-    if (p.has("safety_radius_m")) n.person_tracker.safety_radius_m = p.number("safety_radius_m", 0.0, 3.0);
-    if (p.has("dynamic_after_m")) n.person_tracker.dynamic_after_m = p.number("dynamic_after_m", 0.0, 20.0);
-    if (p.has("expire_s")) n.person_tracker.expire_s = n.cages.expire_s = p.number("expire_s", 0.1, 60.0);
-    if (p.has("match_window_s")) n.fusion.match_window_s = p.number("match_window_s", 0.0, 2.0);
-    if (p.has("max_age_s")) n.detection_max_age_s = p.number("max_age_s", 0.05, 10.0);
-    if (p.has("min_confidence")) n.fusion.min_confidence = static_cast<float>(p.number("min_confidence", 0.0, 1.0));
-    if (p.has("confirm_boxes"))
-      n.person_tracker.confirm_hits = static_cast<std::uint32_t>(p.integer("confirm_boxes", 1, 100));
-    if (p.has("laser_follow_s")) n.person_tracker.laser_follow_s = p.number("laser_follow_s", 0.0, 60.0);
-    if (p.has("follow_gate_m")) n.person_tracker.follow_gate_m = p.number("follow_gate_m", 0.05, 2.0);
-    if (p.has("max_body_radius_m")) n.fusion.max_body_radius_m = p.number("max_body_radius_m", 0.0, 1.0);
-    if (p.has("robot_clearance_m")) n.cages.robot_clearance_m = p.number("robot_clearance_m", 0.0, 2.0);
-    // The safety filter's cage check.
-    if (p.has("keep_out")) {
-      const Reader o = p.child("keep_out");
-      o.allow_only({"enabled", "margin_m", "movers"});
-      if (o.has("enabled") && !o.boolean("enabled")) n.safety.cage_margin_m = -1.0;
-      if (o.has("margin_m")) n.safety.cage_margin_m = o.number("margin_m", 0.0, 2.0);
-      if (o.has("movers")) n.cage_movers = o.boolean("movers");
-    }
-    if (p.has("hidden")) {
-      // People kept while out of sight until their place is seen empty.
-      const Reader o = p.child("hidden");
-      o.allow_only({"enabled", "max_s", "max_sigma_m", "cage_growth_m", "wander_m2_s"});
-      nav::PersonTrackerConfig& t = n.person_tracker;
-      if (o.has("enabled")) t.keep_hidden = o.boolean("enabled");
-      if (o.has("max_s")) t.hidden_max_s = o.number("max_s", 0.1, 600.0);
-      if (o.has("max_sigma_m")) t.hidden_max_sigma_m = o.number("max_sigma_m", 0.05, 10.0);
-      if (o.has("cage_growth_m")) t.hidden_cage_growth_m = o.number("cage_growth_m", 0.0, 2.0);
-      if (o.has("wander_m2_s")) t.hidden_wander_m2_s = o.number("wander_m2_s", 0.0, 10.0);
-    }
-    if (p.has("onboard")) {
-      // The on-board detector's search (detector: onboard).
-      const Reader o = p.child("onboard");
-      o.allow_only({"rate_hz", "scale", "threshold", "min_height_px"});
-      if (o.has("rate_hz")) n.onboard_rate_hz = o.number("rate_hz", 0.05, 30.0);
-      if (o.has("scale")) n.onboard_hog.scale = o.number("scale", 0.1, 2.0);
-      if (o.has("threshold")) n.onboard_hog.hit_threshold = o.number("threshold", -5.0, 10.0);
-      if (o.has("min_height_px")) n.onboard_hog.min_height_px = o.number("min_height_px", 0.0, 4096.0);
-    }
-    if (p.has("online_sgp")) {
-      // Re-running the supervisory planner when a person pushed the robot off its safe path.
-      const Reader o = p.child("online_sgp");
-      o.allow_only({"enabled", "trigger_distance_m", "deviation_m", "delay_s", "cooldown_s", "person_timeout_s"});
-      if (o.has("enabled")) n.osgp_enabled = o.boolean("enabled");
-      if (o.has("trigger_distance_m")) n.osgp.trigger_distance_m = o.number("trigger_distance_m", 0.1, 20.0);
-      if (o.has("deviation_m")) n.osgp.deviation_m = o.number("deviation_m", 0.05, 10.0);
-      if (o.has("delay_s")) n.osgp.delay_s = o.number("delay_s", 0.0, 60.0);
-      if (o.has("cooldown_s")) n.osgp.cooldown_s = o.number("cooldown_s", 0.0, 600.0);
-      if (o.has("person_timeout_s")) n.osgp.person_timeout_s = o.number("person_timeout_s", 0.0, 60.0);
-    }
-  }
-  if (r.has("sgp")) {
-    // The supervisory planner's integration (sgp.hpp); used with safe_curve.
-    const Reader p = r.child("sgp");
-    p.allow_only({"step_m", "max_steps", "waypoint_spacing_m", "barrier_k", "zeta", "on_curve_m", "max_waypoints"});
-    if (p.has("step_m")) n.sgp.step_m = p.number("step_m", 0.001, 0.5);
-    if (p.has("max_steps")) n.sgp.max_steps = static_cast<int>(p.integer("max_steps", 10, 1'000'000));
-    if (p.has("waypoint_spacing_m")) n.sgp.waypoint_spacing_m = p.number("waypoint_spacing_m", 0.02, 5.0);
-    if (p.has("barrier_k")) n.sgp.barrier_k = p.number("barrier_k", 0.0, 100.0);
-    if (p.has("zeta")) n.sgp.zeta = p.number("zeta", 0.01, 100.0);
-    if (p.has("on_curve_m")) n.sgp.on_curve_m = p.number("on_curve_m", 0.005, 1.0);
-    if (p.has("max_waypoints")) n.sgp.max_waypoints = static_cast<std::size_t>(p.integer("max_waypoints", 2, 65'536));
-    if (n.sgp.waypoint_spacing_m < n.sgp.step_m) p.fail("waypoint_spacing_m", "is shorter than step_m", YAML::Node());
-  }
+  if (r.has("people")) read_people(r.child("people"), n);
+  if (r.has("sgp")) read_sgp(r.child("sgp"), n.sgp);
   if (r.has("initial_pose")) n.mcl.initial_pose = read_pose(r.child("initial_pose"));
   if (r.has("initial_std_m")) n.mcl.initial_std_xy_m = r.number("initial_std_m", 0.0, 10.0);
-  if (r.has("particles")) {
-    const Reader p = r.child("particles");
-    p.allow_only({"min", "max"});
-    n.mcl.min_particles = static_cast<std::size_t>(p.integer("min", 10, 100'000));
-    n.mcl.max_particles = static_cast<std::size_t>(p.integer("max", 10, 100'000));
-    if (n.mcl.max_particles < n.mcl.min_particles) p.fail("max", "must be at least min", YAML::Node());
-  }
-  if (r.has("recovery")) {
-    // Random-particle injection (AMCL's recovery_alpha_slow/fast); 0 for either turns it off.
-    const Reader p = r.child("recovery");
-    p.allow_only({"alpha_slow", "alpha_fast", "lost_ratio", "headings"});
-    if (p.has("alpha_slow")) n.mcl.recovery_alpha_slow = p.number("alpha_slow", 0.0, 1.0);
-    if (p.has("alpha_fast")) n.mcl.recovery_alpha_fast = p.number("alpha_fast", 0.0, 1.0);
-    if (p.has("lost_ratio")) n.mcl.lost_likelihood_ratio = p.number("lost_ratio", 0.0, 0.99);
-    if (p.has("headings")) n.mcl.injection_headings = static_cast<std::size_t>(p.integer("headings", 1, 360));
-    if (n.mcl.recovery_alpha_slow > 0.0 && n.mcl.recovery_alpha_fast > 0.0 &&
-        !(n.mcl.recovery_alpha_slow < n.mcl.recovery_alpha_fast))
-      p.fail("alpha_fast", "must be larger than alpha_slow (or 0 for either to turn recovery off)", YAML::Node());
-  }
+  if (r.has("particles")) read_particles(r.child("particles"), n.mcl);
+  if (r.has("recovery")) read_recovery(r.child("recovery"), n.mcl);
   if (r.has("max_v_m_s")) n.dwa.max_v_m_s = r.number("max_v_m_s", 0.05, 2.0);
   if (r.has("max_w_rad_s")) n.dwa.max_w_rad_s = r.number("max_w_rad_s", 0.1, 5.0);
   if (r.has("goal_tolerance_m")) n.dwa.goal_tolerance_m = r.number("goal_tolerance_m", 0.02, 2.0);
   if (r.has("stop_distance_m")) n.safety.stop_distance_m = r.number("stop_distance_m", 0.05, 3.0);
-  if (r.has("approach")) {
-    // The safety filter's check against tracked movers coming from the side (safety.hpp).
-    const Reader p = r.child("approach");
-    p.allow_only({"horizon_s", "margin_m", "min_speed_m_s", "candidates"});
-    if (p.has("horizon_s")) n.safety.approach_horizon_s = p.number("horizon_s", 0.0, 5.0);
-    if (p.has("margin_m")) n.safety.approach_margin_m = p.number("margin_m", 0.0, 1.0);
-    if (p.has("min_speed_m_s")) n.safety.approach_min_speed_m_s = p.number("min_speed_m_s", 0.0, 3.0);
-    if (p.has("candidates")) n.safety.approach_candidates = p.boolean("candidates");
-  }
-  if (r.has("make_way")) {
-    // Moving out of a walker's way when the robot would stand in it (crossings.hpp).
-    const Reader p = r.child("make_way");
-    p.allow_only({"enabled", "horizon_s", "forward_m_s", "reverse_m_s", "slack_s"});
-    nav::MakeWayConfig& m = n.make_way;
-    if (p.has("enabled")) m.enabled = p.boolean("enabled");
-    if (p.has("horizon_s")) m.horizon_s = p.number("horizon_s", 0.5, 20.0);
-    if (p.has("forward_m_s")) m.forward_m_s = p.number("forward_m_s", 0.05, 2.0);
-    if (p.has("reverse_m_s")) m.reverse_m_s = p.number("reverse_m_s", 0.05, 1.0);
-    if (p.has("slack_s")) m.slack_s = p.number("slack_s", 0.0, 5.0);
-  }
-  if (r.has("separation")) {
-    // The safety filter's speed and separation limit near people (safety.hpp).
-    const Reader p = r.child("separation");
-    p.allow_only({"enabled", "spread_m_s"});
-    const bool on = !p.has("enabled") || p.boolean("enabled");
-    if (p.has("spread_m_s")) n.safety.separation_spread_m_s = p.number("spread_m_s", 0.0, 2.0);
-    if (!on) n.safety.separation_spread_m_s = -1.0;
-  }
+  if (r.has("approach")) read_approach(r.child("approach"), n.safety);
+  if (r.has("make_way")) read_make_way(r.child("make_way"), n.make_way);
+  if (r.has("separation")) read_separation(r.child("separation"), n.safety);
   if (r.has("dynamic_obstacles")) read_dynamic_obstacles(r.child("dynamic_obstacles"), n.dynamic_obstacles);
-  if (r.has("crossings")) {
-    // The crossing gate and the lanes (nav/crossings.hpp).
-    const Reader p = r.child("crossings");
-    p.allow_only({"enabled", "lookahead_m", "horizon_s", "spread_m_s", "margin_m", "go_share", "lane_decay_s",
-                  "lane_band_weight"});
-    nav::CrossingConfig& x = n.crossings;
-    if (p.has("enabled")) x.enabled = p.boolean("enabled");
-    if (p.has("lookahead_m")) x.lookahead_m = p.number("lookahead_m", 0.5, 12.0);
-    if (p.has("horizon_s")) x.horizon_s = p.number("horizon_s", 0.5, 12.0);
-    if (p.has("spread_m_s")) x.spread_m_s = p.number("spread_m_s", 0.0, 2.0);
-    if (p.has("margin_m")) x.margin_m = p.number("margin_m", 0.0, 2.0);
-    if (p.has("go_share")) x.go_share = p.number("go_share", 0.1, 1.0);
-    if (p.has("lane_decay_s")) n.lanes.decay_s = p.number("lane_decay_s", 1.0, 3600.0);
-    if (p.has("lane_band_weight")) n.lanes.band_weight = p.number("lane_band_weight", 0.01, 0.99);
-  }
-  if (r.has("local_costmap")) {
-    // A larger window with longer marking sees movers earlier (costing memory and time).
-    const Reader p = r.child("local_costmap");
-    p.allow_only({"size_m", "obstacle_range_m", "raytrace_range_m", "sonar_clearing"});
-    if (p.has("size_m")) n.local_costmap_size_m = p.number("size_m", 2.0, 20.0);
-    if (p.has("obstacle_range_m")) n.local_obstacles.obstacle_max_range_m = p.number("obstacle_range_m", 0.5, 10.0);
-    if (p.has("raytrace_range_m")) n.local_obstacles.raytrace_max_range_m = p.number("raytrace_range_m", 0.5, 10.0);
-    // The base's sonar echoes clear marks the laser cannot see any more (beside and behind).
-    if (p.has("sonar_clearing")) n.local_obstacles.sonar_clearing = p.boolean("sonar_clearing");
-    if (n.local_obstacles.raytrace_max_range_m < n.local_obstacles.obstacle_max_range_m)
-      p.fail("raytrace_range_m", "must be at least obstacle_range_m (a mark must be clearable)", YAML::Node());
-    if (n.local_obstacles.raytrace_max_range_m > n.local_costmap_size_m / 2.0)
-      p.fail("raytrace_range_m", "reaches beyond the window (size_m / 2)", YAML::Node());
-  }
-  if (r.has("mover_prediction")) {
-    // The DWA's time-aware check against the tracked movers (local_planner.hpp).
-    const Reader p = r.child("mover_prediction");
-    p.allow_only({"enabled", "horizon_s", "stay_horizon_s", "margin_m", "weight", "max_yield_s", "brake_delay_s",
-                  "brake_decel_m_s2", "may_return"});
-    if (p.has("enabled")) n.dwa.mover_prediction = p.boolean("enabled");
-    if (p.has("horizon_s")) n.dwa.mover_horizon_s = p.number("horizon_s", 0.1, 10.0);
-    if (p.has("margin_m")) n.dwa.mover_margin_m = p.number("margin_m", 0.0, 2.0);
-    if (p.has("stay_horizon_s")) n.dwa.mover_stay_horizon_s = p.number("stay_horizon_s", 0.0, 60.0);
-    if (p.has("brake_delay_s")) n.dwa.mover_brake_delay_s = p.number("brake_delay_s", 0.0, 2.0);
-    if (p.has("brake_decel_m_s2")) n.dwa.mover_brake_decel_m_s2 = p.number("brake_decel_m_s2", 0.05, 5.0);
-    if (p.has("may_return")) n.dwa.mover_may_return = p.boolean("may_return");
-    if (p.has("weight")) n.dwa.mover_weight = p.number("weight", 0.0, 100.0);
-    if (p.has("max_yield_s")) n.dwa.max_yield_s = p.number("max_yield_s", 0.0, 600.0);
-  }
+  if (r.has("crossings")) read_crossings(r.child("crossings"), n);
+  if (r.has("local_costmap")) read_local_costmap(r.child("local_costmap"), n);
+  if (r.has("mover_prediction")) read_mover_prediction(r.child("mover_prediction"), n.dwa);
   // Optional here: with a `fleet` section the goals come from the fleet's orders instead.
   if (r.has("goals")) {
     const std::vector<Reader> goals = r.sequence("goals");

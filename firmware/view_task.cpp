@@ -266,238 +266,272 @@ bool ViewTask::encode(ViewChannel channel, hal::Nanos now) {
                                 c.resolution_m(), {c.origin_x_m(), c.origin_y_m()}, "cost"};
       return write(ch, stamp, [&](json::Writer& w) { view::write_grid(w, stamp, "map", grid); });
     }
-    case ViewChannel::local_costmap: {
-      if (!sources_.local_costmap->read(s.local_costmap)) return false;
-      const msg::CostmapSnapshot& c = s.local_costmap.value;
-      const view::GridView grid{std::span<const std::uint8_t>(c.cells.data(), static_cast<std::size_t>(c.columns) * c.rows),
-                                c.columns, c.rows, c.resolution_m, {mm(c.origin_x_m), mm(c.origin_y_m)}, "cost"};
-      const hal::Nanos at = s.local_costmap.stamp_ns + s.unix_offset_ns;
-      return write(ch, at, [&](json::Writer& w) { view::write_grid(w, at, "map", grid); });
-    }
-    case ViewChannel::scan: {
-      if (!sources_.scan->read(s.scan)) return false;
-      const msg::ScanMessage& scan = s.scan.value;
-      const hal::Nanos at = scan.stamp_ns + s.unix_offset_ns;
-      return write(ch, at, [&](json::Writer& w) {
-        view::write_laser_scan(w, at, "laser", scan.view().ranges_m, scan.angle_min_rad, scan.increment_rad,
-                               scan.range_min_m, scan.range_max_m);
-      });
-    }
-    case ViewChannel::tf: {
-      tasks::Sample<msg::PoseEstimate> pose;
-      tasks::Sample<msg::Odometry> odom;
-      if (!sources_.pose->read(pose) || !pose.value.valid || !sources_.odometry->read(odom)) return false;
-      // map -> odom so that map -> odom -> base_link is the estimate at the odometry's time.
-      const msg::Pose2D base_in_odom{odom.value.x_m, odom.value.y_m, odom.value.theta_rad};
-      const msg::Pose2D& base_in_map = pose.value.pose;
-      const double dtheta = nav::normalize_angle(base_in_map.theta_rad - base_in_odom.theta_rad);
-      const double c = std::cos(dtheta), sn = std::sin(dtheta);
-      const msg::Pose2D odom_in_map{base_in_map.x_m - (c * base_in_odom.x_m - sn * base_in_odom.y_m),
-                                    base_in_map.y_m - (sn * base_in_odom.x_m + c * base_in_odom.y_m), dtheta};
-      const msg::SensorMount& l = sources_.laser_mount;
-      return write(ch, stamp, [&](json::Writer& w) {
-               view::write_frame_transform(w, stamp, "map", "odom", pose2(odom_in_map.x_m, odom_in_map.y_m, odom_in_map.theta_rad));
-             }) &&
-             write(ch, stamp, [&](json::Writer& w) {
-               view::write_frame_transform(w, stamp, "odom", "base_link", pose2(base_in_odom.x_m, base_in_odom.y_m, base_in_odom.theta_rad));
-             }) &&
-             write(ch, stamp, [&](json::Writer& w) {
-               view::write_frame_transform(w, stamp, "base_link", "laser", {l.x_m, l.y_m, l.theta_rad});
-             });
-    }
-    case ViewChannel::plan: {
-      if (!sources_.path->read(s.path)) return false;
-      const msg::PathMessage& path = s.path.value;
-      const std::size_t count = std::min<std::size_t>(path.count, msg::PathMessage::kMaxPoints);
-      const std::size_t step = count > kMaxPlanPoses ? (count + kMaxPlanPoses - 2) / (kMaxPlanPoses - 1) : 1;
-      std::size_t n = 0;
-      for (std::size_t i = 0; i < count && n < kMaxPlanPoses; i += step) {
-        const std::size_t j = std::min(i + step, count - 1);
-        const double heading = std::atan2(path.points[j].y_m - path.points[i].y_m, path.points[j].x_m - path.points[i].x_m);
-        s.plan[n++] = pose2(path.points[i].x_m, path.points[i].y_m, heading);
-      }
-      if (count > 0 && n > 0 && (count - 1) % step != 0) {
-        if (n == kMaxPlanPoses) --n;
-        const double heading = s.plan[n > 0 ? n - 1 : 0].theta_rad;
-        s.plan[n] = pose2(path.points[count - 1].x_m, path.points[count - 1].y_m, heading);
-        ++n;
-      }
-      const hal::Nanos at = s.path.stamp_ns + s.unix_offset_ns;
-      return write(ch, at, [&](json::Writer& w) { view::write_poses_in_frame(w, at, "map", std::span(s.plan).first(n)); });
-    }
-    case ViewChannel::safe_path: {
-      const std::span<const msg::Point2D> points = sources_.planner->safe_path();
-      const std::size_t step = points.size() > kMaxSafePathPoints ? (points.size() + kMaxSafePathPoints - 1) / kMaxSafePathPoints : 1;
-      std::size_t n = 0;
-      for (std::size_t i = 0; i < points.size() && n < kMaxSafePathPoints; i += step)
-        s.safe_path[n++] = {mm(points[i].x_m), mm(points[i].y_m)};
-      const view::Line line{view::LineType::strip, std::span(s.safe_path).first(n), 0.04, {0.1, 0.6, 0.2, 0.9}};
-      const view::Line curve{view::LineType::list, s.curve, 0.02, {0.2, 0.4, 0.9, 0.8}};
-      const view::Entity entities[] = {{"waypoints", "map", 0, std::span(&line, n > 1 ? 1 : 0), {}, {}, {}},
-                                       {"safe_curve", "map", 0, std::span(&curve, 1), {}, {}, {}}};
-      const std::size_t count = s.curve.empty() ? 1 : 2;
-      return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(entities).first(count)); });
-    }
-    case ViewChannel::driven_path: {
-      for (std::size_t i = 0; i < s.driven_count; ++i)
-        s.driven_ordered[i] = s.driven[(s.driven_head + kDrivenPoses - s.driven_count + i) % kDrivenPoses];
-      return write(ch, stamp, [&](json::Writer& w) {
-        view::write_poses_in_frame(w, stamp, "map", std::span(s.driven_ordered).first(s.driven_count));
-      });
-    }
-    case ViewChannel::dwa: {
-      tasks::Sample<msg::PoseEstimate> pose;
-      tasks::Sample<msg::VelocityCommand> request;
-      if (!sources_.pose->read(pose) || !pose.value.valid || !sources_.request->read(request)) return false;
-      // The chosen rollout is the arc of the requested (v, w) held for the DWA's simulated time.
-      msg::Pose2D p = pose.value.pose;
-      const double dt = sources_.rollout_s / static_cast<double>(kRolloutPoses - 1);
-      for (std::size_t i = 0; i < kRolloutPoses; ++i) {
-        s.rollout[i] = pose2(p.x_m, p.y_m, p.theta_rad);
-        nav::advance_arc(p, request.value.v_m_s, request.value.w_rad_s, dt);
-      }
-      const hal::Nanos at = request.stamp_ns + s.unix_offset_ns;
-      return write(ch, at, [&](json::Writer& w) { view::write_poses_in_frame(w, at, "map", s.rollout); });
-    }
-    case ViewChannel::people: {
-      std::size_t e = 0, body = 0, arrow = 0;
-      if (sources_.people != nullptr && sources_.people->read(s.people)) {
-        const msg::People& people = s.people.value;
-        for (std::size_t i = 0; i < std::min<std::size_t>(people.count, msg::People::kMax); ++i) {
-          const msg::TrackedPerson& p = people.items[i];
-          std::array<view::Point2, kCagePoints + 1>& cage = s.cages[i];
-          for (std::size_t k = 0; k < kCagePoints; ++k) {
-            const double a = 2.0 * M_PI * static_cast<double>(k) / kCagePoints;
-            cage[k] = {mm(p.x_m + p.cage_radius_m * std::cos(a)), mm(p.y_m + p.cage_radius_m * std::sin(a))};
-          }
-          // A hidden person (kept out of the sensors' view) is a guess: greyed, and labelled so.
-          s.cage_lines[i] = {view::LineType::loop, std::span(cage).first(kCagePoints), 0.03,
-                             p.hidden ? view::Color{0.5, 0.5, 0.5, 0.9} : view::Color{0.9, 0.2, 0.1, 0.9}};
-          s.bodies[body] = {{mm(p.x_m), mm(p.y_m)}, std::max(0.2, p.width_m), 1.7,
-                            p.hidden ? view::Color{0.6, 0.6, 0.6, 0.4} : view::Color{0.95, 0.6, 0.1, 0.8}};
-          const double speed = std::hypot(p.vx_m_s, p.vy_m_s);
-          const bool moving = speed > 0.05;
-          if (moving) s.arrows[arrow] = {{mm(p.x_m), mm(p.y_m)}, rad(std::atan2(p.vy_m_s, p.vx_m_s)), mm(std::max(0.1, speed)), {0.9, 0.2, 0.1, 1.0}};
-          std::snprintf(s.ids[e].data(), s.ids[e].size(), "person/%u", p.id);
-          if (p.hidden)
-            std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u hidden", p.id);
-          else
-            std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u", p.id);
-          s.labels[i] = {{mm(p.x_m), mm(p.y_m + p.cage_radius_m)}, s.label_text[i].data(), 12.0, {0.1, 0.1, 0.1, 1.0}};
-          s.entities[e] = {s.ids[e].data(), "map", 0, std::span(&s.cage_lines[i], 1), std::span(&s.bodies[body], 1),
-                           std::span(&s.arrows[arrow], moving ? 1 : 0), std::span(&s.labels[i], 1)};
-          ++e;
-          ++body;
-          arrow += moving ? 1 : 0;
-        }
-      }
-      if (sources_.movers != nullptr && sources_.movers->read(s.movers)) {
-        const msg::MovingObstacles& movers = s.movers.value;
-        for (std::size_t i = 0; i < std::min<std::size_t>(movers.count, msg::MovingObstacles::kMax) && e < kMaxSceneEntities; ++i) {
-          const msg::MovingObstacle& m = movers.items[i];
-          s.bodies[body] = {{mm(m.x_m), mm(m.y_m)}, std::max(0.1, 2.0 * m.radius_m), 0.5, {0.5, 0.3, 0.8, 0.7}};
-          const double speed = std::hypot(m.vx_m_s, m.vy_m_s);
-          const bool moving = speed > 0.05;
-          if (moving) s.arrows[arrow] = {{mm(m.x_m), mm(m.y_m)}, rad(std::atan2(m.vy_m_s, m.vx_m_s)), mm(std::max(0.1, speed)), {0.5, 0.3, 0.8, 1.0}};
-          std::snprintf(s.ids[e].data(), s.ids[e].size(), "mover/%u", m.id);
-          s.entities[e] = {s.ids[e].data(), "map", 0, {}, std::span(&s.bodies[body], 1),
-                           std::span(&s.arrows[arrow], moving ? 1 : 0), {}};
-          ++e;
-          ++body;
-          arrow += moving ? 1 : 0;
-        }
-      }
-      return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(s.entities).first(e)); });
-    }
-    case ViewChannel::camera: {
-      if (frames_ == nullptr) return false;
-      camera::FramePool& frames = *frames_;
-      if (frames.latest_sequence() == s.camera_sequence) return false;
-      camera::FrameHandle frame = frames.acquire_latest();
-      if (!frame) return false;
-      const camera::FrameRef& f = frame.ref();
-      s.camera_sequence = f.sequence;
-      const view::Image image{f.data, f.width_px, f.height_px, f.stride_bytes,
-                              f.format == camera::PixelFormat::bgr8 ? view::PixelLayout::bgr8 : view::PixelLayout::gray8};
-      auto size = s.encoder.encode(image, s.jpeg);
-      frame.release();
-      if (!size) return false;
-      const hal::Nanos at = f.decoded_ns + s.unix_offset_ns;
-      return write(ch, at, [&](json::Writer& w) {
-        view::write_compressed_image(w, at, "camera", std::span(s.jpeg).first(*size), "jpeg");
-      });
-    }
-    case ViewChannel::stats: {
-      const tasks::Scheduler& scheduler = sources_.scheduler;
-      const std::size_t n = std::min(scheduler.task_count(), s.stats.size());
-      for (std::size_t i = 0; i < n; ++i) s.stats[i] = scheduler.stats(i);
-      const view::ServerCounters counters = server_->counters();
-      return write(ch, stamp, [&](json::Writer& w) {
-        w.begin_object();
-        view::write_time(w, "timestamp", stamp);
-        w.member_number("uptime_s", std::round(hal::to_seconds(now - start_ns_) * 10.0) / 10.0);
-        w.key("tasks").begin_array();
-        for (std::size_t i = 0; i < n; ++i) {
-          const tasks::TaskStats& t = s.stats[i];
-          w.begin_object().member("name", t.name).member("thread", t.thread);
-          w.member_int64("period_us", t.period_us).member_int64("budget_us", t.budget_us);
-          w.member_uint64("runs", t.runs).member_uint64("overruns", t.overruns);
-          w.member_uint64("slips", t.slips).member_uint64("skips", t.skips);
-          w.member_number("exec_mean_us", std::round(static_cast<double>(t.exec_mean_ns) / 100.0) / 10.0);
-          w.member_number("exec_max_us", std::round(static_cast<double>(t.exec_max_ns) / 100.0) / 10.0);
-          w.member_number("cpu_mean_us", std::round(static_cast<double>(t.cpu_mean_ns) / 100.0) / 10.0);
-          w.member_number("cpu_max_us", std::round(static_cast<double>(t.cpu_max_ns) / 100.0) / 10.0);
-          w.member_number("jitter_p99_us", std::round(static_cast<double>(t.jitter_p99_ns) / 100.0) / 10.0);
-          w.end_object();
-        }
-        w.end_array();
-        w.key("view").begin_object().member_uint64("clients", counters.clients).member_uint64("sent", counters.sent);
-        w.member_uint64("dropped", counters.dropped).member_uint64("rejected", counters.rejected).end_object();
-        w.end_object();
-      });
-    }
-    case ViewChannel::mission: {
-      tasks::Sample<msg::PoseEstimate> pose;
-      tasks::Sample<msg::SafetyOutput> safety;
-      tasks::Sample<msg::ControllerStatus> controller;
-      const bool have_pose = sources_.pose != nullptr && sources_.pose->read(pose);
-      const bool have_safety = sources_.safety != nullptr && sources_.safety->read(safety);
-      const bool have_controller = sources_.controller != nullptr && sources_.controller->read(controller);
-      const MissionTask* mission = sources_.mission;
-      return write(ch, stamp, [&](json::Writer& w) {
-        w.begin_object();
-        view::write_time(w, "timestamp", stamp);
-        w.member("state", mission != nullptr ? to_string(mission->report().state) : "fleet");
-        w.member_uint32("goals_reached", mission != nullptr ? static_cast<std::uint32_t>(mission->report().goals_reached) : 0);
-        w.member_uint32("goals_total", static_cast<std::uint32_t>(sources_.goal_count));
-        w.key("goal");
-        if (mission != nullptr && mission->current_goal() != nullptr)
-          w.begin_object().member_number("x", mm(mission->current_goal()->x_m)).member_number("y", mm(mission->current_goal()->y_m)).end_object();
-        else
-          w.null();
-        const msg::Pose2D p = have_pose ? pose.value.pose : msg::Pose2D{};
-        w.key("pose").begin_object().member_number("x", mm(p.x_m)).member_number("y", mm(p.y_m));
-        w.member_number("theta", rad(p.theta_rad)).end_object();
-        w.member_bool("localized", have_pose && pose.value.valid).member_bool("lost", have_pose && pose.value.lost);
-        w.member_number("v", have_safety ? mm(safety.value.command.v_m_s) : 0.0);
-        w.member_number("w", have_safety ? rad(safety.value.command.w_rad_s) : 0.0);
-        w.member("controller", have_controller ? (controller.value.formation ? "formation" : msg::to_string(controller.value.status)) : "none");
-        w.key("safety").begin_array();
-        if (have_safety)
-          for (std::uint32_t bit = 1; bit != 0 && bit <= safety.value.reasons; bit <<= 1)
-            if (safety.value.reasons & bit) w.string(safety_reason(bit));
-        w.end_array();
-        w.key("separation");
-        if (have_safety && std::isfinite(safety.value.separation_cap_m_s))
-          w.begin_object().member_number("cap", mm(safety.value.separation_cap_m_s)).member_number("gap", mm(safety.value.separation_gap_m))
-              .member_number("approach", mm(safety.value.separation_approach_m_s)).end_object();
-        else
-          w.null();
-        w.end_object();
-      });
-    }
+    case ViewChannel::local_costmap: return encode_local_costmap(ch);
+    case ViewChannel::scan: return encode_scan(ch);
+    case ViewChannel::tf: return encode_tf(ch, stamp);
+    case ViewChannel::plan: return encode_plan(ch);
+    case ViewChannel::safe_path: return encode_safe_path(ch, stamp);
+    case ViewChannel::driven_path: return encode_driven_path(ch, stamp);
+    case ViewChannel::dwa: return encode_dwa(ch);
+    case ViewChannel::people: return encode_people(ch, stamp);
+    case ViewChannel::camera: return encode_camera(ch);
+    case ViewChannel::stats: return encode_stats(ch, stamp, now);
+    case ViewChannel::mission: return encode_mission(ch, stamp);
   }
   return false;
+}
+
+bool ViewTask::encode_local_costmap(std::size_t ch) {
+  Scratch& s = *scratch_;
+  if (!sources_.local_costmap->read(s.local_costmap)) return false;
+  const msg::CostmapSnapshot& c = s.local_costmap.value;
+  const view::GridView grid{std::span<const std::uint8_t>(c.cells.data(), static_cast<std::size_t>(c.columns) * c.rows),
+                            c.columns, c.rows, c.resolution_m, {mm(c.origin_x_m), mm(c.origin_y_m)}, "cost"};
+  const hal::Nanos at = s.local_costmap.stamp_ns + s.unix_offset_ns;
+  return write(ch, at, [&](json::Writer& w) { view::write_grid(w, at, "map", grid); });
+}
+
+bool ViewTask::encode_scan(std::size_t ch) {
+  Scratch& s = *scratch_;
+  if (!sources_.scan->read(s.scan)) return false;
+  const msg::ScanMessage& scan = s.scan.value;
+  const hal::Nanos at = scan.stamp_ns + s.unix_offset_ns;
+  return write(ch, at, [&](json::Writer& w) {
+    view::write_laser_scan(w, at, "laser", scan.view().ranges_m, scan.angle_min_rad, scan.increment_rad,
+                           scan.range_min_m, scan.range_max_m);
+  });
+}
+
+bool ViewTask::encode_tf(std::size_t ch, hal::Nanos stamp) {
+  tasks::Sample<msg::PoseEstimate> pose;
+  tasks::Sample<msg::Odometry> odom;
+  if (!sources_.pose->read(pose) || !pose.value.valid || !sources_.odometry->read(odom)) return false;
+  // map -> odom so that map -> odom -> base_link is the estimate at the odometry's time.
+  const msg::Pose2D base_in_odom{odom.value.x_m, odom.value.y_m, odom.value.theta_rad};
+  const msg::Pose2D& base_in_map = pose.value.pose;
+  const double dtheta = nav::normalize_angle(base_in_map.theta_rad - base_in_odom.theta_rad);
+  const double c = std::cos(dtheta), sn = std::sin(dtheta);
+  const msg::Pose2D odom_in_map{base_in_map.x_m - (c * base_in_odom.x_m - sn * base_in_odom.y_m),
+                                base_in_map.y_m - (sn * base_in_odom.x_m + c * base_in_odom.y_m), dtheta};
+  const msg::SensorMount& l = sources_.laser_mount;
+  return write(ch, stamp, [&](json::Writer& w) {
+           view::write_frame_transform(w, stamp, "map", "odom", pose2(odom_in_map.x_m, odom_in_map.y_m, odom_in_map.theta_rad));
+         }) &&
+         write(ch, stamp, [&](json::Writer& w) {
+           view::write_frame_transform(w, stamp, "odom", "base_link", pose2(base_in_odom.x_m, base_in_odom.y_m, base_in_odom.theta_rad));
+         }) &&
+         write(ch, stamp, [&](json::Writer& w) {
+           view::write_frame_transform(w, stamp, "base_link", "laser", {l.x_m, l.y_m, l.theta_rad});
+         });
+}
+
+// The plan thinned to at most kMaxPlanPoses poses, each heading for the next; its end kept.
+bool ViewTask::encode_plan(std::size_t ch) {
+  Scratch& s = *scratch_;
+  if (!sources_.path->read(s.path)) return false;
+  const msg::PathMessage& path = s.path.value;
+  const std::size_t count = std::min<std::size_t>(path.count, msg::PathMessage::kMaxPoints);
+  const std::size_t step = count > kMaxPlanPoses ? (count + kMaxPlanPoses - 2) / (kMaxPlanPoses - 1) : 1;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count && n < kMaxPlanPoses; i += step) {
+    const std::size_t j = std::min(i + step, count - 1);
+    const double heading = std::atan2(path.points[j].y_m - path.points[i].y_m, path.points[j].x_m - path.points[i].x_m);
+    s.plan[n++] = pose2(path.points[i].x_m, path.points[i].y_m, heading);
+  }
+  if (count > 0 && n > 0 && (count - 1) % step != 0) {
+    if (n == kMaxPlanPoses) --n;
+    const double heading = s.plan[n > 0 ? n - 1 : 0].theta_rad;
+    s.plan[n] = pose2(path.points[count - 1].x_m, path.points[count - 1].y_m, heading);
+    ++n;
+  }
+  const hal::Nanos at = s.path.stamp_ns + s.unix_offset_ns;
+  return write(ch, at, [&](json::Writer& w) { view::write_poses_in_frame(w, at, "map", std::span(s.plan).first(n)); });
+}
+
+bool ViewTask::encode_safe_path(std::size_t ch, hal::Nanos stamp) {
+  Scratch& s = *scratch_;
+  const std::span<const msg::Point2D> points = sources_.planner->safe_path();
+  const std::size_t step = points.size() > kMaxSafePathPoints ? (points.size() + kMaxSafePathPoints - 1) / kMaxSafePathPoints : 1;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < points.size() && n < kMaxSafePathPoints; i += step)
+    s.safe_path[n++] = {mm(points[i].x_m), mm(points[i].y_m)};
+  const view::Line line{view::LineType::strip, std::span(s.safe_path).first(n), 0.04, {0.1, 0.6, 0.2, 0.9}};
+  const view::Line curve{view::LineType::list, s.curve, 0.02, {0.2, 0.4, 0.9, 0.8}};
+  const view::Entity entities[] = {{"waypoints", "map", 0, std::span(&line, n > 1 ? 1 : 0), {}, {}, {}},
+                                   {"safe_curve", "map", 0, std::span(&curve, 1), {}, {}, {}}};
+  const std::size_t count = s.curve.empty() ? 1 : 2;
+  return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(entities).first(count)); });
+}
+
+bool ViewTask::encode_driven_path(std::size_t ch, hal::Nanos stamp) {
+  Scratch& s = *scratch_;
+  for (std::size_t i = 0; i < s.driven_count; ++i)
+    s.driven_ordered[i] = s.driven[(s.driven_head + kDrivenPoses - s.driven_count + i) % kDrivenPoses];
+  return write(ch, stamp, [&](json::Writer& w) {
+    view::write_poses_in_frame(w, stamp, "map", std::span(s.driven_ordered).first(s.driven_count));
+  });
+}
+
+bool ViewTask::encode_dwa(std::size_t ch) {
+  Scratch& s = *scratch_;
+  tasks::Sample<msg::PoseEstimate> pose;
+  tasks::Sample<msg::VelocityCommand> request;
+  if (!sources_.pose->read(pose) || !pose.value.valid || !sources_.request->read(request)) return false;
+  // The chosen rollout is the arc of the requested (v, w) held for the DWA's simulated time.
+  msg::Pose2D p = pose.value.pose;
+  const double dt = sources_.rollout_s / static_cast<double>(kRolloutPoses - 1);
+  for (std::size_t i = 0; i < kRolloutPoses; ++i) {
+    s.rollout[i] = pose2(p.x_m, p.y_m, p.theta_rad);
+    nav::advance_arc(p, request.value.v_m_s, request.value.w_rad_s, dt);
+  }
+  const hal::Nanos at = request.stamp_ns + s.unix_offset_ns;
+  return write(ch, at, [&](json::Writer& w) { view::write_poses_in_frame(w, at, "map", s.rollout); });
+}
+
+// The people: each one's cage, body, heading and label; then the tracked movers.
+bool ViewTask::encode_people(std::size_t ch, hal::Nanos stamp) {
+  Scratch& s = *scratch_;
+  std::size_t e = 0, body = 0, arrow = 0;
+  if (sources_.people != nullptr && sources_.people->read(s.people)) {
+    const msg::People& people = s.people.value;
+    for (std::size_t i = 0; i < std::min<std::size_t>(people.count, msg::People::kMax); ++i) {
+      const msg::TrackedPerson& p = people.items[i];
+      std::array<view::Point2, kCagePoints + 1>& cage = s.cages[i];
+      for (std::size_t k = 0; k < kCagePoints; ++k) {
+        const double a = 2.0 * M_PI * static_cast<double>(k) / kCagePoints;
+        cage[k] = {mm(p.x_m + p.cage_radius_m * std::cos(a)), mm(p.y_m + p.cage_radius_m * std::sin(a))};
+      }
+      // A hidden person (kept out of the sensors' view) is a guess: greyed, and labelled so.
+      s.cage_lines[i] = {view::LineType::loop, std::span(cage).first(kCagePoints), 0.03,
+                         p.hidden ? view::Color{0.5, 0.5, 0.5, 0.9} : view::Color{0.9, 0.2, 0.1, 0.9}};
+      s.bodies[body] = {{mm(p.x_m), mm(p.y_m)}, std::max(0.2, p.width_m), 1.7,
+                        p.hidden ? view::Color{0.6, 0.6, 0.6, 0.4} : view::Color{0.95, 0.6, 0.1, 0.8}};
+      const double speed = std::hypot(p.vx_m_s, p.vy_m_s);
+      const bool moving = speed > 0.05;
+      if (moving) s.arrows[arrow] = {{mm(p.x_m), mm(p.y_m)}, rad(std::atan2(p.vy_m_s, p.vx_m_s)), mm(std::max(0.1, speed)), {0.9, 0.2, 0.1, 1.0}};
+      std::snprintf(s.ids[e].data(), s.ids[e].size(), "person/%u", p.id);
+      if (p.hidden)
+        std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u hidden", p.id);
+      else
+        std::snprintf(s.label_text[i].data(), s.label_text[i].size(), "person %u", p.id);
+      s.labels[i] = {{mm(p.x_m), mm(p.y_m + p.cage_radius_m)}, s.label_text[i].data(), 12.0, {0.1, 0.1, 0.1, 1.0}};
+      s.entities[e] = {s.ids[e].data(), "map", 0, std::span(&s.cage_lines[i], 1), std::span(&s.bodies[body], 1),
+                       std::span(&s.arrows[arrow], moving ? 1 : 0), std::span(&s.labels[i], 1)};
+      ++e;
+      ++body;
+      arrow += moving ? 1 : 0;
+    }
+  }
+  if (sources_.movers != nullptr && sources_.movers->read(s.movers)) {
+    const msg::MovingObstacles& movers = s.movers.value;
+    for (std::size_t i = 0; i < std::min<std::size_t>(movers.count, msg::MovingObstacles::kMax) && e < kMaxSceneEntities; ++i) {
+      const msg::MovingObstacle& m = movers.items[i];
+      s.bodies[body] = {{mm(m.x_m), mm(m.y_m)}, std::max(0.1, 2.0 * m.radius_m), 0.5, {0.5, 0.3, 0.8, 0.7}};
+      const double speed = std::hypot(m.vx_m_s, m.vy_m_s);
+      const bool moving = speed > 0.05;
+      if (moving) s.arrows[arrow] = {{mm(m.x_m), mm(m.y_m)}, rad(std::atan2(m.vy_m_s, m.vx_m_s)), mm(std::max(0.1, speed)), {0.5, 0.3, 0.8, 1.0}};
+      std::snprintf(s.ids[e].data(), s.ids[e].size(), "mover/%u", m.id);
+      s.entities[e] = {s.ids[e].data(), "map", 0, {}, std::span(&s.bodies[body], 1),
+                       std::span(&s.arrows[arrow], moving ? 1 : 0), {}};
+      ++e;
+      ++body;
+      arrow += moving ? 1 : 0;
+    }
+  }
+  return write(ch, stamp, [&](json::Writer& w) { view::write_scene_update(w, stamp, true, std::span(s.entities).first(e)); });
+}
+
+// The newest camera frame, once, as JPEG.
+bool ViewTask::encode_camera(std::size_t ch) {
+  Scratch& s = *scratch_;
+  if (frames_ == nullptr) return false;
+  camera::FramePool& frames = *frames_;
+  if (frames.latest_sequence() == s.camera_sequence) return false;
+  camera::FrameHandle frame = frames.acquire_latest();
+  if (!frame) return false;
+  const camera::FrameRef& f = frame.ref();
+  s.camera_sequence = f.sequence;
+  const view::Image image{f.data, f.width_px, f.height_px, f.stride_bytes,
+                          f.format == camera::PixelFormat::bgr8 ? view::PixelLayout::bgr8 : view::PixelLayout::gray8};
+  auto size = s.encoder.encode(image, s.jpeg);
+  frame.release();
+  if (!size) return false;
+  const hal::Nanos at = f.decoded_ns + s.unix_offset_ns;
+  return write(ch, at, [&](json::Writer& w) {
+    view::write_compressed_image(w, at, "camera", std::span(s.jpeg).first(*size), "jpeg");
+  });
+}
+
+bool ViewTask::encode_stats(std::size_t ch, hal::Nanos stamp, hal::Nanos now) {
+  Scratch& s = *scratch_;
+  const tasks::Scheduler& scheduler = sources_.scheduler;
+  const std::size_t n = std::min(scheduler.task_count(), s.stats.size());
+  for (std::size_t i = 0; i < n; ++i) s.stats[i] = scheduler.stats(i);
+  const view::ServerCounters counters = server_->counters();
+  return write(ch, stamp, [&](json::Writer& w) {
+    w.begin_object();
+    view::write_time(w, "timestamp", stamp);
+    w.member_number("uptime_s", std::round(hal::to_seconds(now - start_ns_) * 10.0) / 10.0);
+    w.key("tasks").begin_array();
+    for (std::size_t i = 0; i < n; ++i) {
+      const tasks::TaskStats& t = s.stats[i];
+      w.begin_object().member("name", t.name).member("thread", t.thread);
+      w.member_int64("period_us", t.period_us).member_int64("budget_us", t.budget_us);
+      w.member_uint64("runs", t.runs).member_uint64("overruns", t.overruns);
+      w.member_uint64("slips", t.slips).member_uint64("skips", t.skips);
+      w.member_number("exec_mean_us", std::round(static_cast<double>(t.exec_mean_ns) / 100.0) / 10.0);
+      w.member_number("exec_max_us", std::round(static_cast<double>(t.exec_max_ns) / 100.0) / 10.0);
+      w.member_number("cpu_mean_us", std::round(static_cast<double>(t.cpu_mean_ns) / 100.0) / 10.0);
+      w.member_number("cpu_max_us", std::round(static_cast<double>(t.cpu_max_ns) / 100.0) / 10.0);
+      w.member_number("jitter_p99_us", std::round(static_cast<double>(t.jitter_p99_ns) / 100.0) / 10.0);
+      w.end_object();
+    }
+    w.end_array();
+    w.key("view").begin_object().member_uint64("clients", counters.clients).member_uint64("sent", counters.sent);
+    w.member_uint64("dropped", counters.dropped).member_uint64("rejected", counters.rejected).end_object();
+    w.end_object();
+  });
+}
+
+bool ViewTask::encode_mission(std::size_t ch, hal::Nanos stamp) {
+  tasks::Sample<msg::PoseEstimate> pose;
+  tasks::Sample<msg::SafetyOutput> safety;
+  tasks::Sample<msg::ControllerStatus> controller;
+  const bool have_pose = sources_.pose != nullptr && sources_.pose->read(pose);
+  const bool have_safety = sources_.safety != nullptr && sources_.safety->read(safety);
+  const bool have_controller = sources_.controller != nullptr && sources_.controller->read(controller);
+  const MissionTask* mission = sources_.mission;
+  return write(ch, stamp, [&](json::Writer& w) {
+    w.begin_object();
+    view::write_time(w, "timestamp", stamp);
+    w.member("state", mission != nullptr ? to_string(mission->report().state) : "fleet");
+    w.member_uint32("goals_reached", mission != nullptr ? static_cast<std::uint32_t>(mission->report().goals_reached) : 0);
+    w.member_uint32("goals_total", static_cast<std::uint32_t>(sources_.goal_count));
+    w.key("goal");
+    if (mission != nullptr && mission->current_goal() != nullptr)
+      w.begin_object().member_number("x", mm(mission->current_goal()->x_m)).member_number("y", mm(mission->current_goal()->y_m)).end_object();
+    else
+      w.null();
+    const msg::Pose2D p = have_pose ? pose.value.pose : msg::Pose2D{};
+    w.key("pose").begin_object().member_number("x", mm(p.x_m)).member_number("y", mm(p.y_m));
+    w.member_number("theta", rad(p.theta_rad)).end_object();
+    w.member_bool("localized", have_pose && pose.value.valid).member_bool("lost", have_pose && pose.value.lost);
+    w.member_number("v", have_safety ? mm(safety.value.command.v_m_s) : 0.0);
+    w.member_number("w", have_safety ? rad(safety.value.command.w_rad_s) : 0.0);
+    w.member("controller", have_controller ? (controller.value.formation ? "formation" : msg::to_string(controller.value.status)) : "none");
+    w.key("safety").begin_array();
+    if (have_safety)
+      for (std::uint32_t bit = 1; bit != 0 && bit <= safety.value.reasons; bit <<= 1)
+        if (safety.value.reasons & bit) w.string(safety_reason(bit));
+    w.end_array();
+    w.key("separation");
+    if (have_safety && std::isfinite(safety.value.separation_cap_m_s))
+      w.begin_object().member_number("cap", mm(safety.value.separation_cap_m_s)).member_number("gap", mm(safety.value.separation_gap_m))
+          .member_number("approach", mm(safety.value.separation_approach_m_s)).end_object();
+    else
+      w.null();
+    w.end_object();
+  });
 }
 
 Status make_view(Wiring& w) {

@@ -77,6 +77,19 @@ class ViewTask final : public tasks::Task {
  private:
   struct Scratch;
   bool encode(ViewChannel channel, hal::Nanos now);
+  // encode()'s channels but the map and the global costmap, which it writes itself; `stamp` is
+  // the step's time on the messages' clock.
+  bool encode_local_costmap(std::size_t ch);
+  bool encode_scan(std::size_t ch);
+  bool encode_tf(std::size_t ch, hal::Nanos stamp);
+  bool encode_plan(std::size_t ch);
+  bool encode_safe_path(std::size_t ch, hal::Nanos stamp);
+  bool encode_driven_path(std::size_t ch, hal::Nanos stamp);
+  bool encode_dwa(std::size_t ch);
+  bool encode_people(std::size_t ch, hal::Nanos stamp);
+  bool encode_camera(std::size_t ch);
+  bool encode_stats(std::size_t ch, hal::Nanos stamp, hal::Nanos now);
+  bool encode_mission(std::size_t ch, hal::Nanos stamp);
   bool write(std::size_t board_channel, hal::Nanos stamp, auto&& body);
 
   ViewTaskConfig config_;

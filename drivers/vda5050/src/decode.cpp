@@ -207,6 +207,142 @@ Decoded decode_visualization(std::string_view text, Version version, Visualizati
 
 namespace {
 
+// Calls each(v) on every element of `list` with the path at key[i]; false at the first false.
+template <typename Each>
+bool each_item(Decoder& d, std::string_view key, Value list, Each&& each) noexcept {
+  auto at = d.field(key);
+  std::size_t i = 0;
+  for (Value v : list.items()) {
+    auto item = d.index(i++);
+    if (!each(v)) return false;
+  }
+  return true;
+}
+
+// A list member kept in `out` (which sets its capacity): each element an object, read by
+// read(d, v, entry) into an entry of its own.
+template <typename T, std::size_t N, typename Read>
+bool decode_list(Decoder& d, Value obj, std::string_view key, bool required, StaticVector<T, N>& out,
+                 Read&& read) noexcept {
+  Value list;
+  if (!d.array(obj, key, list, required, N)) return false;
+  if (!list.valid()) return true;
+  return each_item(d, key, list, [&](Value v) {
+    if (!d.expect(v, Type::object)) return false;
+    (void)out.emplace_back();
+    return read(d, v, out.back());
+  });
+}
+
+// What node and edge states share: the id (which a rejection names from here on, in the
+// caller's id scope), the sequence id, the description (only checked) and whether released.
+template <typename State>
+bool graph_state(Decoder& d, Value v, std::string_view id_key, Id& id, std::string_view description_key,
+                 State& state) noexcept {
+  if (!d.string(v, id_key, id, true)) return false;
+  d.set_id(id);
+  return d.uint32(v, "sequenceId", state.sequence_id, true) && d.string_type(v, description_key) &&
+         d.boolean(v, "released", state.released, true);
+}
+
+// An optional object member: read(obj) with the path at key, when it is there.
+template <typename Read>
+bool optional_object(Decoder& d, Value v, std::string_view key, Read&& read) noexcept {
+  Value obj;
+  if (!d.object(v, key, obj, false)) return false;
+  if (!obj.valid()) return true;
+  auto at = d.field(key);
+  return read(obj);
+}
+
+bool node_state(Decoder& d, Value v, NodeState& n) noexcept {
+  Decoder::IdScope id(d, "nodeId");
+  if (!graph_state(d, v, "nodeId", n.node_id, "nodeDescription", n)) return false;
+  return optional_object(d, v, "nodePosition", [&](Value pos) {
+    n.position.emplace();
+    return d.node_position(pos, *n.position, false);
+  });
+}
+
+bool edge_state(Decoder& d, Value v, EdgeState& e) noexcept {
+  Decoder::IdScope id(d, "edgeId");
+  if (!graph_state(d, v, "edgeId", e.edge_id, "edgeDescription", e)) return false;
+  return optional_object(d, v, "trajectory", [&](Value t) { return d.trajectory(t); });
+}
+
+bool action_state(Decoder& d, Value v, ActionState& a) noexcept {
+  Decoder::IdScope id(d, "actionId");
+  if (!d.string(v, "actionId", a.action_id, true)) return false;
+  d.set_id(a.action_id);
+  return d.string(v, "actionType", a.action_type, false) && d.string_type(v, "actionDescription") &&
+         d.enumeration(v, "actionStatus", kActionStatusNames, a.status) &&
+         d.string(v, "resultDescription", a.result_description, false);
+}
+
+bool error_reference(Decoder& d, Value r, ErrorReference& ref) noexcept {
+  return d.string(r, "referenceKey", ref.key, true) && d.string(r, "referenceValue", ref.value, true);
+}
+
+bool vehicle_error(Decoder& d, Value v, VehicleError& e) noexcept {
+  if (!d.string(v, "errorType", e.error_type, true) || !d.string(v, "errorDescription", e.description, false) ||
+      !d.string_type(v, "errorHint") || !d.enumeration(v, "errorLevel", kErrorLevelNames, e.level))
+    return false;
+  return decode_list(d, v, "errorReferences", false, e.references, error_reference);
+}
+
+// Version 2.1.0's maps on the vehicle.
+bool map_state(Decoder& d, Value v, MapState& m) noexcept {
+  return d.string(v, "mapId", m.map_id, true) && d.string(v, "mapVersion", m.map_version, true) &&
+         d.string(v, "mapDescription", m.map_description, false) &&
+         d.enumeration(v, "mapStatus", kMapStatusNames, m.status);
+}
+
+// Loads are only checked against the schema: this vehicle carries none.
+bool check_loads(Decoder& d, Value root) noexcept {
+  Value list;
+  if (!d.array(root, "loads", list, false, SIZE_MAX)) return false;
+  if (!list.valid()) return true;
+  return each_item(d, "loads", list, [&](Value v) {
+    double w = 0;
+    return d.expect(v, Type::object) && d.string_type(v, "loadId") && d.string_type(v, "loadType") &&
+           d.string_type(v, "loadPosition") && d.number(v, "weight", w, false, 0);
+  });
+}
+
+// Information is only checked against the schema: nothing of it is kept.
+bool check_information(Decoder& d, Value root) noexcept {
+  Value list;
+  if (!d.array(root, "information", list, false, SIZE_MAX)) return false;
+  if (!list.valid()) return true;
+  return each_item(d, "information", list, [&](Value v) {
+    Value t;
+    int level = 0;
+    if (!d.expect(v, Type::object) || !d.require(v, "infoType", t) || !d.string_type(v, "infoType") ||
+        !d.string_type(v, "infoDescription") || !d.enumeration(v, "infoLevel", kInfoLevelNames, level))
+      return false;
+    Value refs;
+    return d.array(v, "infoReferences", refs, false, SIZE_MAX);
+  });
+}
+
+bool decode_battery(Decoder& d, Value root, State& s) noexcept {
+  Value obj;
+  if (!d.object(root, "batteryState", obj, true)) return false;
+  auto at = d.field("batteryState");
+  double ignored = 0;
+  return d.number(obj, "batteryCharge", s.battery.battery_charge, true) &&
+         d.number(obj, "batteryVoltage", s.battery.battery_voltage) &&
+         d.number(obj, "batteryHealth", ignored, false, 0, 100) && d.boolean(obj, "charging", s.battery.charging, true) &&
+         d.integer_type(obj, "reach", 0);
+}
+
+bool decode_safety(Decoder& d, Value root, State& s) noexcept {
+  Value obj;
+  if (!d.object(root, "safetyState", obj, true)) return false;
+  auto at = d.field("safetyState");
+  return d.enumeration(obj, "eStop", kEStopNames, s.e_stop) && d.boolean(obj, "fieldViolation", s.field_violation, true);
+}
+
 bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
   if (!d.header(root, s.header)) return false;
   if (!d.string(root, "orderId", s.order_id, true)) return false;
@@ -220,162 +356,13 @@ bool decode_state_body(Decoder& d, Value root, State& s) noexcept {
     return false;
   if (!d.number(root, "distanceSinceLastNode", s.distance_since_last_node)) return false;
   if (!d.enumeration(root, "operatingMode", kOperatingModeNames, s.operating_mode)) return false;
-
-  Value list;
-  if (!d.array(root, "nodeStates", list, true, kMaxNodes)) return false;
-  {
-    auto at = d.field("nodeStates");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      Decoder::IdScope id(d, "nodeId");
-      if (!d.expect(v, Type::object)) return false;
-      (void)s.node_states.emplace_back();
-      NodeState& n = s.node_states.back();
-      if (!d.string(v, "nodeId", n.node_id, true)) return false;
-      d.set_id(n.node_id);
-      if (!d.uint32(v, "sequenceId", n.sequence_id, true) || !d.string_type(v, "nodeDescription") ||
-          !d.boolean(v, "released", n.released, true))
-        return false;
-      Value pos;
-      if (!d.object(v, "nodePosition", pos, false)) return false;
-      if (pos.valid()) {
-        auto ap = d.field("nodePosition");
-        n.position.emplace();
-        if (!d.node_position(pos, *n.position, false)) return false;
-      }
-    }
-  }
-  if (!d.array(root, "edgeStates", list, true, kMaxEdges)) return false;
-  {
-    auto at = d.field("edgeStates");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      Decoder::IdScope id(d, "edgeId");
-      if (!d.expect(v, Type::object)) return false;
-      (void)s.edge_states.emplace_back();
-      EdgeState& e = s.edge_states.back();
-      if (!d.string(v, "edgeId", e.edge_id, true)) return false;
-      d.set_id(e.edge_id);
-      if (!d.uint32(v, "sequenceId", e.sequence_id, true) || !d.string_type(v, "edgeDescription") ||
-          !d.boolean(v, "released", e.released, true))
-        return false;
-      Value t;
-      if (!d.object(v, "trajectory", t, false)) return false;
-      if (t.valid()) {
-        auto af = d.field("trajectory");
-        if (!d.trajectory(t)) return false;
-      }
-    }
-  }
-  if (!d.agv_position(root, s.agv_position) || !d.velocity(root, s.velocity)) return false;
-  Value obj;
-  if (!d.array(root, "loads", list, false, SIZE_MAX)) return false;
-  if (list.valid()) {
-    auto at = d.field("loads");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      double w = 0;
-      if (!d.expect(v, Type::object) || !d.string_type(v, "loadId") || !d.string_type(v, "loadType") ||
-          !d.string_type(v, "loadPosition") || !d.number(v, "weight", w, false, 0))
-        return false;
-    }
-  }
-  if (!d.array(root, "actionStates", list, true, kMaxActionStates)) return false;
-  {
-    auto at = d.field("actionStates");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      Decoder::IdScope id(d, "actionId");
-      if (!d.expect(v, Type::object)) return false;
-      (void)s.action_states.emplace_back();
-      ActionState& a = s.action_states.back();
-      if (!d.string(v, "actionId", a.action_id, true)) return false;
-      d.set_id(a.action_id);
-      if (!d.string(v, "actionType", a.action_type, false) || !d.string_type(v, "actionDescription") ||
-          !d.enumeration(v, "actionStatus", kActionStatusNames, a.status) ||
-          !d.string(v, "resultDescription", a.result_description, false))
-        return false;
-    }
-  }
-  if (!d.object(root, "batteryState", obj, true)) return false;
-  {
-    auto at = d.field("batteryState");
-    double ignored = 0;
-    if (!d.number(obj, "batteryCharge", s.battery.battery_charge, true) ||
-        !d.number(obj, "batteryVoltage", s.battery.battery_voltage) ||
-        !d.number(obj, "batteryHealth", ignored, false, 0, 100) || !d.boolean(obj, "charging", s.battery.charging, true) ||
-        !d.integer_type(obj, "reach", 0))
-      return false;
-  }
-  if (!d.array(root, "errors", list, true, kMaxErrors)) return false;
-  {
-    auto at = d.field("errors");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      if (!d.expect(v, Type::object)) return false;
-      (void)s.errors.emplace_back();
-      VehicleError& e = s.errors.back();
-      if (!d.string(v, "errorType", e.error_type, true) || !d.string(v, "errorDescription", e.description, false) ||
-          !d.string_type(v, "errorHint") || !d.enumeration(v, "errorLevel", kErrorLevelNames, e.level))
-        return false;
-      Value refs;
-      if (!d.array(v, "errorReferences", refs, false, kMaxErrorReferences)) return false;
-      if (!refs.valid()) continue;
-      auto ar = d.field("errorReferences");
-      std::size_t k = 0;
-      for (Value r : refs.items()) {
-        auto ak = d.index(k++);
-        if (!d.expect(r, Type::object)) return false;
-        (void)e.references.emplace_back();
-        ErrorReference& ref = e.references.back();
-        if (!d.string(r, "referenceKey", ref.key, true) || !d.string(r, "referenceValue", ref.value, true)) return false;
-      }
-    }
-  }
-  if (!d.array(root, "information", list, false, SIZE_MAX)) return false;
-  if (list.valid()) {
-    auto at = d.field("information");
-    std::size_t i = 0;
-    for (Value v : list.items()) {
-      auto item = d.index(i++);
-      Value t;
-      int level = 0;
-      if (!d.expect(v, Type::object) || !d.require(v, "infoType", t) || !d.string_type(v, "infoType") ||
-          !d.string_type(v, "infoDescription") || !d.enumeration(v, "infoLevel", kInfoLevelNames, level))
-        return false;
-      Value refs;
-      if (!d.array(v, "infoReferences", refs, false, SIZE_MAX)) return false;
-    }
-  }
-  if (!d.object(root, "safetyState", obj, true)) return false;
-  {
-    auto at = d.field("safetyState");
-    if (!d.enumeration(obj, "eStop", kEStopNames, s.e_stop) || !d.boolean(obj, "fieldViolation", s.field_violation, true))
-      return false;
-  }
-  if (d.version() == Version::v2_1_0) {
-    if (!d.array(root, "maps", list, false, kMaxMaps)) return false;
-    if (list.valid()) {
-      auto at = d.field("maps");
-      std::size_t i = 0;
-      for (Value v : list.items()) {
-        auto item = d.index(i++);
-        if (!d.expect(v, Type::object)) return false;
-        (void)s.maps.emplace_back();
-        MapState& m = s.maps.back();
-        if (!d.string(v, "mapId", m.map_id, true) || !d.string(v, "mapVersion", m.map_version, true) ||
-            !d.string(v, "mapDescription", m.map_description, false) ||
-            !d.enumeration(v, "mapStatus", kMapStatusNames, m.status))
-          return false;
-      }
-    }
-  }
-  return true;
+  return decode_list(d, root, "nodeStates", true, s.node_states, node_state) &&
+         decode_list(d, root, "edgeStates", true, s.edge_states, edge_state) && d.agv_position(root, s.agv_position) &&
+         d.velocity(root, s.velocity) && check_loads(d, root) &&
+         decode_list(d, root, "actionStates", true, s.action_states, action_state) && decode_battery(d, root, s) &&
+         decode_list(d, root, "errors", true, s.errors, vehicle_error) && check_information(d, root) &&
+         decode_safety(d, root, s) &&
+         (d.version() != Version::v2_1_0 || decode_list(d, root, "maps", false, s.maps, map_state));
 }
 
 }  // namespace

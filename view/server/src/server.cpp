@@ -66,14 +66,14 @@ bool peer_is_loopback(lws* wsi) noexcept {
   return is_loopback_address(text);
 }
 
+}  // namespace
+
 // Per connection (lws zeroes it).
-struct Connection {
+struct Server::Connection {
   int client;  // index + 1 of the WebSocket client's slot; 0: none
   bool page;
   std::size_t page_sent;
 };
-
-}  // namespace
 
 bool is_loopback_address(std::string_view address) noexcept {
   if (address.starts_with("::ffff:")) address.remove_prefix(7);
@@ -311,208 +311,244 @@ int refuse(lws* wsi, unsigned status, const char* why) {
 }  // namespace
 
 int Server::on_event(lws* wsi, int reason_int, void* user, void* in, std::size_t len) {
-  Impl& impl = *impl_;
   auto* connection = static_cast<Connection*>(user);
   const auto reason = static_cast<lws_callback_reasons>(reason_int);
   Client* client = connection != nullptr && connection->client > 0 ? &clients_[connection->client - 1] : nullptr;
   switch (reason) {
-    case LWS_CALLBACK_HTTP: {
-      if (!authorized(wsi, config_)) {
-        ++impl.rejected;
-        return refuse(wsi, HTTP_STATUS_UNAUTHORIZED, "access token required");
-      }
-      const std::string_view path = in != nullptr ? static_cast<const char*>(in) : "";
-      if (path != "/" && path != "/index.html") {
-        ++impl.rejected;
-        return refuse(wsi, HTTP_STATUS_NOT_FOUND, "not found");
-      }
-      unsigned char headers[LWS_PRE + 1024];
-      unsigned char* start = headers + LWS_PRE;
-      unsigned char* p = start;
-      unsigned char* end = headers + sizeof headers - 1;
-      if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, "text/html; charset=utf-8", kViewPageSize, &p, end) ||
-          lws_add_http_header_by_name(wsi, reinterpret_cast<const unsigned char*>("cache-control:"),
-                                      reinterpret_cast<const unsigned char*>("no-store"), 8, &p, end) ||
-          lws_add_http_header_by_name(wsi, reinterpret_cast<const unsigned char*>("content-security-policy:"),
-                                      reinterpret_cast<const unsigned char*>(kPagePolicy.data()),
-                                      static_cast<int>(kPagePolicy.size()), &p, end) ||
-          lws_finalize_write_http_header(wsi, start, &p, end))
-        return 1;
-      connection->page = true;
-      connection->page_sent = 0;
-      lws_callback_on_writable(wsi);
-      return 0;
-    }
-    case LWS_CALLBACK_HTTP_WRITEABLE: {
+    case LWS_CALLBACK_HTTP:
+      return serve_page(wsi, connection, in != nullptr ? static_cast<const char*>(in) : "");
+    case LWS_CALLBACK_HTTP_WRITEABLE:
       if (connection == nullptr || !connection->page) break;
-      const std::size_t chunk = std::min(kPageChunk, kViewPageSize - connection->page_sent);
-      const bool last = connection->page_sent + chunk == kViewPageSize;
-      std::memcpy(impl.page.data() + LWS_PRE, kViewPage + connection->page_sent, chunk);
-      if (lws_write(wsi, reinterpret_cast<unsigned char*>(impl.page.data() + LWS_PRE), chunk,
-                    last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != static_cast<int>(chunk))
-        return 1;
-      connection->page_sent += chunk;
-      if (!last) {
-        lws_callback_on_writable(wsi);
-        return 0;
-      }
-      ++impl.pages;
-      connection->page = false;
-      return lws_http_transaction_completed(wsi) ? -1 : 0;
-    }
-    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
-      if (!offers_subprotocol(wsi)) {
-        ++impl.rejected;
-        return refuse(wsi, HTTP_STATUS_BAD_REQUEST, "the WebSocket subprotocol must be foxglove.websocket.v1");
-      }
-      if (!authorized(wsi, config_)) {
-        ++impl.rejected;
-        return refuse(wsi, HTTP_STATUS_UNAUTHORIZED, "access token required");
-      }
-      if (impl.clients_now.load() >= client_slots_) {
-        ++impl.rejected;
-        return refuse(wsi, HTTP_STATUS_SERVICE_UNAVAILABLE, "too many viewers");
-      }
-      return 0;
-    }
-    case LWS_CALLBACK_ESTABLISHED: {
-      std::size_t slot = 0;
-      while (slot < client_slots_ && clients_[slot].wsi != nullptr) ++slot;
-      if (slot == client_slots_) return -1;
-      Client& c = clients_[slot];
-      c.wsi = wsi;
-      c.need_info = c.need_advertise = true;
-      c.session.reset(board_->channel_count());
-      c.done_seq.fill(0);
-      c.sending_seq.fill(0);
-      c.next_record.fill(0);
-      c.subscribed_as.fill(Session::kNone);
-      c.cursor = 0;
-      c.rx_size = 0;
-      c.refused_seen = 0;
-      connection->client = static_cast<int>(slot) + 1;
-      // Room for a few of the largest messages, so they seldom wait (the kernel caps this).
-      if (const int fd = lws_get_socket_fd(wsi); fd >= 0) {
-        std::size_t largest = 0;
-        for (std::size_t ch = 0; ch < board_->channel_count(); ++ch) largest = std::max(largest, board_->spec(ch).capacity_bytes);
-        const int bytes = static_cast<int>(std::min<std::size_t>(4 * largest + kControlBytes, 8u << 20));
-        setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bytes, sizeof bytes);
-      }
-      ++impl.clients_now;
-      ++impl.connections;
-      lws_callback_on_writable(wsi);
-      return 0;
-    }
-    case LWS_CALLBACK_CLOSED: {
+      return send_page(wsi, *connection);
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
+      return admit(wsi);
+    case LWS_CALLBACK_ESTABLISHED:
+      return open_client(wsi, connection);
+    case LWS_CALLBACK_CLOSED:
       if (client != nullptr) {
         client->wsi = nullptr;
         connection->client = 0;
-        --impl.clients_now;
+        --impl_->clients_now;
       }
       return 0;
-    }
-    case LWS_CALLBACK_RECEIVE: {
+    case LWS_CALLBACK_RECEIVE:
       if (client == nullptr) return -1;
-      if (client->rx_size + len > client->rx.size()) {
-        ++impl.closed_oversized;
-        static constexpr char kWhy[] = "client messages are limited to 64 KiB";
-        lws_close_reason(wsi, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE,
-                         reinterpret_cast<unsigned char*>(const_cast<char*>(kWhy)), sizeof kWhy - 1);
-        return -1;
-      }
-      std::memcpy(client->rx.data() + client->rx_size, in, len);
-      client->rx_size += len;
-      if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi) != 0) return 0;
-      const std::size_t size = client->rx_size;
-      client->rx_size = 0;
-      if (lws_frame_is_binary(wsi))
-        client->session.on_binary({reinterpret_cast<const std::uint8_t*>(client->rx.data()), size});
-      else
-        client->session.on_text({client->rx.data(), size});
-      impl.refused_ops += client->session.refused() - client->refused_seen;
-      client->refused_seen = client->session.refused();
-      // A channel subscribed anew starts from its newest publish.
-      for (std::size_t ch = 0; ch < board_->channel_count(); ++ch)
-        if (client->session.subscription(ch) != client->subscribed_as[ch]) {
-          client->subscribed_as[ch] = client->session.subscription(ch);
-          client->done_seq[ch] = client->sending_seq[ch] = 0;
-          client->next_record[ch] = 0;
-        }
-      lws_callback_on_writable(wsi);
-      return 0;
-    }
-    case LWS_CALLBACK_SERVER_WRITEABLE: {
+      return receive(wsi, *client, in, len);
+    case LWS_CALLBACK_SERVER_WRITEABLE:
       if (client == nullptr) return 0;
-      if (client->need_info || client->need_advertise) {
-        const bool info = client->need_info;
-        char* text = (info ? impl.server_info.data() : impl.advertise.data()) + LWS_PRE;
-        const std::size_t size = info ? impl.server_info_size : impl.advertise_size;
-        if (!socket_has_room(wsi, size)) return lws_set_timer_usecs(wsi, kRetryUs), 0;
-        if (lws_write(wsi, reinterpret_cast<unsigned char*>(text), size, LWS_WRITE_TEXT) < 0) return -1;
-        (info ? client->need_info : client->need_advertise) = false;
-        lws_callback_on_writable(wsi);
-        return 0;
-      }
-      if (client->session.has_reply()) {
-        const std::string_view reply = client->session.reply();
-        if (!socket_has_room(wsi, reply.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
-        std::memcpy(impl.status.data() + LWS_PRE, reply.data(), reply.size());
-        client->session.pop_reply();
-        if (lws_write(wsi, reinterpret_cast<unsigned char*>(impl.status.data() + LWS_PRE), reply.size(), LWS_WRITE_TEXT) < 0)
-          return -1;
-        lws_callback_on_writable(wsi);
-        return 0;
-      }
-      const std::size_t n = board_->channel_count();
-      for (std::size_t k = 0; k < n; ++k) {
-        const std::size_t ch = (client->cursor + k) % n;
-        const std::uint32_t subscription = client->session.subscription(ch);
-        if (subscription == Session::kNone) continue;
-        const Publication& pub = board_->take(ch);
-        if (pub.seq == 0 || pub.seq == client->done_seq[ch]) continue;
-        if (pub.seq != client->sending_seq[ch]) {
-          if (client->done_seq[ch] != 0 && pub.seq > client->done_seq[ch] + 1)
-            impl.dropped += pub.seq - client->done_seq[ch] - 1;
-          client->sending_seq[ch] = pub.seq;
-          client->next_record[ch] = 0;
-        }
-        const std::span<char> payload = pub.payload(client->next_record[ch]);
-        if (!socket_has_room(wsi, kFrameHeader + payload.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
-        char* frame = payload.data() - kFrameHeader;
-        write_frame_header(std::span<char, kFrameHeader>(frame, kFrameHeader), subscription,
-                           pub.records[client->next_record[ch]].stamp_ns);
-        if (lws_write(wsi, reinterpret_cast<unsigned char*>(frame), kFrameHeader + payload.size(), LWS_WRITE_BINARY) < 0)
-          return -1;
-        ++impl.sent;
-        impl.sent_bytes += kFrameHeader + payload.size();
-        if (++client->next_record[ch] >= pub.record_count) {
-          client->done_seq[ch] = pub.seq;
-          client->cursor = ch + 1;  // the next channel goes first next time
-        }
-        lws_callback_on_writable(wsi);
-        return 0;
-      }
-      return 0;
-    }
+      return send_next(wsi, *client);
     case LWS_CALLBACK_TIMER:
       lws_callback_on_writable(wsi);
       return 0;
-    case LWS_CALLBACK_EVENT_WAIT_CANCELLED: {
-      for (std::size_t i = 0; i < client_slots_; ++i) {
-        Client& c = clients_[i];
-        if (c.wsi == nullptr) continue;
-        for (std::size_t ch = 0; ch < board_->channel_count(); ++ch)
-          if (c.session.subscription(ch) != Session::kNone && board_->published(ch) != c.done_seq[ch]) {
-            lws_callback_on_writable(c.wsi);
-            break;
-          }
-      }
+    case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+      wake_writers();
       return 0;
-    }
     default:
       break;
   }
   return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
+
+// The page's request: its headers now, the page itself as the socket takes it (send_page).
+int Server::serve_page(lws* wsi, Connection* connection, std::string_view path) {
+  Impl& impl = *impl_;
+  if (!authorized(wsi, config_)) {
+    ++impl.rejected;
+    return refuse(wsi, HTTP_STATUS_UNAUTHORIZED, "access token required");
+  }
+  if (path != "/" && path != "/index.html") {
+    ++impl.rejected;
+    return refuse(wsi, HTTP_STATUS_NOT_FOUND, "not found");
+  }
+  unsigned char headers[LWS_PRE + 1024];
+  unsigned char* start = headers + LWS_PRE;
+  unsigned char* p = start;
+  unsigned char* end = headers + sizeof headers - 1;
+  if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, "text/html; charset=utf-8", kViewPageSize, &p, end) ||
+      lws_add_http_header_by_name(wsi, reinterpret_cast<const unsigned char*>("cache-control:"),
+                                  reinterpret_cast<const unsigned char*>("no-store"), 8, &p, end) ||
+      lws_add_http_header_by_name(wsi, reinterpret_cast<const unsigned char*>("content-security-policy:"),
+                                  reinterpret_cast<const unsigned char*>(kPagePolicy.data()),
+                                  static_cast<int>(kPagePolicy.size()), &p, end) ||
+      lws_finalize_write_http_header(wsi, start, &p, end))
+    return 1;
+  connection->page = true;
+  connection->page_sent = 0;
+  lws_callback_on_writable(wsi);
+  return 0;
+}
+
+int Server::send_page(lws* wsi, Connection& connection) {
+  Impl& impl = *impl_;
+  const std::size_t chunk = std::min(kPageChunk, kViewPageSize - connection.page_sent);
+  const bool last = connection.page_sent + chunk == kViewPageSize;
+  std::memcpy(impl.page.data() + LWS_PRE, kViewPage + connection.page_sent, chunk);
+  if (lws_write(wsi, reinterpret_cast<unsigned char*>(impl.page.data() + LWS_PRE), chunk,
+                last ? LWS_WRITE_HTTP_FINAL : LWS_WRITE_HTTP) != static_cast<int>(chunk))
+    return 1;
+  connection.page_sent += chunk;
+  if (!last) {
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  ++impl.pages;
+  connection.page = false;
+  return lws_http_transaction_completed(wsi) ? -1 : 0;
+}
+
+// A WebSocket upgrade: the subprotocol, the token and a free slot, or a refusal.
+int Server::admit(lws* wsi) {
+  Impl& impl = *impl_;
+  if (!offers_subprotocol(wsi)) {
+    ++impl.rejected;
+    return refuse(wsi, HTTP_STATUS_BAD_REQUEST, "the WebSocket subprotocol must be foxglove.websocket.v1");
+  }
+  if (!authorized(wsi, config_)) {
+    ++impl.rejected;
+    return refuse(wsi, HTTP_STATUS_UNAUTHORIZED, "access token required");
+  }
+  if (impl.clients_now.load() >= client_slots_) {
+    ++impl.rejected;
+    return refuse(wsi, HTTP_STATUS_SERVICE_UNAVAILABLE, "too many viewers");
+  }
+  return 0;
+}
+
+int Server::open_client(lws* wsi, Connection* connection) {
+  Impl& impl = *impl_;
+  std::size_t slot = 0;
+  while (slot < client_slots_ && clients_[slot].wsi != nullptr) ++slot;
+  if (slot == client_slots_) return -1;
+  Client& c = clients_[slot];
+  c.wsi = wsi;
+  c.need_info = c.need_advertise = true;
+  c.session.reset(board_->channel_count());
+  c.done_seq.fill(0);
+  c.sending_seq.fill(0);
+  c.next_record.fill(0);
+  c.subscribed_as.fill(Session::kNone);
+  c.cursor = 0;
+  c.rx_size = 0;
+  c.refused_seen = 0;
+  connection->client = static_cast<int>(slot) + 1;
+  // Room for a few of the largest messages, so they seldom wait (the kernel caps this).
+  if (const int fd = lws_get_socket_fd(wsi); fd >= 0) {
+    std::size_t largest = 0;
+    for (std::size_t ch = 0; ch < board_->channel_count(); ++ch) largest = std::max(largest, board_->spec(ch).capacity_bytes);
+    const int bytes = static_cast<int>(std::min<std::size_t>(4 * largest + kControlBytes, 8u << 20));
+    setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bytes, sizeof bytes);
+  }
+  ++impl.clients_now;
+  ++impl.connections;
+  lws_callback_on_writable(wsi);
+  return 0;
+}
+
+// A piece of a client's message; a whole one goes to its session.
+int Server::receive(lws* wsi, Client& client, const void* in, std::size_t len) {
+  Impl& impl = *impl_;
+  if (client.rx_size + len > client.rx.size()) {
+    ++impl.closed_oversized;
+    static constexpr char kWhy[] = "client messages are limited to 64 KiB";
+    lws_close_reason(wsi, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE,
+                     reinterpret_cast<unsigned char*>(const_cast<char*>(kWhy)), sizeof kWhy - 1);
+    return -1;
+  }
+  std::memcpy(client.rx.data() + client.rx_size, in, len);
+  client.rx_size += len;
+  if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi) != 0) return 0;
+  const std::size_t size = client.rx_size;
+  client.rx_size = 0;
+  if (lws_frame_is_binary(wsi))
+    client.session.on_binary({reinterpret_cast<const std::uint8_t*>(client.rx.data()), size});
+  else
+    client.session.on_text({client.rx.data(), size});
+  impl.refused_ops += client.session.refused() - client.refused_seen;
+  client.refused_seen = client.session.refused();
+  // A channel subscribed anew starts from its newest publish.
+  for (std::size_t ch = 0; ch < board_->channel_count(); ++ch)
+    if (client.session.subscription(ch) != client.subscribed_as[ch]) {
+      client.subscribed_as[ch] = client.session.subscription(ch);
+      client.done_seq[ch] = client.sending_seq[ch] = 0;
+      client.next_record[ch] = 0;
+    }
+  lws_callback_on_writable(wsi);
+  return 0;
+}
+
+// One message a time: the server's info, the advertisement, a reply, then the channels' records.
+int Server::send_next(lws* wsi, Client& client) {
+  Impl& impl = *impl_;
+  if (client.need_info || client.need_advertise) {
+    const bool info = client.need_info;
+    char* text = (info ? impl.server_info.data() : impl.advertise.data()) + LWS_PRE;
+    const std::size_t size = info ? impl.server_info_size : impl.advertise_size;
+    if (!socket_has_room(wsi, size)) return lws_set_timer_usecs(wsi, kRetryUs), 0;
+    if (lws_write(wsi, reinterpret_cast<unsigned char*>(text), size, LWS_WRITE_TEXT) < 0) return -1;
+    (info ? client.need_info : client.need_advertise) = false;
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  if (client.session.has_reply()) {
+    const std::string_view reply = client.session.reply();
+    if (!socket_has_room(wsi, reply.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
+    std::memcpy(impl.status.data() + LWS_PRE, reply.data(), reply.size());
+    client.session.pop_reply();
+    if (lws_write(wsi, reinterpret_cast<unsigned char*>(impl.status.data() + LWS_PRE), reply.size(), LWS_WRITE_TEXT) < 0)
+      return -1;
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  return send_record(wsi, client);
+}
+
+// The next record of the first subscribed channel, from the client's cursor on, with a publish
+// the client has not had whole.
+int Server::send_record(lws* wsi, Client& client) {
+  Impl& impl = *impl_;
+  const std::size_t n = board_->channel_count();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t ch = (client.cursor + k) % n;
+    const std::uint32_t subscription = client.session.subscription(ch);
+    if (subscription == Session::kNone) continue;
+    const Publication& pub = board_->take(ch);
+    if (pub.seq == 0 || pub.seq == client.done_seq[ch]) continue;
+    if (pub.seq != client.sending_seq[ch]) {
+      if (client.done_seq[ch] != 0 && pub.seq > client.done_seq[ch] + 1)
+        impl.dropped += pub.seq - client.done_seq[ch] - 1;
+      client.sending_seq[ch] = pub.seq;
+      client.next_record[ch] = 0;
+    }
+    const std::span<char> payload = pub.payload(client.next_record[ch]);
+    if (!socket_has_room(wsi, kFrameHeader + payload.size())) return lws_set_timer_usecs(wsi, kRetryUs), 0;
+    char* frame = payload.data() - kFrameHeader;
+    write_frame_header(std::span<char, kFrameHeader>(frame, kFrameHeader), subscription,
+                       pub.records[client.next_record[ch]].stamp_ns);
+    if (lws_write(wsi, reinterpret_cast<unsigned char*>(frame), kFrameHeader + payload.size(), LWS_WRITE_BINARY) < 0)
+      return -1;
+    ++impl.sent;
+    impl.sent_bytes += kFrameHeader + payload.size();
+    if (++client.next_record[ch] >= pub.record_count) {
+      client.done_seq[ch] = pub.seq;
+      client.cursor = ch + 1;  // the next channel goes first next time
+    }
+    lws_callback_on_writable(wsi);
+    return 0;
+  }
+  return 0;
+}
+
+// After a publish: every client with a subscribed channel it has not had is asked to write.
+void Server::wake_writers() {
+  for (std::size_t i = 0; i < client_slots_; ++i) {
+    Client& c = clients_[i];
+    if (c.wsi == nullptr) continue;
+    for (std::size_t ch = 0; ch < board_->channel_count(); ++ch)
+      if (c.session.subscription(ch) != Session::kNone && board_->published(ch) != c.done_seq[ch]) {
+        lws_callback_on_writable(c.wsi);
+        break;
+      }
+  }
 }
 
 }  // namespace sen3bot::view

@@ -85,8 +85,18 @@ class Server {
  private:
   struct Client;
   struct Impl;
+  struct Connection;
   Server() = default;
   void run();
+  // on_event's steps, by event.
+  int serve_page(lws* wsi, Connection* connection, std::string_view path);
+  int send_page(lws* wsi, Connection& connection);
+  int admit(lws* wsi);
+  int open_client(lws* wsi, Connection* connection);
+  int receive(lws* wsi, Client& client, const void* in, std::size_t len);
+  int send_next(lws* wsi, Client& client);
+  int send_record(lws* wsi, Client& client);
+  void wake_writers();
 
   ServerConfig config_;
   std::unique_ptr<ChannelBoard> board_;
