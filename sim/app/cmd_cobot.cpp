@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "case_run.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "report_figure.hpp"
@@ -519,28 +520,17 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, camera.error().c_str());
     return 1;
   }
-  std::FILE* quiet = std::fopen("/dev/null", "w");
-  if (quiet == nullptr) quiet = out;
-  Firmware fw(config, board, quiet);
+  const QuietLog quiet(out);
+  Firmware fw(config, board, quiet.file());
   fw.use_camera_frames(&(*camera)->frames());
-  board.referee().watch_estimate(&fw.pose_estimate());
-  board.referee().watch_people(&fw.people());
-  auto fail = [&](const Error& e) {
-    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, e.c_str());
-    fw.shutdown();
-    board.stop();
-    if (quiet != out) std::fclose(quiet);
-    return 1;
-  };
-  if (Status s = board.start(); !s) return fail(s.error());
-  if (Status s = fw.init(); !s) return fail(s.error());
+  if (Status s = start_case(fw, board); !s) return stop_case(fw, board, spec.name, s.error(), err);
   Director director(spec, spec.kind == CaseKind::collaborate ? 1 : attempts, scripts, board.simulation().world(),
                     seed * 1000003 + index);
   CaseRig rig{spec, fw, board, **camera, director, *names, world.laser_mount};
   const double limit_s = 60.0 + 40.0 * static_cast<double>(attempts);
   const auto wall_start = std::chrono::steady_clock::now();
   double sim_s = 0;
-  if (Status s = run_slices(rig, limit_s, result, sim_s, out); !s) return fail(s.error());
+  if (Status s = run_slices(rig, limit_s, result, sim_s, out); !s) return stop_case(fw, board, spec.name, s.error(), err);
   fw.shutdown();
   board.stop();
   result.sim_s = sim_s;
@@ -551,7 +541,6 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
   result.passed = check(result);
   print_outcome(out, result);
   if (!report_dir.empty()) write_case_figure(report_dir, spec, index, result, config, fw, board, err);
-  if (quiet != out) std::fclose(quiet);
   return 0;
 }
 

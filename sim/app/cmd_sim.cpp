@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "case_run.hpp"
 #include "cli_util.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
@@ -39,11 +40,7 @@ using firmware::Firmware;
 using firmware::FirmwareConfig;
 using firmware::MissionState;
 using firmware::MissionTask;
-using scenario::Case;
-using scenario::CaseResult;
-using scenario::mission_time_s;
-using scenario::Scenario;
-using scenario::summarize;
+using namespace scenario;
 
 namespace {
 
@@ -272,28 +269,17 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
     return 1;
   }
   SimBoard& board = **created;
-  std::FILE* quiet = std::fopen("/dev/null", "w");  // the per-task status lines of `run`
-  if (quiet == nullptr) quiet = out;
-  Firmware fw(config, board, quiet);
+  const QuietLog quiet(out);
+  Firmware fw(config, board, quiet.file());
   fw.use_view_server(view);
-  board.referee().watch_estimate(&fw.pose_estimate());
-  board.referee().watch_people(&fw.people());
-  auto fail = [&](const Error& e) {
-    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", label.c_str(), e.c_str());
-    fw.shutdown();
-    board.stop();
-    if (quiet != out) std::fclose(quiet);
-    return 1;
-  };
-  if (Status s = board.start(); !s) return fail(s.error());
-  if (Status s = fw.init(); !s) return fail(s.error());
+  if (Status s = start_case(fw, board); !s) return stop_case(fw, board, label, s.error(), err);
   const double limit_s = config.duration_s > 0 ? config.duration_s : 600.0;
   const auto wall_start = std::chrono::steady_clock::now();
   double sim_s = 0;
   CaseWatch watch(fw, label, result, out);
   const Status ran =
       realtime ? run_realtime(fw, limit_s, wall_start, watch, sim_s) : run_lockstep(fw, board, limit_s, watch, sim_s);
-  if (!ran) return fail(ran.error());
+  if (!ran) return stop_case(fw, board, label, ran.error(), err);
   fw.shutdown();
   board.stop();
   if (tasks::Sample<msg::PoseEstimate> estimate; fw.pose_estimate().read(estimate)) result.final_pose = estimate.value.pose;
@@ -307,7 +293,6 @@ int run_case(const FirmwareConfig& config, const SimulationConfig& world, bool r
   fw.mission()->print_report(out);
   board.referee().print(out);
   if (!report_dir.empty()) write_case_figure(report_dir, result, config, fw, board, err);
-  if (quiet != out) std::fclose(quiet);
   return 0;
 }
 

@@ -124,12 +124,10 @@ std::vector<Point2D> resample(const std::vector<Point2D>& v, double step) {
 
 // A worker drawn from a style: their pace, sway, clearance and how tight they take corners.
 struct Worker {
-  double speed = 0;
-  double sway = 0;
-  double sway_hz = 0;
-  double sway_phase = 0;
-  double clearance = 0;
-  double turn_radius = 0;
+  double speed = 0;                              // m/s
+  double sway = 0, sway_hz = 0, sway_phase = 0;  // side to side: m, Hz, rad
+  double clearance = 0;                          // kept off shelves
+  double turn_radius = 0;                        // corners rounded this wide
 };
 
 Worker draw_worker(const WorkerStyle& style, std::mt19937_64& rng) {
