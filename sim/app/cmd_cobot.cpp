@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "case_run.hpp"
 #include "config.hpp"
 #include "firmware.hpp"
 #include "report_figure.hpp"
@@ -143,9 +144,15 @@ nav::Pose2D laser_pose(const nav::Pose2D& robot, const nav::Pose2D& mount) {
           nav::normalize_angle(robot.theta_rad + mount.theta_rad)};
 }
 
-bool check(const CaseOutcome& c) {
+// Refusals for any reason: the trigger's and the mode's.
+std::uint32_t refusals(const CaseOutcome& c) {
   std::uint32_t refused = c.not_the_operator;
   for (const std::uint32_t r : c.rejections) refused += r;
+  return refused;
+}
+
+bool check(const CaseOutcome& c) {
+  const std::uint32_t refused = refusals(c);
   const bool toggles_right = c.toggles_on + c.toggles_off == c.expected_toggles && c.false_toggles == 0;
   if (c.kind == CaseKind::collaborate)
     return toggles_right && c.follow.samples > 0 && c.border_holds > 0 && c.outside_area_s == 0 && c.post_error_m >= 0 &&
@@ -156,12 +163,9 @@ bool check(const CaseOutcome& c) {
   return toggles_right && 10 * refused >= 9 * c.attempts && c.moving_contacts == 0;
 }
 
-int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfig& base, const SimulationConfig& base_world,
-                   const std::string& folder, std::size_t attempts, std::uint64_t seed, const std::string& report_dir,
-                   CaseOutcome& result, std::FILE* out, std::FILE* err) {
-  result.name = spec.name;
-  result.description = spec.description;
-  result.kind = spec.kind;
+// The case's firmware: the post its one goal, people and moving obstacles on and, unless the
+// configuration has its own, the collaborative mode on the lab's site.
+FirmwareConfig case_config(const FirmwareConfig& base, const std::string& folder) {
   FirmwareConfig config = base;
   config.clock = firmware::ClockMode::lockstep;
   config.navigation.mcl.initial_pose = kPost;
@@ -184,206 +188,239 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     config.cobot.operations_path = folder + "cobot/operations.yaml";
     config.cobot.model_path = folder + "cobot/operations-model.yaml.gz";
   }
+  return config;
+}
 
-  // The operations' names for the report, read as the recognition row reads them.
-  std::vector<std::string> operation_names;
-  if (config.cobot.recognition) {
-    Result<sen3bot::cobot::OperationsConfig> operations = sen3bot::cobot::load_operations(config.cobot.operations_path);
-    if (!operations) {
-      std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, operations.error().c_str());
-      return 1;
-    }
-    for (const sen3bot::cobot::Operation& o : operations->operations) operation_names.push_back(o.name);
-  }
+// The operations' names for the report, read as the recognition row reads them (none without
+// recognition).
+Result<std::vector<std::string>> operation_names(const FirmwareConfig& config) {
+  std::vector<std::string> names;
+  if (!config.cobot.recognition) return names;
+  Result<sen3bot::cobot::OperationsConfig> operations = sen3bot::cobot::load_operations(config.cobot.operations_path);
+  if (!operations) return operations.error();
+  for (const sen3bot::cobot::Operation& o : operations->operations) names.push_back(o.name);
+  return names;
+}
 
-  SimulationConfig world = base_world;
-  world.start_pose = kPost;
-  world.seed = seed + index;
-  world.detector.enabled = true;
+// The operator and a bystander, parked out of the robot's view until the director sends them.
+struct CaseScripts {
   OperatorScript op, bystander;
-  op.start(0.0, kOperatorPark, 0.0);
-  bystander.start(0.0, kBystanderPark, 0.0);
-  world.movers = {op.mover(kPersonSizeM), bystander.mover(kPersonSizeM)};
-
-  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
-  if (!created) {
-    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, created.error().c_str());
-    return 1;
+  CaseScripts() {
+    op.start(0.0, kOperatorPark, 0.0);
+    bystander.start(0.0, kBystanderPark, 0.0);
   }
-  SimBoard& board = **created;
-  cobot::SimCameraConfig camera_config;
-  camera_config.camera = nav::CameraCalibration{};
-  Result<std::unique_ptr<cobot::SimCamera>> camera = cobot::SimCamera::create(camera_config, seed * 7919 + index);
-  if (!camera) {
-    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, camera.error().c_str());
-    return 1;
-  }
-  std::FILE* quiet = std::fopen("/dev/null", "w");
-  if (quiet == nullptr) quiet = out;
-  Firmware fw(config, board, quiet);
-  fw.use_camera_frames(&(*camera)->frames());
-  board.referee().watch_estimate(&fw.pose_estimate());
-  board.referee().watch_people(&fw.people());
-  auto fail = [&](const Error& e) {
-    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, e.c_str());
-    fw.shutdown();
-    board.stop();
-    if (quiet != out) std::fclose(quiet);
-    return 1;
-  };
-  if (Status s = board.start(); !s) return fail(s.error());
-  if (Status s = fw.init(); !s) return fail(s.error());
-  tasks::Scheduler& scheduler = fw.scheduler();
-  hal::SimClock& clock = *board.lockstep_clock();
-  world::World& w = board.simulation().world();
-  ScriptFeed op_feed{0}, bystander_feed{1};
-  std::mt19937_64 rng(seed * 1000003 + index);
-  const nav::Pose2D mount = world.laser_mount;
+};
 
-  // The director: attempts one after another, each planned where the robot is when it starts.
-  cobot::AttemptOptions options;
-  std::vector<AttemptPlan> plans;
-  std::vector<std::uint32_t> ids;  // whose tags each keyframe span shows: the newest plan's
-  std::uint32_t wearing = kOperator;
-  enum class Stage : std::uint8_t { asking, following, stepping_in, coming_back, returning, done };
-  Stage stage = Stage::asking;
-  double standing_since_s = -1;
-  double end_s = 0;
-  const double limit_s = 60.0 + 40.0 * static_cast<double>(attempts);
-  const auto wall_start = std::chrono::steady_clock::now();
-  double sim_s = 0, next_progress_s = 0;
-  const std::size_t planned_attempts = spec.kind == CaseKind::collaborate ? 1 : attempts;
+// What the director sees of a slice.
+struct SliceView {
+  double sim_s = 0;
+  nav::Pose2D laser;
+  double standing_since_s = -1;  // -1: the robot moves
+  bool standing = false;
+  bool waiting = false;  // the robot is in wait4col
+};
 
-  auto plan_next = [&](double t0_s) {
-    const nav::Pose2D laser = laser_pose(board.simulation().truth().pose, mount);
-    AttemptKind kind = spec.attempt;
-    std::uint32_t id = plans.size() % 2 == 0 ? kOperator : kSecondOperator;
-    if (kind == AttemptKind::unknown_operator) id = kUnknownOperator;
-    cobot::AttemptOptions o = options;
-    o.twice = spec.kind == CaseKind::requests && kind == AttemptKind::valid;
-    o.leave = spec.kind != CaseKind::collaborate;
-    const AttemptPlan plan = cobot::plan_attempt(op, kind, id, laser, t0_s, o, rng);
-    wearing = id;
-    if (plan.bystander) {
-      // In place when the operator arrives, gone when they leave.
-      const nav::Point2D side{plan.bystander_at.x_m, plan.bystander_at.y_m + (plan.bystander_at.y_m > laser.y_m ? 1.2 : -1.2)};
-      bystander.stand(std::max(0.0, plan.start_s - bystander.end_s()));
-      bystander.walk_to(side, 2.0);
-      bystander.walk_to(plan.bystander_at, 0.8);
-      bystander.stand(std::max(0.0, plan.end_s - bystander.end_s() - 1.5));
-      bystander.walk_to(side, 0.8);
-      bystander.walk_to(kBystanderPark, 2.0);
-      bystander_feed.push(bystander, w);
-    }
-    op_feed.push(op, w);
-    plans.push_back(plan);
-  };
+enum class Stage : std::uint8_t { asking, following, stepping_in, coming_back, returning, done };
 
-  while (sim_s < limit_s && stage != Stage::done) {
-    if (Status s = scheduler.run_lockstep(clock, kSliceNs); !s) return fail(s.error());
-    sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
-    const GroundTruth& truth = board.simulation().truth();
-    const nav::Pose2D laser = laser_pose(truth.pose, mount);
-    // The camera sees the operator's leg band.
-    const cobot::TagWearer wearer{w.mover_position(0), op.facing(sim_s), wearing};
-    (*camera)->step(clock.now(), laser, std::span(&wearer, 1));
+// The director: attempts one after another, each planned where the robot is when it starts;
+// in the collaborate case then the walk the robot follows, and the operator's way back to
+// switch it back.
+class Director {
+ public:
+  Director(const CobotCase& spec, std::size_t planned_attempts, CaseScripts& scripts, world::World& world,
+           std::uint64_t seed)
+      : spec_(spec), planned_(planned_attempts), op_(scripts.op), bystander_(scripts.bystander), world_(world), rng_(seed) {}
 
-    tasks::Sample<msg::CobotState> state;
-    const bool have_state = fw.cobot_state().read(state);
-    const bool collaborative = have_state && state.value.mode == msg::CobotMode::collaborative;
-    const bool standing = std::fabs(truth.speed_m_s) < 0.01;
-    standing_since_s = standing ? (standing_since_s < 0 ? sim_s : standing_since_s) : -1;
-    if (collaborative && !::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
-      result.outside_area_s += hal::to_seconds(kSliceNs);
-    tasks::Sample<msg::OperationEstimate> estimate;
-    if (collaborative && stage == Stage::following && fw.operation().read(estimate) && estimate.value.best >= 0) {
-      const auto best = static_cast<std::size_t>(estimate.value.best);
-      if (best < operation_names.size()) result.operation = operation_names[best];
-      result.operation_probability = estimate.value.probability[best];
-      result.operation_points = estimate.value.points;
-    }
-    if (collaborative && stage == Stage::following) {
-      // The operator leading the robot: how far behind it keeps.
-      const nav::Point2D a = op.at(sim_s - 0.05), b = op.at(sim_s + 0.05);
-      if (std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) / 0.1 > 0.3) {
-        const nav::Point2D o = w.mover_position(0);
-        result.follow.add(std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m));
-      }
-    }
-
-    switch (stage) {
-      case Stage::asking:
-        if (plans.size() < planned_attempts) {
-          const double t0 = plans.empty() ? kFirstAttemptS : op.end_s() + 1.0;
-          if (sim_s + 0.5 >= t0) plan_next(std::max(t0, sim_s + 0.5));
-        } else if (spec.kind == CaseKind::collaborate) {
-          // Through the work area and out of its door into the storage area.
-          // Leading the robot at a pace it can keep (config/sim.yaml: 0.5 m/s at most): round
-          // the workstation's north side, west under the pillar, through the door.
-          op.walk_to({4.3, 2.9}, kLeadingM_s);
-          op.walk_to({4.3, 3.9}, kLeadingM_s);
-          op.walk_to({2.9, 4.1}, kLeadingM_s);
-          op.walk_to({2.9, 5.6}, kLeadingM_s);
-          op.walk_to({2.9, 6.4}, kLeadingM_s);
-          op.stand(2.0);
-          op_feed.push(op, w);
-          stage = Stage::following;
-        } else if (sim_s > op.end_s() + 3.0) {
-          end_s = sim_s;
-          stage = Stage::done;
-        }
-        break;
+  void step(const SliceView& v) {
+    switch (stage_) {
+      case Stage::asking: ask(v); break;
       case Stage::following:
         // Back once the robot has stood at the border a while: up to it first, then, once it
         // stands again, into its camera's view to ask back.
-        if (sim_s > op.end_s() && standing_since_s >= 0 && sim_s - standing_since_s > 1.5) {
-          const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
-          op.walk_to({laser.x_m + 1.4 * c, laser.y_m + 1.4 * s}, 0.6);
-          op.stand(0.5);
-          op_feed.push(op, w);
-          stage = Stage::stepping_in;
-        }
+        if (stood(v, 1.5)) step_up(v.laser);
         break;
       case Stage::stepping_in:
-        if (sim_s > op.end_s() && standing_since_s >= 0 && sim_s - standing_since_s > 1.0) {
-          const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
-          const nav::Point2D stand{laser.x_m + 0.95 * c, laser.y_m + 0.95 * s};
-          op.walk_to(stand, 0.4);
-          const double face = std::atan2(laser.y_m - stand.y_m, laser.x_m - stand.x_m);
-          op.turn_to(face, 0.8);
-          op.stand(2.1);
-          op.turn_to(face + std::numbers::pi, 0.8);
-          op.stand(2.1);
-          op.walk_to({2.9, 6.6}, 0.9);
-          op_feed.push(op, w);
-          stage = Stage::coming_back;
-        }
+        if (stood(v, 1.0)) ask_back(v.laser);
         break;
       case Stage::coming_back:
-        if (sim_s > op.end_s()) stage = Stage::returning;
+        if (v.sim_s > op_.end_s()) stage_ = Stage::returning;
         break;
       case Stage::returning:
-        if (have_state && state.value.mode == msg::CobotMode::wait4col && standing) {
-          end_s = sim_s;
-          stage = Stage::done;
-        }
+        if (v.waiting && v.standing) stage_ = Stage::done;
         break;
       case Stage::done: break;
     }
+  }
+
+  [[nodiscard]] bool done() const noexcept { return stage_ == Stage::done; }
+  [[nodiscard]] bool following() const noexcept { return stage_ == Stage::following; }
+  [[nodiscard]] std::size_t attempts() const noexcept { return plans_.size(); }
+  [[nodiscard]] std::size_t planned() const noexcept { return planned_; }
+  [[nodiscard]] std::uint32_t wearing() const noexcept { return wearing_; }  // whose tags the operator shows
+  [[nodiscard]] const OperatorScript& op() const noexcept { return op_; }
+
+ private:
+  // The operator has finished the script and the robot has stood for more than stood_s.
+  [[nodiscard]] bool stood(const SliceView& v, double stood_s) const {
+    return v.sim_s > op_.end_s() && v.standing_since_s >= 0 && v.sim_s - v.standing_since_s > stood_s;
+  }
+
+  void ask(const SliceView& v) {
+    if (plans_.size() < planned_) {
+      const double t0 = plans_.empty() ? kFirstAttemptS : op_.end_s() + 1.0;
+      if (v.sim_s + 0.5 >= t0) plan_next(std::max(t0, v.sim_s + 0.5), v.laser);
+    } else if (spec_.kind == CaseKind::collaborate) {
+      lead_out();
+    } else if (v.sim_s > op_.end_s() + 3.0) {
+      stage_ = Stage::done;
+    }
+  }
+
+  void plan_next(double t0_s, const nav::Pose2D& laser) {
+    AttemptKind kind = spec_.attempt;
+    std::uint32_t id = plans_.size() % 2 == 0 ? kOperator : kSecondOperator;
+    if (kind == AttemptKind::unknown_operator) id = kUnknownOperator;
+    cobot::AttemptOptions o = options_;
+    o.twice = spec_.kind == CaseKind::requests && kind == AttemptKind::valid;
+    o.leave = spec_.kind != CaseKind::collaborate;
+    const AttemptPlan plan = cobot::plan_attempt(op_, kind, id, laser, t0_s, o, rng_);
+    wearing_ = id;
+    if (plan.bystander) {
+      // In place when the operator arrives, gone when they leave.
+      const nav::Point2D side{plan.bystander_at.x_m, plan.bystander_at.y_m + (plan.bystander_at.y_m > laser.y_m ? 1.2 : -1.2)};
+      bystander_.stand(std::max(0.0, plan.start_s - bystander_.end_s()));
+      bystander_.walk_to(side, 2.0);
+      bystander_.walk_to(plan.bystander_at, 0.8);
+      bystander_.stand(std::max(0.0, plan.end_s - bystander_.end_s() - 1.5));
+      bystander_.walk_to(side, 0.8);
+      bystander_.walk_to(kBystanderPark, 2.0);
+      bystander_feed_.push(bystander_, world_);
+    }
+    op_feed_.push(op_, world_);
+    plans_.push_back(plan);
+  }
+
+  // Through the work area and out of its door into the storage area, leading the robot at a
+  // pace it can keep (config/sim.yaml: 0.5 m/s at most): round the workstation's north side,
+  // west under the pillar, through the door.
+  void lead_out() {
+    op_.walk_to({4.3, 2.9}, kLeadingM_s);
+    op_.walk_to({4.3, 3.9}, kLeadingM_s);
+    op_.walk_to({2.9, 4.1}, kLeadingM_s);
+    op_.walk_to({2.9, 5.6}, kLeadingM_s);
+    op_.walk_to({2.9, 6.4}, kLeadingM_s);
+    op_.stand(2.0);
+    op_feed_.push(op_, world_);
+    stage_ = Stage::following;
+  }
+
+  void step_up(const nav::Pose2D& laser) {
+    const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
+    op_.walk_to({laser.x_m + 1.4 * c, laser.y_m + 1.4 * s}, 0.6);
+    op_.stand(0.5);
+    op_feed_.push(op_, world_);
+    stage_ = Stage::stepping_in;
+  }
+
+  void ask_back(const nav::Pose2D& laser) {
+    const double c = std::cos(laser.theta_rad), s = std::sin(laser.theta_rad);
+    const nav::Point2D stand{laser.x_m + 0.95 * c, laser.y_m + 0.95 * s};
+    op_.walk_to(stand, 0.4);
+    const double face = std::atan2(laser.y_m - stand.y_m, laser.x_m - stand.x_m);
+    op_.turn_to(face, 0.8);
+    op_.stand(2.1);
+    op_.turn_to(face + std::numbers::pi, 0.8);
+    op_.stand(2.1);
+    op_.walk_to({2.9, 6.6}, 0.9);
+    op_feed_.push(op_, world_);
+    stage_ = Stage::coming_back;
+  }
+
+  const CobotCase& spec_;
+  std::size_t planned_;
+  OperatorScript& op_;
+  OperatorScript& bystander_;
+  world::World& world_;
+  ScriptFeed op_feed_{0}, bystander_feed_{1};
+  std::mt19937_64 rng_;
+  cobot::AttemptOptions options_;
+  std::vector<AttemptPlan> plans_;
+  std::uint32_t wearing_ = kOperator;
+  Stage stage_ = Stage::asking;
+};
+
+// A slice's measures: time outside the work area while collaborative; while following, the
+// newest operation estimate and how far behind the walking operator the robot keeps (truth).
+void measure(CaseOutcome& result, const Firmware& fw, const std::vector<std::string>& operation_names,
+             const GroundTruth& truth, const world::World& w, const OperatorScript& op, double sim_s, bool collaborative,
+             bool following) {
+  if (collaborative && !::sen3bot::cobot::inside_polygon(kAssembly, {truth.pose.x_m, truth.pose.y_m}))
+    result.outside_area_s += hal::to_seconds(kSliceNs);
+  if (!collaborative || !following) return;
+  if (tasks::Sample<msg::OperationEstimate> estimate; fw.operation().read(estimate) && estimate.value.best >= 0) {
+    const auto best = static_cast<std::size_t>(estimate.value.best);
+    if (best < operation_names.size()) result.operation = operation_names[best];
+    result.operation_probability = estimate.value.probability[best];
+    result.operation_points = estimate.value.points;
+  }
+  // The operator leading the robot: how far behind it keeps.
+  const nav::Point2D a = op.at(sim_s - 0.05), b = op.at(sim_s + 0.05);
+  if (std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) / 0.1 > 0.3) {
+    const nav::Point2D o = w.mover_position(0);
+    result.follow.add(std::hypot(o.x_m - truth.pose.x_m, o.y_m - truth.pose.y_m));
+  }
+}
+
+// The case's parts while it runs.
+struct CaseRig {
+  const CobotCase& spec;
+  Firmware& fw;
+  SimBoard& board;
+  cobot::SimCamera& camera;
+  Director& director;
+  const std::vector<std::string>& operation_names;
+  nav::Pose2D mount;  // the laser's, on the robot
+};
+
+// The case in lockstep slices until the director is done or the time is up; sim_s the
+// simulated time it ran.
+Status run_slices(CaseRig& rig, double limit_s, CaseOutcome& result, double& sim_s, std::FILE* out) {
+  tasks::Scheduler& scheduler = rig.fw.scheduler();
+  hal::SimClock& clock = *rig.board.lockstep_clock();
+  world::World& w = rig.board.simulation().world();
+  Director& director = rig.director;
+  double standing_since_s = -1;
+  double next_progress_s = 0;
+  while (sim_s < limit_s && !director.done()) {
+    if (Status s = scheduler.run_lockstep(clock, kSliceNs); !s) return s;
+    sim_s = hal::to_seconds(clock.now() - scheduler.start_time_ns());
+    const GroundTruth& truth = rig.board.simulation().truth();
+    const nav::Pose2D laser = laser_pose(truth.pose, rig.mount);
+    // The camera sees the operator's leg band.
+    const cobot::TagWearer wearer{w.mover_position(0), director.op().facing(sim_s), director.wearing()};
+    rig.camera.step(clock.now(), laser, std::span(&wearer, 1));
+
+    tasks::Sample<msg::CobotState> state;
+    const bool have_state = rig.fw.cobot_state().read(state);
+    const bool collaborative = have_state && state.value.mode == msg::CobotMode::collaborative;
+    const bool standing = std::fabs(truth.speed_m_s) < 0.01;
+    standing_since_s = standing ? (standing_since_s < 0 ? sim_s : standing_since_s) : -1;
+    measure(result, rig.fw, rig.operation_names, truth, w, director.op(), sim_s, collaborative, director.following());
+    director.step({sim_s, laser, standing_since_s, standing, have_state && state.value.mode == msg::CobotMode::wait4col});
     if (sim_s >= next_progress_s) {
       std::fprintf(out, "  %-18s t=%6.1f s  robot (%5.2f, %5.2f) m  %-13s toggles %u  refusals %u  attempts %zu/%zu\n",
-                   spec.name, sim_s, truth.pose.x_m, truth.pose.y_m,
+                   rig.spec.name, sim_s, truth.pose.x_m, truth.pose.y_m,
                    have_state ? msg::to_string(state.value.mode) : "-", have_state ? state.value.toggles : 0,
-                   have_state ? state.value.rejections : 0, plans.size(), planned_attempts);
+                   have_state ? state.value.rejections : 0, director.attempts(), director.planned());
       std::fflush(out);
       next_progress_s += 10.0;
     }
   }
-  fw.shutdown();
-  board.stop();
-  result.sim_s = sim_s;
-  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  result.attempts = plans.size();
+  return Status::success();
+}
+
+// After the run: the cobot task's counters, the truth at the end, the camera's and the QR row's.
+void collect(CaseOutcome& result, const CobotCase& spec, const Firmware& fw, SimBoard& board, const cobot::SimCamera& camera) {
   const firmware::CobotTask& task = *fw.cobot();
   result.toggles_on = task.counters().toggles_on;
   result.toggles_off = task.counters().toggles_off;
@@ -394,7 +431,8 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
     result.rejections[r] = task.trigger().rejections(static_cast<TriggerRejection>(r));
   result.not_the_operator = task.mode().refusals(::sen3bot::cobot::ModeRefusal::not_the_operator);
   const bool asks = spec.attempt == AttemptKind::valid;
-  result.expected_toggles = !asks ? 0 : spec.kind == CaseKind::collaborate ? 2 : 2 * static_cast<std::uint32_t>(plans.size());
+  result.expected_toggles =
+      !asks ? 0 : spec.kind == CaseKind::collaborate ? 2 : 2 * static_cast<std::uint32_t>(result.attempts);
   const std::uint32_t toggles = result.toggles_on + result.toggles_off;
   result.false_toggles = toggles > result.expected_toggles ? toggles - result.expected_toggles : 0;
   const GroundTruth& truth = board.simulation().truth();
@@ -403,21 +441,19 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
   result.waiting_at_end = fw.cobot_state().read(state) && state.value.mode == msg::CobotMode::wait4col;
   result.contacts = board.referee().report().contacts;
   result.moving_contacts = board.referee().report().moving_contacts;
-  result.frames_rendered = (*camera)->frames_rendered();
+  result.frames_rendered = camera.frames_rendered();
   if (tasks::Sample<msg::TagFrame> tags; fw.tags().read(tags)) {
     result.frames_searched = tags.value.frames_searched;
     result.tags_read = tags.value.tags_read;
   }
   result.worker_path_points = task.recorder().size();
-  for (std::size_t i = 0; i < scheduler.task_count(); ++i) result.stats.push_back(scheduler.stats(i));
-  result.passed = check(result);
-  (void)end_s;
+}
 
-  std::uint32_t refused = result.not_the_operator;
-  for (const std::uint32_t r : result.rejections) refused += r;
-  std::fprintf(out, "  %s: %zu attempt%s, %u toggle%s (%u expected, %u false), %u refused", spec.name, result.attempts,
-               result.attempts == 1 ? "" : "s", toggles, toggles == 1 ? "" : "s", result.expected_toggles,
-               result.false_toggles, refused);
+void print_outcome(std::FILE* out, const CaseOutcome& result) {
+  const std::uint32_t toggles = result.toggles_on + result.toggles_off;
+  std::fprintf(out, "  %s: %zu attempt%s, %u toggle%s (%u expected, %u false), %u refused", result.name.c_str(),
+               result.attempts, result.attempts == 1 ? "" : "s", toggles, toggles == 1 ? "" : "s", result.expected_toggles,
+               result.false_toggles, refusals(result));
   for (std::size_t r = 0; r < result.rejections.size(); ++r)
     if (result.rejections[r] > 0)
       std::fprintf(out, " %s=%u", ::sen3bot::cobot::to_string(static_cast<TriggerRejection>(r)), result.rejections[r]);
@@ -435,18 +471,76 @@ int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfi
                static_cast<unsigned long long>(result.frames_rendered),
                static_cast<unsigned long long>(result.frames_searched), static_cast<unsigned long long>(result.tags_read),
                result.passed ? "passed" : "FAILED", result.sim_s, result.wall_s);
-  if (!report_dir.empty()) {
-    const std::string png = report_dir + "/" + result.name + ".png";
-    figure::CaseFigure figure =
-        case_figure("case " + std::to_string(index + 1) + "/" + std::to_string(kCases.size()) + ": " + result.name,
-                    std::string("cobot: ") + spec.description, config, fw, board);
-    figure.goals = {{kPost.x_m, kPost.y_m}};
-    figure.result = std::to_string(toggles) + " toggles (" + std::to_string(result.expected_toggles) + " expected), " +
-                    std::to_string(refused) + " refused, " + std::to_string(result.moving_contacts) + " contacts";
-    figure.passed = result.passed;
-    if (!draw_case_figure(figure).write_png(png)) std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
+}
+
+void write_case_figure(const std::string& report_dir, const CobotCase& spec, std::size_t index, const CaseOutcome& result,
+                       const FirmwareConfig& config, const Firmware& fw, SimBoard& board, std::FILE* err) {
+  const std::string png = report_dir + "/" + result.name + ".png";
+  figure::CaseFigure figure =
+      case_figure("case " + std::to_string(index + 1) + "/" + std::to_string(kCases.size()) + ": " + result.name,
+                  std::string("cobot: ") + spec.description, config, fw, board);
+  figure.goals = {{kPost.x_m, kPost.y_m}};
+  figure.result = std::to_string(result.toggles_on + result.toggles_off) + " toggles (" +
+                  std::to_string(result.expected_toggles) + " expected), " + std::to_string(refusals(result)) +
+                  " refused, " + std::to_string(result.moving_contacts) + " contacts";
+  figure.passed = result.passed;
+  if (!draw_case_figure(figure).write_png(png)) std::fprintf(err, "sen3bot-sim sim: cannot write %s\n", png.c_str());
+}
+
+int run_cobot_case(const CobotCase& spec, std::size_t index, const FirmwareConfig& base, const SimulationConfig& base_world,
+                   const std::string& folder, std::size_t attempts, std::uint64_t seed, const std::string& report_dir,
+                   CaseOutcome& result, std::FILE* out, std::FILE* err) {
+  result.name = spec.name;
+  result.description = spec.description;
+  result.kind = spec.kind;
+  const FirmwareConfig config = case_config(base, folder);
+  const Result<std::vector<std::string>> names = operation_names(config);
+  if (!names) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, names.error().c_str());
+    return 1;
   }
-  if (quiet != out) std::fclose(quiet);
+
+  SimulationConfig world = base_world;
+  world.start_pose = kPost;
+  world.seed = seed + index;
+  world.detector.enabled = true;
+  CaseScripts scripts;
+  world.movers = {scripts.op.mover(kPersonSizeM), scripts.bystander.mover(kPersonSizeM)};
+
+  Result<std::unique_ptr<SimBoard>> created = SimBoard::create(world, true);
+  if (!created) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, created.error().c_str());
+    return 1;
+  }
+  SimBoard& board = **created;
+  cobot::SimCameraConfig camera_config;
+  camera_config.camera = nav::CameraCalibration{};
+  Result<std::unique_ptr<cobot::SimCamera>> camera = cobot::SimCamera::create(camera_config, seed * 7919 + index);
+  if (!camera) {
+    std::fprintf(err, "sen3bot-sim sim: %s: %s\n", spec.name, camera.error().c_str());
+    return 1;
+  }
+  const QuietLog quiet(out);
+  Firmware fw(config, board, quiet.file());
+  fw.use_camera_frames(&(*camera)->frames());
+  if (Status s = start_case(fw, board); !s) return stop_case(fw, board, spec.name, s.error(), err);
+  Director director(spec, spec.kind == CaseKind::collaborate ? 1 : attempts, scripts, board.simulation().world(),
+                    seed * 1000003 + index);
+  CaseRig rig{spec, fw, board, **camera, director, *names, world.laser_mount};
+  const double limit_s = 60.0 + 40.0 * static_cast<double>(attempts);
+  const auto wall_start = std::chrono::steady_clock::now();
+  double sim_s = 0;
+  if (Status s = run_slices(rig, limit_s, result, sim_s, out); !s) return stop_case(fw, board, spec.name, s.error(), err);
+  fw.shutdown();
+  board.stop();
+  result.sim_s = sim_s;
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.attempts = director.attempts();
+  collect(result, spec, fw, board, **camera);
+  for (std::size_t i = 0; i < fw.scheduler().task_count(); ++i) result.stats.push_back(fw.scheduler().stats(i));
+  result.passed = check(result);
+  print_outcome(out, result);
+  if (!report_dir.empty()) write_case_figure(report_dir, spec, index, result, config, fw, board, err);
   return 0;
 }
 
@@ -554,11 +648,9 @@ int cobot_scenario(const std::string& config_path, const std::string& report_dir
   }
   std::fprintf(out, "\nsummary of cobot:\n");
   for (const CaseOutcome& r : results) {
-    std::uint32_t refused = r.not_the_operator;
-    for (const std::uint32_t x : r.rejections) refused += x;
     std::fprintf(out, "  %-18s %-7s attempts %2zu  toggles %2u/%-2u  false %u  refused %2u\n", r.name.c_str(),
                  r.passed ? "passed" : "FAILED", r.attempts, r.toggles_on + r.toggles_off, r.expected_toggles,
-                 r.false_toggles, refused);
+                 r.false_toggles, refusals(r));
   }
   if (!report_dir.empty()) {
     const std::string json = report_dir + "/report.json";

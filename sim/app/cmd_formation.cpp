@@ -332,15 +332,18 @@ void write_run(json::Writer& w, std::size_t index, const RunResult& r) {
   w.end_array().end_object();
 }
 
-}  // namespace
-
-int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+struct FormationOptions {
   int number = 0;
   std::string report_dir;
   std::string config_path;
   std::uint64_t runs = 1;
   std::uint64_t seed = 1;
   double duration_s = -1;
+  bool help = false;  // --help: the usage, nothing run
+};
+
+// 0, or the exit status of a bad command line (said on err); --help ends the parsing.
+int parse_formation(int argc, char** argv, FormationOptions& o, std::FILE* err) {
   for (int i = 0; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](std::string& v) {
@@ -350,150 +353,204 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     };
     std::string v;
     if (arg == "--help" || arg == "-h") {
-      std::fprintf(out, "usage: sen3bot-sim formation --example 1|2|3 [--report DIR] [--runs N] [--seed S] [--duration S] "
-                        "[--config FILE]\n");
+      o.help = true;
       return 0;
     } else if (arg == "--example") {
       if (!value(v)) return fail(err, "--example: expected 1, 2 or 3");
       if (v == "1" || v == "2" || v == "3")
-        number = v[0] - '0';
+        o.number = v[0] - '0';
       else
         return fail(err, "--example: expected 1, 2 or 3, got '" + v + "'");
     } else if (arg == "--report") {
-      if (!value(report_dir) || report_dir.empty()) return fail(err, "--report: expected a folder");
+      if (!value(o.report_dir) || o.report_dir.empty()) return fail(err, "--report: expected a folder");
     } else if (arg == "--config") {
-      if (!value(config_path) || config_path.empty()) return fail(err, "--config: expected a file");
+      if (!value(o.config_path) || o.config_path.empty()) return fail(err, "--config: expected a file");
     } else if (arg == "--runs") {
-      if (!value(v) || !parse_count(v, runs) || runs < 1 || runs > 10000)
+      if (!value(v) || !parse_count(v, o.runs) || o.runs < 1 || o.runs > 10000)
         return fail(err, "--runs: expected a whole number from 1 to 10000, got '" + v + "'");
     } else if (arg == "--seed") {
-      if (!value(v) || !parse_count(v, seed)) return fail(err, "--seed: expected a whole number, got '" + v + "'");
+      if (!value(v) || !parse_count(v, o.seed)) return fail(err, "--seed: expected a whole number, got '" + v + "'");
     } else if (arg == "--duration") {
-      if (!value(v) || !parse_number(v, duration_s) || duration_s <= 0 || duration_s > 3600)
+      if (!value(v) || !parse_number(v, o.duration_s) || o.duration_s <= 0 || o.duration_s > 3600)
         return fail(err, "--duration: expected seconds above 0, at most 3600, got '" + v + "'");
     } else {
       return fail(err, "unknown argument '" + arg + "' (try --help)");
     }
   }
-  if (number == 0) return fail(err, "--example: missing (1 targets, 2 patrol, 3 leader)");
-  const FormationExample& ex = *formation_example(number);
-  if (duration_s < 0) duration_s = ex.duration_s;
-  if (!report_dir.empty() && ::mkdir(report_dir.c_str(), 0755) != 0 && errno != EEXIST)
-    return fail(err, "--report: cannot create " + report_dir + ": " + std::strerror(errno), 1);
+  return 0;
+}
+
+// One run from `starts` for duration_s, with a progress line every 10 s when `progress`; the
+// rig, shut down, with its samples and metrics.
+Result<std::unique_ptr<FormationRig>> run_formation(const FormationExample& ex, const std::vector<formation::Pose>& starts,
+                                                    const FormationRunOptions& options, double duration_s, bool progress,
+                                                    std::FILE* out) {
+  auto rig = FormationRig::create(ex, starts, options);
+  if (!rig) return rig.error();
+  FormationRig& g = **rig;
+  double next_progress_s = 10;
+  const auto slices = static_cast<std::int64_t>(std::llround(duration_s * 1e9 / static_cast<double>(kFormationSliceNs)));
+  for (std::int64_t k = 0; k < slices; ++k) {
+    if (Status s = g.advance(); !s) return s.error();
+    if (progress && g.t_s() + 1e-9 >= next_progress_s && !g.samples().empty()) {
+      next_progress_s += 10;
+      std::fprintf(out, "  t=%5.1f s of %.0f s  formation error %.3f m (the centre's estimate %.3f m)  F %.2f  closest %.2f m\n",
+                   g.t_s(), duration_s, g.samples().back().formation_error_m, g.service().controller().last().formation_error_m,
+                   g.samples().back().scale, g.min_robot_distance_m());
+      std::fflush(out);
+    }
+  }
+  g.shutdown();
+  return rig;
+}
+
+void print_run(std::FILE* out, std::uint64_t run, std::uint64_t runs, const FormationMetrics& m) {
+  std::fprintf(out, "run %llu/%llu: %s  min distance %.3f m, %llu contacts, targets %zu, formation error %.3f m, converged %s "
+                    "(on the centre's estimates %s), %zu switches, min F %.3f\n",
+               static_cast<unsigned long long>(run + 1), static_cast<unsigned long long>(runs), m.passed ? "ok" : "FAILED",
+               m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
+               m.converge_s < 0 ? "never" : fmt("at %.1f s", m.converge_s).c_str(),
+               m.centre_converge_s < 0 ? "never" : fmt("at %.1f s", m.centre_converge_s).c_str(), m.switches_s.size(), m.min_scale);
+  for (const std::string& f : m.failures) std::fprintf(out, "  %s\n", f.c_str());
+  std::fflush(out);
+}
+
+// The runs taken together: the worst of each measure.
+struct Summary {
+  double worst_distance = 1e9, worst_error = 0, worst_converge = 0, worst_centre_converge = 0, least_scale = 1;
+  std::uint64_t contacts = 0;
+  std::size_t min_targets = 0, passed = 0;
+  bool all_converged = true;
+};
+
+Summary summarize(const FormationExample& ex, const std::vector<RunResult>& results) {
+  Summary s;
+  s.min_targets = ex.targets.size();
+  for (const RunResult& r : results) {
+    const FormationMetrics& m = r.metrics;
+    s.worst_distance = std::min(s.worst_distance, m.min_robot_distance_m);
+    s.worst_error = std::max(s.worst_error, m.formation_error_m);
+    s.contacts += m.obstacle_contacts;
+    s.min_targets = std::min(s.min_targets, m.targets_reached);
+    if (m.converge_s < 0) s.all_converged = false;
+    s.worst_converge = std::max(s.worst_converge, m.converge_s);
+    s.worst_centre_converge = m.centre_converge_s < 0 || s.worst_centre_converge < 0
+                                  ? -1.0
+                                  : std::max(s.worst_centre_converge, m.centre_converge_s);
+    s.least_scale = std::min(s.least_scale, m.min_scale);
+    s.passed += m.passed ? 1 : 0;
+  }
+  return s;
+}
+
+void print_summary(std::FILE* out, const FormationExample& ex, std::size_t runs, const Summary& s) {
+  std::fprintf(out, "\nexample %d over %zu run%s: %zu passed; worst min distance %.3f m (bound %.2f), %llu contacts, ", ex.number,
+               runs, runs == 1 ? "" : "s", s.passed, s.worst_distance, 2 * kFormationRadiusM,
+               static_cast<unsigned long long>(s.contacts));
+  if (ex.config.task == formation::TaskKind::targets) std::fprintf(out, "fewest targets reached %zu of %zu, ", s.min_targets, ex.targets.size());
+  std::fprintf(out, "worst formation error %.3f m, slowest convergence %s\n", s.worst_error,
+               s.all_converged ? fmt("%.1f s", s.worst_converge).c_str() : "never (a run did not converge)");
+}
+
+Result<std::string> formation_json(const FormationExample& ex, const FormationOptions& o, double duration_s,
+                                   const std::vector<RunResult>& results, const Summary& s) {
+  std::string json;
+  json::StringSink sink(json);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .line(2).member_int64("example", ex.number)
+      .line(2).member("name", ex.name)
+      .line(2).member("description", ex.description)
+      .line(2).member_uint64("robots", ex.starts.size())
+      .line(2).key("robot_radius_m").fixed_or_null(kFormationRadiusM, 2)
+      .line(2).key("offset_m").fixed_or_null(kFormationOffsetM, 2)
+      .line(2).key("duration_s").fixed_or_null(duration_s, 1)
+      .line(2).member_uint64("seed", o.seed)
+      .line(2).key("runs").begin_array();
+  for (std::size_t i = 0; i < results.size(); ++i) write_run(w.line(4), i, results[i]);
+  w.line(2).end_array()
+      .line(2).key("summary").begin_object()
+      .member_uint64("runs", results.size())
+      .member_uint64("runs_passed", s.passed)
+      .key("min_robot_distance_m").fixed_or_null(s.worst_distance, 4)
+      .member_uint64("obstacle_contacts", s.contacts)
+      .member_uint64("targets_reached", ex.config.task == formation::TaskKind::targets ? s.min_targets : std::size_t{0})
+      .key("formation_error_m").fixed_or_null(s.worst_error, 4)
+      .key("converge_s").fixed_or_null(s.all_converged ? s.worst_converge : -1.0, 1)
+      .key("centre_converge_s").fixed_or_null(s.worst_centre_converge, 1)
+      .key("min_scale").fixed_or_null(s.least_scale, 4)
+      .end_object()
+      .line(0)
+      .end_object();
+  if (auto written = w.finish(); !written) return written.error();
+  return json;
+}
+
+// formation.json, distances.csv and the two figures; 0, or the exit status of a failure (said
+// on err).
+int write_report(const FormationExample& ex, const FormationOptions& o, double duration_s, const std::vector<RunResult>& results,
+                 const Summary& s, const Record& record, std::FILE* out, std::FILE* err) {
+  Result<std::string> json = formation_json(ex, o, duration_s, results, s);
+  if (!json) return fail(err, std::string("formation.json: ") + json.error().c_str(), 1);
+  *json += '\n';
+  const std::string base = o.report_dir + "/";
+  if (!write_text(base + "formation.json", *json)) return fail(err, "cannot write " + base + "formation.json", 1);
+  if (!write_text(base + "distances.csv", distances_csv(ex, record))) return fail(err, "cannot write " + base + "distances.csv", 1);
+  if (!draw_trajectories(base + "trajectories.png", ex, record, results.front().metrics, duration_s))
+    return fail(err, "cannot write " + base + "trajectories.png", 1);
+  if (!draw_distances(base + "distances.png", ex, record, duration_s))
+    return fail(err, "cannot write " + base + "distances.png", 1);
+  std::fprintf(out, "report: %sformation.json, trajectories.png, distances.png, distances.csv\n", base.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
+  FormationOptions o;
+  if (int rc = parse_formation(argc, argv, o, err); rc != 0) return rc;
+  if (o.help) {
+    std::fprintf(out, "usage: sen3bot-sim formation --example 1|2|3 [--report DIR] [--runs N] [--seed S] [--duration S] "
+                      "[--config FILE]\n");
+    return 0;
+  }
+  if (o.number == 0) return fail(err, "--example: missing (1 targets, 2 patrol, 3 leader)");
+  const FormationExample& ex = *formation_example(o.number);
+  const double duration_s = o.duration_s < 0 ? ex.duration_s : o.duration_s;
+  if (!o.report_dir.empty() && ::mkdir(o.report_dir.c_str(), 0755) != 0 && errno != EEXIST)
+    return fail(err, "--report: cannot create " + o.report_dir + ": " + std::strerror(errno), 1);
 
   std::fprintf(out, "formation example %d (%s): %s\n", ex.number, ex.name, ex.description);
   std::fflush(out);
-  std::mt19937_64 rng(seed);
+  std::mt19937_64 rng(o.seed);
   FormationRunOptions options;
-  options.config_path = config_path;
-  options.seed = seed;
+  options.config_path = o.config_path;
+  options.seed = o.seed;
   std::vector<RunResult> results;
   Record record;
   std::unique_ptr<FormationRig> first;  // run 0's rig, kept for the figures (its map and curve)
-  for (std::uint64_t run = 0; run < runs; ++run) {
+  for (std::uint64_t run = 0; run < o.runs; ++run) {
     RunResult& r = results.emplace_back();
     r.starts = run == 0 ? ex.starts : perturbed_starts(ex, rng);
-    auto rig = FormationRig::create(ex, r.starts, options);
+    auto rig = run_formation(ex, r.starts, options, duration_s, o.runs == 1, out);
     if (!rig) return fail(err, std::string("run ") + std::to_string(run) + ": " + rig.error().c_str(), 1);
-    FormationRig& g = **rig;
-    double next_progress_s = 10;
-    const auto slices = static_cast<std::int64_t>(std::llround(duration_s * 1e9 / static_cast<double>(kFormationSliceNs)));
-    for (std::int64_t k = 0; k < slices; ++k) {
-      if (Status s = g.advance(); !s) return fail(err, std::string("run ") + std::to_string(run) + ": " + s.error().c_str(), 1);
-      if (runs == 1 && g.t_s() + 1e-9 >= next_progress_s && !g.samples().empty()) {
-        next_progress_s += 10;
-        std::fprintf(out, "  t=%5.1f s of %.0f s  formation error %.3f m (the centre's estimate %.3f m)  F %.2f  closest %.2f m\n",
-                     g.t_s(), duration_s, g.samples().back().formation_error_m, g.service().controller().last().formation_error_m,
-                     g.samples().back().scale, g.min_robot_distance_m());
-        std::fflush(out);
-      }
-    }
-    g.shutdown();
-    r.metrics = g.metrics();
-    const FormationMetrics& m = r.metrics;
-    std::fprintf(out, "run %llu/%llu: %s  min distance %.3f m, %llu contacts, targets %zu, formation error %.3f m, converged %s "
-                      "(on the centre's estimates %s), %zu switches, min F %.3f\n",
-                 static_cast<unsigned long long>(run + 1), static_cast<unsigned long long>(runs), m.passed ? "ok" : "FAILED",
-                 m.min_robot_distance_m, static_cast<unsigned long long>(m.obstacle_contacts), m.targets_reached, m.formation_error_m,
-                 m.converge_s < 0 ? "never" : fmt("at %.1f s", m.converge_s).c_str(),
-                 m.centre_converge_s < 0 ? "never" : fmt("at %.1f s", m.centre_converge_s).c_str(), m.switches_s.size(), m.min_scale);
-    for (const std::string& f : m.failures) std::fprintf(out, "  %s\n", f.c_str());
-    std::fflush(out);
+    r.metrics = (*rig)->metrics();
+    print_run(out, run, o.runs, r.metrics);
     if (run == 0) {
-      record.samples = g.samples();
-      record.switches_s = g.switches_s();
-      const auto curve = g.service().controller().curve_points();
+      record.samples = (*rig)->samples();
+      record.switches_s = (*rig)->switches_s();
+      const auto curve = (*rig)->service().controller().curve_points();
       record.curve.assign(curve.begin(), curve.end());
       first = std::move(rig.value());
       record.map = &first->map();
     }
   }
 
-  // Over the runs.
-  double worst_distance = 1e9, worst_error = 0, worst_converge = 0, worst_centre_converge = 0, least_scale = 1;
-  std::uint64_t contacts = 0;
-  std::size_t min_targets = ex.targets.size(), passed = 0;
-  bool all_converged = true;
-  for (const RunResult& r : results) {
-    const FormationMetrics& m = r.metrics;
-    worst_distance = std::min(worst_distance, m.min_robot_distance_m);
-    worst_error = std::max(worst_error, m.formation_error_m);
-    contacts += m.obstacle_contacts;
-    min_targets = std::min(min_targets, m.targets_reached);
-    if (m.converge_s < 0) all_converged = false;
-    worst_converge = std::max(worst_converge, m.converge_s);
-    worst_centre_converge = m.centre_converge_s < 0 || worst_centre_converge < 0 ? -1.0 : std::max(worst_centre_converge, m.centre_converge_s);
-    least_scale = std::min(least_scale, m.min_scale);
-    passed += m.passed ? 1 : 0;
-  }
-  std::fprintf(out, "\nexample %d over %zu run%s: %zu passed; worst min distance %.3f m (bound %.2f), %llu contacts, ", ex.number,
-               results.size(), results.size() == 1 ? "" : "s", passed, worst_distance, 2 * kFormationRadiusM,
-               static_cast<unsigned long long>(contacts));
-  if (ex.config.task == formation::TaskKind::targets) std::fprintf(out, "fewest targets reached %zu of %zu, ", min_targets, ex.targets.size());
-  std::fprintf(out, "worst formation error %.3f m, slowest convergence %s\n", worst_error,
-               all_converged ? fmt("%.1f s", worst_converge).c_str() : "never (a run did not converge)");
-
-  if (!report_dir.empty()) {
-    std::string json;
-    json::StringSink sink(json);
-    json::Writer w(sink, json::Style::spaced);
-    w.begin_object()
-        .line(2).member_int64("example", ex.number)
-        .line(2).member("name", ex.name)
-        .line(2).member("description", ex.description)
-        .line(2).member_uint64("robots", ex.starts.size())
-        .line(2).key("robot_radius_m").fixed_or_null(kFormationRadiusM, 2)
-        .line(2).key("offset_m").fixed_or_null(kFormationOffsetM, 2)
-        .line(2).key("duration_s").fixed_or_null(duration_s, 1)
-        .line(2).member_uint64("seed", seed)
-        .line(2).key("runs").begin_array();
-    for (std::size_t i = 0; i < results.size(); ++i) write_run(w.line(4), i, results[i]);
-    w.line(2).end_array()
-        .line(2).key("summary").begin_object()
-        .member_uint64("runs", results.size())
-        .member_uint64("runs_passed", passed)
-        .key("min_robot_distance_m").fixed_or_null(worst_distance, 4)
-        .member_uint64("obstacle_contacts", contacts)
-        .member_uint64("targets_reached", ex.config.task == formation::TaskKind::targets ? min_targets : std::size_t{0})
-        .key("formation_error_m").fixed_or_null(worst_error, 4)
-        .key("converge_s").fixed_or_null(all_converged ? worst_converge : -1.0, 1)
-        .key("centre_converge_s").fixed_or_null(worst_centre_converge, 1)
-        .key("min_scale").fixed_or_null(least_scale, 4)
-        .end_object()
-        .line(0)
-        .end_object();
-    if (auto written = w.finish(); !written) return fail(err, std::string("formation.json: ") + written.error().c_str(), 1);
-    json += '\n';
-    const std::string base = report_dir + "/";
-    if (!write_text(base + "formation.json", json)) return fail(err, "cannot write " + base + "formation.json", 1);
-    if (!write_text(base + "distances.csv", distances_csv(ex, record))) return fail(err, "cannot write " + base + "distances.csv", 1);
-    if (!draw_trajectories(base + "trajectories.png", ex, record, results.front().metrics, duration_s))
-      return fail(err, "cannot write " + base + "trajectories.png", 1);
-    if (!draw_distances(base + "distances.png", ex, record, duration_s))
-      return fail(err, "cannot write " + base + "distances.png", 1);
-    std::fprintf(out, "report: %sformation.json, trajectories.png, distances.png, distances.csv\n", base.c_str());
-  }
-  return passed == results.size() ? 0 : 1;
+  const Summary summary = summarize(ex, results);
+  print_summary(out, ex, results.size(), summary);
+  if (!o.report_dir.empty())
+    if (int rc = write_report(ex, o, duration_s, results, summary, record, out, err); rc != 0) return rc;
+  return summary.passed == results.size() ? 0 : 1;
 }
 
 }  // namespace sen3bot::sim

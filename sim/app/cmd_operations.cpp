@@ -397,6 +397,166 @@ int parse_experiment(int argc, char** argv, ExperimentOptions& o, std::FILE* err
   return 0;
 }
 
+// What the experiment found: per model (the order-encoded one, then the occupancy-only
+// baseline unless --no-baseline) its evaluation on the test walks and its reversal test.
+struct Findings {
+  std::vector<operations::Labelled> results;
+  std::vector<Reversal> reversals;
+  cobot::TrainingReport baseline_report;
+  double baseline_generate_s = 0;
+  [[nodiscard]] const Evaluation& ours() const { return results.front().evaluation; }
+  [[nodiscard]] bool accuracy_met() const { return ours().accuracy >= kTargetAccuracy; }
+  [[nodiscard]] bool progressive_met() const { return ours().confident[kTargetStep] >= kTargetConfident; }
+};
+
+// The held-out workers: their own seed stream, so none of them was seen in training.
+Result<std::vector<LabelledPath>> test_walks(Site& site, const cobot::WorkerStyle& style, const ExperimentOptions& o,
+                                             std::FILE* out) {
+  const auto generate_start = std::chrono::steady_clock::now();
+  cobot::DatasetSpec spec;
+  spec.styles = std::span<const cobot::WorkerStyle>(&style, 1);
+  spec.per_operation = o.runs;
+  spec.seed = o.seed;
+  spec.purpose = cobot::kTestSeeds;
+  spec.records_first_task = o.first_task;
+  Result<std::vector<LabelledPath>> test = cobot::generate_paths(*site.workers, spec);
+  if (!test) return test.error();
+  std::fprintf(out, "  generated %zu walks (%.0f points on average) in %.1f s\n", test->size(), mean_points(*test),
+               seconds_since(generate_start));
+  std::fflush(out);
+  return test;
+}
+
+// The thesis' input (the drawn path, no order) with the same classifier and training: trained
+// here, evaluated and reversed as the shipped model was. 0, or the exit status of a failure.
+int run_baseline(Site& site, const ExperimentOptions& o, const std::vector<LabelledPath>& test, Findings& found,
+                 std::FILE* out, std::FILE* err) {
+  std::fprintf(out, "  source-style comparison: training on the occupancy image alone (%zu walks per operation)\n",
+               o.baseline_plan.per_class);
+  std::fflush(out);
+  Result<Trained> baseline = train(site, o.baseline_plan, out);
+  if (!baseline) {
+    std::fprintf(err, "%s: %s\n", kExperimentName, baseline.error().c_str());
+    return 1;
+  }
+  found.baseline_report = baseline->report;
+  found.baseline_generate_s = baseline->generate_s;
+  Result<Evaluation> b = cobot::evaluate(*baseline->recognizer, test, kConfidentProbability);
+  if (!b) return bad(err, kExperimentName, b.error().c_str());
+  std::fprintf(out, "  occupancy-only model: accuracy %.3f\n", b->accuracy);
+  found.results.push_back({"occupancy only (thesis input)", std::move(*b)});
+  Result<Reversal> r = reversal_test(*baseline->recognizer, site.config, test);
+  if (!r) return bad(err, kExperimentName, r.error().c_str());
+  found.reversals.push_back(*r);
+  return 0;
+}
+
+void print_findings(std::FILE* out, const cobot::WorkerStyle& style, std::size_t walks, const Findings& found) {
+  const Evaluation& ours = found.ours();
+  std::fprintf(out, "\nprogressive test (%zu %s walks; prefixes of each recorded path):\n", walks, style.name.c_str());
+  for (const operations::Labelled& r : found.results) print_table(out, r.label.c_str(), r.evaluation);
+  std::fprintf(out, "\nconfusion, whole paths (order-encoded):\n");
+  print_confusion(out, ours);
+  if (found.results.size() > 1) {
+    std::fprintf(out, "confusion, whole paths (occupancy only):\n");
+    print_confusion(out, found.results[1].evaluation);
+  }
+
+  if (found.reversals.front().paths > 0) {
+    std::fprintf(out, "reversal test (%zu walks of operations with a reversed twin, played backwards):",
+                 found.reversals.front().paths);
+    for (std::size_t k = 0; k < found.reversals.size(); ++k)
+      std::fprintf(out, "%s %s %.3f", k ? "," : "", found.results[k].label.c_str(), found.reversals[k].accuracy());
+    std::fprintf(out, "\n");
+  }
+
+  const bool accuracy_met = found.accuracy_met();
+  const bool progressive_met = found.progressive_met();
+  std::fprintf(out, "\ntargets: accuracy %.3f %s 0.97 (%s); right operation above 0.95 at 60 %% for %.1f %% of paths %s 95 %% (%s)\n",
+               ours.accuracy, accuracy_met ? ">=" : "<", accuracy_met ? "met" : "NOT met",
+               100 * ours.confident[kTargetStep], progressive_met ? ">=" : "<", progressive_met ? "met" : "NOT met");
+}
+
+// --save-paths: the walks as a paths file for `sen3bot recognize`.
+bool save_paths(const std::string& path, const Site& site, const cobot::WorkerStyle& style,
+                const std::vector<LabelledPath>& test) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  std::size_t index = 0;
+  for (const LabelledPath& p : test) {
+    cobot::PathRecord r{style.name + "-" + std::to_string(index++), site.config.operations[p.operation].name, p.xy};
+    f << cobot::path_line(r) << '\n';
+  }
+  return static_cast<bool>(f.flush());
+}
+
+bool write_report_json(const std::string& path, const ExperimentOptions& o, const cobot::WorkerStyle& style, bool held_out,
+                       const std::vector<LabelledPath>& test, const Findings& found) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) return false;
+  json::FileSink sink(f);
+  json::Writer w(sink, json::Style::spaced);
+  w.begin_object()
+      .line(2).member("experiment", "operations")
+      .line(2).member("operations_file", o.operations_path)
+      .line(2).member("model", o.model_path)
+      .line(2).member("style", style.name)
+      .line(2).member_bool("held_out_style", held_out)
+      .line(2).member_uint64("runs_per_operation", o.runs)
+      .line(2).member_uint64("seed", o.seed)
+      .line(2).member_bool("recorded_from_first_task", o.first_task);
+  write_evaluation(w, found.ours(), 2);
+  w.line(2).key("targets").begin_object()
+      .key("accuracy").fixed_or_null(kTargetAccuracy, 2)
+      .member_bool("accuracy_met", found.accuracy_met())
+      .key("confident_at_60_percent").fixed_or_null(kTargetConfident, 2)
+      .member_bool("confident_met", found.progressive_met())
+      .end_object();
+  if (found.results.size() > 1) {
+    w.line(2).key("source_style").begin_object()
+        .line(4).member("encoding", "occupancy")
+        .line(4).member_uint64("training_walks_per_operation", o.baseline_plan.per_class)
+        .line(4).key("training_s").fixed_or_null(found.baseline_report.seconds, 3)
+        .line(4).key("generation_s").fixed_or_null(found.baseline_generate_s, 3);
+    write_evaluation(w, found.results[1].evaluation, 4);
+    w.line(2).end_object();
+  }
+  w.line(2).key("reversal").begin_object()
+      .member_uint64("paths", found.reversals.front().paths)
+      .key("order_encoded_accuracy").fixed_or_null(found.reversals.front().accuracy(), 6);
+  if (found.reversals.size() > 1) w.key("occupancy_only_accuracy").fixed_or_null(found.reversals[1].accuracy(), 6);
+  w.end_object();
+  w.line(2).key("timing").begin_object()
+      .key("classify_us_median").fixed_or_null(found.ours().median_us, 3)
+      .key("points_mean").fixed_or_null(mean_points(test), 1)
+      .end_object();
+  w.line(0).end_object();
+  const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
+  return std::fclose(f) == 0 && written;
+}
+
+// confusion.png, progressive.png and paths.png (the first test walk of each operation).
+bool draw_figures(const std::string& report_dir, const std::string& subtitle, const Site& site,
+                  const std::vector<LabelledPath>& test, const Findings& found) {
+  bool ok = operations::draw_confusion("Operation recognition: whole paths", subtitle, found.results)
+                .write_png(report_dir + "/confusion.png");
+  ok = operations::draw_progressive("Operation recognition as the path grows", subtitle, found.results, kConfidentProbability)
+           .write_png(report_dir + "/progressive.png") && ok;
+  std::vector<operations::ExamplePath> examples;
+  for (std::size_t op = 0; op < site.config.operations.size(); ++op) {
+    for (const LabelledPath& p : test) {
+      if (p.operation != op) continue;
+      std::string label = site.config.operations[op].name + "\n";
+      for (const std::size_t s : site.config.operations[op].stations)
+        label += (label.back() == '\n' ? "" : " > ") + site.config.stations[s].name;
+      examples.push_back({label, p.xy});
+      break;
+    }
+  }
+  ok = operations::draw_example_paths("Recorded paths, one per operation", subtitle, *site.map, site.config, examples)
+           .write_png(report_dir + "/paths.png") && ok;
+  return ok;
+}
+
 }  // namespace
 
 int train_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
@@ -424,156 +584,37 @@ int operations_experiment_command(int argc, char** argv, std::FILE* out, std::FI
                held_out ? ", a style not used in training" : ", a TRAINING style",
                o.first_task ? ", recorded from their first task" : "", o.model_path.c_str());
   std::fflush(out);
-
-  // The held-out workers: their own seed stream, so none of them was seen in training.
-  const auto generate_start = std::chrono::steady_clock::now();
-  cobot::DatasetSpec spec;
-  spec.styles = std::span<const cobot::WorkerStyle>(&style, 1);
-  spec.per_operation = o.runs;
-  spec.seed = o.seed;
-  spec.purpose = cobot::kTestSeeds;
-  spec.records_first_task = o.first_task;
-  Result<std::vector<LabelledPath>> test = cobot::generate_paths(*site->workers, spec);
+  Result<std::vector<LabelledPath>> test = test_walks(*site, style, o, out);
   if (!test) return bad(err, kExperimentName, test.error().c_str());
-  std::fprintf(out, "  generated %zu walks (%.0f points on average) in %.1f s\n", test->size(), mean_points(*test),
-               seconds_since(generate_start));
-  std::fflush(out);
 
   Result<Evaluation> ours = cobot::evaluate(**model, *test, kConfidentProbability);
   if (!ours) return bad(err, kExperimentName, ours.error().c_str());
   std::fprintf(out, "  order-encoded model: accuracy %.3f, classification %.1f us per path (median)\n", ours->accuracy,
                ours->median_us);
   std::fflush(out);
-
-  // The thesis' input (the drawn path, no order) with the same classifier and training.
-  std::vector<operations::Labelled> results{{"order-encoded", *ours}};
-  std::vector<Reversal> reversals;
-  {
-    Result<Reversal> r = reversal_test(**model, site->config, *test);
-    if (!r) return bad(err, kExperimentName, r.error().c_str());
-    reversals.push_back(*r);
-  }
-  cobot::TrainingReport baseline_report;
-  double baseline_generate_s = 0;
-  if (o.baseline) {
-    std::fprintf(out, "  source-style comparison: training on the occupancy image alone (%zu walks per operation)\n",
-                 o.baseline_plan.per_class);
-    std::fflush(out);
-    Result<Trained> baseline = train(*site, o.baseline_plan, out);
-    if (!baseline) {
-      std::fprintf(err, "%s: %s\n", kExperimentName, baseline.error().c_str());
-      return 1;
-    }
-    baseline_report = baseline->report;
-    baseline_generate_s = baseline->generate_s;
-    Result<Evaluation> b = cobot::evaluate(*baseline->recognizer, *test, kConfidentProbability);
-    if (!b) return bad(err, kExperimentName, b.error().c_str());
-    std::fprintf(out, "  occupancy-only model: accuracy %.3f\n", b->accuracy);
-    results.push_back({"occupancy only (thesis input)", std::move(*b)});
-    Result<Reversal> r = reversal_test(*baseline->recognizer, site->config, *test);
-    if (!r) return bad(err, kExperimentName, r.error().c_str());
-    reversals.push_back(*r);
-  }
-
-  std::fprintf(out, "\nprogressive test (%zu %s walks; prefixes of each recorded path):\n", test->size(), style.name.c_str());
-  for (const operations::Labelled& r : results) print_table(out, r.label.c_str(), r.evaluation);
-  std::fprintf(out, "\nconfusion, whole paths (order-encoded):\n");
-  print_confusion(out, *ours);
-  if (results.size() > 1) {
-    std::fprintf(out, "confusion, whole paths (occupancy only):\n");
-    print_confusion(out, results[1].evaluation);
-  }
-
-  if (reversals.front().paths > 0) {
-    std::fprintf(out, "reversal test (%zu walks of operations with a reversed twin, played backwards):", reversals.front().paths);
-    for (std::size_t k = 0; k < reversals.size(); ++k)
-      std::fprintf(out, "%s %s %.3f", k ? "," : "", results[k].label.c_str(), reversals[k].accuracy());
-    std::fprintf(out, "\n");
-  }
-
-  const bool accuracy_met = ours->accuracy >= kTargetAccuracy;
-  const bool progressive_met = ours->confident[kTargetStep] >= kTargetConfident;
-  std::fprintf(out, "\ntargets: accuracy %.3f %s 0.97 (%s); right operation above 0.95 at 60 %% for %.1f %% of paths %s 95 %% (%s)\n",
-               ours->accuracy, accuracy_met ? ">=" : "<", accuracy_met ? "met" : "NOT met",
-               100 * ours->confident[kTargetStep], progressive_met ? ">=" : "<", progressive_met ? "met" : "NOT met");
+  Findings found;
+  found.results.push_back({"order-encoded", *ours});
+  Result<Reversal> reversal = reversal_test(**model, site->config, *test);
+  if (!reversal) return bad(err, kExperimentName, reversal.error().c_str());
+  found.reversals.push_back(*reversal);
+  if (o.baseline)
+    if (int rc = run_baseline(*site, o, *test, found, out, err); rc != 0) return rc;
+  print_findings(out, style, test->size(), found);
 
   if (!o.save_paths.empty()) {
-    std::ofstream f(o.save_paths, std::ios::binary | std::ios::trunc);
-    std::size_t index = 0;
-    for (const LabelledPath& p : *test) {
-      cobot::PathRecord r{style.name + "-" + std::to_string(index++), site->config.operations[p.operation].name, p.xy};
-      f << cobot::path_line(r) << '\n';
-    }
-    if (!f.flush()) return bad(err, kExperimentName, "--save-paths: cannot write " + o.save_paths);
+    if (!save_paths(o.save_paths, *site, style, *test)) return bad(err, kExperimentName, "--save-paths: cannot write " + o.save_paths);
     std::fprintf(out, "paths: %s\n", o.save_paths.c_str());
   }
-
   if (!o.report_dir.empty()) {
     const std::string json_path = o.report_dir + "/report.json";
-    std::FILE* f = std::fopen(json_path.c_str(), "w");
-    if (!f) return bad(err, kExperimentName, "--report: cannot write " + json_path);
-    json::FileSink sink(f);
-    json::Writer w(sink, json::Style::spaced);
-    w.begin_object()
-        .line(2).member("experiment", "operations")
-        .line(2).member("operations_file", o.operations_path)
-        .line(2).member("model", o.model_path)
-        .line(2).member("style", style.name)
-        .line(2).member_bool("held_out_style", held_out)
-        .line(2).member_uint64("runs_per_operation", o.runs)
-        .line(2).member_uint64("seed", o.seed)
-        .line(2).member_bool("recorded_from_first_task", o.first_task);
-    write_evaluation(w, *ours, 2);
-    w.line(2).key("targets").begin_object()
-        .key("accuracy").fixed_or_null(kTargetAccuracy, 2)
-        .member_bool("accuracy_met", accuracy_met)
-        .key("confident_at_60_percent").fixed_or_null(kTargetConfident, 2)
-        .member_bool("confident_met", progressive_met)
-        .end_object();
-    if (results.size() > 1) {
-      w.line(2).key("source_style").begin_object()
-          .line(4).member("encoding", "occupancy")
-          .line(4).member_uint64("training_walks_per_operation", o.baseline_plan.per_class)
-          .line(4).key("training_s").fixed_or_null(baseline_report.seconds, 3)
-          .line(4).key("generation_s").fixed_or_null(baseline_generate_s, 3);
-      write_evaluation(w, results[1].evaluation, 4);
-      w.line(2).end_object();
-    }
-    w.line(2).key("reversal").begin_object()
-        .member_uint64("paths", reversals.front().paths)
-        .key("order_encoded_accuracy").fixed_or_null(reversals.front().accuracy(), 6);
-    if (reversals.size() > 1) w.key("occupancy_only_accuracy").fixed_or_null(reversals[1].accuracy(), 6);
-    w.end_object();
-    w.line(2).key("timing").begin_object()
-        .key("classify_us_median").fixed_or_null(ours->median_us, 3)
-        .key("points_mean").fixed_or_null(mean_points(*test), 1)
-        .end_object();
-    w.line(0).end_object();
-    const bool written = static_cast<bool>(w.finish()) && std::fputc('\n', f) != EOF;
-    if (std::fclose(f) != 0 || !written) return bad(err, kExperimentName, "--report: cannot write " + json_path);
-
+    if (!write_report_json(json_path, o, style, held_out, *test, found))
+      return bad(err, kExperimentName, "--report: cannot write " + json_path);
     const std::string subtitle = std::to_string(o.runs) + " " + style.name + " workers per operation (" +
                                  (held_out ? "a walking style not used in training" : "a training style") +
                                  (o.first_task ? ", recorded from their first task" : "") + "), seed " +
                                  std::to_string(o.seed);
-    bool ok = operations::draw_confusion("Operation recognition: whole paths", subtitle, results)
-                  .write_png(o.report_dir + "/confusion.png");
-    ok = operations::draw_progressive("Operation recognition as the path grows", subtitle, results, kConfidentProbability)
-             .write_png(o.report_dir + "/progressive.png") && ok;
-    std::vector<operations::ExamplePath> examples;
-    for (std::size_t op = 0; op < site->config.operations.size(); ++op) {
-      for (const LabelledPath& p : *test) {
-        if (p.operation != op) continue;
-        std::string label = site->config.operations[op].name + "\n";
-        for (const std::size_t s : site->config.operations[op].stations)
-          label += (label.back() == '\n' ? "" : " > ") + site->config.stations[s].name;
-        examples.push_back({label, p.xy});
-        break;
-      }
-    }
-    ok = operations::draw_example_paths("Recorded paths, one per operation", subtitle, *site->map, site->config, examples)
-             .write_png(o.report_dir + "/paths.png") && ok;
-    if (!ok) return bad(err, kExperimentName, "--report: cannot write the figures in " + o.report_dir);
+    if (!draw_figures(o.report_dir, subtitle, *site, *test, found))
+      return bad(err, kExperimentName, "--report: cannot write the figures in " + o.report_dir);
     std::fprintf(out, "report: %s (report.json, confusion.png, progressive.png, paths.png)\n", o.report_dir.c_str());
   }
   return 0;

@@ -248,50 +248,41 @@ std::string realtime_robot_config(const std::string& base_text, const std::strin
   return out;
 }
 
-}  // namespace
 
-int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& site_path,
-                   const std::string& config_path, const nav::OccupancyMap& map, const std::string& report_dir, std::FILE* out,
-                   std::FILE* err) {
-  // The programs sit beside this one (the build writes sen3bot, sen3bot-sim and sen3bot-centre to
-  // one folder).
+// The temporary folder, removed with what is in it on every way out.
+struct RemoveDir {
+  std::string path;
+  ~RemoveDir() {
+    if (DIR* d = ::opendir(path.c_str())) {
+      while (const dirent* e = ::readdir(d))
+        if (e->d_name[0] != '.') ::unlink((path + "/" + e->d_name).c_str());
+      ::closedir(d);
+    }
+    ::rmdir(path.c_str());
+  }
+};
+
+// The programs the scenario runs: beside this one (the build writes sen3bot, sen3bot-sim and
+// sen3bot-centre to one folder).
+struct Programs {
+  std::string sim_bin, centre_bin;
+};
+
+int find_programs(Programs& programs, std::FILE* err) {
   char self[4096] = {};
   const ssize_t self_size = ::readlink("/proc/self/exe", self, sizeof self - 1);
   if (self_size <= 0) return fail(err, std::string("cannot read /proc/self/exe: ") + std::strerror(errno), 1);
   std::string bin_dir(self, static_cast<std::size_t>(self_size));
   bin_dir = bin_dir.substr(0, bin_dir.rfind('/'));
-  const std::string sim_bin = bin_dir + "/sen3bot-sim", centre_bin = bin_dir + "/sen3bot-centre";
-  for (const std::string& bin : {sim_bin, centre_bin})
+  programs.sim_bin = bin_dir + "/sen3bot-sim";
+  programs.centre_bin = bin_dir + "/sen3bot-centre";
+  for (const std::string& bin : {programs.sim_bin, programs.centre_bin})
     if (::access(bin.c_str(), X_OK) != 0) return fail(err, "--realtime needs " + bin + ": " + std::strerror(errno), 1);
+  return 0;
+}
 
-  char temp[] = "/tmp/sen3bot-fleet-XXXXXX";
-  if (::mkdtemp(temp) == nullptr) return fail(err, std::string("mkdtemp: ") + std::strerror(errno), 1);
-  const std::string work = temp;
-  // The temporary folder goes on every way out; the logs stay in the report folder.
-  struct RemoveDir {
-    std::string path;
-    ~RemoveDir() {
-      if (DIR* d = ::opendir(path.c_str())) {
-        while (const dirent* e = ::readdir(d))
-          if (e->d_name[0] != '.') ::unlink((path + "/" + e->d_name).c_str());
-        ::closedir(d);
-      }
-      ::rmdir(path.c_str());
-    }
-  } remove_work{work};
-  const std::string logs = report_dir.empty() ? work : report_dir;
-  const std::string event_log = logs + "/events.jsonl";
-  ::unlink(event_log.c_str());  // the centre appends
-
-  std::string base_text;
-  if (!read_text(config_path, base_text)) return fail(err, "--config " + config_path + ": " + std::strerror(errno), 1);
-  const std::string base_dir = config_path.find('/') == std::string::npos ? "." : config_path.substr(0, config_path.rfind('/'));
-
-  const firmware::StopOnSignal stop;
-  Children children;
-  const int port = free_loopback_port();
-  if (port <= 0) return fail(err, "no free loopback port", 1);
-  const std::string url = "mqtt://127.0.0.1:" + std::to_string(port);
+// Mosquitto on the loopback port, started and accepting; 0, or the exit status of a failure.
+int start_broker(Children& children, int port, const std::string& work, const std::string& logs, std::FILE* err) {
   // Run as root, Mosquitto would switch to its own user, and a change of user clears the signal
   // it gets should this process die: it stays the user it was started as.
   const passwd* user = ::getpwuid(::geteuid());
@@ -308,15 +299,361 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
       return fail(err, "mosquitto did not start (is it installed?): " + tail(logs + "/mosquitto.log"), 1);
     ::usleep(10'000);
   }
+  return 0;
+}
+
+std::string fixed4(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4f", v);
+  return std::string(text);
+}
+
+// The centre and one `sen3bot-sim agv` per AGV, each from the start of its route.
+int start_centre_and_agvs(Children& children, const Programs& programs, const std::string& url, const FleetScenario& scenario,
+                          const ssc::SiteFile& site, const std::string& site_path, const std::string& event_log,
+                          const std::string& duration, const std::string& logs, std::FILE* err) {
+  if (!children.start("ssc", {programs.centre_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log,
+                              "--duration", duration},
+                      logs + "/ssc.log"))
+    return fail(err, "cannot start sen3bot-centre ssc", 1);
+  for (const AgvPlan& plan : scenario.agvs) {
+    const double theta = std::atan2(plan.route[1].y_m - plan.route[0].y_m, plan.route[1].x_m - plan.route[0].x_m);
+    if (!children.start(plan.serial,
+                        {programs.sim_bin, "agv", "--broker", url, "--serial", plan.serial, "--map-id", site.service.map_id,
+                         "--x", fixed4(plan.route[0].x_m), "--y", fixed4(plan.route[0].y_m), "--theta", fixed4(theta),
+                         "--speed", fixed4(plan.speed_m_s), "--duration", duration},
+                        logs + "/" + plan.serial + ".log"))
+      return fail(err, std::string("cannot start the AGV ") + plan.serial, 1);
+  }
+  return 0;
+}
+
+// What the observer hears: the AGVs' states and connections, the centre's advisories, the
+// robots coming online; times on the scenario's clock once it has started.
+class FleetWatch {
+ public:
+  FleetWatch(const FleetScenario& scenario, const ssc::SiteFile& site, hal::PubSub& observer)
+      : latest(scenario.agvs.size()),
+        advice(scenario.agvs.size(), Advice::clear),
+        first_advice_s(scenario.agvs.size(), -1),
+        agv_online(scenario.agvs.size(), false),
+        scenario_(scenario),
+        site_(site),
+        observer_(observer) {}
+
+  // Scenario time 0: when the robots start.
+  void start(std::int64_t t0) {
+    t0_ = t0;
+    started_ = true;
+  }
+  [[nodiscard]] std::int64_t t0() const noexcept { return t0_; }
+  [[nodiscard]] double scenario_s() const {
+    return started_ ? static_cast<double>(firmware::clock_ns(CLOCK_MONOTONIC) - t0_) * 1e-9 : 0.0;
+  }
+  [[nodiscard]] bool agvs_online() const { return std::all_of(agv_online.begin(), agv_online.end(), [](bool b) { return b; }); }
+
+  // Everything received so far; "" or what went wrong.
+  std::string drain() {
+    for (;;) {
+      auto m = observer_.receive(topic_, payload_);
+      if (!m) return std::string("observer: ") + m.error().c_str();
+      if (!m.value()) return {};
+      const std::string_view t(topic_.data(), m.value()->topic_size);
+      const std::string_view text(reinterpret_cast<const char*>(payload_.data()), m.value()->payload_size);
+      // uagv/v2/MANUFACTURER/SERIAL/LEAF and sen3bot/v1/advisory/MANUFACTURER/SERIAL
+      const std::size_t leaf_at = t.rfind('/');
+      const std::string_view leaf = t.substr(leaf_at + 1);
+      const std::string_view before = t.substr(0, leaf_at);
+      const std::string_view serial = before.substr(before.rfind('/') + 1);
+      if (t.starts_with("sen3bot/v1/advisory/")) on_advisory(leaf, text);
+      else if (leaf == "connection") on_connection(serial, text);
+      else if (leaf == "state") on_state(serial, text);
+    }
+  }
+
+  std::vector<LatestState> latest;
+  std::vector<Advice> advice;
+  std::vector<double> first_advice_s;
+  std::vector<bool> agv_online;
+  std::map<std::string, double> robots_online;
+
+ private:
+  int agv_index(std::string_view serial) const {
+    for (std::size_t i = 0; i < scenario_.agvs.size(); ++i)
+      if (serial == scenario_.agvs[i].serial) return static_cast<int>(i);
+    return -1;
+  }
+
+  void on_advisory(std::string_view serial, std::string_view text) {
+    const int i = agv_index(serial);
+    if (i < 0 || !vda5050::decode_advisory(text, *advisory_, *scratch_).ok()) return;
+    advice[static_cast<std::size_t>(i)] = advisory_->advice;
+    if (started_ && first_advice_s[static_cast<std::size_t>(i)] < 0 && advisory_->advice != Advice::clear)
+      first_advice_s[static_cast<std::size_t>(i)] = scenario_s();
+  }
+
+  void on_connection(std::string_view serial, std::string_view text) {
+    if (text.find("\"ONLINE\"") == std::string_view::npos) return;
+    if (const int i = agv_index(serial); i >= 0) agv_online[static_cast<std::size_t>(i)] = true;
+    else if (started_) robots_online.emplace(std::string(serial), scenario_s());
+  }
+
+  void on_state(std::string_view serial, std::string_view text) {
+    const int i = agv_index(serial);
+    if (i < 0 || !vda5050::decode_state(text, site_.service.version, *state_, *scratch_).ok() || !state_->agv_position) return;
+    LatestState& s = latest[static_cast<std::size_t>(i)];
+    s.known = true;
+    s.t_s = scenario_s();
+    s.x = state_->agv_position->x;
+    s.y = state_->agv_position->y;
+    s.theta = state_->agv_position->theta;
+    s.speed = state_->velocity ? state_->velocity->vx : 0.0;
+  }
+
+  const FleetScenario& scenario_;
+  const ssc::SiteFile& site_;
+  hal::PubSub& observer_;
+  std::vector<char> topic_ = std::vector<char>(256);
+  std::vector<std::uint8_t> payload_ = std::vector<std::uint8_t>(64 * 1024);
+  std::unique_ptr<vda5050::State> state_ = std::make_unique<vda5050::State>();
+  std::unique_ptr<vda5050::DecodeScratch> scratch_ = std::make_unique<vda5050::DecodeScratch>();
+  std::unique_ptr<vda5050::AdvisoryMessage> advisory_ = std::make_unique<vda5050::AdvisoryMessage>();
+  std::int64_t t0_ = 0;
+  bool started_ = false;
+};
+
+// "" while every program runs and no stop was asked for; else why the scenario ends.
+std::string check_children(Children& children) {
+  if (const Children::Child* c = children.ended())
+    return c->name + " ended early (status " + std::to_string(c->status) + "): " + tail(c->log);
+  if (const int s = firmware::StopOnSignal::requested(); s != 0) return "stopped by signal " + std::to_string(s);
+  return {};
+}
+
+// The centre and the AGVs online before the robots start the scenario's clock.
+int wait_for_agvs(FleetWatch& watch, Children& children, std::FILE* err) {
+  for (const std::int64_t deadline = firmware::clock_ns(CLOCK_MONOTONIC) + 10'000'000'000;;) {
+    if (std::string problem = watch.drain(); !problem.empty()) return fail(err, problem, 1);
+    if (std::string problem = check_children(children); !problem.empty()) return fail(err, problem, 1);
+    if (watch.agvs_online()) return 0;
+    if (firmware::clock_ns(CLOCK_MONOTONIC) > deadline) return fail(err, "the AGVs did not come online within 10 s", 1);
+    ::usleep(20'000);
+  }
+}
+
+// Each robot's configuration for its own `sen3bot-sim run`, written to the work folder.
+int write_robot_configs(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& base_text,
+                        const std::string& base_dir, const std::string& url, double duration_s, const std::string& work,
+                        std::vector<std::string>& paths, std::FILE* err) {
+  for (const char* serial : scenario.robots) {
+    const auto it = std::find(site.robot_serials.begin(), site.robot_serials.end(), serial);
+    if (it == site.robot_serials.end()) return fail(err, std::string("the site has no robot ") + serial);
+    const ssc::RobotHome& home = site.site.robots[static_cast<std::size_t>(it - site.robot_serials.begin())];
+    const std::string path = work + "/robot_" + serial + ".yaml";
+    if (!write_text(path, realtime_robot_config(base_text, base_dir, serial, home, url, duration_s, scenario.people)))
+      return fail(err, "cannot write " + path, 1);
+    paths.push_back(path);
+  }
+  return 0;
+}
+
+// What the scenario measures of the AGVs against the scripted people: the closest any came,
+// when each one's own scanner (2 m ahead, +-30 degrees) first had a person, and when it would
+// have unadvised (its route at its speed from its order); its samples every 0.5 s.
+struct Measures {
+  explicit Measures(std::size_t n_agvs)
+      : ordered(n_agvs, false), samples(n_agvs), own_sensor_s(n_agvs, -1), unadvised_sensor_s(n_agvs, -1) {}
+  std::vector<bool> ordered;
+  std::vector<std::vector<AgvSample>> samples;
+  std::vector<double> own_sensor_s, unadvised_sensor_s;
+  double min_agv_person_m = 1e9;
+};
+
+constexpr double kSensorRangeM = 2.0;  // SimAgvConfig's, which `sen3bot-sim agv` keeps
+constexpr double kStateExtrapolateS = 1.0;  // the AGVs' state period
+
+void measure_agvs(const FleetScenario& scenario, world::World& people_world, const std::vector<LatestState>& latest,
+                  double t_s, Measures& m) {
+  people_world.set_time(t_s);
+  std::vector<msg::Point2D> people;
+  for (std::size_t k = 0; k < people_world.mover_count(); ++k)
+    if (people_world.mover_visible(k)) people.push_back({people_world.mover_position(k).x_m, people_world.mover_position(k).y_m});
+  for (std::size_t i = 0; i < scenario.agvs.size(); ++i) {
+    const LatestState& s = latest[i];
+    if (s.known) {
+      // Between its states the AGV drives on as it last said.
+      const double ahead = std::min(kStateExtrapolateS, t_s - s.t_s) * s.speed;
+      const double x = s.x + ahead * std::cos(s.theta), y = s.y + ahead * std::sin(s.theta);
+      for (const msg::Point2D& p : people) {
+        const double d = std::hypot(p.x_m - x, p.y_m - y);
+        m.min_agv_person_m = std::min(m.min_agv_person_m, d);
+        const double bearing = std::remainder(std::atan2(p.y_m - y, p.x_m - x) - s.theta, 2 * kPi);
+        if (m.own_sensor_s[i] < 0 && d < kSensorRangeM && std::abs(bearing) < kPi / 6) m.own_sensor_s[i] = t_s;
+      }
+    }
+    const msg::Pose2D ghost = unadvised_pose(scenario.agvs[i], t_s);
+    for (const msg::Point2D& p : people) {
+      const double d = std::hypot(p.x_m - ghost.x_m, p.y_m - ghost.y_m);
+      const double bearing = std::remainder(std::atan2(p.y_m - ghost.y_m, p.x_m - ghost.x_m) - ghost.theta_rad, 2 * kPi);
+      if (m.unadvised_sensor_s[i] < 0 && m.ordered[i] && d < kSensorRangeM && std::abs(bearing) < kPi / 6)
+        m.unadvised_sensor_s[i] = t_s;
+    }
+  }
+}
+
+// The scenario's duration on the wall clock: the plant's orders when due, the measures every
+// AGV step, the samples every 0.5 s and a progress line every 10 s; 0, or the exit status of
+// a failure.
+int run_scenario(const FleetScenario& scenario, const ssc::SiteFile& site, const nav::OccupancyMap& map, FleetWatch& watch,
+                 Children& children, hal::PubSub& plant, Measures& m, std::FILE* out, std::FILE* err) {
+  // The scripted people as every robot's world has them, for the distances.
+  world::World people_world(map);
+  for (const world::MoverScript& p : scenario.people) people_world.add_mover(p);
+  const std::size_t n_agvs = scenario.agvs.size();
+  double next_step_s = 0, next_sample_s = 0, next_progress_s = 0;
+  for (;;) {
+    if (std::string problem = watch.drain(); !problem.empty()) return fail(err, problem, 1);
+    if (std::string problem = check_children(children); !problem.empty()) return fail(err, problem, 1);
+    const double t_s = watch.scenario_s();
+    if (t_s >= scenario.duration_s) return 0;
+    for (std::size_t i = 0; i < n_agvs; ++i)
+      if (!m.ordered[i] && t_s >= scenario.agvs[i].order_s) {
+        const std::string text = plant_order_text(scenario.agvs[i], site, firmware::clock_ns(CLOCK_REALTIME));
+        if (text.empty() || !plant.publish(plant_topic(scenario.agvs[i], "order"), hal::as_bytes(text), 0, false))
+          return fail(err, std::string("cannot publish the order of ") + scenario.agvs[i].serial, 1);
+        m.ordered[i] = true;
+      }
+    if (t_s >= next_step_s) {
+      next_step_s += kAgvStepS;
+      measure_agvs(scenario, people_world, watch.latest, t_s, m);
+    }
+    if (t_s >= next_sample_s) {
+      next_sample_s += 0.5;
+      for (std::size_t i = 0; i < n_agvs; ++i)
+        if (watch.latest[i].known)
+          m.samples[i].push_back({t_s, watch.latest[i].x, watch.latest[i].y, watch.latest[i].speed, watch.advice[i]});
+    }
+    if (t_s >= next_progress_s) {
+      next_progress_s += 10.0;
+      std::fprintf(out, "  t=%5.1f s of %.0f s", t_s, scenario.duration_s);
+      for (std::size_t i = 0; i < n_agvs; ++i)
+        std::fprintf(out, "  %s (%.1f, %.1f) %.2f m/s %s", scenario.agvs[i].serial, watch.latest[i].x, watch.latest[i].y,
+                     watch.latest[i].speed, std::string(vda5050::to_string(watch.advice[i])).c_str());
+      std::fprintf(out, "\n");
+      std::fflush(out);
+    }
+    ::usleep(10'000);
+  }
+}
+
+// The centre's event log, its times made the scenario's (it logs its monotonic clock), each
+// line printed.
+std::vector<std::string> read_events(const std::string& event_log, std::int64_t t0, std::FILE* out) {
+  std::vector<std::string> events;
+  std::string text;
+  (void)read_text(event_log, text);
+  const double t0_s = static_cast<double>(t0) * 1e-9;
+  for (std::size_t at = 0; at < text.size();) {
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(at, end - at);
+    at = end + 1;
+    if (line.empty()) continue;
+    const std::string key = "\"timeS\":";
+    if (const std::size_t k = line.find(key); k != std::string::npos) {
+      const std::size_t from = k + key.size();
+      const std::size_t to = line.find_first_of(",}", from);
+      char shifted[32];
+      std::snprintf(shifted, sizeof shifted, "%.3f", std::strtod(line.substr(from, to - from).c_str(), nullptr) - t0_s);
+      line.replace(from, to - from, shifted);
+    }
+    std::fprintf(out, "  %s\n", line.c_str());
+    events.push_back(std::move(line));
+  }
+  return events;
+}
+
+// The centre's counters: the JSON line it writes when it stops ("null" without one).
+std::string centre_counters(const std::string& ssc_log) {
+  std::string text;
+  (void)read_text(ssc_log, text);
+  const std::size_t k = text.rfind("{\"stopped_by\"");
+  return k != std::string::npos ? text.substr(k, text.find('\n', k) - k) : std::string("null");
+}
+
+std::string seconds_text(double t) {
+  if (t < 0) return std::string("never");
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f s", t);
+  return std::string(text);
+}
+
+// DIR/report.json: the head both fleet reports share, the robots' start, the timeline, the
+// AGVs' samples and the centre's counters; 0, or the exit status of a failure.
+int write_report(const std::string& report_dir, const FleetScenario& scenario, const FleetWatch& watch, const Measures& m,
+                 const std::vector<std::string>& failures, const std::vector<std::string>& events, const std::string& centre,
+                 std::FILE* out, std::FILE* err) {
+  const bool never_in_range = m.own_sensor_s[0] < 0;
+  const double lead_s = watch.first_advice_s[0] < 0 || never_in_range ? 0.0 : m.own_sensor_s[0] - watch.first_advice_s[0];
+  std::string json;
+  json::StringSink sink(json);
+  json::Writer w(sink, json::Style::spaced);
+  write_report_head(w, {.scenario = scenario.name,
+                        .realtime = true,
+                        .failures = &failures,
+                        .min_agv_person_m = m.min_agv_person_m,
+                        .first_advice_s = watch.first_advice_s[0],
+                        .own_sensor_s = m.own_sensor_s[0],
+                        .lead_s = lead_s,
+                        .unadvised_sensor_s = m.unadvised_sensor_s[0],
+                        .never_in_range = never_in_range});
+  w.line(2).key("robots_online_s").begin_object();
+  for (const auto& [serial, t] : watch.robots_online) w.key(serial).fixed_or_null(t, 2);
+  w.end_object();
+  write_timeline(w, events);
+  write_agv_samples(w, scenario, m.samples);
+  w.line(2).key("centre").raw(centre).line(0).end_object();
+  if (auto written = w.finish(); !written) return fail(err, std::string("report.json: ") + written.error().c_str(), 1);
+  json += '\n';
+  if (!write_text(report_dir + "/report.json", json)) return fail(err, "cannot write " + report_dir + "/report.json", 1);
+  std::fprintf(out, "report: %s/report.json, %s/events.jsonl and the programs' logs there\n", report_dir.c_str(), report_dir.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, const std::string& site_path,
+                   const std::string& config_path, const nav::OccupancyMap& map, const std::string& report_dir, std::FILE* out,
+                   std::FILE* err) {
+  Programs programs;
+  if (int rc = find_programs(programs, err); rc != 0) return rc;
+  char temp[] = "/tmp/sen3bot-fleet-XXXXXX";
+  if (::mkdtemp(temp) == nullptr) return fail(err, std::string("mkdtemp: ") + std::strerror(errno), 1);
+  const std::string work = temp;
+  const RemoveDir remove_work{work};  // the logs stay in the report folder
+  const std::string logs = report_dir.empty() ? work : report_dir;
+  const std::string event_log = logs + "/events.jsonl";
+  ::unlink(event_log.c_str());  // the centre appends
+
+  std::string base_text;
+  if (!read_text(config_path, base_text)) return fail(err, "--config " + config_path + ": " + std::strerror(errno), 1);
+  const std::string base_dir = config_path.find('/') == std::string::npos ? "." : config_path.substr(0, config_path.rfind('/'));
+
+  const firmware::StopOnSignal stop;
+  Children children;
+  const int port = free_loopback_port();
+  if (port <= 0) return fail(err, "no free loopback port", 1);
+  const std::string url = "mqtt://127.0.0.1:" + std::to_string(port);
+  if (int rc = start_broker(children, port, work, logs, err); rc != 0) return rc;
   std::fprintf(out, "fleet-sim %s (realtime, Mosquitto on %s): %s\n", scenario.name, url.c_str(), scenario.description);
 
   // The observer: the AGVs' states and connections, the centre's advisories.
-  hal::PubSubOptions watch;
-  watch.url = url;
-  watch.client_id = "fleet-sim-observer";
-  watch.subscriptions = {{"uagv/v2/PlantAGV/+/state", 0}, {"uagv/v2/+/+/connection", 1}, {"sen3bot/v1/advisory/#", 1}};
-  watch.inbound_slots = 1024;
-  auto observer = hal::open_mqtt(watch);
+  hal::PubSubOptions watch_options;
+  watch_options.url = url;
+  watch_options.client_id = "fleet-sim-observer";
+  watch_options.subscriptions = {{"uagv/v2/PlantAGV/+/state", 0}, {"uagv/v2/+/+/connection", 1}, {"sen3bot/v1/advisory/#", 1}};
+  watch_options.inbound_slots = 1024;
+  auto observer = hal::open_mqtt(watch_options);
   if (!observer) return fail(err, "observer: " + std::string(observer.error().c_str()), 1);
   // The plant's master control: its own client.
   hal::PubSubOptions master;
@@ -327,177 +664,26 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
 
   const double margin_s = 30;  // the programs' own --duration: a backstop should this one vanish
   const std::string duration = std::to_string(static_cast<int>(scenario.duration_s + margin_s));
-  if (!children.start("ssc", {centre_bin, "ssc", "--broker", url, "--site", site_path, "--event-log", event_log, "--duration", duration},
-                      logs + "/ssc.log"))
-    return fail(err, "cannot start sen3bot-centre ssc", 1);
-  auto fmt = [](double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.4f", v);
-    return std::string(text);
-  };
-  for (const AgvPlan& plan : scenario.agvs) {
-    const double theta = std::atan2(plan.route[1].y_m - plan.route[0].y_m, plan.route[1].x_m - plan.route[0].x_m);
-    if (!children.start(plan.serial,
-                        {sim_bin, "agv", "--broker", url, "--serial", plan.serial, "--map-id", site.service.map_id, "--x",
-                         fmt(plan.route[0].x_m), "--y", fmt(plan.route[0].y_m), "--theta", fmt(theta), "--speed", fmt(plan.speed_m_s),
-                         "--duration", duration},
-                        logs + "/" + plan.serial + ".log"))
-      return fail(err, std::string("cannot start the AGV ") + plan.serial, 1);
-  }
-
-  std::vector<char> topic(256);
-  std::vector<std::uint8_t> payload(64 * 1024);
-  auto state = std::make_unique<vda5050::State>();
-  auto scratch = std::make_unique<vda5050::DecodeScratch>();
-  auto advisory = std::make_unique<vda5050::AdvisoryMessage>();
-  std::vector<LatestState> latest(scenario.agvs.size());
-  std::vector<Advice> advice(scenario.agvs.size(), Advice::clear);
-  std::vector<double> first_advice_s(scenario.agvs.size(), -1);
-  std::vector<bool> agv_online(scenario.agvs.size(), false);
-  std::map<std::string, double> robots_online;
-  std::int64_t t0 = 0;  // scenario time 0: when the robots start
-  bool started = false;
-  auto scenario_s = [&] { return started ? static_cast<double>(firmware::clock_ns(CLOCK_MONOTONIC) - t0) * 1e-9 : 0.0; };
-  auto agv_index = [&](std::string_view serial) -> int {
-    for (std::size_t i = 0; i < scenario.agvs.size(); ++i)
-      if (serial == scenario.agvs[i].serial) return static_cast<int>(i);
-    return -1;
-  };
-  auto drain = [&]() -> std::string {
-    for (;;) {
-      auto m = (*observer)->receive(topic, payload);
-      if (!m) return std::string("observer: ") + m.error().c_str();
-      if (!m.value()) return {};
-      const std::string_view t(topic.data(), m.value()->topic_size);
-      const std::string_view text(reinterpret_cast<const char*>(payload.data()), m.value()->payload_size);
-      // uagv/v2/MANUFACTURER/SERIAL/LEAF and sen3bot/v1/advisory/MANUFACTURER/SERIAL
-      const std::size_t leaf_at = t.rfind('/');
-      const std::string_view leaf = t.substr(leaf_at + 1);
-      const std::string_view before = t.substr(0, leaf_at);
-      const std::string_view serial = before.substr(before.rfind('/') + 1);
-      if (t.starts_with("sen3bot/v1/advisory/")) {
-        const int i = agv_index(leaf);
-        if (i < 0 || !vda5050::decode_advisory(text, *advisory, *scratch).ok()) continue;
-        advice[static_cast<std::size_t>(i)] = advisory->advice;
-        if (started && first_advice_s[static_cast<std::size_t>(i)] < 0 && advisory->advice != Advice::clear)
-          first_advice_s[static_cast<std::size_t>(i)] = scenario_s();
-      } else if (leaf == "connection") {
-        if (text.find("\"ONLINE\"") == std::string_view::npos) continue;
-        if (const int i = agv_index(serial); i >= 0) agv_online[static_cast<std::size_t>(i)] = true;
-        else if (started) robots_online.emplace(std::string(serial), scenario_s());
-      } else if (leaf == "state") {
-        const int i = agv_index(serial);
-        if (i < 0 || !vda5050::decode_state(text, site.service.version, *state, *scratch).ok() || !state->agv_position) continue;
-        LatestState& s = latest[static_cast<std::size_t>(i)];
-        s.known = true;
-        s.t_s = scenario_s();
-        s.x = state->agv_position->x;
-        s.y = state->agv_position->y;
-        s.theta = state->agv_position->theta;
-        s.speed = state->velocity ? state->velocity->vx : 0.0;
-      }
-    }
-  };
-  auto check_children = [&]() -> std::string {
-    if (const Children::Child* c = children.ended())
-      return c->name + " ended early (status " + std::to_string(c->status) + "): " + tail(c->log);
-    if (const int s = firmware::StopOnSignal::requested(); s != 0) return "stopped by signal " + std::to_string(s);
-    return {};
-  };
-
-  // The centre and the AGVs first, online before the robots start the scenario's clock.
-  for (const std::int64_t deadline = firmware::clock_ns(CLOCK_MONOTONIC) + 10'000'000'000;;) {
-    if (std::string problem = drain(); !problem.empty()) return fail(err, problem, 1);
-    if (std::string problem = check_children(); !problem.empty()) return fail(err, problem, 1);
-    if (std::all_of(agv_online.begin(), agv_online.end(), [](bool b) { return b; })) break;
-    if (firmware::clock_ns(CLOCK_MONOTONIC) > deadline) return fail(err, "the AGVs did not come online within 10 s", 1);
-    ::usleep(20'000);
-  }
+  if (int rc = start_centre_and_agvs(children, programs, url, scenario, site, site_path, event_log, duration, logs, err); rc != 0)
+    return rc;
+  FleetWatch watch(scenario, site, **observer);
+  if (int rc = wait_for_agvs(watch, children, err); rc != 0) return rc;
   const std::size_t first_robot = children.size();
   std::vector<std::string> robot_configs;
-  for (const char* serial : scenario.robots) {
-    const auto it = std::find(site.robot_serials.begin(), site.robot_serials.end(), serial);
-    if (it == site.robot_serials.end()) return fail(err, std::string("the site has no robot ") + serial);
-    const ssc::RobotHome& home = site.site.robots[static_cast<std::size_t>(it - site.robot_serials.begin())];
-    const std::string path = work + "/robot_" + serial + ".yaml";
-    if (!write_text(path, realtime_robot_config(base_text, base_dir, serial, home, url, scenario.duration_s + margin_s, scenario.people)))
-      return fail(err, "cannot write " + path, 1);
-    robot_configs.push_back(path);
-  }
-  t0 = firmware::clock_ns(CLOCK_MONOTONIC);
-  started = true;
+  if (int rc = write_robot_configs(scenario, site, base_text, base_dir, url, scenario.duration_s + margin_s, work,
+                                   robot_configs, err);
+      rc != 0)
+    return rc;
+  watch.start(firmware::clock_ns(CLOCK_MONOTONIC));
   for (std::size_t r = 0; r < scenario.robots.size(); ++r) {
     const std::string serial = scenario.robots[r];
-    if (!children.start(serial, {sim_bin, "run", "--config", robot_configs[r], "--clock", "realtime"}, logs + "/robot_" + serial + ".log"))
+    if (!children.start(serial, {programs.sim_bin, "run", "--config", robot_configs[r], "--clock", "realtime"},
+                        logs + "/robot_" + serial + ".log"))
       return fail(err, "cannot start the robot " + serial, 1);
   }
 
-  // The scripted people as every robot's world has them, for the distances.
-  world::World people_world(map);
-  for (const world::MoverScript& m : scenario.people) people_world.add_mover(m);
-  const std::size_t n_agvs = scenario.agvs.size();
-  std::vector<bool> ordered(n_agvs, false);
-  std::vector<std::vector<AgvSample>> samples(n_agvs);
-  std::vector<double> own_sensor_s(n_agvs, -1), unadvised_sensor_s(n_agvs, -1);
-  double min_agv_person_m = 1e9;
-  constexpr double kSensorRangeM = 2.0;  // SimAgvConfig's, which `sen3bot-sim agv` keeps
-  constexpr double kStateExtrapolateS = 1.0;  // the AGVs' state period
-  double next_step_s = 0, next_sample_s = 0, next_progress_s = 0;
-  for (;;) {
-    if (std::string problem = drain(); !problem.empty()) return fail(err, problem, 1);
-    if (std::string problem = check_children(); !problem.empty()) return fail(err, problem, 1);
-    const double t_s = scenario_s();
-    if (t_s >= scenario.duration_s) break;
-    for (std::size_t i = 0; i < n_agvs; ++i)
-      if (!ordered[i] && t_s >= scenario.agvs[i].order_s) {
-        const std::string text = plant_order_text(scenario.agvs[i], site, firmware::clock_ns(CLOCK_REALTIME));
-        if (text.empty() || !(*plant)->publish(plant_topic(scenario.agvs[i], "order"), hal::as_bytes(text), 0, false))
-          return fail(err, std::string("cannot publish the order of ") + scenario.agvs[i].serial, 1);
-        ordered[i] = true;
-      }
-    if (t_s >= next_step_s) {
-      next_step_s += kAgvStepS;
-      people_world.set_time(t_s);
-      std::vector<msg::Point2D> people;
-      for (std::size_t k = 0; k < people_world.mover_count(); ++k)
-        if (people_world.mover_visible(k)) people.push_back({people_world.mover_position(k).x_m, people_world.mover_position(k).y_m});
-      for (std::size_t i = 0; i < n_agvs; ++i) {
-        const LatestState& s = latest[i];
-        if (s.known) {
-          // Between its states the AGV drives on as it last said.
-          const double ahead = std::min(kStateExtrapolateS, t_s - s.t_s) * s.speed;
-          const double x = s.x + ahead * std::cos(s.theta), y = s.y + ahead * std::sin(s.theta);
-          for (const msg::Point2D& p : people) {
-            const double d = std::hypot(p.x_m - x, p.y_m - y);
-            min_agv_person_m = std::min(min_agv_person_m, d);
-            const double bearing = std::remainder(std::atan2(p.y_m - y, p.x_m - x) - s.theta, 2 * kPi);
-            if (own_sensor_s[i] < 0 && d < kSensorRangeM && std::abs(bearing) < kPi / 6) own_sensor_s[i] = t_s;
-          }
-        }
-        const msg::Pose2D ghost = unadvised_pose(scenario.agvs[i], t_s);
-        for (const msg::Point2D& p : people) {
-          const double d = std::hypot(p.x_m - ghost.x_m, p.y_m - ghost.y_m);
-          const double bearing = std::remainder(std::atan2(p.y_m - ghost.y_m, p.x_m - ghost.x_m) - ghost.theta_rad, 2 * kPi);
-          if (unadvised_sensor_s[i] < 0 && ordered[i] && d < kSensorRangeM && std::abs(bearing) < kPi / 6) unadvised_sensor_s[i] = t_s;
-        }
-      }
-    }
-    if (t_s >= next_sample_s) {
-      next_sample_s += 0.5;
-      for (std::size_t i = 0; i < n_agvs; ++i)
-        if (latest[i].known) samples[i].push_back({t_s, latest[i].x, latest[i].y, latest[i].speed, advice[i]});
-    }
-    if (t_s >= next_progress_s) {
-      next_progress_s += 10.0;
-      std::fprintf(out, "  t=%5.1f s of %.0f s", t_s, scenario.duration_s);
-      for (std::size_t i = 0; i < n_agvs; ++i)
-        std::fprintf(out, "  %s (%.1f, %.1f) %.2f m/s %s", scenario.agvs[i].serial, latest[i].x, latest[i].y, latest[i].speed,
-                     std::string(vda5050::to_string(advice[i])).c_str());
-      std::fprintf(out, "\n");
-      std::fflush(out);
-    }
-    ::usleep(10'000);
-  }
+  Measures m(scenario.agvs.size());
+  if (int rc = run_scenario(scenario, site, map, watch, children, **plant, m, out, err); rc != 0) return rc;
   // The robots, the AGVs and the centre stop first, then the broker.
   children.stop_from(first_robot, 10.0);
   children.stop_from(1, 5.0);
@@ -505,83 +691,21 @@ int fleet_realtime(const FleetScenario& scenario, const ssc::SiteFile& site, con
   (*plant)->close(0.5);
   children.stop_all(5.0);
 
-  // The centre's event log, its times made the scenario's (it logs its monotonic clock).
-  std::vector<std::string> events;
-  {
-    std::string text;
-    (void)read_text(event_log, text);
-    const double t0_s = static_cast<double>(t0) * 1e-9;
-    for (std::size_t at = 0; at < text.size();) {
-      std::size_t end = text.find('\n', at);
-      if (end == std::string::npos) end = text.size();
-      std::string line = text.substr(at, end - at);
-      at = end + 1;
-      if (line.empty()) continue;
-      const std::string key = "\"timeS\":";
-      if (const std::size_t k = line.find(key); k != std::string::npos) {
-        const std::size_t from = k + key.size();
-        const std::size_t to = line.find_first_of(",}", from);
-        char shifted[32];
-        std::snprintf(shifted, sizeof shifted, "%.3f", std::strtod(line.substr(from, to - from).c_str(), nullptr) - t0_s);
-        line.replace(from, to - from, shifted);
-      }
-      std::fprintf(out, "  %s\n", line.c_str());
-      events.push_back(std::move(line));
-    }
-  }
-  // The centre's counters: the JSON line it writes when it stops.
-  std::string centre = "null";
-  {
-    std::string text;
-    (void)read_text(logs + "/ssc.log", text);
-    const std::size_t k = text.rfind("{\"stopped_by\"");
-    if (k != std::string::npos) centre = text.substr(k, text.find('\n', k) - k);
-  }
-
+  const std::vector<std::string> events = read_events(event_log, watch.t0(), out);
+  const std::string centre = centre_counters(logs + "/ssc.log");
   std::vector<std::string> failures;
-  const bool never_in_range = own_sensor_s[0] < 0;
-  const double lead_s = first_advice_s[0] < 0 || never_in_range ? 0.0 : own_sensor_s[0] - first_advice_s[0];
-  if (samples[0].empty()) failures.push_back("no state from the AGV");
-  for (std::string& f : scenario_failures(scenario, events, first_advice_s[0], own_sensor_s[0], unadvised_sensor_s[0], min_agv_person_m))
+  if (m.samples[0].empty()) failures.push_back("no state from the AGV");
+  for (std::string& f : scenario_failures(scenario, events, watch.first_advice_s[0], m.own_sensor_s[0], m.unadvised_sensor_s[0],
+                                          m.min_agv_person_m))
     failures.push_back(std::move(f));
   std::fprintf(out, "\nresult %s (realtime): %s", scenario.name, failures.empty() ? "ok" : "FAILED");
   for (const std::string& f : failures) std::fprintf(out, "; %s", f.c_str());
-  auto seconds = [](double t) {
-    if (t < 0) return std::string("never");
-    char text[32];
-    std::snprintf(text, sizeof text, "%.2f s", t);
-    return std::string(text);
-  };
   std::fprintf(out, "\n  first advice to the AGV %s, its own scanner first in range %s, unadvised %s, closest AGV-person %.2f m\n",
-               seconds(first_advice_s[0]).c_str(), seconds(own_sensor_s[0]).c_str(), seconds(unadvised_sensor_s[0]).c_str(),
-               min_agv_person_m);
-
-  if (!report_dir.empty()) {
-    std::string json;
-    json::StringSink sink(json);
-    json::Writer w(sink, json::Style::spaced);
-    write_report_head(w, {.scenario = scenario.name,
-                          .realtime = true,
-                          .failures = &failures,
-                          .min_agv_person_m = min_agv_person_m,
-                          .first_advice_s = first_advice_s[0],
-                          .own_sensor_s = own_sensor_s[0],
-                          .lead_s = lead_s,
-                          .unadvised_sensor_s = unadvised_sensor_s[0],
-                          .never_in_range = never_in_range});
-    w.line(2).key("robots_online_s").begin_object();
-    for (const auto& [serial, t] : robots_online) w.key(serial).fixed_or_null(t, 2);
-    w.end_object();
-    write_timeline(w, events);
-    write_agv_samples(w, scenario, samples);
-    w.line(2).key("centre").raw(centre).line(0).end_object();
-    if (auto written = w.finish(); !written) return fail(err, std::string("report.json: ") + written.error().c_str(), 1);
-    json += '\n';
-    if (!write_text(report_dir + "/report.json", json)) return fail(err, "cannot write " + report_dir + "/report.json", 1);
-    std::fprintf(out, "report: %s/report.json, %s/events.jsonl and the programs' logs there\n", report_dir.c_str(), report_dir.c_str());
-  }
+               seconds_text(watch.first_advice_s[0]).c_str(), seconds_text(m.own_sensor_s[0]).c_str(),
+               seconds_text(m.unadvised_sensor_s[0]).c_str(), m.min_agv_person_m);
+  if (!report_dir.empty())
+    if (int rc = write_report(report_dir, scenario, watch, m, failures, events, centre, out, err); rc != 0) return rc;
   return failures.empty() ? 0 : 3;
 }
-
 
 }  // namespace sen3bot::sim::fleet

@@ -7,7 +7,9 @@
 #include <limits>
 #include <memory_resource>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <vector>
 
 #include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/nav/costmap.hpp"
@@ -119,6 +121,92 @@ std::vector<Point2D> resample(const std::vector<Point2D>& v, double step) {
   return out;
 }
 
+
+// A worker drawn from a style: their pace, sway, clearance and how tight they take corners.
+struct Worker {
+  double speed = 0;                              // m/s
+  double sway = 0, sway_hz = 0, sway_phase = 0;  // side to side: m, Hz, rad
+  double clearance = 0;                          // kept off shelves
+  double turn_radius = 0;                        // corners rounded this wide
+};
+
+Worker draw_worker(const WorkerStyle& style, std::mt19937_64& rng) {
+  Worker k;
+  k.speed = style.speed_m_s * (1.0 + style.speed_spread * uniform(rng, -1.0, 1.0));
+  k.sway = style.sway_m * uniform(rng, 0.7, 1.3);
+  k.sway_hz = style.sway_hz * uniform(rng, 0.9, 1.1);
+  k.sway_phase = uniform(rng, 0.0, 2.0 * std::numbers::pi);
+  k.clearance = std::max(kBodyClearanceM, style.clearance_m + uniform(rng, -0.05, 0.05));
+  k.turn_radius = style.turn_radius_m * uniform(rng, 0.7, 1.3);
+  return k;
+}
+
+// How long the worker works at a station: the style's dwell, skewed towards its short end.
+double dwell_s(const WorkerStyle& style, std::mt19937_64& rng) {
+  return style.dwell_min_s + (style.dwell_max_s - style.dwell_min_s) * std::pow(uniform(rng), style.dwell_skew);
+}
+
+// The body's track every kStepS.
+struct Track {
+  std::vector<Point2D> points;
+  Point2D shift{0, 0};  // a standing worker's offset from their spot
+};
+
+// The robot that follows the worker: along the worker's breadcrumbs at its top speed until it
+// is its distance behind them.
+struct Follower {
+  Point2D robot;
+  std::vector<Point2D> trail;
+  std::size_t trail_head = 0;
+
+  void step(Point2D body, const Observer& observer) {
+    if (norm(body - trail.back()) >= kTrailStepM) trail.push_back(body);
+    double budget = observer.robot_speed_m_s * kStepS;
+    while (budget > 0 && trail_head < trail.size() && norm(body - robot) > observer.follow_distance_m) {
+      const Point2D target = trail[trail_head];
+      const double d = norm(target - robot);
+      if (d <= budget) {
+        robot = target;
+        budget -= d;
+        ++trail_head;
+      } else {
+        robot = robot + (budget / d) * (target - robot);
+        budget = 0;
+      }
+    }
+  }
+};
+
+// The recorder's rule (cobot::PathRecorder): farther than the spacing from the last point;
+// when full, every other point dropped (the first and the newest kept) and the spacing doubled.
+void record_point(WorkerWalk& out, Point2D hit, double& spacing) {
+  auto far_enough = [&]() {
+    if (out.points() == 0) return true;
+    const Point2D last{out.xy[out.xy.size() - 2], out.xy.back()};
+    return norm(hit - last) > spacing;
+  };
+  if (!far_enough()) return;
+  if (out.points() == kMaxPathPoints) {
+    const std::size_t newest = out.points() - 1;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k <= newest; k += 2, ++kept) {
+      out.xy[2 * kept] = out.xy[2 * k];
+      out.xy[2 * kept + 1] = out.xy[2 * k + 1];
+    }
+    if (newest % 2 != 0) {
+      out.xy[2 * kept] = out.xy[2 * newest];
+      out.xy[2 * kept + 1] = out.xy[2 * newest + 1];
+      ++kept;
+    }
+    out.xy.resize(2 * kept);
+    spacing *= 2.0;
+    ++out.halvings;
+    if (!far_enough()) return;
+  }
+  out.xy.push_back(static_cast<float>(hit.x_m));
+  out.xy.push_back(static_cast<float>(hit.y_m));
+}
+
 }  // namespace
 
 std::span<const WorkerStyle> training_styles() noexcept { return kTrainingStyles; }
@@ -196,6 +284,22 @@ struct WorkerSimulator::Impl {
 
   Result<std::vector<Point2D>> route(Point2D from, Point2D to, double clearance_m);
   void shape_leg(std::vector<Point2D>& v, const WorkerStyle& style, double turn_radius_m, std::mt19937_64& rng) const;
+
+  // The walk's parts (walk() puts them together).
+  std::vector<Point2D> station_spots(const Operation& op, const WorkerStyle& style, std::mt19937_64& rng) const;
+  void stand_steps(Track& track, Point2D spot, long steps, const WorkerStyle& style, std::mt19937_64& rng) const;
+  void stand(Track& track, Point2D spot, double seconds, const WorkerStyle& style, std::mt19937_64& rng) const {
+    stand_steps(track, spot, std::lround(seconds / kStepS), style, rng);
+  }
+  void walk_leg(Track& track, const std::vector<Point2D>& dense, const Worker& worker, const WorkerStyle& style,
+                double& walked_s, std::mt19937_64& rng) const;
+  Result<Track> body_track(const std::vector<Point2D>& spots, const Worker& worker, const WorkerStyle& style,
+                           const Observer& observer, std::mt19937_64& rng);
+  Follower follower(const Track& track, const Observer& observer, std::mt19937_64& rng) const;
+  std::optional<Point2D> beam_hit(Point2D robot, Point2D body, double beam_offset, const Observer& observer,
+                                  std::mt19937_64& rng) const;
+  WorkerWalk observe(Track& track, const Operation& op, const std::vector<Point2D>& spots, const WorkerStyle& style,
+                     const Observer& observer, std::mt19937_64& rng) const;
 };
 
 Result<std::vector<Point2D>> WorkerSimulator::Impl::route(Point2D from, Point2D to, double clearance_m) {
@@ -343,6 +447,179 @@ Result<std::vector<Point2D>> WorkerSimulator::reference_route(std::size_t operat
   return resample(whole, spacing_m);
 }
 
+// Where they stand at each station: within approach_m of its point, where a body fits.
+std::vector<Point2D> WorkerSimulator::Impl::station_spots(const Operation& op, const WorkerStyle& style,
+                                                          std::mt19937_64& rng) const {
+  std::vector<Point2D> spots;
+  for (const std::size_t s : op.stations) {
+    const Point2D centre = config.stations[s].position;
+    Point2D spot = centre;
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      const double r = style.approach_m * std::sqrt(uniform(rng));
+      const double a = uniform(rng, 0.0, 2.0 * std::numbers::pi);
+      const Point2D c = centre + Point2D{r * std::cos(a), r * std::sin(a)};
+      if (cost(c) < kBlocked) {
+        spot = c;
+        break;
+      }
+    }
+    spots.push_back(spot);
+  }
+  return spots;
+}
+
+// Standing at a spot: the shift drifts at random and back towards the spot.
+void WorkerSimulator::Impl::stand_steps(Track& track, Point2D spot, long steps, const WorkerStyle& style,
+                                        std::mt19937_64& rng) const {
+  const double keep = 1.0 - kStepS / kShiftTauS;
+  const double kick = style.dwell_shift_m * std::sqrt(2.0 * kStepS / kShiftTauS);
+  for (long i = 0; i < steps; ++i) {
+    const Point2D next = keep * track.shift + Point2D{kick * normal(rng), kick * normal(rng)};
+    if (cost(spot + next) < kBlocked) track.shift = next;
+    track.points.push_back(spot + track.shift);
+  }
+}
+
+// Along a leg's dense route: speeding up from the stand and slowing down to the next, swaying,
+// the stand's shift fading out, and maybe a pause on the way.
+void WorkerSimulator::Impl::walk_leg(Track& track, const std::vector<Point2D>& dense, const Worker& worker,
+                                     const WorkerStyle& style, double& walked_s, std::mt19937_64& rng) const {
+  const double length = polyline_length(dense);
+  const double leg_speed = worker.speed * (1.0 + 0.5 * style.speed_spread * uniform(rng, -1.0, 1.0));
+  const bool pause = style.pause_probability > 0 && uniform(rng) < style.pause_probability;
+  const double pause_at = uniform(rng, 0.3, 0.7) * length;
+  const double pause_s = pause ? uniform(rng, 0.5, std::max(0.5, style.pause_max_s)) : 0.0;
+  bool paused = false;
+  const Point2D left_shift = track.shift;
+  double s = 0, t_leg = 0;
+  while (s < length) {
+    const double ramp = std::clamp(std::min(s, length - s) / kRampM, kRampFloor, 1.0);
+    s = std::min(length, s + leg_speed * ramp * kStepS);
+    t_leg += kStepS;
+    walked_s += kStepS;
+    const std::size_t at = std::min(dense.size() - 2, static_cast<std::size_t>(s / kDenseStepM));
+    const double f = std::clamp(s / kDenseStepM - static_cast<double>(at), 0.0, 1.0);
+    const Point2D on_route = dense[at] + f * (dense[at + 1] - dense[at]);
+    const Point2D lateral = msg::perpendicular(unit(dense[at + 1] - dense[at]));
+    const double swing = worker.sway * ramp * std::sin(2.0 * std::numbers::pi * worker.sway_hz * walked_s + worker.sway_phase);
+    Point2D body = on_route + swing * lateral;
+    if (cost(body) >= kBlocked) body = on_route;
+    const double fade = std::exp(-t_leg / kStartBlendS);
+    if (cost(body + fade * left_shift) < kBlocked) body = body + fade * left_shift;
+    track.points.push_back(body);
+    if (pause && !paused && s >= pause_at) {
+      paused = true;
+      track.shift = {0, 0};
+      stand(track, body, pause_s, style, rng);
+    }
+  }
+}
+
+// Pass 1: the body's track. The recording starts when the worker engages the robot at the
+// first station (shows it their tag): a few seconds there, then the walk. Later stations get
+// the style's dwell.
+Result<Track> WorkerSimulator::Impl::body_track(const std::vector<Point2D>& spots, const Worker& worker,
+                                                const WorkerStyle& style, const Observer& observer, std::mt19937_64& rng) {
+  Track track;
+  double walked_s = 0;  // walking time so far: the sway's clock
+  const double engage_s = uniform(rng, kEngageMinS, kEngageMaxS);
+  stand(track, spots.front(), observer.records_first_task ? dwell_s(style, rng) : engage_s, style, rng);
+  for (std::size_t k = 1; k < spots.size(); ++k) {
+    Result<std::vector<Point2D>> leg = route(spots[k - 1], spots[k], worker.clearance);
+    if (!leg) return leg.error();
+    shape_leg(*leg, style, worker.turn_radius, rng);
+    const std::vector<Point2D> dense = resample(*leg, kDenseStepM);
+    if (dense.size() < 2) continue;  // two stations at one spot: nothing to walk
+    walk_leg(track, dense, worker, style, walked_s, rng);
+    track.shift = {0, 0};
+    stand(track, spots[k], dwell_s(style, rng), style, rng);
+  }
+  return track;
+}
+
+// The robot where it starts: at the observer's position, or following, its distance from the
+// worker's start in the first clear direction from a random one.
+Follower WorkerSimulator::Impl::follower(const Track& track, const Observer& observer, std::mt19937_64& rng) const {
+  Follower f{observer.position, {}, 0};
+  if (observer.mode != ObserverMode::following || track.points.empty()) return f;
+  const Point2D start = track.points.front();
+  const double a0 = uniform(rng, 0.0, 2.0 * std::numbers::pi);
+  f.robot = start + Point2D{observer.follow_distance_m, 0.0};
+  for (int k = 0; k < 16; ++k) {
+    const double a = a0 + k * (2.0 * std::numbers::pi / 16);
+    const Point2D c = start + observer.follow_distance_m * Point2D{std::cos(a), std::sin(a)};
+    if (clear(start, c)) {
+      f.robot = c;
+      break;
+    }
+  }
+  f.trail.push_back(start);
+  return f;
+}
+
+// The beam nearest the body's bearing, its first crossing of the body's circle: where the
+// laser sees the body, if it does.
+std::optional<Point2D> WorkerSimulator::Impl::beam_hit(Point2D robot, Point2D body, double beam_offset,
+                                                       const Observer& observer, std::mt19937_64& rng) const {
+  const Point2D to_body = body - robot;
+  const double distance = norm(to_body);
+  if (distance <= observer.body_radius_m + 0.05) return std::nullopt;  // too close to be a clean return
+  const double bearing = std::atan2(to_body.y_m, to_body.x_m);
+  const double beam = beam_offset + std::round((bearing - beam_offset) / observer.beam_step_rad) * observer.beam_step_rad;
+  const Point2D dir{std::cos(beam), std::sin(beam)};
+  const double along = dot(to_body, dir);
+  const double off2 = distance * distance - along * along;
+  const double r2 = observer.body_radius_m * observer.body_radius_m;
+  if (off2 >= r2 || along <= 0) return std::nullopt;  // the beam misses the body
+  double range = along - std::sqrt(r2 - off2) + observer.range_noise_m * normal(rng);
+  if (observer.range_step_m > 0) range = std::round(range / observer.range_step_m) * observer.range_step_m;
+  if (range <= 0 || range > observer.max_range_m) return std::nullopt;
+  const Point2D hit = robot + range * dir;
+  if (!line_of_sight(robot, hit)) return std::nullopt;
+  return hit;
+}
+
+// Pass 2: the robot and its scans. A following robot that fell behind a fast worker keeps
+// recording until it has them in sight at the last station: the operation ends when they
+// finish there, not before the robot could see it. The worker keeps working meanwhile.
+WorkerWalk WorkerSimulator::Impl::observe(Track& track, const Operation& op, const std::vector<Point2D>& spots,
+                                          const WorkerStyle& style, const Observer& observer, std::mt19937_64& rng) const {
+  WorkerWalk out;
+  const auto steps_per_scan = std::max<long>(1, std::lround(1.0 / (observer.scan_hz * kStepS)));
+  const long scan_phase = static_cast<long>(uniform(rng) * static_cast<double>(steps_per_scan));
+  const double beam_offset = uniform(rng, 0.0, observer.beam_step_rad);
+  double spacing = observer.min_step_m;
+  Follower f = follower(track, observer, rng);
+  std::size_t next_visit = 0;
+  long settled = 0;
+  double extended_s = 0;
+  for (std::size_t i = 0;; ++i) {
+    if (i == track.points.size()) {
+      if (observer.mode != ObserverMode::following || track.points.empty()) break;
+      const bool caught_up = norm(track.points.back() - f.robot) <= observer.follow_distance_m + kCaughtUpSlackM &&
+                             line_of_sight(f.robot, track.points.back());
+      if ((caught_up && ++settled > kSettleScans) || extended_s >= kMaxExtensionS) break;
+      stand_steps(track, spots.back(), steps_per_scan, style, rng);
+      extended_s += static_cast<double>(steps_per_scan) * kStepS;
+    }
+    const Point2D body = track.points[i];
+    if (observer.mode == ObserverMode::following) f.step(body, observer);
+    if ((static_cast<long>(i) + scan_phase) % steps_per_scan != 0) continue;
+    out.body.push_back(body);
+    out.robot.push_back(f.robot);
+    if (next_visit < op.stations.size()) {
+      const Workstation& st = config.stations[op.stations[next_visit]];
+      if (norm(body - st.position) <= st.radius_m) {
+        out.arrivals.push_back(out.body.size() - 1);
+        ++next_visit;
+      }
+    }
+    if (const std::optional<Point2D> hit = beam_hit(f.robot, body, beam_offset, observer, rng)) record_point(out, *hit, spacing);
+  }
+  out.duration_s = static_cast<double>(track.points.size()) * kStepS;
+  return out;
+}
+
 Result<WorkerWalk> WorkerSimulator::walk(std::size_t operation, const WorkerStyle& style, const Observer& observer,
                                          std::uint64_t seed) {
   Impl& w = *impl_;
@@ -351,204 +628,12 @@ Result<WorkerWalk> WorkerSimulator::walk(std::size_t operation, const WorkerStyl
     return Error(Errc::invalid_argument, "walk: the scan rate and the walking speed must be positive");
   const Operation& op = w.config.operations[operation];
   std::mt19937_64 rng(seed);
-
-  // This worker, drawn from the style.
-  const double speed = style.speed_m_s * (1.0 + style.speed_spread * uniform(rng, -1.0, 1.0));
-  const double sway = style.sway_m * uniform(rng, 0.7, 1.3);
-  const double sway_hz = style.sway_hz * uniform(rng, 0.9, 1.1);
-  const double sway_phase = uniform(rng, 0.0, 2.0 * std::numbers::pi);
-  const double clearance = std::max(kBodyClearanceM, style.clearance_m + uniform(rng, -0.05, 0.05));
-  const double turn_radius = style.turn_radius_m * uniform(rng, 0.7, 1.3);
-
-  // Where they stand at each station: within approach_m of its point, where a body fits.
-  std::vector<Point2D> spots;
-  for (const std::size_t s : op.stations) {
-    const Point2D centre = w.config.stations[s].position;
-    Point2D spot = centre;
-    for (int attempt = 0; attempt < 8; ++attempt) {
-      const double r = style.approach_m * std::sqrt(uniform(rng));
-      const double a = uniform(rng, 0.0, 2.0 * std::numbers::pi);
-      const Point2D c = centre + Point2D{r * std::cos(a), r * std::sin(a)};
-      if (w.cost(c) < kBlocked) {
-        spot = c;
-        break;
-      }
-    }
-    spots.push_back(spot);
-  }
-
-  // Pass 1: the body's track every kStepS.
-  std::vector<Point2D> track;
-  Point2D shift{0, 0};  // a standing worker's offset from their spot
-  auto stand_steps = [&](Point2D spot, long steps) {
-    const double keep = 1.0 - kStepS / kShiftTauS;
-    const double kick = style.dwell_shift_m * std::sqrt(2.0 * kStepS / kShiftTauS);
-    for (long i = 0; i < steps; ++i) {
-      const Point2D next = keep * shift + Point2D{kick * normal(rng), kick * normal(rng)};
-      if (w.cost(spot + next) < kBlocked) shift = next;
-      track.push_back(spot + shift);
-    }
-  };
-  auto stand = [&](Point2D spot, double seconds) { stand_steps(spot, std::lround(seconds / kStepS)); };
-  auto dwell = [&]() {
-    return style.dwell_min_s + (style.dwell_max_s - style.dwell_min_s) * std::pow(uniform(rng), style.dwell_skew);
-  };
-  double walked_s = 0;  // walking time so far: the sway's clock
-  // The recording starts when the worker engages the robot at the first station (shows it
-  // their tag): a few seconds there, then the walk. Later stations get the style's dwell.
-  const double engage_s = uniform(rng, kEngageMinS, kEngageMaxS);
-  stand(spots.front(), observer.records_first_task ? dwell() : engage_s);
-  for (std::size_t k = 1; k < spots.size(); ++k) {
-    Result<std::vector<Point2D>> leg = w.route(spots[k - 1], spots[k], clearance);
-    if (!leg) return leg.error();
-    w.shape_leg(*leg, style, turn_radius, rng);
-    const std::vector<Point2D> dense = resample(*leg, kDenseStepM);
-    if (dense.size() < 2) continue;  // two stations at one spot: nothing to walk
-    const double length = polyline_length(dense);
-    const double leg_speed = speed * (1.0 + 0.5 * style.speed_spread * uniform(rng, -1.0, 1.0));
-    const bool pause = style.pause_probability > 0 && uniform(rng) < style.pause_probability;
-    const double pause_at = uniform(rng, 0.3, 0.7) * length;
-    const double pause_s = pause ? uniform(rng, 0.5, std::max(0.5, style.pause_max_s)) : 0.0;
-    bool paused = false;
-    const Point2D left_shift = shift;
-    double s = 0, t_leg = 0;
-    while (s < length) {
-      const double ramp = std::clamp(std::min(s, length - s) / kRampM, kRampFloor, 1.0);
-      s = std::min(length, s + leg_speed * ramp * kStepS);
-      t_leg += kStepS;
-      walked_s += kStepS;
-      const std::size_t at = std::min(dense.size() - 2, static_cast<std::size_t>(s / kDenseStepM));
-      const double f = std::clamp(s / kDenseStepM - static_cast<double>(at), 0.0, 1.0);
-      const Point2D on_route = dense[at] + f * (dense[at + 1] - dense[at]);
-      const Point2D lateral = msg::perpendicular(unit(dense[at + 1] - dense[at]));
-      const double swing = sway * ramp * std::sin(2.0 * std::numbers::pi * sway_hz * walked_s + sway_phase);
-      Point2D body = on_route + swing * lateral;
-      if (w.cost(body) >= kBlocked) body = on_route;
-      const double fade = std::exp(-t_leg / kStartBlendS);
-      if (w.cost(body + fade * left_shift) < kBlocked) body = body + fade * left_shift;
-      track.push_back(body);
-      if (pause && !paused && s >= pause_at) {
-        paused = true;
-        shift = {0, 0};
-        stand(body, pause_s);
-      }
-    }
-    shift = {0, 0};
-    stand(spots[k], dwell());
-  }
-
-  // Pass 2: the robot and its scans.
-  WorkerWalk out;
-  const auto steps_per_scan = std::max<long>(1, std::lround(1.0 / (observer.scan_hz * kStepS)));
-  const long scan_phase = static_cast<long>(uniform(rng) * static_cast<double>(steps_per_scan));
-  const double beam_offset = uniform(rng, 0.0, observer.beam_step_rad);
-  const double range_noise = observer.range_noise_m;
-  double spacing = observer.min_step_m;
-  Point2D robot = observer.position;
-  std::vector<Point2D> trail;
-  std::size_t trail_head = 0;
-  if (observer.mode == ObserverMode::following && !track.empty()) {
-    const Point2D start = track.front();
-    const double a0 = uniform(rng, 0.0, 2.0 * std::numbers::pi);
-    robot = start + Point2D{observer.follow_distance_m, 0.0};
-    for (int k = 0; k < 16; ++k) {
-      const double a = a0 + k * (2.0 * std::numbers::pi / 16);
-      const Point2D c = start + observer.follow_distance_m * Point2D{std::cos(a), std::sin(a)};
-      if (w.clear(start, c)) {
-        robot = c;
-        break;
-      }
-    }
-    trail.push_back(start);
-  }
-  // A following robot that fell behind a fast worker keeps recording until it has them in
-  // sight at the last station: the operation ends when they finish there, not before the robot
-  // could see it. The worker keeps working meanwhile.
-  std::size_t next_visit = 0;
-  long settled = 0;
-  double extended_s = 0;
-  for (std::size_t i = 0;; ++i) {
-    if (i == track.size()) {
-      if (observer.mode != ObserverMode::following || track.empty()) break;
-      const bool caught_up = norm(track.back() - robot) <= observer.follow_distance_m + kCaughtUpSlackM &&
-                             w.line_of_sight(robot, track.back());
-      if ((caught_up && ++settled > kSettleScans) || extended_s >= kMaxExtensionS) break;
-      stand_steps(spots.back(), steps_per_scan);
-      extended_s += static_cast<double>(steps_per_scan) * kStepS;
-    }
-    const Point2D body = track[i];
-    if (observer.mode == ObserverMode::following) {
-      if (norm(body - trail.back()) >= kTrailStepM) trail.push_back(body);
-      double budget = observer.robot_speed_m_s * kStepS;
-      while (budget > 0 && trail_head < trail.size() && norm(body - robot) > observer.follow_distance_m) {
-        const Point2D target = trail[trail_head];
-        const double d = norm(target - robot);
-        if (d <= budget) {
-          robot = target;
-          budget -= d;
-          ++trail_head;
-        } else {
-          robot = robot + (budget / d) * (target - robot);
-          budget = 0;
-        }
-      }
-    }
-    if ((static_cast<long>(i) + scan_phase) % steps_per_scan != 0) continue;
-    out.body.push_back(body);
-    out.robot.push_back(robot);
-    if (next_visit < op.stations.size()) {
-      const Workstation& st = w.config.stations[op.stations[next_visit]];
-      if (norm(body - st.position) <= st.radius_m) {
-        out.arrivals.push_back(out.body.size() - 1);
-        ++next_visit;
-      }
-    }
-    // The beam nearest the body's bearing, its first crossing of the body's circle.
-    const Point2D to_body = body - robot;
-    const double distance = norm(to_body);
-    if (distance <= observer.body_radius_m + 0.05) continue;  // too close to be a clean return
-    const double bearing = std::atan2(to_body.y_m, to_body.x_m);
-    const double beam = beam_offset + std::round((bearing - beam_offset) / observer.beam_step_rad) * observer.beam_step_rad;
-    const Point2D dir{std::cos(beam), std::sin(beam)};
-    const double along = dot(to_body, dir);
-    const double off2 = distance * distance - along * along;
-    const double r2 = observer.body_radius_m * observer.body_radius_m;
-    if (off2 >= r2 || along <= 0) continue;  // the beam misses the body
-    double range = along - std::sqrt(r2 - off2) + range_noise * normal(rng);
-    if (observer.range_step_m > 0) range = std::round(range / observer.range_step_m) * observer.range_step_m;
-    if (range <= 0 || range > observer.max_range_m) continue;
-    const Point2D hit = robot + range * dir;
-    if (!w.line_of_sight(robot, hit)) continue;
-    // The recorder's rule (cobot::PathRecorder): farther than the spacing from the last point;
-    // when full, every other point dropped (the first and the newest kept) and the spacing doubled.
-    auto far_enough = [&]() {
-      if (out.points() == 0) return true;
-      const Point2D last{out.xy[out.xy.size() - 2], out.xy.back()};
-      return norm(hit - last) > spacing;
-    };
-    if (!far_enough()) continue;
-    if (out.points() == kMaxPathPoints) {
-      const std::size_t newest = out.points() - 1;
-      std::size_t kept = 0;
-      for (std::size_t k = 0; k <= newest; k += 2, ++kept) {
-        out.xy[2 * kept] = out.xy[2 * k];
-        out.xy[2 * kept + 1] = out.xy[2 * k + 1];
-      }
-      if (newest % 2 != 0) {
-        out.xy[2 * kept] = out.xy[2 * newest];
-        out.xy[2 * kept + 1] = out.xy[2 * newest + 1];
-        ++kept;
-      }
-      out.xy.resize(2 * kept);
-      spacing *= 2.0;
-      ++out.halvings;
-      if (!far_enough()) continue;
-    }
-    out.xy.push_back(static_cast<float>(hit.x_m));
-    out.xy.push_back(static_cast<float>(hit.y_m));
-  }
-  out.duration_s = static_cast<double>(track.size()) * kStepS;
-  return out;
+  // This worker, drawn from the style, and where they stand at each station.
+  const Worker worker = draw_worker(style, rng);
+  const std::vector<Point2D> spots = w.station_spots(op, style, rng);
+  Result<Track> track = w.body_track(spots, worker, style, observer, rng);
+  if (!track) return track.error();
+  return w.observe(*track, op, spots, style, observer, rng);
 }
 
 Result<std::vector<LabelledPath>> generate_paths(WorkerSimulator& workers, const DatasetSpec& spec) {

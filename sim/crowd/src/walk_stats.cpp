@@ -38,6 +38,198 @@ struct Entry {
   std::size_t index = 0;
 };
 
+
+// matched_crowd's floor: the recording's extent with walls on its border, starts and goals
+// kWallGapM inside them.
+struct Floor {
+  Point2D lo, hi;
+
+  [[nodiscard]] std::vector<Wall> walls() const {
+    return {{lo, {hi.x_m, lo.y_m}}, {{hi.x_m, lo.y_m}, hi}, {hi, {lo.x_m, hi.y_m}}, {{lo.x_m, hi.y_m}, lo}};
+  }
+  // Side 0 bottom, 1 right, 2 top, 3 left; u in [0, 1) along it, 0.5 m inside the walls.
+  [[nodiscard]] Point2D on_side(int side, double u) const {
+    const Point2D a = lo + Point2D{kWallGapM, kWallGapM};
+    const Point2D b = hi - Point2D{kWallGapM, kWallGapM};
+    const Point2D p = a + Point2D{u * (b.x_m - a.x_m), u * (b.y_m - a.y_m)};
+    switch (side) {
+      case 0:
+        return {p.x_m, a.y_m};
+      case 1:
+        return {b.x_m, p.y_m};
+      case 2:
+        return {p.x_m, b.y_m};
+      default:
+        return {a.x_m, p.y_m};
+    }
+  }
+  [[nodiscard]] Point2D clamp_inside(Point2D q) const {
+    return Point2D{std::clamp(q.x_m, lo.x_m + kWallGapM, hi.x_m - kWallGapM),
+                   std::clamp(q.y_m, lo.y_m + kWallGapM, hi.y_m - kWallGapM)};
+  }
+  [[nodiscard]] bool inside(Point2D q) const {
+    return q.x_m >= lo.x_m + kWallGapM && q.x_m <= hi.x_m - kWallGapM && q.y_m >= lo.y_m + kWallGapM &&
+           q.y_m <= hi.y_m - kWallGapM;
+  }
+};
+
+using Route = std::array<Point2D, 2>;
+
+// Where a walker nominally is at time t (straight, at its desired speed), if there.
+std::optional<Point2D> nominal(const Person& q, double end_s, double t) {
+  if (t < q.appear_s || t > end_s) return std::nullopt;
+  const Point2D walk = q.goals[0] - q.start;
+  const double length = norm(walk);
+  const double along = std::min(length, (t - q.appear_s) * q.desired_speed_m_s);
+  return length > 0.0 ? q.start + (along / length) * walk : q.start;
+}
+
+// The options matched_crowd cannot build from.
+Status check_matched(const Recording& recording, const Summary& summary, const MatchedCrowdOptions& options) {
+  if (summary.samples == 0) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: %s has no samples", recording.name.c_str());
+  }
+  const Extent area = summary.extent;
+  const double width = area.max.x_m - area.min.x_m;
+  const double height = area.max.y_m - area.min.y_m;
+  // Room for starts and goals 0.5 m inside the walls, and a walk of 2 m between them.
+  if (!(width > 2.0 * kWallGapM + kMinWalkM && height > 2.0 * kWallGapM + kMinWalkM)) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: %s spans only %g x %g m", recording.name.c_str(),
+                         width, height);
+  }
+  if (!(options.duration_s > 0.0 && std::isfinite(options.duration_s))) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: duration %g s is not positive and finite",
+                         options.duration_s);
+  }
+  if (!(options.pair_share >= 0.0 && options.pair_share <= 1.0)) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: pair share %g is not in [0, 1]", options.pair_share);
+  }
+  return Status::success();
+}
+
+// The recorded routes long enough to walk: from each track's first place to its last.
+Result<std::vector<Route>> recorded_routes(const Recording& recording) {
+  std::vector<Route> routes;
+  for (const Track& track : recording.tracks) {
+    const Point2D a = track.samples.front().position, b = track.samples.back().position;
+    if (norm(b - a) >= kMinWalkM) routes.push_back({a, b});
+  }
+  if (routes.empty()) {
+    return Error::format(Errc::invalid_argument, "matched_crowd: %s has no track of %g m or more to walk",
+                         recording.name.c_str(), kMinWalkM);
+  }
+  return routes;
+}
+
+// matched_crowd's walkers, slot by slot: the slot due first gets its next walker, clear of
+// everyone nominally present at that moment (a companion also of its walker), who appears when
+// the last would nominally arrive.
+class WalkerPlan {
+ public:
+  WalkerPlan(CrowdConfig& config, const Floor& floor, const std::vector<Route>& routes, std::uint64_t seed)
+      : config_(config), floor_(floor), routes_(routes), rng_(seed) {}
+
+  Status run(std::size_t slots, double pair_chance, double duration_s) {
+    const double relaxation_s = config_.social.relaxation_s;
+    const double reach_m = config_.social.goal_reach_m;
+    std::uint32_t groups = 0;
+    std::vector<double> slot_next_s(slots, 0.0);  // when each slot's next walker appears
+    std::vector<bool> slot_first(slots, true);     // the slot's first walk starts part-way
+    for (;;) {
+      // The slot due first, so everyone nominally present at that moment is already placed.
+      const auto due = std::min_element(slot_next_s.begin(), slot_next_s.end());
+      const double t = *due;
+      if (t >= duration_s) return Status::success();
+      const bool first = slot_first[static_cast<std::size_t>(due - slot_next_s.begin())];
+      slot_first[static_cast<std::size_t>(due - slot_next_s.begin())] = false;
+      Person p;
+      p.radius_m = kWalkerRadiusM;
+      p.desired_speed_m_s = draw_walker_speed(rng_);  // first, so spacing does not bias it
+      p.goal_count = 1;
+      p.leave_at_goal = true;
+      p.appear_s = t;
+      const bool pair = pair_chance > 0.0 && unit_uniform(rng_) < pair_chance;
+      Person companion = p;
+      if (!place(p, companion, pair, first, t)) {
+        return Error::format(Errc::capacity, "matched_crowd: no room for walker %zu at %g s in %d draws",
+                             config_.people.size(), t, kMaxDraws);
+      }
+      if (config_.people.size() + (pair ? 2 : 1) > kMaxWalkers) {
+        return Error::format(Errc::capacity, "matched_crowd: %zu at once for %g s needs more than %zu walkers", slots,
+                             duration_s, kMaxWalkers);
+      }
+      // From rest a walker lags its desired speed by the relaxation time; it leaves within reach.
+      const double walk_s = std::max(0.0, norm(p.goals[0] - p.start) - reach_m) / p.desired_speed_m_s + relaxation_s;
+      if (pair) {
+        p.group = companion.group = ++groups;
+        end_s_.push_back(t + walk_s);
+        config_.people.push_back(companion);
+      }
+      end_s_.push_back(t + walk_s);
+      config_.people.push_back(p);
+      *due = t + walk_s;
+    }
+  }
+
+ private:
+  // Clear of everyone nominally present at time t.
+  [[nodiscard]] bool room_for(const Person& who, double t) const {
+    for (std::size_t j = 0; j < config_.people.size(); ++j) {
+      const std::optional<Point2D> q = nominal(config_.people[j], end_s_[j], t);
+      if (q && norm(*q - who.start) < who.radius_m + config_.people[j].radius_m + kSpacingM) return false;
+    }
+    return true;
+  }
+
+  // A walk's ends: a recorded route with jitter, or points on two different sides.
+  void draw_ends(Point2D& a, Point2D& b) {
+    if (!routes_.empty()) {
+      const auto pick = static_cast<std::size_t>(unit_uniform(rng_) * static_cast<double>(routes_.size()));
+      const Route& route = routes_[std::min(routes_.size() - 1, pick)];
+      a = floor_.clamp_inside(route[0] + Point2D{kRouteJitterM * standard_normal(rng_), kRouteJitterM * standard_normal(rng_)});
+      b = floor_.clamp_inside(route[1] + Point2D{kRouteJitterM * standard_normal(rng_), kRouteJitterM * standard_normal(rng_)});
+    } else {
+      const int from = std::min(3, static_cast<int>(unit_uniform(rng_) * 4.0));
+      const int to = (from + 1 + std::min(2, static_cast<int>(unit_uniform(rng_) * 3.0))) % 4;
+      a = floor_.on_side(from, unit_uniform(rng_));
+      b = floor_.on_side(to, unit_uniform(rng_));
+    }
+  }
+
+  // Draws p's walk (a slot's first starts part-way along it) and, for a pair, its companion's
+  // beside it, until they have room; false after kMaxDraws draws.
+  bool place(Person& p, Person& companion, bool pair, bool first, double t) {
+    bool placed = false;
+    for (int attempt = 0; attempt < kMaxDraws && !placed; ++attempt) {
+      Point2D a, b;
+      draw_ends(a, b);
+      const double along = first ? unit_uniform(rng_) : 0.0;
+      if (norm(b - a) < kMinWalkM) continue;
+      p.start = a + along * (b - a);
+      p.goals[0] = b;
+      placed = room_for(p, t);
+      if (placed && pair) {
+        // Beside the walker, on its left if there is room, else on its right.
+        const Point2D left = (kCompanionGapM / norm(b - a)) * perpendicular(b - a);
+        companion.start = p.start + left;
+        companion.goals[0] = b + left;
+        if (!floor_.inside(companion.start) || !floor_.inside(companion.goals[0])) {
+          companion.start = p.start - left;
+          companion.goals[0] = b - left;
+        }
+        placed = floor_.inside(companion.start) && floor_.inside(companion.goals[0]) && room_for(companion, t);
+      }
+    }
+    return placed;
+  }
+
+  CrowdConfig& config_;
+  const Floor& floor_;
+  const std::vector<Route>& routes_;
+  std::mt19937_64 rng_;
+  std::vector<double> end_s_;  // each placed walker's nominal arrival
+};
+
 }  // namespace
 
 WalkStats walk_stats(const Recording& walks, const WalkStatsOptions& options) {
@@ -193,24 +385,7 @@ Result<Recording> sample_crowd(Crowd& crowd, double duration_s, double period_s)
 
 Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed, const MatchedCrowdOptions& options) {
   const Summary summary = summarize(recording);
-  if (summary.samples == 0) {
-    return Error::format(Errc::invalid_argument, "matched_crowd: %s has no samples", recording.name.c_str());
-  }
-  const Extent area = summary.extent;
-  const double width = area.max.x_m - area.min.x_m;
-  const double height = area.max.y_m - area.min.y_m;
-  // Room for starts and goals 0.5 m inside the walls, and a walk of 2 m between them.
-  if (!(width > 2.0 * kWallGapM + kMinWalkM && height > 2.0 * kWallGapM + kMinWalkM)) {
-    return Error::format(Errc::invalid_argument, "matched_crowd: %s spans only %g x %g m", recording.name.c_str(),
-                         width, height);
-  }
-  if (!(options.duration_s > 0.0 && std::isfinite(options.duration_s))) {
-    return Error::format(Errc::invalid_argument, "matched_crowd: duration %g s is not positive and finite",
-                         options.duration_s);
-  }
-  if (!(options.pair_share >= 0.0 && options.pair_share <= 1.0)) {
-    return Error::format(Errc::invalid_argument, "matched_crowd: pair share %g is not in [0, 1]", options.pair_share);
-  }
+  if (Status s = check_matched(recording, summary, options); !s) return s.error();
   std::size_t people = options.people;
   if (people == 0) {
     std::vector<double> counts;
@@ -222,139 +397,20 @@ Result<CrowdConfig> matched_crowd(const Recording& recording, std::uint64_t seed
   const double pair_chance = options.pair_share / (2.0 - options.pair_share);
   const auto slots = static_cast<std::size_t>(std::llround(static_cast<double>(people) / (1.0 + pair_chance)));
   if (slots == 0) return Error(Errc::invalid_argument, "matched_crowd: no people");
-  std::uint32_t groups = 0;
 
   CrowdConfig config;
   config.behaviour = Behaviour::social;
-  const Point2D lo = area.min;
-  const Point2D hi = area.max;
-  config.walls = {{lo, {hi.x_m, lo.y_m}}, {{hi.x_m, lo.y_m}, hi}, {hi, {lo.x_m, hi.y_m}}, {{lo.x_m, hi.y_m}, lo}};
-  const double relaxation_s = config.social.relaxation_s;
-  const double reach_m = config.social.goal_reach_m;
-
-  // Side 0 bottom, 1 right, 2 top, 3 left; u in [0, 1) along it, 0.5 m inside the walls.
-  const auto on_side = [&](int side, double u) -> Point2D {
-    const Point2D a = lo + Point2D{kWallGapM, kWallGapM};
-    const Point2D b = hi - Point2D{kWallGapM, kWallGapM};
-    const Point2D p = a + Point2D{u * (b.x_m - a.x_m), u * (b.y_m - a.y_m)};
-    switch (side) {
-      case 0:
-        return {p.x_m, a.y_m};
-      case 1:
-        return {b.x_m, p.y_m};
-      case 2:
-        return {p.x_m, b.y_m};
-      default:
-        return {a.x_m, p.y_m};
-    }
-  };
-  // Where a walker nominally is at time t (straight, at its desired speed), if there.
-  const auto nominal = [&](const Person& q, double end_s, double t) -> std::optional<Point2D> {
-    if (t < q.appear_s || t > end_s) return std::nullopt;
-    const Point2D walk = q.goals[0] - q.start;
-    const double length = norm(walk);
-    const double along = std::min(length, (t - q.appear_s) * q.desired_speed_m_s);
-    return length > 0.0 ? q.start + (along / length) * walk : q.start;
-  };
-
-  // The recorded routes long enough to walk; none when asked for none or none is.
-  std::vector<std::array<Point2D, 2>> routes;
+  const Floor floor{summary.extent.min, summary.extent.max};
+  config.walls = floor.walls();
+  // The recorded routes long enough to walk; none when asked for none.
+  std::vector<Route> routes;
   if (options.recorded_routes) {
-    for (const Track& track : recording.tracks) {
-      const Point2D a = track.samples.front().position, b = track.samples.back().position;
-      if (norm(b - a) >= kMinWalkM) routes.push_back({a, b});
-    }
-    if (routes.empty()) {
-      return Error::format(Errc::invalid_argument, "matched_crowd: %s has no track of %g m or more to walk",
-                           recording.name.c_str(), kMinWalkM);
-    }
+    Result<std::vector<Route>> recorded = recorded_routes(recording);
+    if (!recorded) return recorded.error();
+    routes = std::move(*recorded);
   }
-  const auto clamp_inside = [&](Point2D q) {
-    return Point2D{std::clamp(q.x_m, lo.x_m + kWallGapM, hi.x_m - kWallGapM),
-                   std::clamp(q.y_m, lo.y_m + kWallGapM, hi.y_m - kWallGapM)};
-  };
-
-  std::mt19937_64 rng(seed);
-  std::vector<double> slot_next_s(slots, 0.0);  // when each slot's next walker appears
-  std::vector<bool> slot_first(slots, true);     // the slot's first walk starts part-way
-  std::vector<double> end_s;                    // each placed walker's nominal arrival
-  for (;;) {
-    // The slot due first, so everyone nominally present at that moment is already placed.
-    const auto due = std::min_element(slot_next_s.begin(), slot_next_s.end());
-    const double t = *due;
-    if (t >= options.duration_s) break;
-    const bool first = slot_first[static_cast<std::size_t>(due - slot_next_s.begin())];
-    slot_first[static_cast<std::size_t>(due - slot_next_s.begin())] = false;
-    Person p;
-    p.radius_m = kWalkerRadiusM;
-    p.desired_speed_m_s = draw_walker_speed(rng);  // first, so spacing does not bias it
-    p.goal_count = 1;
-    p.leave_at_goal = true;
-    p.appear_s = t;
-    const bool pair = pair_chance > 0.0 && unit_uniform(rng) < pair_chance;
-    Person companion = p;
-    // Clear of everyone nominally present (a companion also of its walker).
-    const auto room_for = [&](const Person& who) {
-      for (std::size_t j = 0; j < config.people.size(); ++j) {
-        const std::optional<Point2D> q = nominal(config.people[j], end_s[j], t);
-        if (q && norm(*q - who.start) < who.radius_m + config.people[j].radius_m + kSpacingM) return false;
-      }
-      return true;
-    };
-    const auto inside = [&](Point2D q) {
-      return q.x_m >= lo.x_m + kWallGapM && q.x_m <= hi.x_m - kWallGapM && q.y_m >= lo.y_m + kWallGapM &&
-             q.y_m <= hi.y_m - kWallGapM;
-    };
-    bool placed = false;
-    for (int attempt = 0; attempt < kMaxDraws && !placed; ++attempt) {
-      Point2D a, b;
-      if (!routes.empty()) {
-        const auto pick = static_cast<std::size_t>(unit_uniform(rng) * static_cast<double>(routes.size()));
-        const std::array<Point2D, 2>& route = routes[std::min(routes.size() - 1, pick)];
-        a = clamp_inside(route[0] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
-        b = clamp_inside(route[1] + Point2D{kRouteJitterM * standard_normal(rng), kRouteJitterM * standard_normal(rng)});
-      } else {
-        const int from = std::min(3, static_cast<int>(unit_uniform(rng) * 4.0));
-        const int to = (from + 1 + std::min(2, static_cast<int>(unit_uniform(rng) * 3.0))) % 4;
-        a = on_side(from, unit_uniform(rng));
-        b = on_side(to, unit_uniform(rng));
-      }
-      const double along = first ? unit_uniform(rng) : 0.0;
-      if (norm(b - a) < kMinWalkM) continue;
-      p.start = a + along * (b - a);
-      p.goals[0] = b;
-      placed = room_for(p);
-      if (placed && pair) {
-        // Beside the walker, on its left if there is room, else on its right.
-        const Point2D left = (kCompanionGapM / norm(b - a)) * perpendicular(b - a);
-        companion.start = p.start + left;
-        companion.goals[0] = b + left;
-        if (!inside(companion.start) || !inside(companion.goals[0])) {
-          companion.start = p.start - left;
-          companion.goals[0] = b - left;
-        }
-        placed = inside(companion.start) && inside(companion.goals[0]) && room_for(companion);
-      }
-    }
-    if (!placed) {
-      return Error::format(Errc::capacity, "matched_crowd: no room for walker %zu at %g s in %d draws",
-                           config.people.size(), t, kMaxDraws);
-    }
-    if (config.people.size() + (pair ? 2 : 1) > kMaxWalkers) {
-      return Error::format(Errc::capacity, "matched_crowd: %zu at once for %g s needs more than %zu walkers", slots,
-                           options.duration_s, kMaxWalkers);
-    }
-    // From rest a walker lags its desired speed by the relaxation time; it leaves within reach.
-    const double walk_s = std::max(0.0, norm(p.goals[0] - p.start) - reach_m) / p.desired_speed_m_s + relaxation_s;
-    if (pair) {
-      p.group = companion.group = ++groups;
-      end_s.push_back(t + walk_s);
-      config.people.push_back(companion);
-    }
-    end_s.push_back(t + walk_s);
-    config.people.push_back(p);
-    *due = t + walk_s;
-  }
+  WalkerPlan plan(config, floor, routes, seed);
+  if (Status s = plan.run(slots, pair_chance, options.duration_s); !s) return s.error();
   return config;
 }
 
