@@ -54,6 +54,7 @@ TEST_PACKAGES=(
   clang-16                   # the sanitized suite and the bounded libFuzzer run (SEN3BOT_LIBFUZZER=ON);
                              # 16: the first with C++20's conditionally trivial members (StaticVector)
   libclang-rt-16-dev         # libFuzzer and the sanitizer runtimes for clang 16
+  llvm-16                    # llvm-symbolizer: file:line in the sanitizers' reports
   libmrpt-hwdrivers-dev      # lms200 tests: MRPT's CSickLaserSerial, a third-party LMS200 client
   python3-jsonschema         # vda5050 tests: encoder output checked against the VDA 5050 JSON schemas
   python3-gi                 # camera tests: the RTSP peer is gst-rtsp-server driven from Python

@@ -65,6 +65,7 @@ case "${1:-}" in
     sanitize_args=(-DCMAKE_C_COMPILER=clang-16 -DCMAKE_CXX_COMPILER=clang++-16 -DSEN3BOT_SANITIZE=ON
                    -DSEN3BOT_BENCH=OFF)
     if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then sanitize_args+=(-DSEN3BOT_LIBFUZZER=ON); fi
+    export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # reports with file:line
     if [[ "${SEN3BOT_SKIP_SANITIZE:-0}" != 1 ]]; then
       section "AddressSanitizer + UndefinedBehaviorSanitizer build (clang) and tests"
       configure_and_build build-sanitize "${sanitize_args[@]}"

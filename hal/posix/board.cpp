@@ -22,8 +22,9 @@ class PosixBoard::GpioLine final : public DigitalInput, public DigitalOutput {
   static Result<std::unique_ptr<GpioLine>> open(std::string_view spec, bool output, const char* consumer) {
     const std::size_t colon = spec.rfind(':');
     unsigned line = 0;
-    const char* first = spec.data() + colon + 1;
+    // No colon: the line is empty (computing data() + npos + 1 would be undefined).
     const char* last = spec.data() + spec.size();
+    const char* first = colon == std::string_view::npos ? last : spec.data() + colon + 1;
     if (colon == std::string_view::npos || colon == 0 || first == last ||
         std::from_chars(first, last, line).ptr != last)
       return Error::format(Errc::config, "gpio: '%.*s': expected /dev/gpiochipN:LINE", static_cast<int>(spec.size()),

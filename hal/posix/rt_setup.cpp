@@ -78,9 +78,11 @@ Status prefault_stack(std::size_t bytes) {
   char* low = nullptr;
   std::size_t size = 0;
   if (thread_stack(low, size)) {
-    char here = 0;
+    // The frame's address, not a local's: under AddressSanitizer's use-after-return detection
+    // locals live on a heap-allocated fake stack.
+    const char* here = static_cast<const char*>(__builtin_frame_address(0));
     // Stacks grow down on every target we build for (x86-64, AArch64, ARMv7).
-    const std::size_t room = static_cast<std::size_t>(&here - low);
+    const std::size_t room = static_cast<std::size_t>(here - low);
     if (bytes + kStackSafetyMarginBytes > room) {
       return Error::format(Errc::invalid_argument,
                            "prefault_stack: %zu bytes asked but only %zu of the %zu-byte stack are free "

@@ -27,9 +27,9 @@ struct BaseRig {
   tasks::Topic<msg::VelocityCommand> command;
   tasks::Topic<msg::Odometry> odometry;
   tasks::Topic<msg::BaseFlags> flags;
-  BaseTask task{p2os::P2osConfig{}, board, BaseTopics{command, odometry, flags}};
   std::array<std::byte, 64 * 1024> buffer{};
   std::pmr::monotonic_buffer_resource arena{buffer.data(), buffer.size(), std::pmr::null_memory_resource()};
+  BaseTask task{p2os::P2osConfig{}, board, BaseTopics{command, odometry, flags}};
   std::uint64_t cycle = 0;
 
   BaseRig() { board.attach("base", pipe.a()); }
@@ -97,9 +97,9 @@ TEST(BaseTask, ConnectsToATcpSimulatorAndReconnectsAfterADrop) {
   tasks::Topic<msg::VelocityCommand> command;
   tasks::Topic<msg::Odometry> odometry;
   tasks::Topic<msg::BaseFlags> flags;
-  BaseTask task(config, board, BaseTopics{command, odometry, flags});
   std::array<std::byte, 64 * 1024> buffer;
   std::pmr::monotonic_buffer_resource arena(buffer.data(), buffer.size(), std::pmr::null_memory_resource());
+  BaseTask task(config, board, BaseTopics{command, odometry, flags});
   ASSERT_TRUE(task.init(arena));
   hal::Clock& clock = board.clock();
   std::uint64_t cycle = 0;
@@ -135,10 +135,10 @@ TEST(LaserTask, PublishesNavigationScansFromTheBoardsLink) {
   c.port = "sim";
   c.baud = 500000;
   c.variant = {180, 100};
-  LaserTask task(c, board, topic);
   // The arena is exactly the declared budget over the null resource: init fits in it.
   std::vector<std::byte> budget(LaserTask::kArenaBytes);
   std::pmr::monotonic_buffer_resource arena(budget.data(), budget.size(), std::pmr::null_memory_resource());
+  LaserTask task(c, board, topic);  // after the arena: it gives its memory back first
   ASSERT_TRUE(task.init(arena));
   EXPECT_EQ(board.opens("laser"), 1);
   for (hal::Nanos now = 0; now < hal::seconds(2); now += hal::millis(1)) {
@@ -224,9 +224,9 @@ TEST(BaseTask, StartsWithoutItsDeviceReportsItAndRetriesWithBackoff) {
   tasks::Topic<msg::BaseFlags> flags;
   p2os::P2osConfig config;
   config.reopen_delay_ms = 500;
-  BaseTask task(config, board, BaseTopics{command, odometry, flags});
   std::array<std::byte, 64 * 1024> buffer{};
   std::pmr::monotonic_buffer_resource arena{buffer.data(), buffer.size(), std::pmr::null_memory_resource()};
+  BaseTask task(config, board, BaseTopics{command, odometry, flags});
   ASSERT_TRUE(task.init(arena));
   EXPECT_TRUE(task.device_missing());
   hal::SimClock& clock = board.sim_clock();

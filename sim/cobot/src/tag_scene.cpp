@@ -126,11 +126,18 @@ void TagSceneRenderer::Impl::draw_background() {
   constexpr double kNearM = 0.15;   // the floor seen nearest the robot (the image's bottom is farther)
   constexpr double kHalfWidthM = 8.0;
   const auto jitter = [&](double base, double spread) { return base + rng.uniform(-spread, spread); };
-  frame.setTo(cv::Scalar::all(jitter(160, 25)) + cv::Scalar(jitter(0, 8), jitter(0, 8), jitter(0, 8)));  // the wall
+  // A grey of `base` tinted per channel, drawn in a fixed order (see the shelves' boxes below).
+  const auto shade = [&](double base, double spread, double tint) {
+    const double third = jitter(0, tint);
+    const double second = jitter(0, tint);
+    const double first = jitter(0, tint);
+    return cv::Scalar::all(jitter(base, spread)) + cv::Scalar(first, second, third);
+  };
+  frame.setTo(shade(160, 25, 8));  // the wall
   std::array<cv::Point2f, 4> floor{};
   if (pixel(wall, kHalfWidthM, floor_up, floor[0]) && pixel(wall, -kHalfWidthM, floor_up, floor[1]) &&
       pixel(kNearM, -kHalfWidthM, floor_up, floor[2]) && pixel(kNearM, kHalfWidthM, floor_up, floor[3])) {
-    fill(floor, cv::Scalar::all(jitter(105, 20)) + cv::Scalar(jitter(0, 6), jitter(0, 6), jitter(0, 6)));
+    fill(floor, shade(105, 20, 6));
   }
   // Floor tiles, 0.6 m.
   const cv::Scalar seam(80, 84, 86);
@@ -157,7 +164,12 @@ void TagSceneRenderer::Impl::draw_background() {
     const double h = rng.uniform(0.1, 0.5);
     std::array<cv::Point2f, 4> corners{};
     if (quad(wall - 0.05, l, 0.0, 0.0, -1.0, w / 2, lo, lo + h, corners)) {
-      fill(corners, cv::Scalar(rng.uniform(30, 200), rng.uniform(30, 200), rng.uniform(30, 200)));
+      // Drawn in a fixed order (a function's arguments are evaluated in an order each compiler
+      // chooses: GCC's last to first is kept, so the scenes stay as they were).
+      const int red = rng.uniform(30, 200);
+      const int green = rng.uniform(30, 200);
+      const int blue = rng.uniform(30, 200);
+      fill(corners, cv::Scalar(blue, green, red));
     }
   }
   if (!options.wall_code.empty()) {
