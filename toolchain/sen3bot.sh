@@ -40,6 +40,7 @@ use_ccache() {
 
 case "${1:-}" in
   mission)
+    start=$SECONDS
     section "installing missing packages"
     toolchain/bootstrap.sh --mission
     use_ccache
