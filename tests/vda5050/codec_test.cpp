@@ -361,6 +361,10 @@ TEST_F(Codec, ConnectionAndVisualization) {
   EXPECT_EQ(back.state, ConnectionState::connection_broken);
   EXPECT_EQ(back.header.manufacturer, "KIT");
   expect_rejected(decode_connection(*text, Version::v2_1_0, back, *scratch), kValidationError, "version");
+  // An empty timestamp is refused on the way in, as the encoder refuses it on the way out.
+  const std::string no_time = R"({"headerId":1,"timestamp":"","version":"2.0.0","manufacturer":"KIT",)"
+                              R"("serialNumber":"0001","connectionState":"ONLINE"})";
+  expect_rejected(decode_connection(no_time, Version::v2_0_0, back, *scratch), kValidationError, "timestamp");
 
   Visualization v;
   v.header = c.header;

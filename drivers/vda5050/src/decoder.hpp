@@ -231,6 +231,10 @@ class Decoder {
     if (!uint32(root, "headerId", h.header_id, true)) return false;
     set_header_id(h.header_id);
     if (!string(root, "timestamp", h.timestamp, true)) return false;
+    if (h.timestamp.empty()) {  // an ISO 8601 time; the encoder would refuse to send it on
+      auto at = field("timestamp");
+      return fail(kValidationError, "empty, expected an ISO 8601 time");
+    }
     if (!string(root, "version", h.version, true)) return false;
     if (!version_matches(h.version.view(), version_)) {
       auto at = field("version");
