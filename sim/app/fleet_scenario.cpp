@@ -10,15 +10,10 @@ namespace sen3bot::sim::fleet {
 
 namespace {
 
+// A walker who leaves the site at vanish_s.
 world::MoverScript walker(std::vector<world::Point2D> path, double speed, double start_s, double vanish_s) {
-  world::MoverScript m;
-  m.path = std::move(path);
-  m.speed_m_s = speed;
-  m.size_m = 0.45;
-  m.start_time_s = start_s;
+  world::MoverScript m = world::walking_person(std::move(path), speed, start_s);
   m.vanish_time_s = vanish_s;
-  m.accel_m_s2 = 1.0;
-  m.person = true;
   return m;
 }
 

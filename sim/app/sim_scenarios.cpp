@@ -35,20 +35,6 @@ world::MoverScript box_at(double x_m, double y_m, double appear_s) {
   return box;
 }
 
-// How fast a walker slows down and sets off again at the ends of a walk.
-constexpr double kWalkerAccelMS2 = 1.0;
-
-world::MoverScript person_walking(std::vector<msg::Point2D> path, double speed_m_s, double start_s) {
-  world::MoverScript person;
-  person.path = std::move(path);
-  person.speed_m_s = speed_m_s;
-  person.size_m = 0.45;
-  person.start_time_s = start_s;
-  person.accel_m_s2 = kWalkerAccelMS2;
-  person.person = true;
-  return person;
-}
-
 }  // namespace
 
 std::vector<Scenario> all() {
@@ -73,7 +59,7 @@ std::vector<Scenario> all() {
        "",
        "",
        {{"worker", "a person walking across the robot's way, back and forth",
-         {person_walking({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
+         {world::walking_person({{5.0, 5.3}, {1.0, 5.3}}, 0.6, 6.0)}}}},
       {"people-crossing",
        "the main mission among people: (2.5, 2) m to (4, 7) m and back on the lab's safe curve, two workers "
        "crossing its way at 0.6 and 1.0 m/s, found by the camera and the laser and caged (each seed starts "
@@ -83,7 +69,7 @@ std::vector<Scenario> all() {
        "maps/lab_curve.yaml",
        "",
        {{"two-workers", "one across the upper area, one across the lower area",
-         {person_walking({{6.8, 5.5}, {0.8, 5.5}}, 0.6, 0.0), person_walking({{1.8, 3.0}, {6.8, 3.0}}, 1.0, 0.0)}}},
+         {world::walking_person({{6.8, 5.5}, {0.8, 5.5}}, 0.6, 0.0), world::walking_person({{1.8, 3.0}, {6.8, 3.0}}, 1.0, 0.0)}}},
        true},
       {"kidnapped",
        "(2.5, 2) m to (4, 7) m and back; on the way back the robot is carried into the lower work area, its odometry "

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <random>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "sen3bot/crowd/legs.hpp"
@@ -62,6 +63,19 @@ inline MoverScript standing_person(double x_m, double y_m) {
   MoverScript person;
   person.path = {{x_m, y_m}};
   person.size_m = 0.45;
+  person.person = true;
+  return person;
+}
+
+// A person walking the path at speed_m_s from start_s (slowing down and setting off again at the
+// ends at 1 m/s^2), a 0.45 m body as the scenarios' people are.
+inline MoverScript walking_person(std::vector<Point2D> path, double speed_m_s, double start_s) {
+  MoverScript person;
+  person.path = std::move(path);
+  person.speed_m_s = speed_m_s;
+  person.size_m = 0.45;
+  person.start_time_s = start_s;
+  person.accel_m_s2 = 1.0;
   person.person = true;
   return person;
 }
