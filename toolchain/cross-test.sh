@@ -12,8 +12,9 @@
 #    file's CMAKE_CROSSCOMPILING_EMULATOR), GoogleTest discovery included. Exit status is
 #    non-zero if the sysroot, the configure, the build or any test fails.
 #
-# Tests with a ctest label listed in SEN3BOT_QEMU_EXCLUDE_LABELS (a regex for ctest -LE; empty
-# by default) are skipped; docs/cross-build.md lists which labels are excluded and why.
+# Tests with a ctest label listed in SEN3BOT_QEMU_EXCLUDE_LABELS (a regex for ctest -LE) and
+# tests whose names match SEN3BOT_QEMU_EXCLUDE_TESTS (a regex for ctest -E) are skipped; both
+# are empty by default. docs/cross-build.md says which the test command excludes and why.
 # SEN3BOT_SYSROOT overrides the sysroot directory (default <repo>/.sysroot-<arch>).
 set -euo pipefail
 
@@ -102,6 +103,10 @@ ctest_args=(--test-dir "${build_dir}" --output-on-failure --no-tests=error -j "$
 if [[ -n "${SEN3BOT_QEMU_EXCLUDE_LABELS:-}" ]]; then
   ctest_args+=(-LE "${SEN3BOT_QEMU_EXCLUDE_LABELS}")
   echo "   excluding labels: ${SEN3BOT_QEMU_EXCLUDE_LABELS}"
+fi
+if [[ -n "${SEN3BOT_QEMU_EXCLUDE_TESTS:-}" ]]; then
+  ctest_args+=(-E "${SEN3BOT_QEMU_EXCLUDE_TESTS}")
+  echo "   excluding tests: ${SEN3BOT_QEMU_EXCLUDE_TESTS}"
 fi
 status=0
 ctest "${ctest_args[@]}" || status=$?

@@ -13,8 +13,10 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
             --source-dir ${PROJECT_SOURCE_DIR}
             --out ${CMAKE_CURRENT_BINARY_DIR}/page-report
             --timeout 120)
+  set(labels view peer npm browser)
+  sen3bot_peer_labels(labels)
   set_tests_properties(view.page.browser PROPERTIES
-    LABELS "view;peer;npm;browser"
+    LABELS "${labels}"
     TIMEOUT 300
     SKIP_RETURN_CODE 77
     RESOURCE_LOCK view-page-npm)

@@ -11,8 +11,10 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
             --sim $<TARGET_FILE:sen3bot-sim>
             --cache ${CMAKE_CURRENT_BINARY_DIR}/view-npm
             --source-dir ${PROJECT_SOURCE_DIR})
+  set(labels view peer npm timing)
+  sen3bot_peer_labels(labels)
   set_tests_properties(view.peer.foxglove_client PROPERTIES
-    LABELS "view;peer;npm;timing"
+    LABELS "${labels}"
     TIMEOUT 300
     SKIP_RETURN_CODE 77
     RESOURCE_LOCK view-npm)
@@ -26,8 +28,10 @@ if(NOT CMAKE_CROSSCOMPILING AND TARGET sen3bot-sim)
     COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/peer/hostile_peers.py
             --sim $<TARGET_FILE:sen3bot-sim>
             --source-dir ${PROJECT_SOURCE_DIR})
+  set(labels view peer timing)
+  sen3bot_peer_labels(labels)
   set_tests_properties(view.peer.hostile PROPERTIES
-    LABELS "view;peer;timing"
+    LABELS "${labels}"
     TIMEOUT 300
     SKIP_RETURN_CODE 77
     RUN_SERIAL TRUE)

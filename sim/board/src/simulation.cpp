@@ -17,8 +17,6 @@ constexpr hal::Nanos kClearancePeriodNs = 50'000'000;
 constexpr double kNanosPerSecond = 1e9;
 constexpr double kMovingSpeedM_s = 0.02;
 
-nav::Pose2D to_nav(const p2os::Pose2& p) { return {p.x_m, p.y_m, p.theta_rad}; }
-
 }  // namespace
 
 // The scanner's view: the world ray-cast from the sensor pose, with seeded range noise.
@@ -46,7 +44,7 @@ class Simulation::WorldObstacles final : public p2os::EmulatorWorld {
   WorldObstacles(world::World& world, const nav::Footprint& footprint) : world_(world), footprint_(footprint) {}
   bool motion_blocked(const p2os::Pose2& from, const p2os::Pose2& to) override {
     // Moving out of an overlap (a person walked into the robot) is allowed.
-    return world_.collides(to_nav(to), footprint_) && !world_.collides(to_nav(from), footprint_);
+    return world_.collides(to, footprint_) && !world_.collides(from, footprint_);
   }
   double sonar_range_m(const p2os::Pose2& sensor, double max_range_m) override {
     return world_.cast_ray(sensor.x_m, sensor.y_m, sensor.theta_rad, max_range_m);
@@ -143,7 +141,7 @@ std::string Simulation::laser_device_path() const {
 
 // The crowd sees the robot as the disc that holds its footprint, where the robot truly is.
 void Simulation::place_crowd(hal::Nanos now_ns) noexcept {
-  const nav::Pose2D truth = to_nav(base_.ground_truth());
+  const nav::Pose2D truth = base_.ground_truth();
   const double v = base_.velocity_m_s();
   const crowd::RobotDisc robot{{truth.x_m, truth.y_m},
                                {v * std::cos(truth.theta_rad), v * std::sin(truth.theta_rad)},
@@ -168,7 +166,7 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
   (void)base_.step(base_stream, now_ns);
   if (crowd_) place_crowd(now_ns);
 
-  const nav::Pose2D pose = to_nav(base_.ground_truth());
+  const nav::Pose2D pose = base_.ground_truth();
   const nav::Pose2D& m = config_.laser_mount;
   const nav::Pose2D sensor = nav::compose(pose, nav::SensorMount{m.x_m, m.y_m, m.theta_rad});
   ranges_->set_sensor_pose(sensor.x_m, sensor.y_m, sensor.theta_rad);

@@ -101,7 +101,9 @@ bool P2osEmulator::take_session_closed() noexcept {
   return closed;
 }
 
-Pose2 P2osEmulator::odometry_pose() const noexcept { return {odom_x_mm_, odom_y_mm_, odom_theta_rad_}; }
+Pose2 P2osEmulator::odometry_pose() const noexcept {
+  return {odom_x_mm_ * 1e-3, odom_y_mm_ * 1e-3, odom_theta_rad_};
+}
 
 double P2osEmulator::omega_rad_s() const noexcept { return w_deg_s_ / kDegPerRad; }
 

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <numbers>
 
+#include "sen3bot/geometry/geometry.hpp"
 #include "sen3bot/p2os/codec.hpp"
 
 namespace sen3bot::p2os {
@@ -17,11 +18,7 @@ struct ConversionFactors {
   double range_conv_mm_per_unit = 1.0;   // RangeConvFactor (sonar)
 };
 
-struct Pose2 {
-  double x_m = 0;
-  double y_m = 0;
-  double theta_rad = 0;
-};
+using Pose2 = geometry::Pose2D;
 
 // Wraps an angle to (-pi, pi].
 double wrap_angle_rad(double angle_rad) noexcept;

@@ -11,6 +11,7 @@
 #include <span>
 #include <string_view>
 
+#include "sen3bot/geometry/geometry.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/json/json.hpp"
 
@@ -41,15 +42,8 @@ std::string_view json_schema(Schema schema) noexcept;
 // u32 seconds to the last one. For the robot's own JSON messages too.
 void write_time(json::Writer& out, std::string_view name, hal::Nanos ns) noexcept;
 
-struct Point2 {
-  double x_m = 0.0;
-  double y_m = 0.0;
-};
-struct Pose2 {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
+using Point2 = geometry::Point2D;
+using Pose2 = geometry::Pose2D;
 struct Color {
   double r = 0.0, g = 0.0, b = 0.0, a = 1.0;  // 0..1
 };

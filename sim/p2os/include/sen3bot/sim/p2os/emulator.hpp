@@ -121,7 +121,7 @@ class P2osEmulator {
   // Ground truth in the world frame (m, rad); independent of the controller's odometry.
   [[nodiscard]] Pose2 ground_truth() const noexcept { return truth_; }
   void set_ground_truth(const Pose2& pose) noexcept { truth_ = pose; }
-  // The controller's own odometry (what the SIPs report), mm and rad.
+  // The controller's own odometry (what the SIPs report), m and rad.
   [[nodiscard]] Pose2 odometry_pose() const noexcept;
   void set_world(EmulatorWorld* world) noexcept { world_ = world; }
 
