@@ -340,7 +340,7 @@ Status make_cobot(Wiring& w) {
     if (a.outline.size() > CobotArea::kMaxVertices)
       return Error::format(Errc::config, "%s: cobot.site: an area of more than %zu corners", w.file(),
                            CobotArea::kMaxVertices);
-    for (const ssc::Point& p : a.outline) area.outline[area.vertices++] = {p.x, p.y};
+    for (const ssc::Point& p : a.outline) area.outline[area.vertices++] = p;
   }
   w.make<CobotTask>(task,
                     CobotTopics{w.reads(&Topics::people), w.reads(&Topics::pose), w.reads(&Topics::odometry),

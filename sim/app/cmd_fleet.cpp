@@ -98,13 +98,13 @@ int start_robots(const FleetScenario& scenario, const ssc::SiteFile& site, const
     run.serial = serial;
     run.config = base.firmware;
     run.config.fleet.serial_number = serial;
-    run.config.navigation.mcl.initial_pose = {home.pose.x, home.pose.y, home.pose.theta};
+    run.config.navigation.mcl.initial_pose = home.pose;
     run.config.navigation.people_enabled = true;
     run.config.navigation.people_detector = "sim";
     run.config.tasks["detector"].arena_bytes = 4 * 1024;
     run.config.tasks["people"].arena_bytes = 64 * 1024;
     SimulationConfig world = base.world;
-    world.start_pose = {home.pose.x, home.pose.y, home.pose.theta};
+    world.start_pose = home.pose;
     world.movers = scenario.people;
     world.detector.enabled = true;
     auto board = SimBoard::create(world, true);

@@ -118,13 +118,13 @@ bool draw_trajectories(const std::string& path, const FormationExample& ex, cons
       }
   if (rec.curve.size() > 1) {
     std::vector<Px> curve;
-    for (const formation::Vec2& p : rec.curve) curve.push_back(view(p.x, p.y));
+    for (const formation::Vec2& p : rec.curve) curve.push_back(view(p.x_m, p.y_m));
     curve.push_back(curve.front());
     canvas.dashed_polyline(curve, colours::kCurve, 2, 10, 6);
   }
   const std::size_t n = ex.starts.size();
   for (std::size_t i = 0; i < ex.targets.size(); ++i) {
-    const Px c = view(ex.targets[i].x, ex.targets[i].y);
+    const Px c = view(ex.targets[i].x_m, ex.targets[i].y_m);
     const Rgb colour = kRobotColours[i % kColourCount];
     canvas.line({c.x - 9, c.y - 9}, {c.x + 9, c.y + 9}, colour, 3);
     canvas.line({c.x - 9, c.y + 9}, {c.x + 9, c.y - 9}, colour, 3);
@@ -135,8 +135,8 @@ bool draw_trajectories(const std::string& path, const FormationExample& ex, cons
     std::vector<Px> line;
     for (const FormationSample& s : rec.samples) {
       const nav::Pose2D& a = s.truth[i];
-      const formation::Vec2 p = formation::point_p({a.x_m, a.y_m, a.theta_rad}, kFormationOffsetM);
-      line.push_back(view(p.x, p.y));
+      const formation::Vec2 p = formation::point_p(a, kFormationOffsetM);
+      line.push_back(view(p.x_m, p.y_m));
     }
     if (line.size() > 1) canvas.polyline(line, colour, 2);
     if (rec.samples.empty()) continue;
@@ -310,7 +310,7 @@ void write_run(json::Writer& w, std::size_t index, const RunResult& r) {
   const FormationMetrics& m = r.metrics;
   w.begin_object().member_uint64("run", index).member_bool("passed", m.passed).key("starts").begin_array();
   for (const auto& start : r.starts) {
-    w.begin_array().fixed_or_null(start.x, 4).fixed_or_null(start.y, 4).fixed_or_null(start.theta, 4).end_array();
+    w.begin_array().fixed_or_null(start.x_m, 4).fixed_or_null(start.y_m, 4).fixed_or_null(start.theta_rad, 4).end_array();
   }
   w.end_array()
       .key("min_robot_distance_m").fixed_or_null(m.min_robot_distance_m, 4)

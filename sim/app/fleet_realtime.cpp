@@ -188,7 +188,8 @@ std::string realtime_robot_config(const std::string& base_text, const std::strin
                                   const ssc::RobotHome& home, const std::string& broker_url, double duration_s,
                                   const std::vector<world::MoverScript>& people) {
   char pose[160];
-  std::snprintf(pose, sizeof pose, "{ x_m: %.3f, y_m: %.3f, theta_deg: %.2f }", home.pose.x, home.pose.y, home.pose.theta * 180.0 / kPi);
+  std::snprintf(pose, sizeof pose, "{ x_m: %.3f, y_m: %.3f, theta_deg: %.2f }", home.pose.x_m, home.pose.y_m,
+                home.pose.theta_rad * 180.0 / kPi);
   std::string out;
   std::string section;
   std::size_t start = 0;

@@ -86,9 +86,10 @@ bool draw_site(const std::string& path, const std::string& title, const nav::Occ
   for (std::size_t i = 0; i < site.site.areas.size(); ++i) {
     const ssc::Area& a = site.site.areas[i];
     std::vector<figure::Px> outline;
-    for (const ssc::Point& p : a.outline) outline.push_back(view(p.x, p.y));
+    for (const ssc::Point& p : a.outline) outline.push_back(view(p.x_m, p.y_m));
     canvas.outline_polygon(outline, area_colour(a.type), 3);
-    canvas.text(view(a.outline[0].x + 0.1, a.outline[0].y + 0.15), site.area_names[i] + " (" + std::string(ssc::to_string(a.type)) + ")",
+    canvas.text(view(a.outline[0].x_m + 0.1, a.outline[0].y_m + 0.15),
+                site.area_names[i] + " (" + std::string(ssc::to_string(a.type)) + ")",
                 {150, 60, 60}, 0.45, 1, true);
   }
   for (const AgvPlan& plan : plans) {

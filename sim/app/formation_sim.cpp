@@ -65,9 +65,9 @@ bool formation_starts_admissible(std::span<const formation::Pose> starts) noexce
   const double inset = kFormationRadiusM + kStartWallMarginM;
   for (std::size_t i = 0; i < starts.size(); ++i) {
     const formation::Pose& a = starts[i];
-    if (a.x < w.x0_m + inset || a.x > w.x1_m - inset || a.y < w.y0_m + inset || a.y > w.y1_m - inset) return false;
+    if (a.x_m < w.x0_m + inset || a.x_m > w.x1_m - inset || a.y_m < w.y0_m + inset || a.y_m > w.y1_m - inset) return false;
     for (std::size_t j = 0; j < i; ++j)
-      if (std::hypot(a.x - starts[j].x, a.y - starts[j].y) < kStartSeparationM) return false;
+      if (std::hypot(a.x_m - starts[j].x_m, a.y_m - starts[j].y_m) < kStartSeparationM) return false;
   }
   return true;
 }
@@ -80,9 +80,9 @@ std::vector<formation::Pose> perturbed_starts(const FormationExample& example, s
     for (std::size_t i = 0; i < starts.size(); ++i) {
       const formation::Pose& s = example.starts[i];
       // Drawn in a fixed order (x, y, theta) so a seed gives the same starts everywhere.
-      const double x = s.x + dxy(rng);
-      const double y = s.y + dxy(rng);
-      const double theta = s.theta + dtheta(rng);
+      const double x = s.x_m + dxy(rng);
+      const double y = s.y_m + dxy(rng);
+      const double theta = s.theta_rad + dtheta(rng);
       starts[i] = formation::Pose{x, y, std::remainder(theta, 2 * kPi)};
     }
     if (formation_starts_admissible(starts)) return starts;
@@ -121,7 +121,7 @@ Result<std::unique_ptr<FormationRig>> FormationRig::create(const FormationExampl
     c.navigation.waypoints_path.clear();
     c.navigation.safe_curve_path.clear();
     c.navigation.mission.goal_count = 0;
-    c.navigation.mcl.initial_pose = {s.x, s.y, s.theta};
+    c.navigation.mcl.initial_pose = s;
     c.tasks.erase("mission");
     c.has_fleet = true;
     c.fleet = firmware::FleetConfig{};
@@ -133,7 +133,7 @@ Result<std::unique_ptr<FormationRig>> FormationRig::create(const FormationExampl
     c.tasks["fleet"].arena_bytes = 4 * 1024 * 1024;
     SimulationConfig world = base->world;
     world.map_path = map_path;
-    world.start_pose = {s.x, s.y, s.theta};
+    world.start_pose = s;
     // The teammates, in this robot's world: its laser sees them and its safety filter stops
     // for them, as on the floor. Each is a round body where the teammate truly is (moved on
     // in advance()).
@@ -142,7 +142,7 @@ Result<std::unique_ptr<FormationRig>> FormationRig::create(const FormationExampl
       if (k == i) continue;
       world::MoverScript teammate;
       teammate.size_m = kTeammateDiameterM;
-      teammate.timeline = {{starts[k].x, starts[k].y}};
+      teammate.timeline = {{starts[k].x_m, starts[k].y_m}};
       teammate.times_s = {0.0};
       world.movers.push_back(std::move(teammate));
     }
@@ -236,7 +236,7 @@ void FormationRig::record() {
   for (std::size_t i = 0; i < n; ++i) {
     const nav::Pose2D& p = truth(i);
     s.truth.push_back(p);
-    p_[i] = formation::point_p(formation::Pose{p.x_m, p.y_m, p.theta_rad}, kFormationOffsetM);
+    p_[i] = formation::point_p(p, kFormationOffsetM);
   }
   s.formation_error_m = service_->controller().formation_error(p_);
   s.scale = last_scale_;
@@ -271,8 +271,9 @@ FormationMetrics FormationRig::metrics() const {
     if (example_.config.task == formation::TaskKind::targets) {
       for (std::size_t i = 0; i < last.truth.size() && i < example_.targets.size(); ++i) {
         const nav::Pose2D& p = last.truth[i];
-        const formation::Vec2 at = formation::point_p(formation::Pose{p.x_m, p.y_m, p.theta_rad}, kFormationOffsetM);
-        if (std::hypot(at.x - example_.targets[i].x, at.y - example_.targets[i].y) <= kFormationTargetToleranceM) ++m.targets_reached;
+        const formation::Vec2 at = formation::point_p(p, kFormationOffsetM);
+        if (std::hypot(at.x_m - example_.targets[i].x_m, at.y_m - example_.targets[i].y_m) <= kFormationTargetToleranceM)
+          ++m.targets_reached;
       }
     }
     // Converged from the sample after the last one above the bound.

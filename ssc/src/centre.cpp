@@ -104,7 +104,7 @@ Status Centre::update_agv(const AgvReport& report) {
   a->name = report.name.empty() ? Name("agv") : report.name;
   a->pose = report.pose;
   a->path.clear();
-  (void)a->path.push_back(report.pose.position());
+  (void)a->path.push_back(position(report.pose));
   for (const Point& p : report.route) (void)a->path.push_back(p);  // room for the pose and every node
   return Status::success();
 }
@@ -311,7 +311,7 @@ void Centre::staff_coalitions() {
       double far_d = -1;
       for (const RobotId m : c.members) {
         RobotSlot* r = robot(m);
-        const double d = distance_to(area->outline.as_span(), r->last.pose.position());
+        const double d = distance_to(area->outline.as_span(), position(r->last.pose));
         if (d >= far_d) {
           far = r;
           far_d = d;
@@ -334,7 +334,7 @@ void Centre::staff_coalitions() {
     // Too few: Fig. 2.7 over every robot that may be taken.
     StaticVector<Candidate, kMaxRobots> candidates;
     for (const RobotSlot& r : robots_) {
-      Candidate cand{r.id, r.last.pose.position(), r.tasks.priority(), usable(r)};
+      Candidate cand{r.id, position(r.last.pose), r.tasks.priority(), usable(r)};
       if (r.tasks.is(TaskKind::monitor) || r.tasks.is(TaskKind::charge) || coalition_of(r.id) != nullptr)
         cand.available = false;
       (void)candidates.push_back(cand);
@@ -355,7 +355,7 @@ void Centre::staff_coalitions() {
       const Task monitor{next_task_id(), TaskKind::monitor, priority, sentry_pose(c, r), c.area, 0};
       Reason why;
       why.format("monitors %s for %s", area_name(c.area), agv_name(served));
-      const double d = distance_to(area->outline.as_span(), r.last.pose.position());
+      const double d = distance_to(area->outline.as_span(), position(r.last.pose));
       take(r, monitor, why.c_str());
       (void)c.members.push_back(id);
       Event& e = event(EventType::allocation, served, c.area);
@@ -384,9 +384,9 @@ void Centre::assign_requests() {
       const auto& current = r.tasks.current();
       const bool free = !current || current->kind == TaskKind::home ||
                         (current->kind == TaskKind::amr && current->priority > p.request.priority);
-      (void)candidates.push_back({r.id, r.last.pose.position(), r.tasks.priority(), usable(r) && free});
+      (void)candidates.push_back({r.id, position(r.last.pose), r.tasks.priority(), usable(r) && free});
     }
-    const RobotId id = select_for_task(candidates.as_span(), p.request.goal.position());
+    const RobotId id = select_for_task(candidates.as_span(), position(p.request.goal));
     if (id == kNone) {
       ++i;
       continue;
@@ -610,7 +610,7 @@ Pose Centre::sentry_pose(const Coalition& c, const RobotSlot& r) const noexcept 
   }
   if (!area->sentries.empty()) return area->sentries.back();
   const Point mid = centroid(area->outline.as_span());
-  return {mid.x, mid.y, 0};
+  return {mid.x_m, mid.y_m, 0};
 }
 
 }  // namespace sen3bot::ssc

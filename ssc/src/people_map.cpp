@@ -13,7 +13,7 @@ RobotMask robot_bit(RobotId robot) noexcept { return robot < kMaxRobots ? (Robot
 
 Point predict(const Track& t, Nanos at) noexcept {
   const double dt = std::max(0.0, hal::to_seconds(at - t.last_seen));
-  return {t.position.x + t.vx * dt, t.position.y + t.vy * dt};
+  return {t.position.x_m + t.vx * dt, t.position.y_m + t.vy * dt};
 }
 
 }  // namespace
@@ -69,7 +69,7 @@ void PeopleMap::update(const PeopleReport& report) noexcept {
     if (match[o] >= 0) {
       Track& t = tracks_[static_cast<std::size_t>(match[o])];
       const Point pred = predict(t, report.stamp);
-      t.position = {g * obs.x + (1 - g) * pred.x, g * obs.y + (1 - g) * pred.y};
+      t.position = {g * obs.x + (1 - g) * pred.x_m, g * obs.y + (1 - g) * pred.y_m};
       t.vx = g * obs.vx + (1 - g) * t.vx;
       t.vy = g * obs.vy + (1 - g) * t.vy;
       t.last_seen = std::max(t.last_seen, report.stamp);

@@ -10,31 +10,25 @@ namespace {
 
 constexpr double kEps = 1e-9;
 
-double cross(Point o, Point a, Point b) noexcept { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
-
-double segment_distance(Point p, Point a, Point b) noexcept {
-  return geometry::segment_distance({p.x, p.y}, {a.x, a.y}, {b.x, b.y});
-}
-
 // Parameters along a→b where it meets edge c→d (one point, or the ends of a collinear overlap).
 void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool& any) noexcept {
-  const Point r{b.x - a.x, b.y - a.y};
-  const Point s{d.x - c.x, d.y - c.y};
-  const Point ca{c.x - a.x, c.y - a.y};
-  const double denom = r.x * s.y - r.y * s.x;
-  const double rr = r.x * r.x + r.y * r.y;
+  const Point r = b - a;
+  const Point s = d - c;
+  const Point ca = c - a;
+  const double denom = r.x_m * s.y_m - r.y_m * s.x_m;
+  const double rr = r.x_m * r.x_m + r.y_m * r.y_m;
   auto take = [&](double t) {
     t = std::clamp(t, 0.0, 1.0);
     lo = any ? std::min(lo, t) : t;
     hi = any ? std::max(hi, t) : t;
     any = true;
   };
-  const double scale = std::max({1.0, rr, s.x * s.x + s.y * s.y});
+  const double scale = std::max({1.0, rr, s.x_m * s.x_m + s.y_m * s.y_m});
   if (std::fabs(denom) <= kEps * scale) {
     if (rr <= 0) return;
-    if (std::fabs(ca.x * r.y - ca.y * r.x) > kEps * scale) return;  // parallel, apart
-    const double t0 = (ca.x * r.x + ca.y * r.y) / rr;
-    const double t1 = ((d.x - a.x) * r.x + (d.y - a.y) * r.y) / rr;
+    if (std::fabs(ca.x_m * r.y_m - ca.y_m * r.x_m) > kEps * scale) return;  // parallel, apart
+    const double t0 = (ca.x_m * r.x_m + ca.y_m * r.y_m) / rr;
+    const double t1 = ((d.x_m - a.x_m) * r.x_m + (d.y_m - a.y_m) * r.y_m) / rr;
     const double from = std::max(0.0, std::min(t0, t1));
     const double to = std::min(1.0, std::max(t0, t1));
     if (from <= to + kEps) {
@@ -43,14 +37,14 @@ void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool&
     }
     return;
   }
-  const double t = (ca.x * s.y - ca.y * s.x) / denom;
-  const double u = (ca.x * r.y - ca.y * r.x) / denom;
+  const double t = (ca.x_m * s.y_m - ca.y_m * s.x_m) / denom;
+  const double u = (ca.x_m * r.y_m - ca.y_m * r.x_m) / denom;
   if (t >= -kEps && t <= 1 + kEps && u >= -kEps && u <= 1 + kEps) take(t);
 }
 
 }  // namespace
 
-double distance(Point a, Point b) noexcept { return std::hypot(a.x - b.x, a.y - b.y); }
+double distance(Point a, Point b) noexcept { return geometry::norm(a - b); }
 
 std::string_view to_string(AreaType type) noexcept {
   switch (type) {
@@ -83,7 +77,7 @@ Status Site::validate() const {
     if (a.outline.size() < 3) return Error::format(Errc::config, "area '%s' needs at least three vertices", a.name.c_str());
     double twice_area = 0;
     for (std::size_t k = 0; k < a.outline.size(); ++k)
-      twice_area += cross({0, 0}, a.outline[k], a.outline[(k + 1) % a.outline.size()]);
+      twice_area += geometry::cross(a.outline[k], a.outline[(k + 1) % a.outline.size()]);
     if (std::fabs(twice_area) < 1e-6) return Error::format(Errc::config, "area '%s' has no surface", a.name.c_str());
     if (monitored(a.type) && a.sentries.empty()) {
       const bool overlooked = std::any_of(robots.begin(), robots.end(), [&](const RobotHome& r) { return r.overlooks == a.id; });
@@ -111,12 +105,12 @@ struct Bounds {
 };
 
 Bounds bounds(std::span<const Point> polygon) noexcept {
-  Bounds b{polygon[0].x, polygon[0].x, polygon[0].y, polygon[0].y};
+  Bounds b{polygon[0].x_m, polygon[0].x_m, polygon[0].y_m, polygon[0].y_m};
   for (const Point& v : polygon) {
-    b.x0 = std::min(b.x0, v.x);
-    b.x1 = std::max(b.x1, v.x);
-    b.y0 = std::min(b.y0, v.y);
-    b.y1 = std::max(b.y1, v.y);
+    b.x0 = std::min(b.x0, v.x_m);
+    b.x1 = std::max(b.x1, v.x_m);
+    b.y0 = std::min(b.y0, v.y_m);
+    b.y1 = std::max(b.y1, v.y_m);
   }
   return b;
 }
@@ -124,48 +118,36 @@ Bounds bounds(std::span<const Point> polygon) noexcept {
 }  // namespace
 
 bool contains(std::span<const Point> polygon, Point p) noexcept {
-  const std::size_t n = polygon.size();
-  if (n < 3) return false;
+  if (polygon.size() < 3) return false;
   const Bounds box = bounds(polygon);
-  if (p.x < box.x0 - kEps || p.x > box.x1 + kEps || p.y < box.y0 - kEps || p.y > box.y1 + kEps) return false;
-  bool inside = false;
-  for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
-    const Point a = polygon[i];
-    const Point b = polygon[j];
-    if (segment_distance(p, a, b) <= kEps) return true;
-    if ((a.y > p.y) != (b.y > p.y)) {
-      const double x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
-      if (p.x < x) inside = !inside;
-    }
-  }
-  return inside;
+  if (p.x_m < box.x0 - kEps || p.x_m > box.x1 + kEps || p.y_m < box.y0 - kEps || p.y_m > box.y1 + kEps) return false;
+  // The crossing test may put a point on an edge either way: within kEps of one is inside.
+  return geometry::inside_polygon(polygon, p) || geometry::polygon_edge_distance(polygon, p) <= kEps;
 }
 
 double distance_to(std::span<const Point> polygon, Point p) noexcept {
   if (contains(polygon, p)) return 0;
-  double best = INFINITY;
-  for (std::size_t i = 0; i < polygon.size(); ++i)
-    best = std::min(best, segment_distance(p, polygon[i], polygon[(i + 1) % polygon.size()]));
-  return best;
+  if (polygon.size() == 1) return distance(p, polygon[0]);  // the edge distance wants two corners
+  return geometry::polygon_edge_distance(polygon, p);
 }
 
 Point centroid(std::span<const Point> polygon) noexcept {
   Point c;
   if (polygon.empty()) return c;
   for (const Point& p : polygon) {
-    c.x += p.x;
-    c.y += p.y;
+    c.x_m += p.x_m;
+    c.y_m += p.y_m;
   }
   const double n = static_cast<double>(polygon.size());
-  return {c.x / n, c.y / n};
+  return {c.x_m / n, c.y_m / n};
 }
 
 std::optional<SegmentSpan> segment_span(std::span<const Point> polygon, Point a, Point b) noexcept {
   if (polygon.size() < 3) return std::nullopt;
   const Bounds box = bounds(polygon);
   const double slack = 1e-6 * std::max({1.0, box.x1 - box.x0, box.y1 - box.y0});
-  if (std::max(a.x, b.x) < box.x0 - slack || std::min(a.x, b.x) > box.x1 + slack || std::max(a.y, b.y) < box.y0 - slack ||
-      std::min(a.y, b.y) > box.y1 + slack)
+  if (std::max(a.x_m, b.x_m) < box.x0 - slack || std::min(a.x_m, b.x_m) > box.x1 + slack ||
+      std::max(a.y_m, b.y_m) < box.y0 - slack || std::min(a.y_m, b.y_m) > box.y1 + slack)
     return std::nullopt;
   double lo = 0;
   double hi = 0;

@@ -40,8 +40,7 @@ SiteFile read(const Reader& top) {
                                    AreaType::not_monitored};
     area.type = kTypes[a.choice("type", {"1.1", "1.2", "2", "3"})];
     for (const Reader& p : a.sequence("outline")) {
-      const geometry::Point2D v = p.point();
-      if (!area.outline.push_back(Point{v.x_m, v.y_m})) a.fail("outline", "at most " + std::to_string(kMaxVertices) + " vertices");
+      if (!area.outline.push_back(p.point())) a.fail("outline", "at most " + std::to_string(kMaxVertices) + " vertices");
     }
     if (a.has("sentries"))
       for (const Reader& p : a.sequence("sentries"))

@@ -351,7 +351,7 @@ std::string_view encode_agv_state(Encoder& e, const Plan& plan, int g, double t,
     (void)n.node_id.assign(id);
     n.sequence_id = static_cast<std::uint32_t>(2 * (i + 1));
     n.released = true;
-    n.position = vda5050::NodePosition{route[i].x, route[i].y, std::nullopt, 0.1, 0.0, {}};
+    n.position = vda5050::NodePosition{route[i].x_m, route[i].y_m, std::nullopt, 0.1, 0.0, {}};
     (void)n.position->map_id.assign("map");
     (void)s.node_states.push_back(n);
   }
@@ -493,7 +493,7 @@ void full_capacity_step(unsigned seed) {
     if (i % 4 == 0) {
       const Area& a = site.areas[i % kMaxAreas];
       const Point mid = centroid(a.outline.as_span());
-      people.push_back({mid.x + u01(rng), mid.y + u01(rng), 0, 0, static_cast<std::uint32_t>(i)});
+      people.push_back({mid.x_m + u01(rng), mid.y_m + u01(rng), 0, 0, static_cast<std::uint32_t>(i)});
     } else {
       people.push_back({240 * u01(rng), 120 * u01(rng), 0, 0, static_cast<std::uint32_t>(i)});
     }

@@ -52,7 +52,7 @@ void run(benchmark::State& state, TaskKind task, double ring) {
   double t = 0.0;
   for (auto _ : state) {
     // Move a little each step so the hybrid rule is checked on new states.
-    for (Pose& p : poses) p.theta += 1e-3;
+    for (Pose& p : poses) p.theta_rad += 1e-3;
     benchmark::DoNotOptimize(k.step(t += 1.0, poses, cmd));
   }
   state.counters["switches"] = static_cast<double>(k.switches());

@@ -93,8 +93,8 @@ TEST(FormationCurve, TracedEvenlyByLengthOnTheCurve) {
   ASSERT_EQ(pts.size(), kCurveSamples);
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const Vec2 q = pts[i], r = pts[(i + 1) % pts.size()];
-    ASSERT_NEAR(c.curve.value(q.x, q.y), 0.0, 1e-6);
-    ASSERT_NEAR(std::hypot(r.x - q.x, r.y - q.y), perimeter / kCurveSamples, 0.02 * perimeter / kCurveSamples);
+    ASSERT_NEAR(c.curve.value(q.x_m, q.y_m), 0.0, 1e-6);
+    ASSERT_NEAR(std::hypot(r.x_m - q.x_m, r.y_m - q.y_m), perimeter / kCurveSamples, 0.02 * perimeter / kCurveSamples);
   }
 }
 
@@ -118,10 +118,10 @@ TEST(FormationField, WithNoBarrierNearTheDecreaseIsTheTaskFieldsOwn) {
     std::uniform_real_distribution<double> jitter(-0.5, 0.5);
     for (int trial = 0; trial < 200; ++trial) {
       std::vector<Vec2> p = points_of(start, c.offset_m);
-      for (Vec2& q : p) q = {q.x + jitter(rng), q.y + jitter(rng)};
+      for (Vec2& q : p) q = {q.x_m + jitter(rng), q.y_m + jitter(rng)};
       if (task == TaskKind::leader) {  // followers near their offsets, clear of each other
-        p[1] = {p[0].x + c.offsets[1].x + jitter(rng) * 0.4, p[0].y + c.offsets[1].y + jitter(rng) * 0.4};
-        p[2] = {p[0].x + c.offsets[2].x + jitter(rng) * 0.4, p[0].y + c.offsets[2].y + jitter(rng) * 0.4};
+        p[1] = {p[0].x_m + c.offsets[1].x_m + jitter(rng) * 0.4, p[0].y_m + c.offsets[1].y_m + jitter(rng) * 0.4};
+        p[2] = {p[0].x_m + c.offsets[2].x_m + jitter(rng) * 0.4, p[0].y_m + c.offsets[2].y_m + jitter(rng) * 0.4};
       }
       const double l = k.decrease(p, 0);
       const double r = k.rho(p);
@@ -148,7 +148,7 @@ TEST(FormationField, BarrierAlwaysPushesTwoCloseRobotsApart) {
     for (std::size_t g = 0; g < k.gain_sets().size(); ++g) {
       std::vector<Vec2> u(2);
       k.field(p, g, u);
-      weakest = std::min(weakest, u[1].x - u[0].x);  // d|p1 - p0|/dt
+      weakest = std::min(weakest, u[1].x_m - u[0].x_m);  // d|p1 - p0|/dt
     }
     if (gap <= 0.005) {
       EXPECT_GT(weakest, 0.0) << "gap " << gap;
@@ -266,7 +266,7 @@ TEST(FormationPatrol, KeepsTheRobotsEvenlySpacedInTheirOrder) {
   // Each robot's slot is one third of the curve from the next.
   for (std::size_t i = 0; i < 3; ++i) {
     const Vec2 want = k.desired(p, i);
-    EXPECT_LE(std::hypot(p[i].x - want.x, p[i].y - want.y), 0.05);
+    EXPECT_LE(std::hypot(p[i].x_m - want.x_m, p[i].y_m - want.y_m), 0.05);
   }
 }
 
@@ -282,14 +282,14 @@ TEST(FormationStep, AllocatesNothingAndStopsOnNonsense) {
     mem::testing::AllocationScope scope;
     for (int i = 0; i < 1000; ++i) {
       k.step(0.1 * i, poses, cmd);
-      for (std::size_t j = 0; j < poses.size(); ++j) poses[j].theta += 0.01;
+      for (std::size_t j = 0; j < poses.size(); ++j) poses[j].theta_rad += 0.01;
     }
     EXPECT_EQ(scope.allocations(), 0u);
     if (mem::testing::counts_malloc()) {
       EXPECT_EQ(scope.malloc_calls(), 0u);
     }
   }
-  poses[2].x = NAN;
+  poses[2].x_m = NAN;
   const StepInfo& info = k.step(200.0, poses, cmd);
   EXPECT_EQ(info.scale, 0.0);
   for (const Unicycle& u : cmd) EXPECT_EQ(u.v == 0.0 && u.w == 0.0, true);

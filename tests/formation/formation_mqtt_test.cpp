@@ -86,9 +86,9 @@ class FakeRobot {
     }
     since_s_ += dt_s;
     if (since_s_ <= hold_s_) {
-      pose_.x += command_.v * std::cos(pose_.theta) * dt_s;
-      pose_.y += command_.v * std::sin(pose_.theta) * dt_s;
-      pose_.theta += command_.w * dt_s;
+      pose_.x_m += command_.v * std::cos(pose_.theta_rad) * dt_s;
+      pose_.y_m += command_.v * std::sin(pose_.theta_rad) * dt_s;
+      pose_.theta_rad += command_.w * dt_s;
     }
     if (!report) return;
     vda5050::Visualization v;
@@ -98,9 +98,9 @@ class FakeRobot {
     (void)v.header.serial_number.assign(serial_);
     vda5050::AgvPosition p;
     p.position_initialized = true;
-    p.x = pose_.x;
-    p.y = pose_.y;
-    p.theta = std::remainder(pose_.theta, 2.0 * 3.14159265358979323846);
+    p.x = pose_.x_m;
+    p.y = pose_.y_m;
+    p.theta = std::remainder(pose_.theta_rad, 2.0 * 3.14159265358979323846);
     (void)p.map_id.assign("map");
     v.agv_position = p;
     // In the vehicle's frame (vx forward), as the robot's fleet task reports it.
@@ -237,7 +237,7 @@ TEST_F(FormationSite, DrivesTheTeamStopsItOnASilentRobotAndOnTheWayOut) {
   for (const auto& r : robots) EXPECT_TRUE(r->last_was_stop) << centre.err();
   const Pose frozen = robots[0]->pose();
   drive(robots, 1.0, 2);
-  EXPECT_NEAR(robots[0]->pose().x, frozen.x, 1e-9);
+  EXPECT_NEAR(robots[0]->pose().x_m, frozen.x_m, 1e-9);
   EXPECT_NE(centre.err().find("stale"), std::string::npos) << centre.err();
 
   // Back: the team moves again.

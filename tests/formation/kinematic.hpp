@@ -54,17 +54,17 @@ inline KinematicResult run_kinematic(Controller& controller, std::vector<Pose> p
       Pose& q = poses[i];
       const double v = std::clamp(applied[i].v, -c.v_max_m_s, c.v_max_m_s);
       const double w = std::clamp(applied[i].w, -c.w_max_rad_s, c.w_max_rad_s);
-      q.x += v * std::cos(q.theta + 0.5 * w * dt) * dt;
-      q.y += v * std::sin(q.theta + 0.5 * w * dt) * dt;
-      q.theta += w * dt;
+      q.x_m += v * std::cos(q.theta_rad + 0.5 * w * dt) * dt;
+      q.y_m += v * std::sin(q.theta_rad + 0.5 * w * dt) * dt;
+      q.theta_rad += w * dt;
     }
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t j = i + 1; j < n; ++j)
-        r.min_axle_distance_m = std::min(r.min_axle_distance_m, std::hypot(poses[i].x - poses[j].x, poses[i].y - poses[j].y));
+        r.min_axle_distance_m = std::min(r.min_axle_distance_m, std::hypot(poses[i].x_m - poses[j].x_m, poses[i].y_m - poses[j].y_m));
       const Workspace& w = c.workspace;
-      r.min_wall_clearance_m = std::min({r.min_wall_clearance_m, poses[i].x - w.x0_m - c.radius_m,
-                                         w.x1_m - poses[i].x - c.radius_m, poses[i].y - w.y0_m - c.radius_m,
-                                         w.y1_m - poses[i].y - c.radius_m});
+      r.min_wall_clearance_m = std::min({r.min_wall_clearance_m, poses[i].x_m - w.x0_m - c.radius_m,
+                                         w.x1_m - poses[i].x_m - c.radius_m, poses[i].y_m - w.y0_m - c.radius_m,
+                                         w.y1_m - poses[i].y_m - c.radius_m});
     }
   }
   for (std::size_t i = 0; i < n; ++i) p[i] = point_p(poses[i], c.offset_m);
@@ -83,12 +83,13 @@ inline std::vector<Pose> perturbed_starts(const Example& e, std::mt19937_64& rng
   const Workspace& w = e.config.workspace;
   for (;;) {
     std::vector<Pose> s(e.starts.begin(), e.starts.begin() + static_cast<long>(n));
-    for (Pose& q : s) q = {q.x + d(rng), q.y + d(rng), q.theta + a(rng)};
+    for (Pose& q : s) q = {q.x_m + d(rng), q.y_m + d(rng), q.theta_rad + a(rng)};
     bool ok = true;
     for (std::size_t i = 0; i < n && ok; ++i) {
       const double keep = e.config.radius_m + 0.1;
-      ok = s[i].x - w.x0_m >= keep && w.x1_m - s[i].x >= keep && s[i].y - w.y0_m >= keep && w.y1_m - s[i].y >= keep;
-      for (std::size_t j = i + 1; j < n && ok; ++j) ok = std::hypot(s[i].x - s[j].x, s[i].y - s[j].y) >= 2.0 * e.config.radius_m + 0.2;
+      ok = s[i].x_m - w.x0_m >= keep && w.x1_m - s[i].x_m >= keep && s[i].y_m - w.y0_m >= keep && w.y1_m - s[i].y_m >= keep;
+      for (std::size_t j = i + 1; j < n && ok; ++j)
+        ok = std::hypot(s[i].x_m - s[j].x_m, s[i].y_m - s[j].y_m) >= 2.0 * e.config.radius_m + 0.2;
     }
     if (ok) return s;
   }

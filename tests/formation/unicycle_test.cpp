@@ -19,13 +19,13 @@ TEST(PointOffset, ThePointMovesAsAskedForAnyHeading) {
     const Vec2 u{any(rng), any(rng)};
     const Unicycle c = to_unicycle(pose, u, l);
     // The closed form of P' for (v, w): [cos, -L sin; sin, L cos] [v; w].
-    const double px = std::cos(pose.theta) * c.v - l * std::sin(pose.theta) * c.w;
-    const double py = std::sin(pose.theta) * c.v + l * std::cos(pose.theta) * c.w;
-    ASSERT_NEAR(px, u.x, 1e-12);
-    ASSERT_NEAR(py, u.y, 1e-12);
+    const double px = std::cos(pose.theta_rad) * c.v - l * std::sin(pose.theta_rad) * c.w;
+    const double py = std::sin(pose.theta_rad) * c.v + l * std::cos(pose.theta_rad) * c.w;
+    ASSERT_NEAR(px, u.x_m, 1e-12);
+    ASSERT_NEAR(py, u.y_m, 1e-12);
     const Vec2 back = point_velocity(pose, c, l);
-    ASSERT_NEAR(back.x, u.x, 1e-12);
-    ASSERT_NEAR(back.y, u.y, 1e-12);
+    ASSERT_NEAR(back.x_m, u.x_m, 1e-12);
+    ASSERT_NEAR(back.y_m, u.y_m, 1e-12);
   }
 }
 
@@ -40,21 +40,21 @@ TEST(PointOffset, IntegratedUnicycleCarriesPAlongTheAskedVelocity) {
   for (int k = 0; k < 50'000; ++k) {  // 5 s, RK4 on (x, y, theta)
     const auto f = [&](const Pose& q) {
       const Unicycle c = to_unicycle(q, u, l);
-      return Pose{c.v * std::cos(q.theta), c.v * std::sin(q.theta), c.w};
+      return Pose{c.v * std::cos(q.theta_rad), c.v * std::sin(q.theta_rad), c.w};
     };
     const Pose k1 = f(pose);
-    const Pose k2 = f({pose.x + 0.5 * dt * k1.x, pose.y + 0.5 * dt * k1.y, pose.theta + 0.5 * dt * k1.theta});
-    const Pose k3 = f({pose.x + 0.5 * dt * k2.x, pose.y + 0.5 * dt * k2.y, pose.theta + 0.5 * dt * k2.theta});
-    const Pose k4 = f({pose.x + dt * k3.x, pose.y + dt * k3.y, pose.theta + dt * k3.theta});
-    pose.x += dt / 6.0 * (k1.x + 2 * k2.x + 2 * k3.x + k4.x);
-    pose.y += dt / 6.0 * (k1.y + 2 * k2.y + 2 * k3.y + k4.y);
-    pose.theta += dt / 6.0 * (k1.theta + 2 * k2.theta + 2 * k3.theta + k4.theta);
+    const Pose k2 = f({pose.x_m + 0.5 * dt * k1.x_m, pose.y_m + 0.5 * dt * k1.y_m, pose.theta_rad + 0.5 * dt * k1.theta_rad});
+    const Pose k3 = f({pose.x_m + 0.5 * dt * k2.x_m, pose.y_m + 0.5 * dt * k2.y_m, pose.theta_rad + 0.5 * dt * k2.theta_rad});
+    const Pose k4 = f({pose.x_m + dt * k3.x_m, pose.y_m + dt * k3.y_m, pose.theta_rad + dt * k3.theta_rad});
+    pose.x_m += dt / 6.0 * (k1.x_m + 2 * k2.x_m + 2 * k3.x_m + k4.x_m);
+    pose.y_m += dt / 6.0 * (k1.y_m + 2 * k2.y_m + 2 * k3.y_m + k4.y_m);
+    pose.theta_rad += dt / 6.0 * (k1.theta_rad + 2 * k2.theta_rad + 2 * k3.theta_rad + k4.theta_rad);
   }
   const Vec2 p = point_p(pose, l);
-  EXPECT_NEAR(p.x, p0.x + 5.0 * u.x, 1e-6);
-  EXPECT_NEAR(p.y, p0.y + 5.0 * u.y, 1e-6);
+  EXPECT_NEAR(p.x_m, p0.x_m + 5.0 * u.x_m, 1e-6);
+  EXPECT_NEAR(p.y_m, p0.y_m + 5.0 * u.y_m, 1e-6);
   // The heading has turned towards u (the zero dynamics of P's single integrator).
-  EXPECT_NEAR(std::remainder(pose.theta - std::atan2(u.y, u.x), 2.0 * std::numbers::pi), 0.0, 0.01);
+  EXPECT_NEAR(std::remainder(pose.theta_rad - std::atan2(u.y_m, u.x_m), 2.0 * std::numbers::pi), 0.0, 0.01);
 }
 
 TEST(CommonScale, KeepsEveryRobotWithinHalfItsLimitsAndItsDirection) {

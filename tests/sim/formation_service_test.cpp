@@ -90,7 +90,7 @@ class Site {
     }
   }
   void report_all(hal::Nanos stamp) {
-    for (std::size_t i = 0; i < config_.team.size(); ++i) report(i, poses[i].x, poses[i].y, poses[i].theta, stamp);
+    for (std::size_t i = 0; i < config_.team.size(); ++i) report(i, poses[i].x_m, poses[i].y_m, poses[i].theta_rad, stamp);
   }
   void collect() {
     std::array<char, 256> topic{};
@@ -215,7 +215,7 @@ TEST(FormationService, MalformedAndForeignVisualizationsAreCountedAndIgnored) {
   site.run_until(hal::seconds(2));
   EXPECT_EQ(site.service_->counters().rejected, 3u);
   EXPECT_EQ(site.service_->counters().stale_steps, 1u);  // only the very first step, before any pose
-  EXPECT_NEAR(site.service_->poses()[0].x, before.x, 1e-9);
+  EXPECT_NEAR(site.service_->poses()[0].x_m, before.x_m, 1e-9);
   const Received last = site.for_robot(0).back();
   EXPECT_GT(std::abs(last.command.v) + std::abs(last.command.omega), 0.01);
 }
@@ -234,10 +234,10 @@ TEST(FormationService, PosesArePredictedToTheStepByTheirReportedVelocity) {
     site.service_->step(site.now_, kEpoch + site.now_);
   }
   const std::span<const Pose> poses = site.service_->poses();
-  EXPECT_NEAR(poses[0].x, -1.0 + 0.15, 1e-6);
-  EXPECT_NEAR(poses[0].y, 0.0, 1e-6);
-  EXPECT_NEAR(poses[1].x, 1.0, 1e-6);  // turning on the spot
-  EXPECT_NEAR(std::remainder(poses[1].theta - (3.14159265358979 + 0.15), 2 * 3.14159265358979), 0.0, 1e-6);
+  EXPECT_NEAR(poses[0].x_m, -1.0 + 0.15, 1e-6);
+  EXPECT_NEAR(poses[0].y_m, 0.0, 1e-6);
+  EXPECT_NEAR(poses[1].x_m, 1.0, 1e-6);  // turning on the spot
+  EXPECT_NEAR(std::remainder(poses[1].theta_rad - (3.14159265358979 + 0.15), 2 * 3.14159265358979), 0.0, 1e-6);
 }
 
 TEST(FormationService, PosesAreCarriedOnToWhenTheCommandActsByTheLastCommand) {
@@ -259,11 +259,12 @@ TEST(FormationService, PosesAreCarriedOnToWhenTheCommandActsByTheLastCommand) {
     for (std::size_t i = 0; i < 2; ++i) {
       const Pose& got = site.service_->poses()[i];
       // The closed form of a unicycle's arc over 0.2 s.
-      const double th = reported[i].theta + last[i].w * 0.2;
-      const double x = std::abs(last[i].w) < 1e-6 ? reported[i].x + last[i].v * 0.2 * std::cos(reported[i].theta)
-                                                  : reported[i].x + last[i].v / last[i].w * (std::sin(th) - std::sin(reported[i].theta));
-      EXPECT_NEAR(got.x, x, 1e-6) << "step " << k << " robot " << i;
-      EXPECT_NEAR(std::remainder(got.theta - th, 2 * 3.14159265358979), 0.0, 1e-6);
+      const Pose& q = reported[i];
+      const double th = q.theta_rad + last[i].w * 0.2;
+      const double x = std::abs(last[i].w) < 1e-6 ? q.x_m + last[i].v * 0.2 * std::cos(q.theta_rad)
+                                                  : q.x_m + last[i].v / last[i].w * (std::sin(th) - std::sin(q.theta_rad));
+      EXPECT_NEAR(got.x_m, x, 1e-6) << "step " << k << " robot " << i;
+      EXPECT_NEAR(std::remainder(got.theta_rad - th, 2 * 3.14159265358979), 0.0, 1e-6);
     }
   }
   EXPECT_GT(std::abs(site.service_->commands()[0].v) + std::abs(site.service_->commands()[0].w), 0.0);

@@ -54,7 +54,7 @@ class Harness {
     r.robot = by;
     r.stamp = now;
     std::uint32_t local = 1;
-    for (const Point& p : people) (void)r.people.push_back({p.x, p.y, vx, vy, local++});
+    for (const Point& p : people) (void)r.people.push_back({p.x_m, p.y_m, vx, vy, local++});
     centre->add_people(r);
   }
   const Decisions& step(Nanos dt = kSecond) {

@@ -125,7 +125,7 @@ TEST(SscPeopleMap, UnseenTracksTimeOut) {
   EXPECT_EQ(map.tracks().size(), 2u);
   map.expire(hal::seconds(2) + kMs);
   ASSERT_EQ(map.tracks().size(), 1u);
-  EXPECT_EQ(map.tracks()[0].position.x, 5);
+  EXPECT_EQ(map.tracks()[0].position.x_m, 5);
   map.expire(hal::seconds(3));
   EXPECT_EQ(map.tracks().size(), 1u);
   map.expire(hal::seconds(3) + kMs);

@@ -27,7 +27,7 @@ TEST(SiteFile, TheShippedPlantSiteLoads) {
   ASSERT_EQ(site->robot_serials.size(), 3u);
   EXPECT_EQ(site->site.robots[0].overlooks, 0);
   EXPECT_EQ(site->site.robots[1].overlooks, kNone);
-  EXPECT_NEAR(site->site.robots[0].pose.theta, -3.14159265358979 / 2, 1e-9);
+  EXPECT_NEAR(site->site.robots[0].pose.theta_rad, -3.14159265358979 / 2, 1e-9);
   EXPECT_DOUBLE_EQ(site->centre.slow_speed_factor, 0.3);
 }
 

@@ -5,21 +5,18 @@
 #include <numbers>
 #include <string>
 
+#include "sen3bot/geometry/point_math.hpp"
+
 namespace sen3bot::formation {
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec2 operator+(Vec2 a, Vec2 b) noexcept { return {a.x + b.x, a.y + b.y}; }
-Vec2 operator-(Vec2 a, Vec2 b) noexcept { return {a.x - b.x, a.y - b.y}; }
-Vec2 operator*(double k, Vec2 a) noexcept { return {k * a.x, k * a.y}; }
-double dot(Vec2 a, Vec2 b) noexcept { return a.x * b.x + a.y * b.y; }
-double norm(Vec2 a) noexcept { return std::hypot(a.x, a.y); }
 Vec2 rotate(Vec2 a, double angle) noexcept {
   const double c = std::cos(angle);
   const double s = std::sin(angle);
-  return {c * a.x - s * a.y, s * a.x + c * a.y};
+  return {c * a.x_m - s * a.y_m, s * a.x_m + c * a.y_m};
 }
 
 // The barrier's speed at distance h past its zero: 1/h - 1/influence, unbounded as h -> 0 so a
@@ -69,7 +66,7 @@ Status Controller::configure(const ControllerConfig& config) {
   if (config.obstacle_count > kMaxObstacles) return config_error("obstacles: at most " + std::to_string(kMaxObstacles));
   for (std::size_t i = 0; i < config.obstacle_count; ++i)
     if (!finite(config.obstacles[i].radius_m) || config.obstacles[i].radius_m <= 0.0 ||
-        !finite(config.obstacles[i].centre.x) || !finite(config.obstacles[i].centre.y))
+        !finite(config.obstacles[i].centre.x_m) || !finite(config.obstacles[i].centre.y_m))
       return config_error("obstacles[" + std::to_string(i) + "]: a finite centre and a radius > 0");
   if (config.gain_set_count > kMaxGainSets) return config_error("gain_sets: at most " + std::to_string(kMaxGainSets));
   if (!(config.eta > 0.0 && config.eta <= 1.0)) return config_error("eta: in (0, 1]");
@@ -105,7 +102,7 @@ Status Controller::configure(const ControllerConfig& config) {
   const double reach = config.influence_m;
   const auto clear = [&](Vec2 p) {
     const Workspace grown{w.x0_m + reach, w.y0_m + reach, w.x1_m - reach, w.y1_m - reach};
-    if (p.x - grown.x0_m < keep || grown.x1_m - p.x < keep || p.y - grown.y0_m < keep || grown.y1_m - p.y < keep)
+    if (p.x_m - grown.x0_m < keep || grown.x1_m - p.x_m < keep || p.y_m - grown.y0_m < keep || grown.y1_m - p.y_m < keep)
       return false;
     for (std::size_t i = 0; i < config.obstacle_count; ++i)
       if (norm(p - config.obstacles[i].centre) < config.obstacles[i].radius_m + keep + reach) return false;
@@ -117,7 +114,7 @@ Status Controller::configure(const ControllerConfig& config) {
   curve_length_ = 0.0;
   if (config.task == TaskKind::targets) {
     for (std::size_t i = 0; i < config.robots; ++i) {
-      if (!finite(config.targets[i].x) || !finite(config.targets[i].y) || !clear(config.targets[i]))
+      if (!finite(config.targets[i].x_m) || !finite(config.targets[i].y_m) || !clear(config.targets[i]))
         return config_error("targets[" + std::to_string(i) + "]: within the workspace, " + std::to_string(keep + reach) +
                             " m clear of its walls and obstacles");
       for (std::size_t j = 0; j < i; ++j)
@@ -132,11 +129,11 @@ Status Controller::configure(const ControllerConfig& config) {
     for (std::size_t k = 0; k < curve_count_; ++k)
       if (!clear(curve_[k]))
         return config_error("curve: passes within " + std::to_string(keep + reach) + " m of a wall or obstacle near (" +
-                            std::to_string(curve_[k].x) + ", " + std::to_string(curve_[k].y) + ")");
+                            std::to_string(curve_[k].x_m) + ", " + std::to_string(curve_[k].y_m) + ")");
     if (config.task == TaskKind::leader) {
       for (std::size_t i = 1; i < config.robots; ++i) {
         const Vec2 o = config.offsets[i];
-        if (!finite(o.x) || !finite(o.y) || norm(o) < apart)
+        if (!finite(o.x_m) || !finite(o.y_m) || norm(o) < apart)
           return config_error("offsets[" + std::to_string(i) + "]: finite and at least " + std::to_string(apart) +
                               " m from the leader");
         for (std::size_t j = 1; j < i; ++j)
@@ -146,7 +143,7 @@ Status Controller::configure(const ControllerConfig& config) {
         for (std::size_t k = 0; k < curve_count_; ++k)
           if (!clear(curve_[k] + o))
             return config_error("offsets[" + std::to_string(i) + "]: the follower's path leaves the workspace near (" +
-                                std::to_string(curve_[k].x + o.x) + ", " + std::to_string(curve_[k].y + o.y) + ")");
+                                std::to_string(curve_[k].x_m + o.x_m) + ", " + std::to_string(curve_[k].y_m + o.y_m) + ")");
       }
     } else if (config.robots > 1 && curve_length_ / static_cast<double>(config.robots) < apart) {
       return config_error("curve: too short for " + std::to_string(config.robots) + " robots " + std::to_string(apart) +
@@ -163,10 +160,10 @@ Status Controller::configure(const ControllerConfig& config) {
 // to the start: once to measure it, once more to place kCurveSamples points evenly by length.
 Status Controller::trace_curve() {
   nav::Point2D start;
-  if (!nav::project_onto_curve(config_.curve, {config_.curve_start.x, config_.curve_start.y}, start))
+  if (!nav::project_onto_curve(config_.curve, config_.curve_start, start))
     return config_error("curve: no point of the curve near curve_start");
   const auto tangent = [&](Vec2 at) -> Vec2 {
-    const nav::Point2D g = config_.curve.gradient(at.x, at.y);
+    const nav::Point2D g = config_.curve.gradient(at.x_m, at.y_m);
     const double n = std::hypot(g.x_m, g.y_m);
     if (!(n > 1e-12)) return {0.0, 0.0};
     return {-g.y_m / n, g.x_m / n};
@@ -176,10 +173,10 @@ Status Controller::trace_curve() {
     const Vec2 k2 = tangent(from + (0.5 * step) * k1);
     Vec2 next = from + step * k2;
     nav::Point2D on;
-    if (nav::project_onto_curve(config_.curve, {next.x, next.y}, on)) next = {on.x_m, on.y_m};
+    if (nav::project_onto_curve(config_.curve, next, on)) next = on;
     return next;
   };
-  const Vec2 origin{start.x_m, start.y_m};
+  const Vec2 origin = start;
   constexpr double kProbeStep = 0.005;
   constexpr std::size_t kMaxProbeSteps = 200'000;  // 1 km of curve
   double length = 0.0;
@@ -278,12 +275,12 @@ void Controller::prepare(std::span<const Vec2> p) const noexcept {
     State& st = state_[i];
     st.s = a.s;
     // p is close to a signed distance near V (sgp.hpp); its gradient's direction is the normal.
-    const nav::Point2D g = config_.curve.gradient(p[i].x, p[i].y);
+    const nav::Point2D g = config_.curve.gradient(p[i].x_m, p[i].y_m);
     const double gn = std::hypot(g.x_m, g.y_m);
-    st.normal = gn > 1e-12 ? Vec2{g.x_m / gn, g.y_m / gn} : Vec2{-a.tangent.y, a.tangent.x};
-    st.distance = gn > 1e-12 ? config_.curve.value(p[i].x, p[i].y) / gn : 0.0;
+    st.normal = gn > 1e-12 ? Vec2{g.x_m / gn, g.y_m / gn} : Vec2{-a.tangent.y_m, a.tangent.x_m};
+    st.distance = gn > 1e-12 ? config_.curve.value(p[i].x_m, p[i].y_m) / gn : 0.0;
     // Travel along J n (counter-clockwise, the trace's direction), its sign the along speed's.
-    st.tangent = {-st.normal.y, st.normal.x};
+    st.tangent = {-st.normal.y_m, st.normal.x_m};
   }
   if (config_.task == TaskKind::patrol) {
     // The team's phase: the circular mean of each robot's position less its slot.
@@ -355,7 +352,8 @@ void Controller::barrier_field(std::span<const Vec2> p, const Gains& k, std::spa
       u[j] = u[j] + m * rotate(-1.0 * dir, k.swirl_rad);
     }
     const Workspace& w = config_.workspace;
-    const double walls[4] = {p[i].x - w.x0_m - keep, w.x1_m - p[i].x - keep, p[i].y - w.y0_m - keep, w.y1_m - p[i].y - keep};
+    const double walls[4] = {p[i].x_m - w.x0_m - keep, w.x1_m - p[i].x_m - keep, p[i].y_m - w.y0_m - keep,
+                             w.y1_m - p[i].y_m - keep};
     constexpr Vec2 inward[4] = {{1.0, 0.0}, {-1.0, 0.0}, {0.0, 1.0}, {0.0, -1.0}};
     for (int wi = 0; wi < 4; ++wi) {
       lowest = std::min(lowest, walls[wi]);
@@ -525,7 +523,7 @@ const StepInfo& Controller::step(double t_s, std::span<const Pose> poses, std::s
   info_.unresolved = false;
   bool valid = configured_ && poses.size() >= n && commands.size() >= n;
   for (std::size_t i = 0; valid && i < n; ++i)
-    valid = std::isfinite(poses[i].x) && std::isfinite(poses[i].y) && std::isfinite(poses[i].theta);
+    valid = std::isfinite(poses[i].x_m) && std::isfinite(poses[i].y_m) && std::isfinite(poses[i].theta_rad);
   if (!valid) {
     for (Unicycle& c : commands) c = {};
     info_.scale = 0.0;

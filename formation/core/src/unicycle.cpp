@@ -6,18 +6,18 @@
 namespace sen3bot::formation {
 
 Vec2 point_p(const Pose& pose, double offset_m) noexcept {
-  return {pose.x + offset_m * std::cos(pose.theta), pose.y + offset_m * std::sin(pose.theta)};
+  return {pose.x_m + offset_m * std::cos(pose.theta_rad), pose.y_m + offset_m * std::sin(pose.theta_rad)};
 }
 
 Unicycle to_unicycle(const Pose& pose, Vec2 u, double offset_m) noexcept {
-  const double c = std::cos(pose.theta);
-  const double s = std::sin(pose.theta);
-  return {c * u.x + s * u.y, (-s * u.x + c * u.y) / offset_m};
+  const double c = std::cos(pose.theta_rad);
+  const double s = std::sin(pose.theta_rad);
+  return {c * u.x_m + s * u.y_m, (-s * u.x_m + c * u.y_m) / offset_m};
 }
 
 Vec2 point_velocity(const Pose& pose, Unicycle command, double offset_m) noexcept {
-  const double c = std::cos(pose.theta);
-  const double s = std::sin(pose.theta);
+  const double c = std::cos(pose.theta_rad);
+  const double s = std::sin(pose.theta_rad);
   return {c * command.v - offset_m * s * command.w, s * command.v + offset_m * c * command.w};
 }
 

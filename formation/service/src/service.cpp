@@ -14,7 +14,7 @@ namespace {
 
 // Where a unicycle at `pose` gets to in dt_s at a constant (v, omega): along its arc.
 Pose predict(const Pose& pose, double v, double omega, double dt_s) noexcept {
-  nav::Pose2D p{pose.x, pose.y, pose.theta};
+  Pose p = pose;
   nav::advance_arc(p, v, omega, dt_s);
   return {p.x_m, p.y_m, std::remainder(p.theta_rad, 2.0 * std::numbers::pi)};
 }

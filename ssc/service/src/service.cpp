@@ -245,13 +245,13 @@ void Service::send_order(RobotId robot, const Task& task, std::int64_t unix_ns) 
   (void)start.node_id.assign("start");
   start.sequence_id = 0;
   start.released = true;
-  start.position = vda5050::NodePosition{from.x, from.y, std::nullopt, 2.0, 0.0, {}};
+  start.position = vda5050::NodePosition{from.x_m, from.y_m, std::nullopt, 2.0, 0.0, {}};
   (void)start.position->map_id.assign(site_.service.map_id);
   vda5050::Node goal;
   (void)goal.node_id.assign("goal");
   goal.sequence_id = 2;
   goal.released = true;
-  goal.position = vda5050::NodePosition{task.goal.x, task.goal.y, std::nullopt, 0.3, 0.0, {}};
+  goal.position = vda5050::NodePosition{task.goal.x_m, task.goal.y_m, std::nullopt, 0.3, 0.0, {}};
   (void)goal.position->map_id.assign(site_.service.map_id);
   vda5050::Edge edge;
   (void)edge.edge_id.assign("to-goal");

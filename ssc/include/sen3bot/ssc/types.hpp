@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string_view>
 
+#include "sen3bot/geometry/geometry.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/mem/static_vector.hpp"
 
@@ -16,19 +17,8 @@ namespace sen3bot::ssc {
 using mem::StaticVector;
 using hal::Nanos;  // time is handed in by the caller; the centre never reads a clock
 
-struct Point {
-  double x = 0;
-  double y = 0;
-  friend bool operator==(const Point&, const Point&) = default;
-};
-
-struct Pose {
-  double x = 0;
-  double y = 0;
-  double theta = 0;
-  [[nodiscard]] Point position() const noexcept { return {x, y}; }
-  friend bool operator==(const Pose&, const Pose&) = default;
-};
+using Point = geometry::Point2D;
+using Pose = geometry::Pose2D;
 
 double distance(Point a, Point b) noexcept;
 

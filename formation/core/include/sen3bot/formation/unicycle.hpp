@@ -10,19 +10,13 @@
 // and P then behaves as a single integrator P' = u.
 #include <span>
 
+#include "sen3bot/geometry/geometry.hpp"
+
 namespace sen3bot::formation {
 
-struct Vec2 {
-  double x = 0.0;
-  double y = 0.0;
-};
-
+using Vec2 = geometry::Point2D;
 // The wheel axle's centre and heading, map frame.
-struct Pose {
-  double x = 0.0;
-  double y = 0.0;
-  double theta = 0.0;
-};
+using Pose = geometry::Pose2D;
 
 struct Unicycle {
   double v = 0.0;  // m/s

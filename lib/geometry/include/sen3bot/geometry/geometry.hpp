@@ -12,6 +12,7 @@ namespace sen3bot::geometry {
 struct Point2D {
   double x_m = 0.0;
   double y_m = 0.0;
+  friend constexpr bool operator==(const Point2D&, const Point2D&) = default;
 };
 static_assert(std::is_trivially_copyable_v<Point2D>);
 
@@ -19,8 +20,12 @@ struct Pose2D {
   double x_m = 0.0;
   double y_m = 0.0;
   double theta_rad = 0.0;
+  friend constexpr bool operator==(const Pose2D&, const Pose2D&) = default;
 };
 static_assert(std::is_trivially_copyable_v<Pose2D>);
+
+// Where the pose stands, without its heading.
+[[nodiscard]] constexpr Point2D position(const Pose2D& pose) noexcept { return {pose.x_m, pose.y_m}; }
 
 // Pose of a sensor on the robot (robot frame: x forward, y left).
 struct SensorMount {
