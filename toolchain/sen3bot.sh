@@ -133,10 +133,10 @@ case "${1:-}" in
       qemu_closed_loop+='|^ZeroAllocation\.The(FirmwareWithTheFleetTask|CollaborativeMode)'
       qemu_closed_loop+='|^Mcl\.RecoversFromAKidnappingOnlyWithInjection$|^Dwa\.RecoversWhenBlockedAndCountsIt$'
       qemu_closed_loop+='|^DwaMovers\.(LetsACrossingBoxPass|TheBroadPhaseNeverChanges)'
-      # Real-time pty runs and external peers are covered natively; under an emulator that is
-      # ten times slower their timing says more about qemu than about the firmware. So are the
-      # long closed-loop runs of the whole simulated robot (more than half the emulated time):
-      # one of them, the main job's mission, stays as the target's end-to-end run.
+      # Real-time pty runs and external peers are covered by the native and sanitized suites;
+      # under an emulator ten times slower their timing says more about qemu than about the
+      # firmware. So are the long closed-loop runs of the whole simulated robot (a third of the
+      # emulated time): one of them, the main job's mission, stays as the target's end-to-end run.
       SEN3BOT_QEMU_EXCLUDE_LABELS=${SEN3BOT_QEMU_EXCLUDE_LABELS:-"slow|peer|mrpt|pty|lms200-pty"} \
       SEN3BOT_QEMU_EXCLUDE_TESTS=${SEN3BOT_QEMU_EXCLUDE_TESTS-$qemu_closed_loop} \
         toolchain/cross-test.sh aarch64
