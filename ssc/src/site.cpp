@@ -15,7 +15,7 @@ void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool&
   const Point r = b - a;
   const Point s = d - c;
   const Point ca = c - a;
-  const double denom = r.x_m * s.y_m - r.y_m * s.x_m;
+  const double denom = geometry::cross(r, s);
   const double rr = r.x_m * r.x_m + r.y_m * r.y_m;
   auto take = [&](double t) {
     t = std::clamp(t, 0.0, 1.0);
@@ -26,7 +26,7 @@ void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool&
   const double scale = std::max({1.0, rr, s.x_m * s.x_m + s.y_m * s.y_m});
   if (std::fabs(denom) <= kEps * scale) {
     if (rr <= 0) return;
-    if (std::fabs(ca.x_m * r.y_m - ca.y_m * r.x_m) > kEps * scale) return;  // parallel, apart
+    if (std::fabs(geometry::cross(ca, r)) > kEps * scale) return;  // parallel, apart
     const double t0 = (ca.x_m * r.x_m + ca.y_m * r.y_m) / rr;
     const double t1 = ((d.x_m - a.x_m) * r.x_m + (d.y_m - a.y_m) * r.y_m) / rr;
     const double from = std::max(0.0, std::min(t0, t1));
@@ -37,8 +37,8 @@ void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool&
     }
     return;
   }
-  const double t = (ca.x_m * s.y_m - ca.y_m * s.x_m) / denom;
-  const double u = (ca.x_m * r.y_m - ca.y_m * r.x_m) / denom;
+  const double t = geometry::cross(ca, s) / denom;
+  const double u = geometry::cross(ca, r) / denom;
   if (t >= -kEps && t <= 1 + kEps && u >= -kEps && u <= 1 + kEps) take(t);
 }
 
