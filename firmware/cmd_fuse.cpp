@@ -129,10 +129,10 @@ int fuse_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     for (const Scan& s : scans)
       if (std::abs(s.t_s - t) < std::abs(nearest->t_s - t)) nearest = &s;
     msg::PersonDetections detections = frame.detections;
-    detections.capture_ns = static_cast<hal::Nanos>(std::llround(t * 1e9));
+    detections.capture_ns = hal::from_seconds(t);
     const msg::ScanView view{nearest->ranges_m, static_cast<float>(nearest->angle_min_rad),
                              static_cast<float>(nearest->increment_rad), 0.01f, 80.0f,
-                             static_cast<hal::Nanos>(std::llround(nearest->t_s * 1e9))};
+                             hal::from_seconds(nearest->t_s)};
     std::array<std::uint64_t, nav::kBoxVerdicts> before{};
     for (std::size_t v = 0; v < nav::kBoxVerdicts; ++v) before[v] = fusion.count(static_cast<nav::BoxVerdict>(v));
     std::array<nav::PersonFix, msg::PersonDetections::kMax> fixes{};

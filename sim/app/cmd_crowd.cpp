@@ -32,7 +32,6 @@ using namespace crowd_experiment;
 
 namespace {
 
-constexpr std::uint64_t kMaxRuns = 100000;
 constexpr std::uint64_t kMaxPeople = 256;
 
 int bad(std::FILE* err, const std::string& message) {
@@ -66,7 +65,7 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
       if (!o.behaviour) return value_error("recorded, social, blind or orca");
       ++i;
     } else if (arg == "--runs" && has_value) {
-      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > kMaxRuns) return value_error("a run count from 1 to 100000");
+      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > pool::kMaxRuns) return value_error("a run count from 1 to 100000");
       o.runs = u;
       have_runs = true;
       ++i;

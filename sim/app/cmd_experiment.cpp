@@ -47,7 +47,6 @@ namespace {
 
 constexpr const char* kName = "sen3bot-sim experiment";
 constexpr double kMaxSpeedM_s = 5.0;
-constexpr std::uint64_t kMaxRuns = 100000;
 // A worker that aborts on purpose when it reaches this seed: how the tests see a crashed worker.
 constexpr const char* kCrashSeedVariable = "SEN3BOT_EXPERIMENT_CRASH_SEED";
 
@@ -381,7 +380,7 @@ int parse_options(int argc, char** argv, Options& o, std::FILE* err) {
       have_speed = true;
       ++i;
     } else if (arg == "--runs" && has_value) {
-      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > kMaxRuns) return value_error("a run count from 1 to 100000");
+      if (!firmware::parse_u64(argv[i + 1], u) || u == 0 || u > pool::kMaxRuns) return value_error("a run count from 1 to 100000");
       o.runs = u;
       have_runs = true;
       ++i;

@@ -24,6 +24,9 @@
 
 namespace sen3bot::sim::pool {
 
+// The most runs one experiment command takes (--runs).
+inline constexpr std::uint64_t kMaxRuns = 100000;
+
 template <class R>
 struct Callbacks {
   // In the worker: runs job j and returns its result.

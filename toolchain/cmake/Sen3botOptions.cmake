@@ -31,5 +31,11 @@ endif()
 function(sen3bot_library name)
   add_library(${name} STATIC ${ARGN})
   target_link_libraries(${name} PUBLIC sen3bot_options)
-  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON
+                                           UNITY_BUILD ${SEN3BOT_UNITY_BUILD})
+  if(SEN3BOT_UNITY_BUILD AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    # In a batch a source's private types are no longer in the main file, and GCC warns about
+    # every class that holds one; one source per compile (the option off) keeps the check.
+    target_compile_options(${name} PRIVATE -Wno-subobject-linkage)
+  endif()
 endfunction()

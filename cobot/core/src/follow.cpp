@@ -11,8 +11,6 @@ namespace sen3bot::cobot {
 
 namespace {
 
-hal::Nanos to_nanos(double s) noexcept { return static_cast<hal::Nanos>(std::llround(s * 1e9)); }
-
 double distance(msg::Point2D a, msg::Point2D b) noexcept { return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m); }
 
 }  // namespace
@@ -122,8 +120,8 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
     cmd.reason = reason;
     return cmd;
   };
-  if (input.now_ns - seen_ns_ > to_nanos(config_.lost_s)) return hold(FollowHold::operator_lost);
-  if (input.now_ns - moving_ns_ > to_nanos(config_.stop_after_s)) return hold(FollowHold::operator_stopped);
+  if (input.now_ns - seen_ns_ > hal::from_seconds(config_.lost_s)) return hold(FollowHold::operator_lost);
+  if (input.now_ns - moving_ns_ > hal::from_seconds(config_.stop_after_s)) return hold(FollowHold::operator_stopped);
   if (cmd.gap_m <= config_.distance_m || straight <= config_.distance_m) return hold(FollowHold::close_enough);
 
   const double target_s = std::max(length - config_.distance_m, 0.0);

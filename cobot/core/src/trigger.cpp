@@ -5,12 +5,6 @@
 
 namespace sen3bot::cobot {
 
-namespace {
-
-hal::Nanos to_nanos(double s) noexcept { return static_cast<hal::Nanos>(std::llround(s * 1e9)); }
-
-}  // namespace
-
 const char* to_string(TriggerPhase phase) noexcept {
   switch (phase) {
     case TriggerPhase::idle: return "idle";
@@ -53,13 +47,13 @@ Status CollaborationTrigger::init(const TriggerConfig& config) noexcept {
     if (id == 0) return Error(Errc::config, "cobot trigger: operator id 0 is reserved for none");
   }
   config_ = config;
-  front_min_ns_ = to_nanos(config.front_min_s);
-  front_max_ns_ = to_nanos(config.front_max_s);
-  back_min_ns_ = to_nanos(config.back_min_s);
-  back_max_ns_ = to_nanos(config.back_max_s);
-  turn_ns_ = to_nanos(config.max_turn_s);
-  gap_ns_ = to_nanos(config.max_sighting_gap_s);
-  delay_ns_ = to_nanos(config.max_frame_delay_s);
+  front_min_ns_ = hal::from_seconds(config.front_min_s);
+  front_max_ns_ = hal::from_seconds(config.front_max_s);
+  back_min_ns_ = hal::from_seconds(config.back_min_s);
+  back_max_ns_ = hal::from_seconds(config.back_max_s);
+  turn_ns_ = hal::from_seconds(config.max_turn_s);
+  gap_ns_ = hal::from_seconds(config.max_sighting_gap_s);
+  delay_ns_ = hal::from_seconds(config.max_frame_delay_s);
   reset();
   requests_ = 0;
   rejections_ = {};

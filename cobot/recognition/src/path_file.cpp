@@ -20,7 +20,7 @@ namespace json = sen3bot::json;
 constexpr std::size_t kTokens = 3 * kMaxPathPoints + 16;
 constexpr std::size_t kMaxLineBytes = 256 * 1024;  // 1024 points at full precision fit many times
 constexpr std::size_t kMaxNameBytes = 256;
-constexpr double kMaxCoordinateM = 1e5;
+constexpr double kMaxPathCoordinateM = 1e5;
 
 Result<std::string> string_member(json::Value v, const char* key) {
   if (!v.is(json::Type::string)) return Error::format(Errc::invalid_argument, "byte %zu: \"%s\": expected a string", v.offset(), key);
@@ -67,7 +67,7 @@ Result<PathRecord> parse_path_line(std::string_view line) {
           return Error::format(Errc::invalid_argument, "byte %zu: \"points\": expected [x, y]", p.offset());
         for (const json::Value c : p.items()) {
           Result<double> v = c.number();
-          if (!v || !std::isfinite(*v) || std::fabs(*v) > kMaxCoordinateM)
+          if (!v || !std::isfinite(*v) || std::fabs(*v) > kMaxPathCoordinateM)
             return Error::format(Errc::invalid_argument, "byte %zu: \"points\": expected a coordinate in metres",
                                  c.offset());
           record.xy.push_back(static_cast<float>(*v));

@@ -11,7 +11,6 @@ namespace sen3bot::formation {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 Vec2 rotate(Vec2 a, double angle) noexcept {
   const double c = std::cos(angle);
@@ -37,10 +36,10 @@ double wrap(double d, double period) noexcept {
 
 constexpr std::array<Gains, 6> kDefaultGains = {{
     {0.6, 0.6, 0.08, 0.0},
-    {0.6, 0.6, 0.08, kPi / 3.0},
-    {0.6, 0.6, 0.08, -kPi / 3.0},
-    {1.0, 0.6, 0.08, kPi / 3.0},
-    {1.0, 0.6, 0.08, -kPi / 3.0},
+    {0.6, 0.6, 0.08, std::numbers::pi / 3.0},
+    {0.6, 0.6, 0.08, -std::numbers::pi / 3.0},
+    {1.0, 0.6, 0.08, std::numbers::pi / 3.0},
+    {1.0, 0.6, 0.08, -std::numbers::pi / 3.0},
     {0.3, 0.3, 0.16, 0.0},
 }};
 
@@ -89,7 +88,7 @@ Status Controller::configure(const ControllerConfig& config) {
   for (std::size_t g = 0; g < gain_count_; ++g) {
     const Gains& k = gains_[g];
     if (!(k.attract > 0.0) || !(k.spacing >= 0.0) || !(k.repel > 0.0) || !finite(k.swirl_rad) ||
-        std::fabs(k.swirl_rad) >= kPi / 2.0 || !finite(k.attract) || !finite(k.spacing) || !finite(k.repel))
+        std::fabs(k.swirl_rad) >= std::numbers::pi / 2.0 || !finite(k.attract) || !finite(k.spacing) || !finite(k.repel))
       return config_error("gain_sets[" + std::to_string(g) +
                           "]: attract > 0, spacing >= 0, repel > 0, |swirl_rad| < pi/2 (the barrier must still push apart)");
   }
@@ -285,7 +284,7 @@ void Controller::prepare(std::span<const Vec2> p) const noexcept {
   if (config_.task == TaskKind::patrol) {
     // The team's phase: the circular mean of each robot's position less its slot.
     double c = 0.0, s = 0.0;
-    const double to_angle = 2.0 * kPi / curve_length_;
+    const double to_angle = 2.0 * std::numbers::pi / curve_length_;
     for (std::size_t i = 0; i < n; ++i) {
       const double a = (state_[i].s - slot_s_[i]) * to_angle;
       c += std::cos(a);

@@ -6,7 +6,6 @@ namespace sen3bot::formation {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double s = kExampleScale;
 
 ControllerConfig base(TaskKind task, std::size_t robots) noexcept {
@@ -30,9 +29,9 @@ Example example(int number) noexcept {
       e.config = base(TaskKind::patrol, 3);
       e.config.curve = nav::SafeCurve::ellipse({0.0, 0.0}, 1.0 * s, 0.5 * s, 0.0);
       e.config.curve_start = {0.0, 0.5 * s};
-      e.starts[0] = {-0.5 * s, 0.5 * s, kPi};
-      e.starts[1] = {0.0, 0.5 * s, kPi / 2.0};
-      e.starts[2] = {0.5 * s, 0.5 * s, 1.5 * kPi};
+      e.starts[0] = {-0.5 * s, 0.5 * s, std::numbers::pi};
+      e.starts[1] = {0.0, 0.5 * s, std::numbers::pi / 2.0};
+      e.starts[2] = {0.5 * s, 0.5 * s, 1.5 * std::numbers::pi};
       e.duration_s = 120.0;
       return e;
     case 3:
@@ -58,9 +57,9 @@ Example example(int number) noexcept {
       e.config.targets[2] = {-1.0 * s, 0.5 * s};
       e.config.targets[3] = {1.0 * s, -0.5 * s};
       e.starts[0] = {-1.2 * s, 0.0, 0.0};
-      e.starts[1] = {-0.4 * s, 0.0, kPi / 2.0};
-      e.starts[2] = {0.4 * s, 0.0, kPi};
-      e.starts[3] = {1.2 * s, 0.0, 1.5 * kPi};
+      e.starts[1] = {-0.4 * s, 0.0, std::numbers::pi / 2.0};
+      e.starts[2] = {0.4 * s, 0.0, std::numbers::pi};
+      e.starts[3] = {1.2 * s, 0.0, 1.5 * std::numbers::pi};
       e.duration_s = 90.0;
       return e;
   }

@@ -77,7 +77,7 @@ FormationService::FormationService(const FormationServiceConfig& config, std::un
     : config_(config), link_(std::move(link)), buffers_(std::make_unique<Buffers>()) {
   buffers_->payload.resize(config.max_payload);
   robots_.reserve(config.team.size());
-  period_ns_ = static_cast<hal::Nanos>(std::llround(config.period_s * 1e9));
+  period_ns_ = hal::from_seconds(config.period_s);
 }
 
 FormationService::~FormationService() = default;

@@ -8,7 +8,6 @@ namespace sen3bot::sim {
 
 namespace {
 constexpr double kTrackSpacingM = 0.05;
-constexpr double kMovingSpeedM_s = 0.02;
 
 // Appends p when it is at least kTrackSpacingM from the last point kept and there is room.
 template <std::size_t N>
@@ -51,7 +50,7 @@ void Referee::observe(const GroundTruth& truth) noexcept {
     const double error_m = std::hypot(estimate.value.pose.x_m - p.x_m, estimate.value.pose.y_m - p.y_m);
     if (estimate.value.valid)
       keep_spaced(estimate_track_, estimate_track_count_, estimate.value.pose.x_m, estimate.value.pose.y_m);
-    if (estimate.value.valid && std::abs(truth.speed_m_s) > kMovingSpeedM_s)
+    if (estimate.value.valid && std::abs(truth.speed_m_s) > kRobotMovingSpeedM_s)
       report_.localization_error_max_m = std::max(report_.localization_error_max_m, error_m);
     // Relocalisation: judged on every estimate after the kidnapping, moving or not.
     if (truth.kidnapped_ns >= 0 && estimate.value.stamp_ns >= truth.kidnapped_ns) {

@@ -15,7 +15,6 @@ constexpr double kClearanceLimitM = 1.5;  // clearance/person distances are capp
 // The clearance search is the costliest part of a step; 20 Hz is plenty for a report.
 constexpr hal::Nanos kClearancePeriodNs = 50'000'000;
 constexpr double kNanosPerSecond = 1e9;
-constexpr double kMovingSpeedM_s = 0.02;
 
 }  // namespace
 
@@ -198,7 +197,7 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
     truth_.contact_person = mover >= 0 && world_->mover_script(static_cast<std::size_t>(mover)).person;
     // A person walking into a robot that has stopped, or that moves away from them, is not
     // the robot's doing.
-    if (world_->robot_closing(pose, config_.footprint, truth_.speed_m_s, kMovingSpeedM_s)) ++truth_.moving_contacts;
+    if (world_->robot_closing(pose, config_.footprint, truth_.speed_m_s, kRobotMovingSpeedM_s)) ++truth_.moving_contacts;
   }
   truth_.in_contact = contact;
   if (now_ns >= next_cage_judge_ns_) {

@@ -16,7 +16,6 @@ constexpr double kTimeSlack_s = 1e-9;
 constexpr double kMaxSubsteps = 1e6;
 
 bool finite(double x) noexcept { return std::isfinite(x); }
-bool finite(Point2D p) noexcept { return finite(p.x_m) && finite(p.y_m); }
 bool positive_finite(double x) noexcept { return x > 0.0 && finite(x); }
 bool non_negative_finite(double x) noexcept { return x >= 0.0 && finite(x); }
 

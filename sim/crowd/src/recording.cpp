@@ -27,17 +27,13 @@ constexpr double kMaxMagnitude[2] = {kMaxFrame, kMaxExactInteger};  // frame id,
 constexpr std::size_t kNameChars = 80;
 constexpr std::size_t kTokenChars = 24;
 
-std::string_view tail(std::string_view text, std::size_t chars) {
-  return text.size() <= chars ? text : text.substr(text.size() - chars);
-}
-
 [[gnu::format(printf, 3, 4)]] Error line_error(std::string_view name, std::size_t line, const char* fmt, ...) {
   char what[Error::kMessageCapacity];
   std::va_list args;
   va_start(args, fmt);
   std::vsnprintf(what, sizeof what, fmt, args);
   va_end(args);
-  const std::string_view file = tail(name, kNameChars);
+  const std::string_view file = name_tail(name, kNameChars);
   return Error::format(Errc::protocol, "%.*s:%zu: %s", static_cast<int>(file.size()), file.data(), line, what);
 }
 
@@ -60,7 +56,7 @@ struct Row {
 };
 
 // One person's annotations in file order (frames increasing), before they are cut into walks.
-struct Person {
+struct AnnotatedPerson {
   std::int64_t id = 0;
   std::vector<Row> rows;
 };
@@ -110,14 +106,14 @@ class Parser {
 
   Result<Recording> finish() && {
     if (people_.empty()) {
-      const std::string_view file = tail(name_, kNameChars);
+      const std::string_view file = name_tail(name_, kNameChars);
       return Error::format(Errc::protocol, "%.*s: no samples", static_cast<int>(file.size()), file.data());
     }
     Recording recording;
     recording.name = std::string(name_);
     recording.first_frame = *std::min_element(frames_.begin(), frames_.end());
     recording.frame_step = most_common_step();
-    for (const Person& person : people_) split_into_tracks(person, recording);
+    for (const AnnotatedPerson& person : people_) split_into_tracks(person, recording);
     std::sort(recording.tracks.begin(), recording.tracks.end(), [](const Track& a, const Track& b) {
       const double ta = a.samples.front().time_s;
       const double tb = b.samples.front().time_s;
@@ -134,7 +130,7 @@ class Parser {
       people_.push_back({id, {row}});
       return {};
     }
-    Person& person = people_[it->second];
+    AnnotatedPerson& person = people_[it->second];
     const Row& last = person.rows.back();
     if (row.frame < last.frame) {
       return line_error(name_, line_number, "person %lld at frame %lld after frame %lld (frames go backwards)",
@@ -175,7 +171,7 @@ class Parser {
   }
 
   // A person missing for more than one annotation step left the view: a new walk begins.
-  void split_into_tracks(const Person& person, Recording& recording) const {
+  void split_into_tracks(const AnnotatedPerson& person, Recording& recording) const {
     const Row* previous = nullptr;
     for (const Row& row : person.rows) {
       if (previous == nullptr || row.frame - previous->frame > recording.frame_step) {
@@ -189,12 +185,16 @@ class Parser {
 
   std::string_view name_;
   RecordingOptions options_;
-  std::vector<Person> people_;  // in order of first appearance
+  std::vector<AnnotatedPerson> people_;  // in order of first appearance
   std::unordered_map<std::int64_t, std::size_t> index_;  // person id -> people_ index
   std::vector<std::int64_t> frames_;  // every annotation's frame
 };
 
 }  // namespace
+
+std::string_view name_tail(std::string_view name, std::size_t chars) noexcept {
+  return name.size() <= chars ? name : name.substr(name.size() - chars);
+}
 
 Result<Recording> parse_recording(std::string_view text, std::string_view name, const RecordingOptions& options) {
   if (!(options.seconds_per_frame > 0.0 && std::isfinite(options.seconds_per_frame)) ||

@@ -43,13 +43,6 @@ constexpr double kCircleHalfFloorM = 6.0;
 // Recorded floors are rounded outwards to this, so their maps have round numbers.
 constexpr double kFloorGridM = 0.5;
 
-// The tail of a long recording name leaves room for the rest of an error message.
-std::string_view tail(std::string_view text, std::size_t chars = 80) {
-  return text.size() <= chars ? text : text.substr(text.size() - chars);
-}
-
-bool finite(Point2D p) noexcept { return std::isfinite(p.x_m) && std::isfinite(p.y_m); }
-
 double time_limit_for(double length_m) { return std::ceil(kTimeLimitFactor * length_m / kRobotSpeedM_s); }
 
 std::vector<Wall> border(const Extent& a) {
@@ -250,7 +243,7 @@ Result<Scene> square(std::size_t count, Behaviour behaviour, std::mt19937_64& rn
 
 // What Replay relies on, as Crowd::create checks it: a hand-built recording may break it.
 Status check_tracks(const Recording& recording) noexcept {
-  const std::string_view name = tail(recording.name);
+  const std::string_view name = name_tail(recording.name);
   for (std::size_t i = 0; i < recording.tracks.size(); ++i) {
     const std::vector<Sample>& samples = recording.tracks[i].samples;
     if (samples.empty()) {
@@ -258,7 +251,7 @@ Status check_tracks(const Recording& recording) noexcept {
                            name.data(), i);
     }
     for (std::size_t k = 0; k < samples.size(); ++k) {
-      if (!std::isfinite(samples[k].time_s) || !finite(samples[k].position) ||
+      if (!std::isfinite(samples[k].time_s) || !geometry::finite(samples[k].position) ||
           (k > 0 && !(samples[k].time_s > samples[k - 1].time_s))) {
         return Error::format(Errc::invalid_argument,
                              "%.*s: track %zu, sample %zu: not finite or not after the one before",
@@ -352,7 +345,7 @@ std::size_t default_people(std::string_view name) noexcept {
 }
 
 Result<Scene> make_scene(const SceneOptions& options, std::uint64_t seed) {
-  const std::string_view name = tail(options.name, 40);
+  const std::string_view name = name_tail(options.name, 40);
   const int len = static_cast<int>(name.size());
   const char* text = name.data();
   constexpr Errc kBad = Errc::invalid_argument;
@@ -396,7 +389,7 @@ Result<Scene> make_scene(const SceneOptions& options, std::uint64_t seed) {
 Result<Scene> recording_scene(std::shared_ptr<const Recording> recording, std::uint64_t seed,
                               const RecordingSceneOptions& options) {
   if (!recording) return Error(Errc::invalid_argument, "recording_scene: no recording");
-  const std::string_view name = tail(recording->name);
+  const std::string_view name = name_tail(recording->name);
   const int name_len = static_cast<int>(name.size());
   if (!(options.margin_m >= 0.0 && std::isfinite(options.margin_m)) ||
       !(options.clear_m >= 0.0 && std::isfinite(options.clear_m))) {
@@ -465,7 +458,7 @@ Result<std::string> write_scene_map(const Scene& scene, const std::string& dir, 
     return Error::format(Errc::invalid_argument, "scene map: resolution %g m is not positive and finite", resolution_m);
   }
   const Extent& area = scene.area;
-  if (!finite(area.min) || !finite(area.max) || !(area.max.x_m > area.min.x_m) || !(area.max.y_m > area.min.y_m)) {
+  if (!geometry::finite(area.min) || !geometry::finite(area.max) || !(area.max.x_m > area.min.x_m) || !(area.max.y_m > area.min.y_m)) {
     return Error::format(Errc::invalid_argument, "scene map: the floor of '%s' is empty or not finite",
                          scene.name.c_str());
   }
@@ -495,7 +488,7 @@ Result<std::string> write_scene_map(const Scene& scene, const std::string& dir, 
     }
   }
   for (const Wall& w : scene.walls) {
-    if (!finite(w.a) || !finite(w.b) || on_border(w, area)) continue;
+    if (!geometry::finite(w.a) || !geometry::finite(w.b) || on_border(w, area)) continue;
     // A nanometre of slack: a wall on a cell boundary blocks both cells on every machine, FMA or not.
     const double half = 0.5 * resolution_m + 1e-9;
     const auto cell_range = [&](double a, double b, double o, std::size_t n) {

@@ -2,6 +2,7 @@
 // Monotonic time for the whole firmware. Everything periodic sleeps to absolute deadlines.
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 
 namespace sen3bot::hal {
@@ -18,6 +19,8 @@ constexpr Nanos micros(std::int64_t us) { return us * kNanosPerMicro; }
 constexpr Nanos millis(std::int64_t ms) { return ms * kNanosPerMilli; }
 constexpr Nanos seconds(std::int64_t s) { return s * kNanosPerSecond; }
 constexpr double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
+// A duration in seconds from a configuration, rounded to the nearest nanosecond.
+inline Nanos from_seconds(double s) noexcept { return static_cast<Nanos>(std::llround(s * 1e9)); }
 
 // CPU time consumed so far by the calling thread (CLOCK_THREAD_CPUTIME_ID on POSIX). Unlike a
 // Clock it counts only time this thread spent running, so the difference around a call is the

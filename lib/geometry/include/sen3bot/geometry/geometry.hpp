@@ -8,7 +8,6 @@
 
 namespace sen3bot::geometry {
 
-
 struct Point2D {
   double x_m = 0.0;
   double y_m = 0.0;
@@ -23,6 +22,9 @@ struct Pose2D {
   friend constexpr bool operator==(const Pose2D&, const Pose2D&) = default;
 };
 static_assert(std::is_trivially_copyable_v<Pose2D>);
+
+// Both coordinates are numbers (not NaN, not infinite): what a reader checks first.
+[[nodiscard]] inline bool finite(const Point2D& p) noexcept { return std::isfinite(p.x_m) && std::isfinite(p.y_m); }
 
 // Where the pose stands, without its heading.
 [[nodiscard]] constexpr Point2D position(const Pose2D& pose) noexcept { return {pose.x_m, pose.y_m}; }

@@ -16,6 +16,9 @@
 
 namespace sen3bot::sim {
 
+// Above this speed the robot counts as moving: a contact then is of its doing.
+inline constexpr double kRobotMovingSpeedM_s = 0.02;
+
 struct RefereeReport {
   std::uint64_t contacts = 0;         // times the footprint started to overlap something
   std::uint64_t moving_contacts = 0;  // of those, the robot moving towards what it touched: collisions

@@ -49,6 +49,9 @@ struct RecordingOptions {
 // no samples at all. Blank lines and lines starting with '#' are skipped. The annotation step
 // is the most common difference between consecutive distinct frame ids; a person missing for
 // more than one step is split into two tracks.
+// The end of a long file name, leaving room for the rest of an error message.
+[[nodiscard]] std::string_view name_tail(std::string_view name, std::size_t chars = 80) noexcept;
+
 [[nodiscard]] Result<Recording> parse_recording(std::string_view text, std::string_view name,
                                                 const RecordingOptions& options = {});
 // Reads the file at `path` and parses it with the path as its name.
