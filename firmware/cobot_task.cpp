@@ -4,6 +4,7 @@
 
 #include "sen3bot/cobot/polygon.hpp"
 #include "sen3bot/ssc/site_file.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 #include "task_table.hpp"
 #include "wiring.hpp"
 
@@ -21,7 +22,6 @@ bool is_critical(cobot::AreaType t) noexcept {
   return t == cobot::AreaType::critical_1_1 || t == cobot::AreaType::critical_1_2;
 }
 
-double distance(msg::Point2D a, msg::Point2D b) noexcept { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
 }  // namespace
 
@@ -122,7 +122,7 @@ void CobotTask::look(const msg::People& people, const msg::Pose2D& laser, const 
   for (std::size_t k = 0; k < n; ++k) {
     if (&front[k] == chosen) continue;
     const msg::Point2D other{front[k].person->x_m, front[k].person->y_m};
-    if (front[k].range < chosen->range || distance(other, at) < config_.in_way_m) ++in.others_in_way;
+    if (front[k].range < chosen->range || geometry::distance(other, at) < config_.in_way_m) ++in.others_in_way;
   }
   if (in.others_in_way == 0 && foreign_returns(laser, at) >= config_.foreign_returns) {
     ++in.others_in_way;
@@ -154,7 +154,7 @@ std::size_t CobotTask::foreign_returns(const msg::Pose2D& laser, msg::Point2D op
     if (!(r > scan.range_min_m && r < scan.range_max_m)) continue;
     const double a = laser.theta_rad + scan.angle_min_rad + static_cast<double>(i) * scan.increment_rad;
     const msg::Point2D p{laser.x_m + r * std::cos(a), laser.y_m + r * std::sin(a)};
-    const double d = distance(p, operator_at);
+    const double d = geometry::distance(p, operator_at);
     if (d <= config_.operator_body_m || d > config_.in_way_m || on_map(p.x_m, p.y_m)) continue;
     ++count;
   }
@@ -175,8 +175,8 @@ void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal:
     const msg::TrackedPerson* nearest = nullptr;
     for (std::size_t i = 0; i < people.count && i < msg::People::kMax; ++i) {
       const msg::TrackedPerson& q = people.items[i];
-      if (!q.hidden && distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
-          (nearest == nullptr || distance({q.x_m, q.y_m}, operator_at_) < distance({nearest->x_m, nearest->y_m}, operator_at_)))
+      if (!q.hidden && geometry::distance({q.x_m, q.y_m}, operator_at_) < kReassociateM &&
+          (nearest == nullptr || geometry::distance({q.x_m, q.y_m}, operator_at_) < geometry::distance({nearest->x_m, nearest->y_m}, operator_at_)))
         nearest = &q;
     }
     if (nearest != nullptr) {
@@ -201,7 +201,7 @@ void CobotTask::follow(const msg::People& people, const msg::Pose2D& robot, hal:
   if (follow_cmd_.reason == cobot::FollowHold::area_border) ++counters_.border_holds;
   if (follow_cmd_.go) {
     const bool own_active = sent_any_ && sent_.active && sent_.id >= kOwnGoalIds;
-    if (!own_active || distance({sent_.x_m, sent_.y_m}, follow_cmd_.target) > config_.goal_step_m) {
+    if (!own_active || geometry::distance({sent_.x_m, sent_.y_m}, follow_cmd_.target) > config_.goal_step_m) {
       send({follow_cmd_.target.x_m, follow_cmd_.target.y_m, ++own_ids_, true, true}, now_ns);
       ++counters_.follow_goals;
     }

@@ -77,10 +77,13 @@ case "${1:-}" in
       section "AddressSanitizer + UndefinedBehaviorSanitizer build (clang) and tests"
       configure_and_build build-sanitize "${sanitize_args[@]}"
       # MRPT's client and the 30 s keep-alive run test peers and wall-clock time, not our memory
-      # use; the native suite runs them.
+      # use; the native suite runs them. The fuzz corpora replay below, in the libFuzzer runs of
+      # this same tree (each starts by running its whole corpus), unless fuzzing is skipped.
+      sanitize_skip="slow|mrpt"
+      if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then sanitize_skip+="|fuzz"; fi
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
         LSAN_OPTIONS=suppressions="$root/toolchain/lsan.supp" \
-        ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -LE "slow|mrpt"
+        ctest --test-dir build-sanitize --output-on-failure -j "$jobs" -LE "$sanitize_skip"
     fi
     if [[ "${SEN3BOT_SKIP_FUZZ:-0}" != 1 ]]; then
       fuzz_s=${SEN3BOT_FUZZ_SECONDS:-15}
@@ -133,10 +136,14 @@ case "${1:-}" in
       qemu_closed_loop+='|^ZeroAllocation\.The(FirmwareWithTheFleetTask|CollaborativeMode)'
       qemu_closed_loop+='|^Mcl\.RecoversFromAKidnappingOnlyWithInjection$|^Dwa\.RecoversWhenBlockedAndCountsIt$'
       qemu_closed_loop+='|^DwaMovers\.(LetsACrossingBoxPass|TheBroadPhaseNeverChanges)'
+      qemu_closed_loop+='|^SenseToAct\.|^Fleet\.(AnOrderDrives|BadMessages|ARobotCutOff)'
+      qemu_closed_loop+='|^QrReaderRate\.WithinHalfAMetre'
       # Real-time pty runs and external peers are covered by the native and sanitized suites;
       # under an emulator ten times slower their timing says more about qemu than about the
-      # firmware. So are the long closed-loop runs of the whole simulated robot (a third of the
-      # emulated time): one of them, the main job's mission, stays as the target's end-to-end run.
+      # firmware. So are the long closed-loop runs of the whole simulated robot (half of the
+      # emulated time) and the longer of the QR reader's two rate sweeps: one closed-loop run, the
+      # main job's mission, stays as the target's end-to-end run, beside the e-stop chain, the
+      # whole table's allocation proof, the people detector and the blurred QR sweep.
       SEN3BOT_QEMU_EXCLUDE_LABELS=${SEN3BOT_QEMU_EXCLUDE_LABELS:-"slow|peer|mrpt|pty|lms200-pty"} \
       SEN3BOT_QEMU_EXCLUDE_TESTS=${SEN3BOT_QEMU_EXCLUDE_TESTS-$qemu_closed_loop} \
         toolchain/cross-test.sh aarch64

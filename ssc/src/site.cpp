@@ -44,8 +44,6 @@ void edge_hits(Point a, Point b, Point c, Point d, double& lo, double& hi, bool&
 
 }  // namespace
 
-double distance(Point a, Point b) noexcept { return geometry::norm(a - b); }
-
 std::string_view to_string(AreaType type) noexcept {
   switch (type) {
     case AreaType::blind_intersection: return "1.1";

@@ -7,7 +7,7 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-struct Collect : EncodedFrameSink {
+struct JpegFrames : EncodedFrameSink {
   std::vector<Bytes> frames;
   void on_frame(const EncodedFrame& f) override { frames.emplace_back(f.data.begin(), f.data.end()); }
 };
@@ -26,7 +26,7 @@ Bytes jpeg_payload(std::uint32_t offset, std::uint8_t type, std::uint8_t q, std:
   return p;
 }
 
-RtpPacket pkt(const Bytes& payload, std::uint32_t ts, bool marker) {
+RtpPacket jpeg_packet(const Bytes& payload, std::uint32_t ts, bool marker) {
   RtpPacket p;
   p.payload = payload;
   p.timestamp = ts;
@@ -54,11 +54,11 @@ TEST(JpegTables, Quality50IsTheAnnexKTableInZigzagOrder) {
 
 TEST(JpegDepacketizer, BuildsJfifFromTwoFragments) {
   JpegDepacketizer d(4096);
-  Collect c;
+  JpegFrames c;
   const Bytes scan1 = {1, 2, 3, 4};
   const Bytes scan2 = {5, 6};
-  d.push(pkt(jpeg_payload(0, 1, 50, 160, 90, {}, scan1), 7, false), false, 0, c);
-  d.push(pkt(jpeg_payload(4, 1, 50, 160, 90, {}, scan2), 7, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 160, 90, {}, scan1), 7, false), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(4, 1, 50, 160, 90, {}, scan2), 7, true), false, 0, c);
   ASSERT_EQ(c.frames.size(), 1u);
   const Bytes& f = c.frames[0];
   EXPECT_EQ(f[0], 0xFF);
@@ -79,9 +79,9 @@ TEST(JpegDepacketizer, BuildsJfifFromTwoFragments) {
 
 TEST(JpegDepacketizer, InBandTablesOf64And128BytesAndRestartIntervals) {
   JpegDepacketizer d(4096);
-  Collect c;
-  d.push(pkt(jpeg_payload(0, 65, 255, 80, 44, Bytes(64, 3), {9, 9}, 4), 1, true), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 0, 255, 80, 45, Bytes(128, 4), {8}), 2, true), false, 0, c);
+  JpegFrames c;
+  d.push(jpeg_packet(jpeg_payload(0, 65, 255, 80, 44, Bytes(64, 3), {9, 9}, 4), 1, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 0, 255, 80, 45, Bytes(128, 4), {8}), 2, true), false, 0, c);
   ASSERT_EQ(c.frames.size(), 2u);
   EXPECT_EQ(count_marker(c.frames[0], 0xDB), 1u);
   EXPECT_EQ(count_marker(c.frames[0], 0xDD), 1u);
@@ -90,52 +90,52 @@ TEST(JpegDepacketizer, InBandTablesOf64And128BytesAndRestartIntervals) {
 
 TEST(JpegDepacketizer, TablesCachedForQBelow255ButNotFor255) {
   JpegDepacketizer d(4096);
-  Collect c;
-  d.push(pkt(jpeg_payload(0, 1, 200, 8, 8, Bytes(128, 5), {1}), 1, true), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 1, 200, 8, 8, {}, {1}), 2, true), false, 0, c);
+  JpegFrames c;
+  d.push(jpeg_packet(jpeg_payload(0, 1, 200, 8, 8, Bytes(128, 5), {1}), 1, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 200, 8, 8, {}, {1}), 2, true), false, 0, c);
   EXPECT_EQ(c.frames.size(), 2u);
   EXPECT_EQ(c.frames[0], c.frames[1]);
-  d.push(pkt(jpeg_payload(0, 1, 255, 8, 8, {}, {1}), 3, true), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 1, 201, 8, 8, {}, {1}), 4, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 255, 8, 8, {}, {1}), 3, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 201, 8, 8, {}, {1}), 4, true), false, 0, c);
   EXPECT_EQ(c.frames.size(), 2u);
   EXPECT_EQ(d.stats().malformed_packets, 2u);
 }
 
 TEST(JpegDepacketizer, OffsetGapLossAndMissingMarkerDropTheFrame) {
   JpegDepacketizer d(4096);
-  Collect c;
-  d.push(pkt(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 1, false), false, 0, c);
-  d.push(pkt(jpeg_payload(5, 1, 50, 8, 8, {}, {3}), 1, true), false, 0, c);  // expected offset 2
+  JpegFrames c;
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 1, false), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(5, 1, 50, 8, 8, {}, {3}), 1, true), false, 0, c);  // expected offset 2
   EXPECT_TRUE(c.frames.empty());
-  d.push(pkt(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 2, false), false, 0, c);
-  d.push(pkt(jpeg_payload(2, 1, 50, 8, 8, {}, {3}), 2, true), true, 0, c);  // loss flagged
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 2, false), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(2, 1, 50, 8, 8, {}, {3}), 2, true), true, 0, c);  // loss flagged
   EXPECT_TRUE(c.frames.empty());
-  d.push(pkt(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 3, false), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 4, true), false, 0, c);  // new timestamp
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 3, false), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 8, 8, {}, {1, 2}), 4, true), false, 0, c);  // new timestamp
   EXPECT_EQ(c.frames.size(), 1u);
   EXPECT_GE(d.stats().frames_dropped_damaged, 2u);
 }
 
 TEST(JpegDepacketizer, RejectsReservedTypesQAndTruncation) {
   JpegDepacketizer d(4096);
-  Collect c;
-  d.push(pkt(jpeg_payload(0, 2, 50, 8, 8, {}, {1}), 1, true), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 1, 110, 8, 8, {}, {1}), 2, true), false, 0, c);
-  d.push(pkt({0, 0, 0}, 3, true), false, 0, c);
-  d.push(pkt(jpeg_payload(0, 1, 50, 0, 8, {}, {1}), 4, true), false, 0, c);  // width 0, no fallback
+  JpegFrames c;
+  d.push(jpeg_packet(jpeg_payload(0, 2, 50, 8, 8, {}, {1}), 1, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 110, 8, 8, {}, {1}), 2, true), false, 0, c);
+  d.push(jpeg_packet({0, 0, 0}, 3, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 0, 8, {}, {1}), 4, true), false, 0, c);  // width 0, no fallback
   Bytes short_tables = jpeg_payload(0, 1, 255, 8, 8, Bytes(128, 1), {});
   short_tables.resize(20);
-  d.push(pkt(short_tables, 5, true), false, 0, c);
+  d.push(jpeg_packet(short_tables, 5, true), false, 0, c);
   EXPECT_TRUE(c.frames.empty());
   d.set_fallback_dimensions(2560, 1440);
-  d.push(pkt(jpeg_payload(0, 1, 50, 0, 0, {}, {1}), 6, true), false, 0, c);
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 0, 0, {}, {1}), 6, true), false, 0, c);
   EXPECT_EQ(c.frames.size(), 1u);
 }
 
 TEST(JpegDepacketizer, OversizeFrameIsDropped) {
   JpegDepacketizer d(16);
-  Collect c;
-  d.push(pkt(jpeg_payload(0, 1, 50, 8, 8, {}, Bytes(100, 1)), 1, true), false, 0, c);
+  JpegFrames c;
+  d.push(jpeg_packet(jpeg_payload(0, 1, 50, 8, 8, {}, Bytes(100, 1)), 1, true), false, 0, c);
   EXPECT_TRUE(c.frames.empty());
   EXPECT_EQ(d.stats().frames_dropped_oversize, 1u);
 }

@@ -17,7 +17,7 @@ namespace {
 
 using test::Bytes;
 
-CaptureFile load_ok(const std::filesystem::path& path) {
+CaptureFile load_checked_in(const std::filesystem::path& path) {
   auto file = CaptureFile::load(path);
   if (!file) ADD_FAILURE() << file.error().c_str();
   return std::move(file).value();
@@ -111,7 +111,7 @@ void replay_and_rerecord(const CaptureFile& original) {
     EXPECT_GT(c.matched_bytes, 0u);
   }
 
-  const CaptureFile rerecorded = load_ok(path);
+  const CaptureFile rerecorded = load_checked_in(path);
   for (const std::uint8_t channel : {test::kP2osChannel, test::kLms200Channel}) {
     const auto before = rx_records(original, channel);
     const auto after = rx_records(rerecorded, channel);
@@ -125,15 +125,15 @@ void replay_and_rerecord(const CaptureFile& original) {
 }
 
 TEST(LoopbackCapture, DecodesToTheScriptedSession) {
-  expect_matches_script(load_ok(test::captures_dir() / "loopback_session.s3bcap"));
+  expect_matches_script(load_checked_in(test::captures_dir() / "loopback_session.s3bcap"));
 }
 
 TEST(LoopbackCapture, ReplayReRecordsByteIdenticalRxStreams) {
-  replay_and_rerecord(load_ok(test::captures_dir() / "loopback_session.s3bcap"));
+  replay_and_rerecord(load_checked_in(test::captures_dir() / "loopback_session.s3bcap"));
 }
 
 TEST(LoopbackCapture, AsFastReplayEndsAtTheLastRecordTime) {
-  const CaptureFile capture = load_ok(test::captures_dir() / "loopback_session.s3bcap");
+  const CaptureFile capture = load_checked_in(test::captures_dir() / "loopback_session.s3bcap");
   const std::vector<RxRecord> expected = rx_records(capture, test::kLms200Channel);
   ASSERT_FALSE(expected.empty());
   hal::SimClock clock;
@@ -148,11 +148,11 @@ TEST(LoopbackCapture, AsFastReplayEndsAtTheLastRecordTime) {
 }
 
 TEST(SyntheticCapture, DecodesToTheScriptedSession) {
-  expect_matches_script(load_ok(test::captures_dir() / "synthetic_session.s3bcap"));
+  expect_matches_script(load_checked_in(test::captures_dir() / "synthetic_session.s3bcap"));
 }
 
 TEST(SyntheticCapture, ReplayReRecordsByteIdenticalRxStreams) {
-  replay_and_rerecord(load_ok(test::captures_dir() / "synthetic_session.s3bcap"));
+  replay_and_rerecord(load_checked_in(test::captures_dir() / "synthetic_session.s3bcap"));
 }
 
 // The generator's live path still works: a fresh recording over real pseudo-terminals.
@@ -161,7 +161,7 @@ TEST(LiveLoopback, RecordsASessionOverRealPseudoTerminals) {
   const Status recorded = test::record_loopback_session(path);
   if (!recorded && recorded.error().code() == Errc::not_supported) GTEST_SKIP() << recorded.error().c_str();
   ASSERT_TRUE(recorded) << recorded.error().c_str();
-  const CaptureFile capture = load_ok(path);
+  const CaptureFile capture = load_checked_in(path);
   expect_matches_script(capture);
   replay_and_rerecord(capture);
 }

@@ -25,7 +25,7 @@ CaptureFile parse_ok(const Bytes& bytes) {
   return std::move(file).value();
 }
 
-CaptureFile load_ok(const std::filesystem::path& path) {
+CaptureFile load_stream_capture(const std::filesystem::path& path) {
   auto file = CaptureFile::load(path);
   if (!file) ADD_FAILURE() << file.error().c_str();
   return std::move(file).value();
@@ -80,7 +80,7 @@ TEST(RecordingStream, RecordsReadsAsRxAndAcceptedWritesAsTx) {
   stream.note_baud_change(38400);
   ASSERT_TRUE(writer.close());
 
-  const CaptureFile file = load_ok(path);
+  const CaptureFile file = load_stream_capture(path);
   const auto r = file.records();
   ASSERT_EQ(r.size(), 5u);
   EXPECT_EQ(r[0].kind, RecordKind::rx);
@@ -188,7 +188,7 @@ TEST(ReplayStream, OriginalTimingOnPosixClockFollowsRealTime) {
 }
 
 TEST(ReplayStream, AsFastAsPossibleAdvancesTheSimClockThroughTheWholeCapture) {
-  const CaptureFile capture = load_ok(test::captures_dir() / "synthetic_session.s3bcap");
+  const CaptureFile capture = load_stream_capture(test::captures_dir() / "synthetic_session.s3bcap");
   for (const std::uint8_t channel : {test::kP2osChannel, test::kLms200Channel}) {
     hal::SimClock clock;
     ReplayStream replay(capture, channel, clock, ReplayTiming::as_fast_as_possible);

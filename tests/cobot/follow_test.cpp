@@ -18,7 +18,7 @@ namespace {
 using msg::Point2D;
 using msg::Pose2D;
 
-constexpr hal::Nanos kCycle = hal::millis(100);
+constexpr hal::Nanos kFollowCycle = hal::millis(100);
 constexpr double kDt = 0.1;
 constexpr double kRobotSpeed = 1.2;  // m/s, faster than the operator walks
 
@@ -32,7 +32,7 @@ class FollowTest : public ::testing::Test {
   // One cycle: the operator (seen, at p with velocity v), then the robot drives toward the
   // command's target for one cycle.
   FollowCommand step(bool seen, Point2D p, double vx, double vy, std::span<const Point2D> area) {
-    now += kCycle;
+    now += kFollowCycle;
     FollowInput in;
     in.now_ns = now;
     in.operator_seen = seen;

@@ -12,8 +12,8 @@ namespace {
 
 using msg::CobotMode;
 
-constexpr std::uint32_t kAnna = 7;
-constexpr std::uint32_t kBruno = 9;
+constexpr std::uint32_t kOperatorAnna = 7;
+constexpr std::uint32_t kOperatorBruno = 9;
 
 TriggerEvent request_by(std::uint32_t id) {
   TriggerEvent e;
@@ -41,10 +41,10 @@ class ModeTest : public ::testing::Test {
   // Idle in a type-2 area, then Anna's request.
   void collaborate_with_anna() {
     ASSERT_EQ(step(AreaType::sub_critical_2, true).mode, CobotMode::wait4col);
-    const ModeOutput out = step(AreaType::sub_critical_2, true, {request_by(kAnna)});
+    const ModeOutput out = step(AreaType::sub_critical_2, true, {request_by(kOperatorAnna)});
     ASSERT_EQ(out.mode, CobotMode::collaborative);
     ASSERT_TRUE(has(out, ModeEventKind::toggled_on));
-    ASSERT_EQ(out.operator_id, kAnna);
+    ASSERT_EQ(out.operator_id, kOperatorAnna);
   }
   CollaborationMode mode;
   hal::Nanos now = 0;
@@ -60,7 +60,7 @@ TEST_F(ModeTest, IdleInASubCriticalAreaWaitsForAnOperator) {
 TEST_F(ModeTest, NeverWaitsInACriticalAreaOrOutsideASubCriticalOne) {
   for (AreaType area : {AreaType::critical_1_1, AreaType::critical_1_2, AreaType::none, AreaType::not_monitored_3}) {
     for (int i = 0; i < 20; ++i) {
-      const ModeOutput out = step(area, true, {request_by(kAnna)});
+      const ModeOutput out = step(area, true, {request_by(kOperatorAnna)});
       EXPECT_EQ(out.mode, CobotMode::cooperative) << to_string(area);
       EXPECT_FALSE(has(out, ModeEventKind::toggled_on)) << to_string(area);
     }
@@ -91,7 +91,7 @@ TEST_F(ModeTest, LeavingTheAreaOrGettingAGoalEndsTheWait) {
 
 TEST_F(ModeTest, ARequestInTheCycleAGoalComesFindsTheRobotNoLongerWaiting) {
   ASSERT_EQ(step(AreaType::sub_critical_2, true).mode, CobotMode::wait4col);
-  const ModeOutput out = step(AreaType::sub_critical_2, false, {request_by(kAnna)});
+  const ModeOutput out = step(AreaType::sub_critical_2, false, {request_by(kOperatorAnna)});
   EXPECT_EQ(out.mode, CobotMode::cooperative);
   EXPECT_EQ(mode.refusals(ModeRefusal::not_waiting), 1u);
 }
@@ -101,7 +101,7 @@ TEST_F(ModeTest, TheSameOperatorTogglesOnAndOffAndTheTaskResumes) {
   // Collaborative whether or not the robot moves.
   EXPECT_EQ(step(AreaType::sub_critical_2, false).mode, CobotMode::collaborative);
   EXPECT_FALSE(step(AreaType::sub_critical_2, true).resume);
-  const ModeOutput off = step(AreaType::sub_critical_2, false, {request_by(kAnna)});
+  const ModeOutput off = step(AreaType::sub_critical_2, false, {request_by(kOperatorAnna)});
   EXPECT_EQ(off.mode, CobotMode::cooperative);
   EXPECT_EQ(off.operator_id, 0u);
   EXPECT_TRUE(off.resume);
@@ -113,7 +113,7 @@ TEST_F(ModeTest, TheSameOperatorTogglesOnAndOffAndTheTaskResumes) {
 
 TEST_F(ModeTest, ToggledOffWithNoTaskLeftItOffersItselfAgainFromTheNextCycle) {
   collaborate_with_anna();
-  const ModeOutput off = step(AreaType::sub_critical_2, true, {request_by(kAnna)});
+  const ModeOutput off = step(AreaType::sub_critical_2, true, {request_by(kOperatorAnna)});
   EXPECT_EQ(off.mode, CobotMode::cooperative);
   EXPECT_TRUE(off.resume);
   EXPECT_EQ(step(AreaType::sub_critical_2, true).mode, CobotMode::wait4col);
@@ -121,13 +121,13 @@ TEST_F(ModeTest, ToggledOffWithNoTaskLeftItOffersItselfAgainFromTheNextCycle) {
 
 TEST_F(ModeTest, AnotherOperatorIsRefused) {
   collaborate_with_anna();
-  const ModeOutput out = step(AreaType::sub_critical_2, false, {request_by(kBruno)});
+  const ModeOutput out = step(AreaType::sub_critical_2, false, {request_by(kOperatorBruno)});
   EXPECT_EQ(out.mode, CobotMode::collaborative);
-  EXPECT_EQ(out.operator_id, kAnna);
+  EXPECT_EQ(out.operator_id, kOperatorAnna);
   EXPECT_FALSE(out.resume);
   ASSERT_TRUE(has(out, ModeEventKind::refused));
   EXPECT_EQ(out.events[0].refusal, ModeRefusal::not_the_operator);
-  EXPECT_EQ(out.events[0].operator_id, kBruno);
+  EXPECT_EQ(out.events[0].operator_id, kOperatorBruno);
   EXPECT_EQ(mode.refusals(ModeRefusal::not_the_operator), 1u);
 }
 
@@ -142,7 +142,7 @@ TEST_F(ModeTest, CollaborativeInACriticalAreaGoesBackToCooperative) {
 }
 
 TEST_F(ModeTest, UpdatesAllocateNothing) {
-  const std::array<TriggerEvent, 1> anna{request_by(kAnna)};
+  const std::array<TriggerEvent, 1> anna{request_by(kOperatorAnna)};
   std::uint32_t collaborative_cycles = 0;
   mem::testing::AllocationScope scope;
   for (int i = 0; i < 1000; ++i) {

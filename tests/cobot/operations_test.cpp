@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "sen3bot/cobot/operations.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 
 namespace sen3bot::cobot {
 namespace {
 
 const std::string kShipped = SEN3BOT_SOURCE_DIR "/config/cobot/operations.yaml";
 
-double distance(msg::Point2D a, msg::Point2D b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
 TEST(OperationsFile, ShippedFileLoads) {
   Result<OperationsConfig> c = load_operations(kShipped);
@@ -36,8 +36,8 @@ TEST(OperationsFile, ShippedFileLoads) {
   // Every operation has the robot's route, from its first station to its last.
   for (const Operation& op : c->operations) {
     ASSERT_GE(op.reference.size(), 2u) << op.name;
-    EXPECT_LT(distance(op.reference.front(), c->stations[op.stations.front()].position), 0.01) << op.name;
-    EXPECT_LT(distance(op.reference.back(), c->stations[op.stations.back()].position), 0.01) << op.name;
+    EXPECT_LT(geometry::distance(op.reference.front(), c->stations[op.stations.front()].position), 0.01) << op.name;
+    EXPECT_LT(geometry::distance(op.reference.back(), c->stations[op.stations.back()].position), 0.01) << op.name;
   }
   EXPECT_EQ(c->find_operation("kitting"), 0);
   EXPECT_EQ(c->find_operation("nothing"), -1);

@@ -1,6 +1,7 @@
 // The worker's path from synthetic LMS200 scans: a person as a circle of returns, with things
 // nearer and farther inside and outside the person's box.
 #include "sen3bot/cobot/path_recorder.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 
 #include <gtest/gtest.h>
 
@@ -80,7 +81,6 @@ Point2D from_laser(const Pose2D& laser, double r, double b) {
   return {laser.x_m + r * std::cos(laser.theta_rad + b), laser.y_m + r * std::sin(laser.theta_rad + b)};
 }
 
-double distance(Point2D a, Point2D b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
 class PathRecorderTest : public ::testing::Test {
  protected:
@@ -113,7 +113,7 @@ TEST_F(PathRecorderTest, RecordsTheNearestReturnOfTheBody) {
   ASSERT_TRUE(recorder.add_scan(scan, laser, person, 2.0 * kBodyRadius));
   ASSERT_EQ(recorder.size(), 1u);
   const Point2D expected = from_laser(laser, 2.0 - kBodyRadius, 0.1);
-  EXPECT_LT(distance(recorder.point(0), expected), 0.01);
+  EXPECT_LT(geometry::distance(recorder.point(0), expected), 0.01);
 }
 
 TEST_F(PathRecorderTest, NothingInTheBoxRecordsNothing) {
@@ -169,10 +169,10 @@ TEST_F(PathRecorderTest, AFullPathIsHalvedKeepingBothEnds) {
     ASSERT_LE(recorder.size(), 16u);
   }
   EXPECT_GT(recorder.spacing_m(), config.min_spacing_m);
-  EXPECT_LT(distance(recorder.point(0), first), 1e-12);
-  EXPECT_LT(distance(recorder.point(recorder.size() - 1), last), 1e-12);
+  EXPECT_LT(geometry::distance(recorder.point(0), first), 1e-12);
+  EXPECT_LT(geometry::distance(recorder.point(recorder.size() - 1), last), 1e-12);
   // The newest point is where the walk ended, within the current spacing.
-  EXPECT_LT(distance(last, recorder.point(recorder.size() - 1)), recorder.spacing_m());
+  EXPECT_LT(geometry::distance(last, recorder.point(recorder.size() - 1)), recorder.spacing_m());
   // Still in walking order along the line.
   for (std::size_t i = 1; i < recorder.size(); ++i) {
     const double along_prev = -(recorder.point(i - 1).x_m - laser.x_m) * std::sin(laser.theta_rad) +

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sen3bot/sim/cobot/workers.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 
 namespace sen3bot::cobot {
 namespace {
@@ -38,7 +39,6 @@ class Workers : public ::testing::Test {
   std::unique_ptr<WorkerSimulator> workers_;
 };
 
-double distance(msg::Point2D a, msg::Point2D b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
 std::vector<WorkerStyle> all_styles() {
   std::vector<WorkerStyle> styles(training_styles().begin(), training_styles().end());
@@ -70,13 +70,13 @@ TEST_F(Workers, VisitStationsInOrder) {
         for (const std::size_t s : stations) {
           const Workstation& st = config_.stations[s];
           std::size_t i = from;
-          while (i < w.points() && distance({w.xy[2 * i], w.xy[2 * i + 1]}, st.position) > st.radius_m + 0.3) ++i;
+          while (i < w.points() && geometry::distance({w.xy[2 * i], w.xy[2 * i + 1]}, st.position) > st.radius_m + 0.3) ++i;
           EXPECT_LT(i, w.points()) << "never near " << st.name;
           from = i;
         }
         // The recorder's spacing, points on the map, the body where a body fits.
         for (std::size_t i = 1; i < w.points(); ++i)
-          EXPECT_GT(distance({w.xy[2 * i - 2], w.xy[2 * i - 1]}, {w.xy[2 * i], w.xy[2 * i + 1]}), 0.0499);
+          EXPECT_GT(geometry::distance({w.xy[2 * i - 2], w.xy[2 * i - 1]}, {w.xy[2 * i], w.xy[2 * i + 1]}), 0.0499);
         for (std::size_t i = 0; i < w.points(); ++i) {
           EXPECT_TRUE(w.xy[2 * i] > 0.0f && w.xy[2 * i] < 8.0f && w.xy[2 * i + 1] > 0.0f && w.xy[2 * i + 1] < 9.5f);
         }
@@ -151,13 +151,13 @@ TEST_F(Workers, ReferenceRoutes) {
     Result<std::vector<msg::Point2D>> route = workers_->reference_route(op);
     ASSERT_TRUE(route.ok()) << route.error().c_str();
     const Operation& o = config_.operations[op];
-    EXPECT_LT(distance(route->front(), config_.stations[o.stations.front()].position), 1e-6);
-    EXPECT_LT(distance(route->back(), config_.stations[o.stations.back()].position), 1e-6);
-    for (std::size_t i = 1; i < route->size(); ++i) EXPECT_LE(distance((*route)[i - 1], (*route)[i]), 0.25 + 1e-6);
+    EXPECT_LT(geometry::distance(route->front(), config_.stations[o.stations.front()].position), 1e-6);
+    EXPECT_LT(geometry::distance(route->back(), config_.stations[o.stations.back()].position), 1e-6);
+    for (std::size_t i = 1; i < route->size(); ++i) EXPECT_LE(geometry::distance((*route)[i - 1], (*route)[i]), 0.25 + 1e-6);
     for (const msg::Point2D& p : *route) EXPECT_TRUE(workers_->standable(p));
     // The shipped file carries these routes (tools/train_operations.sh writes them).
     ASSERT_EQ(o.reference.size(), route->size()) << o.name;
-    for (std::size_t i = 0; i < route->size(); ++i) EXPECT_LT(distance(o.reference[i], (*route)[i]), 0.0075) << o.name;  // written to the cm
+    for (std::size_t i = 0; i < route->size(); ++i) EXPECT_LT(geometry::distance(o.reference[i], (*route)[i]), 0.0075) << o.name;  // written to the cm
   }
 }
 

@@ -16,7 +16,7 @@ using testing::every_byte_value;
 using testing::read_exactly;
 using testing::write_all;
 
-constexpr int kIoTimeout_ms = 2000;
+constexpr int kSocketTimeout_ms = 2000;
 
 std::unique_ptr<TcpStream> accept_within(TcpListener& listener, int timeout_ms) {
   const auto deadline = testing::Clock::now() + std::chrono::milliseconds(timeout_ms);
@@ -45,11 +45,11 @@ Connection connect_loopback() {
   EXPECT_TRUE(listener.ok()) << (listener.ok() ? "" : listener.error().c_str());
   if (!listener.ok()) return c;
   c.listener = std::move(listener).value();
-  Result<std::unique_ptr<TcpStream>> client = TcpStream::connect("127.0.0.1", c.listener->port(), kIoTimeout_ms);
+  Result<std::unique_ptr<TcpStream>> client = TcpStream::connect("127.0.0.1", c.listener->port(), kSocketTimeout_ms);
   EXPECT_TRUE(client.ok()) << (client.ok() ? "" : client.error().c_str());
   if (!client.ok()) return c;
   c.client = std::move(client).value();
-  c.server = accept_within(*c.listener, kIoTimeout_ms);
+  c.server = accept_within(*c.listener, kSocketTimeout_ms);
   return c;
 }
 
@@ -62,10 +62,10 @@ TEST(HalTcp, EphemeralListenerConnectAndExchange) {
   EXPECT_TRUE(contains(c.listener->name(), std::to_string(c.listener->port())));
 
   const std::vector<std::uint8_t> bytes = every_byte_value();
-  ASSERT_TRUE(write_all(*c.client, bytes, kIoTimeout_ms));
-  EXPECT_EQ(read_exactly(*c.server, bytes.size(), kIoTimeout_ms), bytes);
-  ASSERT_TRUE(write_all(*c.server, bytes, kIoTimeout_ms));
-  EXPECT_EQ(read_exactly(*c.client, bytes.size(), kIoTimeout_ms), bytes);
+  ASSERT_TRUE(write_all(*c.client, bytes, kSocketTimeout_ms));
+  EXPECT_EQ(read_exactly(*c.server, bytes.size(), kSocketTimeout_ms), bytes);
+  ASSERT_TRUE(write_all(*c.server, bytes, kSocketTimeout_ms));
+  EXPECT_EQ(read_exactly(*c.client, bytes.size(), kSocketTimeout_ms), bytes);
 
   std::uint8_t buffer[8];
   EXPECT_EQ(*c.client->read(buffer), 0U);  // nothing pending: 0 bytes, not an error
@@ -85,12 +85,12 @@ TEST(HalTcp, PeerCloseIsDisconnectedAndNeverSigpipe) {
   Connection c = connect_loopback();
   ASSERT_TRUE(c.client && c.server);
   const std::uint8_t last_words[] = {0xDE, 0xAD};
-  ASSERT_TRUE(write_all(*c.server, last_words, kIoTimeout_ms));
+  ASSERT_TRUE(write_all(*c.server, last_words, kSocketTimeout_ms));
   c.server.reset();
 
   // What the peer sent before closing is still delivered, then EOF is "disconnected".
   Error error;
-  EXPECT_EQ(read_exactly(*c.client, 3, kIoTimeout_ms, &error), std::vector<std::uint8_t>({0xDE, 0xAD}));
+  EXPECT_EQ(read_exactly(*c.client, 3, kSocketTimeout_ms, &error), std::vector<std::uint8_t>({0xDE, 0xAD}));
   EXPECT_EQ(error.code(), Errc::disconnected) << error.c_str();
   EXPECT_TRUE(contains(error.message(), c.client->name())) << error.c_str();
 
@@ -114,11 +114,11 @@ TEST(HalTcp, ShutdownWriteSendsEofButKeepsReading) {
   ASSERT_TRUE(c.client && c.server);
   ASSERT_TRUE(c.client->shutdown_write().ok());
   Error error;
-  EXPECT_TRUE(read_exactly(*c.server, 1, kIoTimeout_ms, &error).empty());
+  EXPECT_TRUE(read_exactly(*c.server, 1, kSocketTimeout_ms, &error).empty());
   EXPECT_EQ(error.code(), Errc::disconnected);
   const std::uint8_t reply[] = {1, 2, 3};
-  ASSERT_TRUE(write_all(*c.server, reply, kIoTimeout_ms));
-  EXPECT_EQ(read_exactly(*c.client, 3, kIoTimeout_ms), std::vector<std::uint8_t>({1, 2, 3}));
+  ASSERT_TRUE(write_all(*c.server, reply, kSocketTimeout_ms));
+  EXPECT_EQ(read_exactly(*c.client, 3, kSocketTimeout_ms), std::vector<std::uint8_t>({1, 2, 3}));
 }
 
 TEST(HalTcp, ConnectToAClosedPortIsAClearError) {
@@ -128,7 +128,7 @@ TEST(HalTcp, ConnectToAClosedPortIsAClearError) {
     ASSERT_TRUE(listener.ok());
     port = (*listener)->port();
   }  // closed again: nobody listens there now
-  Result<std::unique_ptr<TcpStream>> stream = TcpStream::connect("127.0.0.1", port, kIoTimeout_ms);
+  Result<std::unique_ptr<TcpStream>> stream = TcpStream::connect("127.0.0.1", port, kSocketTimeout_ms);
   ASSERT_FALSE(stream.ok());
   EXPECT_EQ(stream.error().code(), Errc::io);
   EXPECT_TRUE(contains(stream.error().message(), "tcp://127.0.0.1:" + std::to_string(port))) << stream.error().c_str();
@@ -167,14 +167,14 @@ TEST(HalTcp, ListenOnABadAddressFails) {
 TEST(HalTcp, Ipv6LoopbackWhenAvailable) {
   Result<std::unique_ptr<TcpListener>> listener = TcpListener::listen("::1", 0);
   if (!listener.ok()) GTEST_SKIP() << "no IPv6 loopback: " << listener.error().c_str();
-  Result<std::unique_ptr<TcpStream>> client = TcpStream::connect("::1", (*listener)->port(), kIoTimeout_ms);
+  Result<std::unique_ptr<TcpStream>> client = TcpStream::connect("::1", (*listener)->port(), kSocketTimeout_ms);
   ASSERT_TRUE(client.ok()) << client.error().c_str();
   EXPECT_EQ((*client)->name(), "tcp://[::1]:" + std::to_string((*listener)->port()));
-  auto server = accept_within(**listener, kIoTimeout_ms);
+  auto server = accept_within(**listener, kSocketTimeout_ms);
   ASSERT_TRUE(server);
   const std::uint8_t ping[] = {'p'};
-  ASSERT_TRUE(write_all(**client, ping, kIoTimeout_ms));
-  EXPECT_EQ(read_exactly(*server, 1, kIoTimeout_ms), std::vector<std::uint8_t>({'p'}));
+  ASSERT_TRUE(write_all(**client, ping, kSocketTimeout_ms));
+  EXPECT_EQ(read_exactly(*server, 1, kSocketTimeout_ms), std::vector<std::uint8_t>({'p'}));
 }
 
 TEST(HalTcpUrl, GoodUrls) {
@@ -245,11 +245,11 @@ TEST(HalOpenByteStream, TcpUrlConnects) {
   Result<std::unique_ptr<ByteStream>> stream = open_byte_stream(url, 9600);
   ASSERT_TRUE(stream.ok()) << stream.error().c_str();
   EXPECT_EQ((*stream)->name(), url);
-  auto server = accept_within(**listener, kIoTimeout_ms);
+  auto server = accept_within(**listener, kSocketTimeout_ms);
   ASSERT_TRUE(server);
   const std::uint8_t sync0[] = {0xFA, 0xFB, 0x03, 0x00, 0x00, 0x00};  // a P2OS SYNC0 packet
-  ASSERT_TRUE(write_all(**stream, sync0, kIoTimeout_ms));
-  EXPECT_EQ(read_exactly(*server, sizeof sync0, kIoTimeout_ms), std::vector<std::uint8_t>(sync0, sync0 + 6));
+  ASSERT_TRUE(write_all(**stream, sync0, kSocketTimeout_ms));
+  EXPECT_EQ(read_exactly(*server, sizeof sync0, kSocketTimeout_ms), std::vector<std::uint8_t>(sync0, sync0 + 6));
 }
 
 TEST(HalOpenByteStream, BadSpecsFailClearly) {

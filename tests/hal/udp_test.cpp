@@ -13,7 +13,7 @@ namespace {
 using testing::contains;
 
 constexpr UdpEndpoint kLoopback{{127, 0, 0, 1}, 0};
-constexpr int kIoTimeout_ms = 2000;
+constexpr int kDatagramTimeout_ms = 2000;
 
 std::unique_ptr<UdpSocket> bind_or_fail(std::string_view address, std::uint16_t port) {
   Result<std::unique_ptr<UdpSocket>> socket = UdpSocket::bind(address, port);
@@ -54,7 +54,7 @@ TEST(HalUdp, LoopbackSendAndReceiveReportsTheSender) {
   EXPECT_EQ(*sent, sizeof datagram);
 
   std::uint8_t buffer[64];
-  std::optional<UdpReceived> received = receive_within(*b, buffer, kIoTimeout_ms);
+  std::optional<UdpReceived> received = receive_within(*b, buffer, kDatagramTimeout_ms);
   ASSERT_TRUE(received);
   EXPECT_EQ(received->size, sizeof datagram);
   EXPECT_FALSE(received->truncated);
@@ -64,7 +64,7 @@ TEST(HalUdp, LoopbackSendAndReceiveReportsTheSender) {
   // Reply to whoever sent it.
   const std::uint8_t reply[] = {'o', 'k'};
   ASSERT_TRUE(b->send_to(reply, received->sender).ok());
-  std::optional<UdpReceived> answer = receive_within(*a, buffer, kIoTimeout_ms);
+  std::optional<UdpReceived> answer = receive_within(*a, buffer, kDatagramTimeout_ms);
   ASSERT_TRUE(answer);
   EXPECT_EQ(answer->size, 2U);
   EXPECT_EQ(answer->sender.port, b->local_port());
@@ -86,7 +86,7 @@ TEST(HalUdp, OversizedDatagramIsMarkedTruncated) {
   const std::vector<std::uint8_t> big(100, 0x42);
   ASSERT_TRUE(a->send_to(big, at(kLoopback, b->local_port())).ok());
   std::uint8_t small[10];
-  std::optional<UdpReceived> received = receive_within(*b, small, kIoTimeout_ms);
+  std::optional<UdpReceived> received = receive_within(*b, small, kDatagramTimeout_ms);
   ASSERT_TRUE(received);
   EXPECT_TRUE(received->truncated);
   EXPECT_EQ(received->size, sizeof small);
@@ -98,7 +98,7 @@ TEST(HalUdp, EmptyDatagramIsReceivedAsZeroBytes) {
   ASSERT_TRUE(a && b);
   ASSERT_TRUE(a->send_to({}, at(kLoopback, b->local_port())).ok());
   std::uint8_t buffer[8];
-  std::optional<UdpReceived> received = receive_within(*b, buffer, kIoTimeout_ms);
+  std::optional<UdpReceived> received = receive_within(*b, buffer, kDatagramTimeout_ms);
   ASSERT_TRUE(received);  // distinguishable from "nothing waiting"
   EXPECT_EQ(received->size, 0U);
 }
@@ -135,7 +135,7 @@ TEST(HalUdp, MulticastJoinAndLoopbackWhenTheMachineAllowsIt) {
   const std::uint8_t probe[] = {'<', 'P', 'r', 'o', 'b', 'e', '/', '>'};
   ASSERT_TRUE(sender->send_to(probe, UdpEndpoint{{239, 255, 255, 250}, receiver->local_port()}).ok());
   std::uint8_t buffer[32];
-  std::optional<UdpReceived> received = receive_within(*receiver, buffer, kIoTimeout_ms);
+  std::optional<UdpReceived> received = receive_within(*receiver, buffer, kDatagramTimeout_ms);
   ASSERT_TRUE(received);
   EXPECT_EQ(received->size, sizeof probe);
   EXPECT_EQ(received->sender.port, sender->local_port());

@@ -13,7 +13,7 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-Bytes bytes(const Request& r) { return Bytes(r.span().begin(), r.span().end()); }
+Bytes request_bytes(const Request& r) { return Bytes(r.span().begin(), r.span().end()); }
 
 void put(Bytes& b, std::uint16_t v) {
   b.push_back(static_cast<std::uint8_t>(v & 0xFF));
@@ -68,7 +68,7 @@ std::string error_of(const Result<ScanTelegram>& r) { return r.ok() ? std::strin
 TEST(Lms200MeanValues, RequestBytes) {
   Result<Request> r = request_mean_values(10);
   ASSERT_TRUE(r.ok());
-  const Bytes b = bytes(*r);
+  const Bytes b = request_bytes(*r);
   ASSERT_EQ(b.size(), 9u);
   EXPECT_EQ(Bytes(b.begin(), b.begin() + 7), (Bytes{0x02, 0x00, 0x03, 0x00, 0x20, 0x26, 0x0A}));
   EXPECT_EQ(b[7] | (b[8] << 8), crc16({b.data(), 7}));
@@ -91,7 +91,7 @@ TEST(Lms200Subrange, RequestBytesAndBounds) {
   // sicktoolbox's example: 180/0.5, the first 10.5 degrees are values 1..22.
   Result<Request> r = request_subrange(1, 22, {180, 50});
   ASSERT_TRUE(r.ok());
-  const Bytes b = bytes(*r);
+  const Bytes b = request_bytes(*r);
   ASSERT_EQ(b.size(), 12u);
   EXPECT_EQ(Bytes(b.begin(), b.begin() + 10), (Bytes{0x02, 0x00, 0x06, 0x00, 0x20, 0x27, 0x01, 0x00, 0x16, 0x00}));
   EXPECT_EQ(b[10] | (b[11] << 8), crc16({b.data(), 10}));

@@ -16,11 +16,11 @@ namespace {
 using testing::Tracked;
 
 template <std::size_t N, WhenFull P>
-std::vector<int> values(const RingBuffer<int, N, P>& ring) {
+std::vector<int> ring_values(const RingBuffer<int, N, P>& ring) {
   return {ring.begin(), ring.end()};
 }
 template <std::size_t N, WhenFull P>
-std::vector<int> values(const RingBuffer<Tracked, N, P>& ring) {
+std::vector<int> ring_values(const RingBuffer<Tracked, N, P>& ring) {
   std::vector<int> out;
   for (const Tracked& t : ring) out.push_back(t.value);
   return out;
@@ -57,7 +57,7 @@ TEST_F(RingBufferTest, RejectWhenFullLeavesContentsAndCountsTheDrop) {
   EXPECT_TRUE(ring.full());
   EXPECT_FALSE(ring.push(99));
   EXPECT_FALSE(ring.emplace(98));
-  EXPECT_EQ(values(ring), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(ring.dropped(), 2u);
 }
 
@@ -67,13 +67,13 @@ TEST_F(RingBufferTest, OverwriteOldestKeepsTheNewest) {
   EXPECT_FALSE(ring.push(3));  // stored, but 0 was lost
   EXPECT_FALSE(ring.push(4));
   EXPECT_EQ(ring.size(), 3u);
-  EXPECT_EQ(values(ring), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(ring.front(), 2);
   EXPECT_EQ(ring.back(), 4);
   EXPECT_EQ(ring.dropped(), 2u);
   EXPECT_EQ(ring.pop(), 2);
   EXPECT_TRUE(ring.push(5));  // room again: nothing lost
-  EXPECT_EQ(values(ring), (std::vector<int>{3, 4, 5}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{3, 4, 5}));
 }
 
 TEST_F(RingBufferTest, OverwriteWithTheOldestElementAsArgument) {
@@ -81,7 +81,7 @@ TEST_F(RingBufferTest, OverwriteWithTheOldestElementAsArgument) {
   ring.emplace(1);
   ring.emplace(2);
   ring.push(ring.front());  // the argument is the element about to be overwritten
-  EXPECT_EQ(values(ring), (std::vector<int>{2, 1}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{2, 1}));
 }
 
 TEST_F(RingBufferTest, AtCountsFromTheOldestAcrossTheWrap) {
@@ -95,7 +95,7 @@ TEST_F(RingBufferTest, AtCountsFromTheOldestAcrossTheWrap) {
   for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(ring.at(i), static_cast<int>(i) + 2);
   EXPECT_EQ(ring[3], 5);
   ring.at(1) = 30;
-  EXPECT_EQ(values(ring), (std::vector<int>{2, 30, 4, 5}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{2, 30, 4, 5}));
 }
 
 // Random pushes and pops against std::deque, for both policies, with enough operations to
@@ -173,7 +173,7 @@ TEST_F(RingBufferTest, LifetimesWithOverwritePolicy) {
     RingBuffer<Tracked, 3, WhenFull::overwrite_oldest> ring;
     for (int i = 0; i < 10; ++i) ring.emplace(i);
     EXPECT_EQ(Tracked::live(), 3);
-    EXPECT_EQ(values(ring), (std::vector<int>{7, 8, 9}));
+    EXPECT_EQ(ring_values(ring), (std::vector<int>{7, 8, 9}));
   }
   EXPECT_EQ(Tracked::live(), 0);
 }
@@ -186,7 +186,7 @@ TEST_F(RingBufferTest, ClearDestroysAndResets) {
   EXPECT_TRUE(ring.empty());
   EXPECT_EQ(Tracked::live(), 0);
   for (int i = 0; i < 4; ++i) EXPECT_TRUE(ring.emplace(i));
-  EXPECT_EQ(values(ring), (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(ring_values(ring), (std::vector<int>{0, 1, 2, 3}));
 }
 
 TEST_F(RingBufferTest, CopyAndMoveKeepOrderAcrossTheWrap) {
@@ -196,15 +196,15 @@ TEST_F(RingBufferTest, CopyAndMoveKeepOrderAcrossTheWrap) {
   a.pop();
   a.emplace(4);  // wrapped: oldest..newest = 2 3 4
   RingBuffer<Tracked, 4> b(a);
-  EXPECT_EQ(values(b), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(b), (std::vector<int>{2, 3, 4}));
   RingBuffer<Tracked, 4> c;
   c.emplace(100);
   c = a;
-  EXPECT_EQ(values(c), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(c), (std::vector<int>{2, 3, 4}));
   RingBuffer<Tracked, 4> d(std::move(b));
-  EXPECT_EQ(values(d), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(d), (std::vector<int>{2, 3, 4}));
   c = std::move(d);
-  EXPECT_EQ(values(c), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(c), (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(c.pop()->value, 2);
 }
 
@@ -212,7 +212,7 @@ TEST_F(RingBufferTest, TrivialRingCopies) {
   RingBuffer<int, 3, WhenFull::overwrite_oldest> a;
   for (int i = 0; i < 5; ++i) a.push(i);
   const auto b = a;
-  EXPECT_EQ(values(b), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ring_values(b), (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(b.dropped(), 2u);
 }
 

@@ -21,7 +21,7 @@ namespace sen3bot::nav {
 namespace {
 
 constexpr hal::Nanos kScanPeriodNs = 100'000'000;  // 10 Hz laser
-constexpr hal::Nanos kTickNs = 50'000'000;         // 20 Hz costmap updates
+constexpr hal::Nanos kCostmapTickNs = 50'000'000;         // 20 Hz costmap updates
 
 // --- Running averages ---------------------------------------------------------------------
 
@@ -774,7 +774,7 @@ struct Rig {
   // One 20 Hz tick: a scan every other tick, taken at the true pose; the costmap is placed
   // at the believed pose.
   void tick(int k, const Pose2D& true_pose, const Pose2D& believed_pose) {
-    const hal::Nanos now = k * kTickNs;
+    const hal::Nanos now = k * kCostmapTickNs;
     truth.set_time(static_cast<double>(now) * 1e-9);
     const bool has_scan = k % 2 == 0;
     if (has_scan) {
@@ -982,7 +982,7 @@ TEST(DynamicObstacleLayer, AConfirmedBoxIsACandidateUntilItHasTravelled) {
     rig.tick(k, robot, robot);
     if (k % 2 != 0) continue;
     msg::MovingObstacles movers;
-    rig.dol.movers(k * kTickNs, movers);
+    rig.dol.movers(k * kCostmapTickNs, movers);
     ASSERT_LE(movers.count + movers.candidate_count, 1) << "k=" << k;
     const bool confirmed = rig.confirmed_count() > 0;
     if (movers.candidate_count == 1) {
@@ -1055,7 +1055,7 @@ WallReturn box_returning_from_a_wall(bool walls) {
     if (first == nullptr) break;  // lost
     out.worst_gap_m = std::max(out.worst_gap_m, std::hypot(first->x(0) - p.x_m, first->x(1) - p.y_m));
     if (t > 10.0) {  // back in sight, going down
-      out.same_id = k * kTickNs - first->last_hit_ns <= 2 * kTickNs && first->x(3) < -0.5;
+      out.same_id = k * kCostmapTickNs - first->last_hit_ns <= 2 * kCostmapTickNs && first->x(3) < -0.5;
       break;
     }
   }
@@ -1135,15 +1135,15 @@ TEST(DynamicObstacleLayer, UpdatesAllocateNothing) {
     rig.truth.set_time(k * 0.05);
     rig.truth.noisy_scan(compose(robot, rig.mount), rig.scan.angle_min_rad, rig.scan.increment_rad, rig.scan.count,
                          rig.scan.range_max_m, std::span<float>(rig.scan.ranges_m.data(), rig.scan.count));
-    rig.scan.stamp_ns = k * kTickNs;
+    rig.scan.stamp_ns = k * kCostmapTickNs;
     views[static_cast<std::size_t>(k)].assign(rig.scan.view(), rig.mount);
   }
   msg::MovingObstacles movers;
   const auto run = [&](int from, int to) {
     for (int k = from; k < to; ++k) {
       const Pose2D robot{4.0, 6.0 + 0.01 * k, M_PI / 2.0};
-      rig.costmap.update({robot, robot, k % 2 == 0 ? &views[static_cast<std::size_t>(k)] : nullptr, k * kTickNs});
-      rig.dol.movers(k * kTickNs, movers);
+      rig.costmap.update({robot, robot, k % 2 == 0 ? &views[static_cast<std::size_t>(k)] : nullptr, k * kCostmapTickNs});
+      rig.dol.movers(k * kCostmapTickNs, movers);
     }
   };
   run(0, 20);

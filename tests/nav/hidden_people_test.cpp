@@ -16,7 +16,6 @@
 namespace sen3bot::nav {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr hal::Nanos kSecond = 1'000'000'000;
 
 // A 361-beam, 180-degree scan from a laser at the origin facing +x: a wall at wall_m ahead,
@@ -25,14 +24,14 @@ struct Scan {
   Scan(double wall_m, double near_m, std::vector<std::pair<double, double>> near, hal::Nanos stamp)
       : ranges(361), stamp_ns(stamp) {
     for (std::size_t i = 0; i < ranges.size(); ++i) {
-      const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+      const double a = -std::numbers::pi / 2 + static_cast<double>(i) * std::numbers::pi / 360.0;
       ranges[i] = static_cast<float>(std::min(wall_m / std::max(std::cos(a), 0.05), 29.0));
       for (const auto& [lo, hi] : near)
         if (a >= lo && a <= hi) ranges[i] = static_cast<float>(near_m);
     }
   }
   [[nodiscard]] msg::ScanView view() const {
-    return {ranges, static_cast<float>(-kPi / 2), static_cast<float>(kPi / 360.0), 0.05f, 30.0f, stamp_ns};
+    return {ranges, static_cast<float>(-std::numbers::pi / 2), static_cast<float>(std::numbers::pi / 360.0), 0.05f, 30.0f, stamp_ns};
   }
   std::vector<float> ranges;
   hal::Nanos stamp_ns;
@@ -45,8 +44,8 @@ PersonTrackerConfig kept() {
   return c;
 }
 
-struct Tracker {
-  explicit Tracker(PersonTrackerConfig c = kept()) : config(c) { EXPECT_TRUE(tracker.init(c, arena)); }
+struct HiddenTracker {
+  explicit HiddenTracker(PersonTrackerConfig c = kept()) : config(c) { EXPECT_TRUE(tracker.init(c, arena)); }
   // A person standing at (x, y), 0.5 m wide, seen by the camera 5 times at 10 Hz from `from`.
   hal::Nanos stand(double x, double y, hal::Nanos from, int fixes = 5) {
     for (int k = 0; k < fixes; ++k) {
@@ -80,7 +79,7 @@ SensorCoverage laser_only(const msg::ScanView& view) {
 // unconfirmed track beside them still ends at expire_s. A wall just behind the place does not
 // prove it empty (they may stand against it); a scan that sees past the place does.
 TEST(HiddenPeople, APersonBehindARackIsKeptUntilThePlaceIsSeenEmpty) {
-  Tracker t;
+  HiddenTracker t;
   hal::Nanos now = 0;
   // Walking +y at 0.5 m/s along x = 3 to (3, 0), seen by the camera at 10 Hz.
   for (int k = 0; k <= 20; ++k) {
@@ -104,7 +103,7 @@ TEST(HiddenPeople, APersonBehindARackIsKeptUntilThePlaceIsSeenEmpty) {
 
   // The rack: returns at 1.5 m from 0 to 25 degrees, across the walker's bearing (about 9.5
   // degrees once they coasted to (3, 0.5)).
-  const Scan rack(6.0, 1.5, {{0.0, 25.0 * kPi / 180.0}}, last_fix + 2 * kSecond);
+  const Scan rack(6.0, 1.5, {{0.0, 25.0 * std::numbers::pi / 180.0}}, last_fix + 2 * kSecond);
   t.tracker.expire(last_fix + 2 * kSecond + kSecond / 2, laser_only(rack.view()));
   ASSERT_EQ(t.tracker.tracks().size(), 1u) << "the stray, unconfirmed, ended at expire_s";
   EXPECT_TRUE(t.tracker.tracks()[0].hidden);
@@ -136,7 +135,7 @@ TEST(HiddenPeople, APersonBehindARackIsKeptUntilThePlaceIsSeenEmpty) {
 
 // A scan taken before the last fix saw the place before the person came: no evidence.
 TEST(HiddenPeople, OnlyAScanAfterTheLastFixCanShowThePlaceEmpty) {
-  Tracker t;
+  HiddenTracker t;
   const hal::Nanos last_fix = t.stand(3.0, 0.0, 0);
   const Scan old_clear(8.0, 0.0, {}, last_fix - kSecond / 10);
   t.tracker.expire(last_fix + 3 * kSecond, laser_only(old_clear.view()));
@@ -154,15 +153,15 @@ TEST(HiddenPeople, APersonBehindTheRobotIsKeptByRearEchoesAndReleasedByAReadingP
   PersonTrackerConfig config;
   config.keep_hidden = true;
   config.hidden_max_s = 3.0;
-  Tracker t(config);
+  HiddenTracker t(config);
   // Standing 2 m behind the robot (at the origin, facing +x, the laser on its centre).
   const hal::Nanos last_fix = t.stand(-2.0, 0.0, 0);
   const Scan ahead(6.0, 0.0, {}, last_fix + kSecond);
   msg::Sonar sonar;
   sonar.count = 2;
   sonar.max_range_m = 5.0;
-  sonar.mount[0] = {-0.2, 0.0, kPi};          // straight back
-  sonar.mount[1] = {-0.15, 0.15, kPi / 2.0};  // left
+  sonar.mount[0] = {-0.2, 0.0, std::numbers::pi};          // straight back
+  sonar.mount[1] = {-0.15, 0.15, std::numbers::pi / 2.0};  // left
   sonar.stamp_ns = {-1, -1};                  // not fired yet
   SensorCoverage coverage;
   coverage.sonar = &sonar;
@@ -216,12 +215,12 @@ TEST(HiddenPeople, AHiddenPersonIsForgottenAfterHiddenMaxS) {
   PersonTrackerConfig config;
   config.keep_hidden = true;
   config.hidden_max_s = 3.0;
-  Tracker t(config);
+  HiddenTracker t(config);
   const hal::Nanos last_fix = t.stand(-2.0, 0.0, 0);
   const Scan ahead(6.0, 0.0, {}, last_fix + kSecond);
   msg::Sonar sonar;
   sonar.count = 1;
-  sonar.mount[0] = {-0.2, 0.0, kPi};
+  sonar.mount[0] = {-0.2, 0.0, std::numbers::pi};
   sonar.range_m[0] = 1.6;
   sonar.stamp_ns[0] = last_fix + kSecond / 10;  // one echo just after the last fix
   const msg::ScanView view = ahead.view();
@@ -247,7 +246,7 @@ TEST(HiddenPeople, TheSigmaGrowsTheCageUpToItsCapAndEndsTheTrackAtItsOwn) {
   config.hidden_max_sigma_m = 0.8;
   config.hidden_cage_growth_m = 0.5;
   config.hidden_wander_m2_s = 0.1;
-  Tracker t(config);
+  HiddenTracker t(config);
   const hal::Nanos last_fix = t.stand(3.0, 0.0, 0);
   const Scan rack(6.0, 1.5, {{-0.2, 0.2}}, last_fix + kSecond);
   const double base_cage = 0.25 + config.safety_radius_m;
@@ -276,7 +275,7 @@ TEST(HiddenPeople, AFixEndsTheHidingAndAPersonSeenTakesAHiddenOnesSlot) {
   PersonTrackerConfig config;
   config.keep_hidden = true;
   config.max_tracks = 2;
-  Tracker t(config);
+  HiddenTracker t(config);
   hal::Nanos now = t.stand(3.0, 0.0, 0);
   now = t.stand(3.0, 2.0, now + kSecond);
   const Scan rack(6.0, 1.0, {{-0.3, 0.8}}, now);
@@ -304,7 +303,7 @@ TEST(HiddenPeople, AFixEndsTheHidingAndAPersonSeenTakesAHiddenOnesSlot) {
 TEST(HiddenPeople, SwitchedOffEveryTrackEndsAtExpireS) {
   PersonTrackerConfig config;
   config.keep_hidden = false;
-  Tracker t(config);
+  HiddenTracker t(config);
   const hal::Nanos last_fix = t.stand(3.0, 0.0, 0);
   const Scan rack(6.0, 1.5, {{-0.2, 0.2}}, last_fix + kSecond);
   t.tracker.expire(last_fix + 2 * kSecond + kSecond / 10, laser_only(rack.view()));
@@ -318,7 +317,7 @@ TEST(HiddenPeople, SwitchedOffEveryTrackEndsAtExpireS) {
   ASSERT_FALSE(s);
   EXPECT_NE(std::string(s.error().c_str()).find("hidden_max_sigma_m"), std::string::npos);
   bad = {};
-  bad.sonar_half_angle_rad = kPi / 2.0;
+  bad.sonar_half_angle_rad = std::numbers::pi / 2.0;
   EXPECT_FALSE(refused.init(bad, arena));
 }
 
@@ -345,8 +344,8 @@ TEST(HiddenPeople, ThePeopleTaskKeepsAPersonBehindAPostUntilTheSonarLooksPast) {
     msg::ScanMessage m;
     std::copy(s.ranges.begin(), s.ranges.end(), m.ranges_m.begin());
     m.count = static_cast<std::uint16_t>(s.ranges.size());
-    m.angle_min_rad = static_cast<float>(-kPi / 2);
-    m.increment_rad = static_cast<float>(kPi / 360.0);
+    m.angle_min_rad = static_cast<float>(-std::numbers::pi / 2);
+    m.increment_rad = static_cast<float>(std::numbers::pi / 360.0);
     m.range_min_m = 0.05f;
     m.range_max_m = 30.0f;
     m.stamp_ns = now;
@@ -389,7 +388,7 @@ TEST(HiddenPeople, ThePeopleTaskKeepsAPersonBehindAPostUntilTheSonarLooksPast) {
   // The front-left disc, 0.15 m left of the laser and turned 4.5 degrees right, reads 4.5 m.
   msg::Sonar ring;
   ring.count = 1;
-  ring.mount[0] = {0.1, 0.15, -4.5 * kPi / 180.0};
+  ring.mount[0] = {0.1, 0.15, -4.5 * std::numbers::pi / 180.0};
   ring.range_m[0] = 4.5;
   ring.stamp_ns[0] = now;
   sonar.publish(ring, now);

@@ -17,7 +17,6 @@
 namespace sen3bot::nav {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 Ellipse fit_points(const std::vector<Point2D>& points) {
   std::vector<double> work(points.size());
@@ -47,20 +46,20 @@ void expect_contains(const Ellipse& e, const std::vector<Point2D>& points) {
 TEST(EnclosingEllipse, RectanglesAndRotatedBarsAreWithinAHairOfTheirMinimum) {
   // A rectangle's minimal enclosing ellipse has the semi-axes l / sqrt 2 and w / sqrt 2: area
   // pi l w / 2, its major axis along the rectangle's.
-  for (const double angle : {0.0, 0.3, kPi / 4.0, 1.2, -0.7}) {
+  for (const double angle : {0.0, 0.3, std::numbers::pi / 4.0, 1.2, -0.7}) {
     for (const auto& [l, w] : {std::pair{2.0, 1.0}, std::pair{4.0, 0.1}, std::pair{1.0, 1.0}}) {
       const auto corners = rectangle(3.0, -2.0, l, w, angle);
       const Ellipse e = fit_points(corners);
       expect_contains(e, corners);
-      EXPECT_LE(e.area_m2(), 1.10 * kPi * l * w / 2.0);
-      EXPECT_NEAR(e.area_m2(), kPi * l * w / 2.0, 1e-3 * l * w);
+      EXPECT_LE(e.area_m2(), 1.10 * std::numbers::pi * l * w / 2.0);
+      EXPECT_NEAR(e.area_m2(), std::numbers::pi * l * w / 2.0, 1e-3 * l * w);
       EXPECT_NEAR(e.cx_m, 3.0, 1e-3);
       EXPECT_NEAR(e.cy_m, -2.0, 1e-3);
       if (l > w) {
         EXPECT_NEAR(e.semi_major_m, l / std::sqrt(2.0), 1e-3 * l);
         EXPECT_NEAR(e.semi_minor_m, w / std::sqrt(2.0), 1e-3 * l);
         // The major axis along the bar (an axis has no sign).
-        const double off = std::remainder(e.angle_rad - angle, kPi);
+        const double off = std::remainder(e.angle_rad - angle, std::numbers::pi);
         EXPECT_NEAR(off, 0.0, 1e-3);
       }
     }
@@ -72,17 +71,17 @@ TEST(EnclosingEllipse, ADiscIsItsOwnEllipse) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i < 64; ++i) {
-    const double a = 2.0 * kPi * i / 64.0;
+    const double a = 2.0 * std::numbers::pi * i / 64.0;
     points.push_back({1.0 + 0.5 * std::cos(a), 2.0 + 0.5 * std::sin(a)});
   }
   for (int i = 0; i < 200; ++i) {  // and points inside, which change nothing
-    const double a = 2.0 * kPi * u(rng);
+    const double a = 2.0 * std::numbers::pi * u(rng);
     const double r = 0.5 * std::sqrt(u(rng));
     points.push_back({1.0 + r * std::cos(a), 2.0 + r * std::sin(a)});
   }
   const Ellipse e = fit_points(points);
   expect_contains(e, points);
-  EXPECT_NEAR(e.area_m2(), kPi * 0.25, 0.01 * kPi * 0.25);
+  EXPECT_NEAR(e.area_m2(), std::numbers::pi * 0.25, 0.01 * std::numbers::pi * 0.25);
   EXPECT_NEAR(e.semi_major_m, 0.5, 0.005);
   EXPECT_NEAR(e.semi_minor_m, 0.5, 0.005);
 }
@@ -159,10 +158,10 @@ TEST(MapEllipses, ABlockAndAWallAreOneEllipseEach) {
   const Ellipse& block = f.ellipses.ellipses()[0];
   const Ellipse& wall = f.ellipses.ellipses()[1];
   EXPECT_EQ(block.cells, 400u);
-  EXPECT_NEAR(block.area_m2(), kPi * 1.0 * 1.0 / 2.0, 0.01);
+  EXPECT_NEAR(block.area_m2(), std::numbers::pi * 1.0 * 1.0 / 2.0, 0.01);
   EXPECT_EQ(wall.cells, 60u);
-  EXPECT_NEAR(wall.area_m2(), kPi * 3.0 * 0.05 / 2.0, 0.01);
-  EXPECT_NEAR(std::remainder(wall.angle_rad, kPi), 0.0, 1e-3);  // along x
+  EXPECT_NEAR(wall.area_m2(), std::numbers::pi * 3.0 * 0.05 / 2.0, 0.01);
+  EXPECT_NEAR(std::remainder(wall.angle_rad, std::numbers::pi), 0.0, 1e-3);  // along x
   EXPECT_EQ(f.ellipses.splits(), 0u);
 }
 
@@ -192,9 +191,9 @@ TEST(MapEllipses, ARasterisedRotatedBarStaysCloseToTheBarsMinimum) {
   // The raster's cells reach up to half a cell diagonal past the bar: the minimum for the bar
   // grown by that much.
   const double grow = 0.05 * std::sqrt(2.0);
-  EXPECT_LE(e.area_m2(), 1.10 * kPi * (length + grow) * (width + grow) / 2.0);
-  EXPECT_GE(e.area_m2(), kPi * length * width / 2.0);
-  EXPECT_NEAR(std::remainder(e.angle_rad - angle, kPi), 0.0, 0.02);
+  EXPECT_LE(e.area_m2(), 1.10 * std::numbers::pi * (length + grow) * (width + grow) / 2.0);
+  EXPECT_GE(e.area_m2(), std::numbers::pi * length * width / 2.0);
+  EXPECT_NEAR(std::remainder(e.angle_rad - angle, std::numbers::pi), 0.0, 0.02);
 }
 
 TEST(MapEllipses, AnLShapedRackIsSplitSoTheCornerStaysFree) {

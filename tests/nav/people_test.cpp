@@ -14,7 +14,6 @@
 namespace sen3bot::nav {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 TEST(CameraProjection, TheThesisCalibrationGivesTheHandComputedPixels) {
   CameraProjection camera;
@@ -52,7 +51,7 @@ TEST(CameraProjection, BehindTheCameraOrOutsideTheImageNeverMatches) {
 std::vector<float> scan_ranges(double wall_m, double leg_m, std::vector<std::pair<double, double>> legs) {
   std::vector<float> r(361);
   for (std::size_t i = 0; i < r.size(); ++i) {
-    const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+    const double a = -std::numbers::pi / 2 + static_cast<double>(i) * std::numbers::pi / 360.0;
     r[i] = static_cast<float>(wall_m / std::max(std::cos(a), 0.05));  // a straight wall ahead
     for (const auto& [lo, hi] : legs)
       if (a >= lo && a <= hi) r[i] = static_cast<float>(leg_m);
@@ -61,7 +60,7 @@ std::vector<float> scan_ranges(double wall_m, double leg_m, std::vector<std::pai
 }
 
 msg::ScanView view_of(const std::vector<float>& r, hal::Nanos stamp) {
-  return {r, static_cast<float>(-kPi / 2), static_cast<float>(kPi / 360.0), 0.05f, 30.0f, stamp};
+  return {r, static_cast<float>(-std::numbers::pi / 2), static_cast<float>(std::numbers::pi / 360.0), 0.05f, 30.0f, stamp};
 }
 
 // The box a detector would draw around a person standing at (forward, left), 0.5 m wide.
@@ -93,7 +92,7 @@ TEST(PeopleFusion, ABoxOnLegsGivesTheLegsPosition) {
   frame.capture_ns = 1'000'000'000;
   PersonFix fixes[4];
   // The laser at (1, 2) on the map, facing +y: forward is +y, left is -x.
-  const std::size_t n = f.fusion.fuse(view_of(r, 1'020'000'000), {1.0, 2.0, kPi / 2}, frame, fixes);
+  const std::size_t n = f.fusion.fuse(view_of(r, 1'020'000'000), {1.0, 2.0, std::numbers::pi / 2}, frame, fixes);
   ASSERT_EQ(n, 1u);
   // Between the legs and 0.05-0.15 m behind their fronts, along the ray: where the body is.
   const double along = ((fixes[0].x_m - 1.0) * -0.3 + (fixes[0].y_m - 2.0) * 2.5) / std::hypot(2.5, 0.3);
@@ -138,7 +137,7 @@ TEST(PeopleFusion, ARoundBodyIsPlacedAtItsCentre) {
         std::vector<float> r(361);
         const double d = std::hypot(forward, left);
         for (std::size_t i = 0; i < r.size(); ++i) {
-          const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+          const double a = -std::numbers::pi / 2 + static_cast<double>(i) * std::numbers::pi / 360.0;
           // Ray (cos a, sin a) against the circle at (forward, left).
           const double b = forward * std::cos(a) + left * std::sin(a);
           const double disc = b * b - (d * d - radius * radius);
@@ -164,7 +163,7 @@ TEST(PeopleFusion, ABodyCutBySomethingNearerIsPartial) {
     // A disc of radius 0.225 at 3 m straight ahead; a post 1.5 m ahead across the bearings given.
     std::vector<float> r(361);
     for (std::size_t i = 0; i < r.size(); ++i) {
-      const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+      const double a = -std::numbers::pi / 2 + static_cast<double>(i) * std::numbers::pi / 360.0;
       const double b = 3.0 * std::cos(a);
       const double disc = b * b - (9.0 - 0.225 * 0.225);
       r[i] = disc >= 0.0 ? static_cast<float>(b - std::sqrt(disc)) : 29.0f;
@@ -487,7 +486,7 @@ TEST(PeopleFusion, TheLaserAloneFindsTheBodyNearEachPrediction) {
   // A round body of radius 0.2 at (2.5, 5.5) seen from (0, 5) facing +x, the wall behind it.
   std::vector<float> r(361);
   for (std::size_t i = 0; i < r.size(); ++i) {
-    const double a = -kPi / 2 + static_cast<double>(i) * kPi / 360.0;
+    const double a = -std::numbers::pi / 2 + static_cast<double>(i) * std::numbers::pi / 360.0;
     const double b = 2.5 * std::cos(a) + 0.5 * std::sin(a);
     const double disc = b * b - (2.5 * 2.5 + 0.5 * 0.5 - 0.04);
     r[i] = disc >= 0.0 ? static_cast<float>(b - std::sqrt(disc)) : static_cast<float>(4.0 / std::max(std::cos(a), 0.05));

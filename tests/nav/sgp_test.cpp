@@ -15,7 +15,6 @@
 namespace sen3bot::nav {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kH = 1e-6;
 
 void expect_gradient(const SafeCurve& p, double x, double y) {
@@ -30,7 +29,7 @@ TEST(SafeCurve, NamedShapesVanishOnTheirCurveAndAreDistancesNearIt) {
   EXPECT_NEAR(std::abs(line.value(1.0 + 0.8, 1.0 - 0.6)), 1.0, 1e-12);  // 1 m along the normal
   const SafeCurve circle = SafeCurve::circle({2.0, -1.0}, 1.5);
   for (int k = 0; k < 8; ++k) {
-    const double a = k * kPi / 4.0;
+    const double a = k * std::numbers::pi / 4.0;
     EXPECT_NEAR(circle.value(2.0 + 1.5 * std::cos(a), -1.0 + 1.5 * std::sin(a)), 0.0, 1e-12);
     // 5 cm outside: p about +5 cm; grad p of length 1 on V.
     EXPECT_NEAR(circle.value(2.0 + 1.55 * std::cos(a), -1.0 + 1.55 * std::sin(a)), 0.05, 1e-3);
@@ -39,7 +38,7 @@ TEST(SafeCurve, NamedShapesVanishOnTheirCurveAndAreDistancesNearIt) {
   }
   const SafeCurve ellipse = SafeCurve::ellipse({0.5, 0.5}, 3.0, 1.0, 0.4);
   for (int k = 0; k < 8; ++k) {
-    const double a = k * kPi / 4.0;
+    const double a = k * std::numbers::pi / 4.0;
     const double u = 3.0 * std::cos(a);
     const double v = 1.0 * std::sin(a);
     EXPECT_NEAR(ellipse.value(0.5 + std::cos(0.4) * u - std::sin(0.4) * v, 0.5 + std::sin(0.4) * u + std::cos(0.4) * v), 0.0,
@@ -113,7 +112,7 @@ TEST(Sgp, WithoutObstaclesAPathConvergesOntoACircleFromInsideAndOutsideAndRunsAl
       for (std::size_t i = first_on + 1; i < path.size(); ++i) {
         const double a0 = std::atan2(path[i - 1].y_m - centre.y_m, path[i - 1].x_m - centre.x_m);
         const double a1 = std::atan2(path[i].y_m - centre.y_m, path[i].x_m - centre.x_m);
-        EXPECT_GT(direction * std::remainder(a1 - a0, 2.0 * kPi), 0.0) << i;
+        EXPECT_GT(direction * std::remainder(a1 - a0, 2.0 * std::numbers::pi), 0.0) << i;
       }
       lengths[direction > 0 ? 0 : 1] = res.length_m;
     }
@@ -255,7 +254,7 @@ TEST(SgpSite, AScaledPolynomialIsOnItsCurveByDistanceNotByValue) {
 }
 
 TEST(SgpSite, TheMapExtentCoversARotatedMap) {
-  OccupancyMap map(40, 20, 0.05, 1.0, 2.0, kPi / 2);  // 2 m x 1 m, turned a quarter
+  OccupancyMap map(40, 20, 0.05, 1.0, 2.0, std::numbers::pi / 2);  // 2 m x 1 m, turned a quarter
   const CurveBounds b = map_extent(map);
   EXPECT_NEAR(b.x0_m, 0.0, 1e-9);
   EXPECT_NEAR(b.x1_m, 1.0, 1e-9);

@@ -40,8 +40,6 @@ std::unique_ptr<Crowd> make(const CrowdConfig& config) {
   return crowd.ok() ? std::move(crowd).value() : nullptr;
 }
 
-double distance(Point2D a, Point2D b) { return msg::norm(a - b); }
-
 Point2D final_goal(const Person& p) { return p.goals[p.goal_count - 1]; }
 
 std::shared_ptr<const Recording> recording(std::string_view text) {
@@ -194,10 +192,10 @@ TEST(Crowd, SocialWalkersCrossASquareWithoutTouchingAndArrive) {
     for (std::size_t i = 0; i < crowd->size(); ++i) {
       const PersonState a = crowd->state(i);
       ASSERT_TRUE(a.visible);
-      nearest_goal[i] = std::min(nearest_goal[i], distance(a.position, final_goal(c.people[i])));
+      nearest_goal[i] = std::min(nearest_goal[i], geometry::distance(a.position, final_goal(c.people[i])));
       for (std::size_t j = i + 1; j < crowd->size(); ++j) {
         const PersonState b = crowd->state(j);
-        closest_gap = std::min(closest_gap, distance(a.position, b.position) - a.radius_m - b.radius_m);
+        closest_gap = std::min(closest_gap, geometry::distance(a.position, b.position) - a.radius_m - b.radius_m);
       }
     }
   }
@@ -221,8 +219,8 @@ std::pair<double, double> walk_past_robot(Behaviour behaviour) {
   double to_goal = 1e9;
   for (int k = 1; k <= 400; ++k) {
     crowd->advance(k * c.step_s, &robot);
-    closest = std::min(closest, distance(crowd->state(0).position, robot.centre));
-    to_goal = std::min(to_goal, distance(crowd->state(0).position, {10.0, 0.0}));
+    closest = std::min(closest, geometry::distance(crowd->state(0).position, robot.centre));
+    to_goal = std::min(to_goal, geometry::distance(crowd->state(0).position, {10.0, 0.0}));
   }
   return {closest, to_goal};
 }
@@ -284,7 +282,7 @@ TEST(Crowd, OrcaCircleCrossingWithoutContactStandingOnOrLeavingAtTheGoals) {
           } else if (before[i].visible) {
             ++vanished[i];
             // It leaves from within the goal reach, i.e. it really got there.
-            EXPECT_LT(distance(before[i].position, final_goal(c.people[i])), c.social.goal_reach_m + step_s);
+            EXPECT_LT(geometry::distance(before[i].position, final_goal(c.people[i])), c.social.goal_reach_m + step_s);
           }
         }
         for (std::size_t i = 0; i < n; ++i) {
@@ -308,7 +306,7 @@ TEST(Crowd, OrcaCircleCrossingWithoutContactStandingOnOrLeavingAtTheGoals) {
           EXPECT_FALSE(crowd->state(i).visible);
         } else {
           EXPECT_EQ(vanished[i], 0) << "person " << i;
-          EXPECT_LT(distance(crowd->state(i).position, final_goal(c.people[i])), 1e-9) << "person " << i;
+          EXPECT_LT(geometry::distance(crowd->state(i).position, final_goal(c.people[i])), 1e-9) << "person " << i;
           EXPECT_LT(msg::norm(crowd->state(i).velocity), 1e-9) << "person " << i;
         }
       }
@@ -374,14 +372,14 @@ TEST(Crowd, ASocialWalkerWhoLeavesAtItsGoalVanishesThere) {
     crowd->advance(k * c.step_s, nullptr);
   }
   EXPECT_FALSE(crowd->state(0).visible);
-  EXPECT_LT(distance(last, {3.0, 3.0}), 0.3 + 0.1);
+  EXPECT_LT(geometry::distance(last, {3.0, 3.0}), 0.3 + 0.1);
   EXPECT_GT(k * c.step_s, 4.0);  // it walked both legs, 6 m at up to 1.69 m/s
   for (; k <= 400; ++k) {
     crowd->advance(k * c.step_s, nullptr);
     ASSERT_FALSE(crowd->state(0).visible);
   }
   EXPECT_TRUE(crowd->state(1).visible);  // the other stays, standing near its goal
-  EXPECT_LT(distance(crowd->state(1).position, {3.0, -2.0}), 1.0);
+  EXPECT_LT(geometry::distance(crowd->state(1).position, {3.0, -2.0}), 1.0);
 }
 
 // Social and ORCA people on a looping route walk it again and again: back and forth between two
@@ -400,7 +398,7 @@ TEST(Crowd, ALoopingRouteIsWalkedAgainAndAgain) {
     for (int k = 1; k <= 800; ++k) {
       crowd->advance(k * c.step_s, nullptr);
       const Point2D p = crowd->state(0).position;
-      const bool far = distance(p, {4.0, 0.0}) < 0.5, start = distance(p, {0.0, 0.0}) < 0.5;
+      const bool far = geometry::distance(p, {4.0, 0.0}) < 0.5, start = geometry::distance(p, {0.0, 0.0}) < 0.5;
       at_far += far && !near_far ? 1 : 0;
       at_near += start && !near_start ? 1 : 0;
       near_far = far;

@@ -285,7 +285,7 @@ struct CrossingRun {
   std::array<Point2D, 5> final_positions{};
 };
 
-CrossingRun circle_crossing(std::uint64_t seed, double dt) {
+CrossingRun orca_circle_crossing(std::uint64_t seed, double dt) {
   constexpr std::size_t kHumans = 5;
   constexpr double kRadius = 0.3;
   std::mt19937_64 rng(seed);
@@ -361,7 +361,7 @@ CrossingStats crossing_stats(int runs, double dt) {
   int arrived = 0;
   double all_sum = 0.0;
   for (int r = 0; r < runs; ++r) {
-    const CrossingRun run = circle_crossing(static_cast<std::uint64_t>(r), dt);
+    const CrossingRun run = orca_circle_crossing(static_cast<std::uint64_t>(r), dt);
     s.contact_runs += run.contact ? 1 : 0;
     s.timeout_runs += run.timeout ? 1 : 0;
     arrival_sum += run.arrival_sum_s;
@@ -390,8 +390,8 @@ TEST(Orca, CrowdNavCircleCrossingHumansOnly) {
 }
 
 TEST(Orca, DeterministicForASeed) {
-  const CrossingRun a = circle_crossing(42, 0.25);
-  const CrossingRun b = circle_crossing(42, 0.25);
+  const CrossingRun a = orca_circle_crossing(42, 0.25);
+  const CrossingRun b = orca_circle_crossing(42, 0.25);
   for (std::size_t i = 0; i < a.final_positions.size(); ++i) {
     EXPECT_EQ(a.final_positions[i].x_m, b.final_positions[i].x_m);
     EXPECT_EQ(a.final_positions[i].y_m, b.final_positions[i].y_m);

@@ -40,8 +40,6 @@ std::string walk(const std::vector<Point2D>& points, int person = 1) {
   return text;
 }
 
-double distance(Point2D a, Point2D b) { return msg::norm(a - b); }
-
 TEST(CrowdRecording, ParsesWalksInTimeOrderSkippingCommentsAndBlankLines) {
   const Recording recording = parse_ok(
       "# frame person x y\n"
@@ -225,7 +223,7 @@ double worst_speed_ratio(Replay& replay) {
   for (std::size_t t = 0; t < replay.track_count(); ++t) {
     const std::vector<Sample>& s = replay.recording().tracks[t].samples;
     auto secant = [&](std::size_t i) {
-      return distance(s[i + 1].position, s[i].position) / (s[i + 1].time_s - s[i].time_s);
+      return geometry::distance(s[i + 1].position, s[i].position) / (s[i + 1].time_s - s[i].time_s);
     };
     for (std::size_t i = 0; i + 1 < s.size(); ++i) {
       double adjacent = secant(i);
@@ -250,14 +248,14 @@ TEST(CrowdReplay, PassesThroughEveryAnnotationWithAContinuousVelocity) {
     SCOPED_TRACE(i);
     const WalkerState at = replay.state_at(0, samples[i].time_s);
     ASSERT_TRUE(at.visible);
-    EXPECT_LT(distance(at.position, samples[i].position), kExact_m);
+    EXPECT_LT(geometry::distance(at.position, samples[i].position), kExact_m);
     if (i == 0 || i + 1 == samples.size()) continue;
     // C1: the velocity just before and just after an annotation agree.
     constexpr double kEpsilon_s = 1e-7;
     const Point2D before = replay.state_at(0, samples[i].time_s - kEpsilon_s).velocity_m_s;
     const Point2D after = replay.state_at(0, samples[i].time_s + kEpsilon_s).velocity_m_s;
-    EXPECT_LT(distance(before, after), 1e-4);
-    EXPECT_LT(distance(before, at.velocity_m_s), 1e-4);
+    EXPECT_LT(geometry::distance(before, after), 1e-4);
+    EXPECT_LT(geometry::distance(before, at.velocity_m_s), 1e-4);
   }
 }
 
@@ -272,8 +270,8 @@ TEST(CrowdReplay, AStraightWalkAtConstantSpeedIsInterpolatedLinearly) {
       SCOPED_TRACE(i + fraction);
       const WalkerState state = replay.state_at(0, (i + fraction) * kStep_s);
       ASSERT_TRUE(state.visible);
-      EXPECT_LT(distance(state.position, points[i] + fraction * (points[i + 1] - points[i])), kExact_m);
-      EXPECT_LT(distance(state.velocity_m_s, expected_velocity), 1e-9);
+      EXPECT_LT(geometry::distance(state.position, points[i] + fraction * (points[i + 1] - points[i])), kExact_m);
+      EXPECT_LT(geometry::distance(state.velocity_m_s, expected_velocity), 1e-9);
     }
   }
 }
@@ -346,7 +344,7 @@ TEST(CrowdReplay, WalkersAreVisibleOnlyDuringTheirWalks) {
   EXPECT_TRUE(person_one_visible(8 * kStep_s));
   EXPECT_FALSE(person_one_visible(8 * kStep_s + 1e-6));
   EXPECT_FALSE(person_one_visible(-1e-6));
-  EXPECT_LT(distance(replay.state_at(ones[1], 6 * kStep_s).position, {6.0, 1.0}), kExact_m);
+  EXPECT_LT(geometry::distance(replay.state_at(ones[1], 6 * kStep_s).position, {6.0, 1.0}), kExact_m);
 
   const WalkerState absent = replay.state_at(ones[0], 4 * kStep_s);
   EXPECT_LT(msg::norm(absent.position) + msg::norm(absent.velocity_m_s), 1e-12);
@@ -399,7 +397,7 @@ TEST(CrowdReplay, QueriesDoNotAllocate) {
 }
 
 // The README's table of the shipped scenes.
-struct Scene {
+struct RecordedScene {
   const char* file;
   std::size_t people;
   double duration_s;
@@ -407,7 +405,7 @@ struct Scene {
   double median_speed_m_s;
 };
 
-constexpr Scene kScenes[] = {
+constexpr RecordedScene kScenes[] = {
     {"biwi_hotel.txt", 389, 722, 18, 1.27},
     {"crowds_zara01.txt", 148, 360, 20, 1.15},
     {"students001.txt", 415, 177, 75, 0.52},
@@ -419,7 +417,7 @@ std::string dataset(const char* file) {
 }
 
 TEST(CrowdScenes, TheShippedFilesReproduceTheirTable) {
-  for (const Scene& scene : kScenes) {
+  for (const RecordedScene& scene : kScenes) {
     SCOPED_TRACE(scene.file);
     const Result<Recording> recording = load_recording(dataset(scene.file));
     ASSERT_TRUE(recording.ok()) << recording.error().message();
@@ -445,7 +443,7 @@ TEST(CrowdScenes, TheShippedFilesReproduceTheirTable) {
 }
 
 TEST(CrowdScenes, ReplayingEachFileAtItsFramesGivesBackItsAnnotations) {
-  for (const Scene& scene : kScenes) {
+  for (const RecordedScene& scene : kScenes) {
     SCOPED_TRACE(scene.file);
     Result<Recording> loaded = load_recording(dataset(scene.file));
     ASSERT_TRUE(loaded.ok()) << loaded.error().message();
@@ -467,7 +465,7 @@ TEST(CrowdScenes, ReplayingEachFileAtItsFramesGivesBackItsAnnotations) {
         const std::vector<Sample>& samples = recording.tracks[t].samples;
         ASSERT_LT(next[t], samples.size());
         ASSERT_EQ(samples[next[t]].time_s, frame.time_s);
-        EXPECT_LT(distance(states[t].position, samples[next[t]].position), kExact_m);
+        EXPECT_LT(geometry::distance(states[t].position, samples[next[t]].position), kExact_m);
         ++next[t];
         ++checked;
       }

@@ -24,6 +24,7 @@
 #include "sen3bot/crowd/scene.hpp"
 #include "sen3bot/msg/point_math.hpp"
 #include "sen3bot/nav/map.hpp"
+#include "stats.hpp"
 
 namespace sen3bot::crowd {
 namespace {
@@ -32,7 +33,6 @@ using msg::norm;
 
 constexpr const char* kSimulated[] = {"circle", "crossing", "corridor", "square"};
 
-double distance(Point2D a, Point2D b) { return norm(a - b); }
 Point2D start_of(const Scene& s) { return {s.robot_start.x_m, s.robot_start.y_m}; }
 
 Scene make_ok(const SceneOptions& options, std::uint64_t seed) {
@@ -80,12 +80,6 @@ bool same(const Scene& a, const Scene& b) {
 bool inside(Point2D p, const Extent& area, double margin_m) {
   return p.x_m >= area.min.x_m + margin_m && p.x_m <= area.max.x_m - margin_m && p.y_m >= area.min.y_m + margin_m &&
          p.y_m <= area.max.y_m - margin_m;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 TEST(CrowdScene, EverySceneIsAPureFunctionOfTheSeed) {
@@ -136,14 +130,14 @@ TEST(CrowdScene, CircleIsCrowdNavsCircleCrossing) {
       EXPECT_EQ(p.appear_s, 0.0);
       EXPECT_FALSE(p.leave_at_goal);  // CrowdNav's humans stand at their goals
       for (const Point2D end : {start_of(s), s.robot_goal}) {
-        EXPECT_GE(distance(p.start, end), kGap) << i;
-        EXPECT_GE(distance(p.goals[0], end), kGap) << i;
+        EXPECT_GE(geometry::distance(p.start, end), kGap) << i;
+        EXPECT_GE(geometry::distance(p.goals[0], end), kGap) << i;
       }
       for (std::size_t j = 0; j < i; ++j) {
         const Person& q = s.crowd.people[j];
-        EXPECT_GE(distance(p.start, q.start), kGap) << i << " " << j;
-        EXPECT_GE(distance(p.start, q.goals[0]), kGap) << i << " " << j;
-        EXPECT_GE(distance(p.goals[0], q.goals[0]), kGap) << i << " " << j;
+        EXPECT_GE(geometry::distance(p.start, q.start), kGap) << i << " " << j;
+        EXPECT_GE(geometry::distance(p.start, q.goals[0]), kGap) << i << " " << j;
+        EXPECT_GE(geometry::distance(p.goals[0], q.goals[0]), kGap) << i << " " << j;
       }
     }
   }
@@ -223,31 +217,31 @@ TEST(CrowdScene, WalkersCrossTheFloorFromTheirSideAtPedestrianSpeeds) {
           EXPECT_EQ(to, 4 - from) << i;  // along it, end to end
         } else {
           EXPECT_NE(from, to) << i;
-          EXPECT_GE(distance(p.start, goal), 2.0) << i;
+          EXPECT_GE(geometry::distance(p.start, goal), 2.0) << i;
         }
         // Clear of the robot's ends, and of anyone appearing at the same place meanwhile.
         for (const Point2D end : {start_of(s), s.robot_goal}) {
-          EXPECT_GE(distance(p.start, end), 0.25 + 0.3 + 0.2) << i;
-          EXPECT_GE(distance(goal, end), 0.25 + 0.3 + 0.2) << i;
+          EXPECT_GE(geometry::distance(p.start, end), 0.25 + 0.3 + 0.2) << i;
+          EXPECT_GE(geometry::distance(goal, end), 0.25 + 0.3 + 0.2) << i;
         }
         for (std::size_t j = 0; j < i; ++j) {
           const Person& q = s.crowd.people[j];
           const double hold = 2.0 * 0.7 / std::min(p.desired_speed_m_s, q.desired_speed_m_s);
           if (std::fabs(p.appear_s - q.appear_s) < hold) {
-            EXPECT_GE(distance(p.start, q.start), 0.7) << i << " " << j;
+            EXPECT_GE(geometry::distance(p.start, q.start), 0.7) << i << " " << j;
           }
         }
       }
     }
     // Truncated normal about 1.3 m/s, sd 0.26 m/s (2000 draws: the median's sd is ~0.007).
-    EXPECT_NEAR(median(speeds), 1.3, 0.025);
+    EXPECT_NEAR(test::median(speeds), 1.3, 0.025);
     double mean = 0.0;
     for (const double v : speeds) mean += v / static_cast<double>(speeds.size());
     double var = 0.0;
     for (const double v : speeds) var += (v - mean) * (v - mean) / static_cast<double>(speeds.size() - 1);
     EXPECT_NEAR(std::sqrt(var), 0.26, 0.02);
     // Appearances spread over the window.
-    EXPECT_NEAR(median(appear), e.window_s / 2.0, e.window_s * 0.05);
+    EXPECT_NEAR(test::median(appear), e.window_s / 2.0, e.window_s * 0.05);
     // Both ways (every way for the square), none much rarer than its share.
     int ways = 0;
     int fewest = 1 << 30;
@@ -287,7 +281,7 @@ TEST(CrowdScene, WalkersDoNotAppearOnEachOther) {
             const PersonState b = crowd.state(j);
             const bool new_one = t - people[i].appear_s < 1.0 || t - people[j].appear_s < 1.0;
             if (!a.visible || !b.visible || !new_one) continue;
-            worst = std::min(worst, distance(a.position, b.position) - a.radius_m - b.radius_m);
+            worst = std::min(worst, geometry::distance(a.position, b.position) - a.radius_m - b.radius_m);
           }
         }
       }
@@ -323,11 +317,11 @@ TEST(CrowdScene, RecordedRobotCrossesTheBusiestPlaceClearOfPeople) {
     const Point2D b = s.robot_goal;
     EXPECT_LT(msg::segment_distance(*busiest, a, b), 0.5);
     EXPECT_TRUE(inside(a, s.area, 0.3) && inside(b, s.area, 0.3));
-    EXPECT_GT(distance(a, b), 5.0);
+    EXPECT_GT(geometry::distance(a, b), 5.0);
     EXPECT_NEAR(s.robot_start.theta_rad, std::atan2(b.y_m - a.y_m, b.x_m - a.x_m), 1e-12);
     angles.insert(std::lround(s.robot_start.theta_rad * 10.0));
     // The rule of the other scenes for that path, and the run fits in the recording.
-    EXPECT_EQ(s.time_limit_s, std::ceil(3.0 * distance(a, b) / 0.5));
+    EXPECT_EQ(s.time_limit_s, std::ceil(3.0 * geometry::distance(a, b) / 0.5));
     EXPECT_GE(s.crowd.recording_start_s, summary.start_s);
     EXPECT_LE(s.crowd.recording_start_s + s.time_limit_s, summary.end_s);
     // Nobody the replay shows at the first instant within 1 m of the robot's start or goal.
@@ -336,8 +330,8 @@ TEST(CrowdScene, RecordedRobotCrossesTheBusiestPlaceClearOfPeople) {
       const WalkerState at = replay.state_at(k, s.crowd.recording_start_s);
       if (!at.visible) continue;
       ++present;
-      EXPECT_GE(distance(at.position, a), 1.0) << "track " << k;
-      EXPECT_GE(distance(at.position, b), 1.0) << "track " << k;
+      EXPECT_GE(geometry::distance(at.position, a), 1.0) << "track " << k;
+      EXPECT_GE(geometry::distance(at.position, b), 1.0) << "track " << k;
     }
     with_people += present > 0 ? 1 : 0;
   }

@@ -25,8 +25,6 @@ Walker walker_at(Point2D position, std::initializer_list<Point2D> goals) {
   return w;
 }
 
-double distance(Point2D a, Point2D b) { return msg::norm(a - b); }
-
 TEST(CrowdSocialForce, ForceFromAnotherPersonMatchesHandComputation) {
   const SocialForceModel model;
   // i at the origin heading for (10, 0), at rest; j at (0.6, 0.3), both r = 0.25 m.
@@ -133,7 +131,7 @@ TEST(CrowdSocialForce, HeadOnWalkersPassWithoutTouchingAndArrive) {
   double lateral = 0.0;
   for (int k = 0; k < 3000 && !(reached_final_goal(walkers[0]) && reached_final_goal(walkers[1])); ++k) {
     ASSERT_TRUE(model.step(walkers, {}, nullptr, 0.01).ok());
-    closest = std::min(closest, distance(walkers[0].position, walkers[1].position));
+    closest = std::min(closest, geometry::distance(walkers[0].position, walkers[1].position));
     lateral = std::max(lateral, std::abs(walkers[0].position.y_m - walkers[1].position.y_m));
   }
   EXPECT_GT(closest, contact);
@@ -144,7 +142,7 @@ TEST(CrowdSocialForce, HeadOnWalkersPassWithoutTouchingAndArrive) {
 
 // Walks one walker from (0, 0) to (10, 0) past a robot standing at (5, 0.05); returns the
 // closest approach of the centres and whether the walker arrived.
-std::pair<double, bool> walk_past_robot(bool sees_robot) {
+std::pair<double, bool> walk_past_standing_robot(bool sees_robot) {
   const SocialForceModel model;
   const RobotDisc robot{{5.0, 0.05}, {0.0, 0.0}, 0.3};
   std::vector<Walker> walkers{walker_at({0.0, 0.0}, {{10.0, 0.0}})};
@@ -152,19 +150,19 @@ std::pair<double, bool> walk_past_robot(bool sees_robot) {
   double closest = 1e9;
   for (int k = 0; k < 3000 && !reached_final_goal(walkers[0]); ++k) {
     EXPECT_TRUE(model.step(walkers, {}, &robot, 0.01).ok());
-    closest = std::min(closest, distance(walkers[0].position, robot.centre));
+    closest = std::min(closest, geometry::distance(walkers[0].position, robot.centre));
   }
   return {closest, reached_final_goal(walkers[0])};
 }
 
 TEST(CrowdSocialForce, WalkerGoesAroundARobotItSees) {
-  const auto [closest, arrived] = walk_past_robot(true);
+  const auto [closest, arrived] = walk_past_standing_robot(true);
   EXPECT_GT(closest, 0.25 + 0.3);
   EXPECT_TRUE(arrived);
 }
 
 TEST(CrowdSocialForce, BlindWalkerWalksThroughTheRobotsPlace) {
-  const auto [closest, arrived] = walk_past_robot(false);
+  const auto [closest, arrived] = walk_past_standing_robot(false);
   EXPECT_LT(closest, 0.25 + 0.3);
   EXPECT_LT(closest, 0.06);  // straight on: the robot's 0.05 m offset is all that separates them
   EXPECT_TRUE(arrived);
@@ -195,12 +193,12 @@ TEST(CrowdSocialForce, RouteAdvancesThroughWaypoints) {
   }
   EXPECT_TRUE(reached_final_goal(walkers[0]));
   EXPECT_GT(farthest_x, 2.6);  // it went by (3, 0) rather than straight to (0, 3)
-  EXPECT_LT(distance(walkers[0].position, {0.0, 3.0}), 0.3);
+  EXPECT_LT(geometry::distance(walkers[0].position, {0.0, 3.0}), 0.3);
   EXPECT_GT(k, 600);  // about 9 m at 1.3 m/s
   // Arrived, it brakes and stands.
   for (int s = 0; s < 300; ++s) ASSERT_TRUE(model.step(walkers, {}, nullptr, 0.01).ok());
   EXPECT_LT(msg::norm(walkers[0].velocity), 0.01);  // 1.3 exp(-3 / 0.5) = 0.003 m/s
-  EXPECT_LT(distance(walkers[0].position, {0.0, 3.0}), 1.0);
+  EXPECT_LT(geometry::distance(walkers[0].position, {0.0, 3.0}), 1.0);
 }
 
 TEST(CrowdSocialForce, SpeedIsCappedAtFactorTimesDesired) {
@@ -258,7 +256,7 @@ TEST(CrowdSocialForce, StepIsDeterministicAndOrderIndependent) {
     ASSERT_TRUE(model.step(b, kCorridor, &kRobot, 0.05).ok());
     ASSERT_TRUE(model.step(reversed, kCorridor, &kRobot, 0.05).ok());
     for (std::size_t i = 0; i < a.size(); ++i) {
-      for (std::size_t j = i + 1; j < a.size(); ++j) closest = std::min(closest, distance(a[i].position, a[j].position));
+      for (std::size_t j = i + 1; j < a.size(); ++j) closest = std::min(closest, geometry::distance(a[i].position, a[j].position));
     }
   }
   EXPECT_LT(closest, 1.0);  // they did interact

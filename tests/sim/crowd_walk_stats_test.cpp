@@ -21,13 +21,13 @@ namespace {
 
 using msg::norm;
 
-constexpr double kDt = kWalkSamplePeriodS;
+constexpr double kSampleDt = kWalkSamplePeriodS;
 
 // A track of `count` samples every 0.4 s from time t0, at position(k).
 template <typename At>
 Track track(std::int64_t id, std::size_t count, At at, double t0 = 0.0) {
   Track t{id, {}};
-  for (std::size_t k = 0; k < count; ++k) t.samples.push_back({t0 + static_cast<double>(k) * kDt, at(k)});
+  for (std::size_t k = 0; k < count; ++k) t.samples.push_back({t0 + static_cast<double>(k) * kSampleDt, at(k)});
   return t;
 }
 
@@ -41,7 +41,7 @@ Recording walks(std::vector<Track> tracks) {
 TEST(CrowdWalkStats, AStraightWalkHasItsSpeedAndNoCurvature) {
   const Point2D dir{0.6, 0.8};
   const WalkStats s = walk_stats(walks({track(1, 20, [&](std::size_t k) {
-    return Point2D{1.0, -2.0} + (1.3 * kDt * static_cast<double>(k)) * dir;
+    return Point2D{1.0, -2.0} + (1.3 * kSampleDt * static_cast<double>(k)) * dir;
   })}));
   EXPECT_EQ(s.speed_m_s.n, 19u);
   EXPECT_NEAR(s.speed_m_s.median, 1.3, 1e-12);
@@ -59,7 +59,7 @@ TEST(CrowdWalkStats, AStraightWalkHasItsSpeedAndNoCurvature) {
 
 TEST(CrowdWalkStats, ACircleOfRadiusRHasCurvatureOneOverR) {
   for (const double radius : {0.5, 2.0, 7.0}) {
-    const double step_rad = 1.2 * kDt / radius;  // 1.2 m/s
+    const double step_rad = 1.2 * kSampleDt / radius;  // 1.2 m/s
     const WalkStats s = walk_stats(walks({track(1, 40, [&](std::size_t k) {
       const double a = step_rad * static_cast<double>(k);
       return Point2D{3.0 + radius * std::cos(a), radius * std::sin(a)};
@@ -71,14 +71,14 @@ TEST(CrowdWalkStats, ACircleOfRadiusRHasCurvatureOneOverR) {
     EXPECT_EQ(s.smooth_curvature_per_m.n, 34u);
     EXPECT_NEAR(s.smooth_curvature_per_m.median, 1.0 / radius, 1e-9) << radius;
     // The chord, not the arc: a little under 1.2 m/s.
-    EXPECT_NEAR(s.speed_m_s.median, 2.0 * radius * std::sin(step_rad / 2.0) / kDt, 1e-12);
+    EXPECT_NEAR(s.speed_m_s.median, 2.0 * radius * std::sin(step_rad / 2.0) / kSampleDt, 1e-12);
   }
 }
 
 TEST(CrowdWalkStats, NearestNeighboursAreCentreToCentreAndCompanionsAreTold) {
   // Side by side, 1.5 m apart, same velocity: each other's nearest, and companions.
   const auto side_by_side = [](double y) {
-    return [y](std::size_t k) { return Point2D{1.2 * kDt * static_cast<double>(k), y}; };
+    return [y](std::size_t k) { return Point2D{1.2 * kSampleDt * static_cast<double>(k), y}; };
   };
   WalkStats s = walk_stats(walks({track(1, 10, side_by_side(0.0)), track(2, 10, side_by_side(1.5))}));
   EXPECT_EQ(s.nearest_m.n, 20u);
@@ -104,7 +104,7 @@ TEST(CrowdWalkStats, NearestNeighboursAreCentreToCentreAndCompanionsAreTold) {
   EXPECT_NEAR(s.nearest_m.max, q.max, 1e-12);
 
   // Only people at the same moment count: one who has gone is no neighbour.
-  s = walk_stats(walks({track(1, 5, east), track(2, 5, north, 5 * kDt)}));
+  s = walk_stats(walks({track(1, 5, east), track(2, 5, north, 5 * kSampleDt)}));
   EXPECT_EQ(s.nearest_m.n, 0u);
   EXPECT_EQ(s.moments, 10u);
 }
@@ -149,7 +149,7 @@ TEST(CrowdWalkStats, ACrowdIsSampledEveryPeriodIntoTracks) {
   EXPECT_EQ(first.person_id, 0);
   EXPECT_NEAR(first.samples[0].time_s, 0.0, 1e-12);
   for (std::size_t k = 1; k < first.samples.size(); ++k) {
-    EXPECT_NEAR(first.samples[k].time_s - first.samples[k - 1].time_s, kDt, 1e-9);
+    EXPECT_NEAR(first.samples[k].time_s - first.samples[k - 1].time_s, kSampleDt, 1e-9);
   }
   EXPECT_EQ(r.value().tracks[1].person_id, 1);
   EXPECT_NEAR(r.value().tracks[1].samples[0].time_s, 2.0, 1e-9);  // appears at 2 s
@@ -170,7 +170,7 @@ std::shared_ptr<const Recording> load(const char* file) {
   return r.ok() ? std::make_shared<const Recording>(std::move(r).value()) : nullptr;
 }
 
-bool same(const CrowdConfig& a, const CrowdConfig& b) {
+bool same_crowd(const CrowdConfig& a, const CrowdConfig& b) {
   if (a.people.size() != b.people.size()) return false;
   for (std::size_t i = 0; i < a.people.size(); ++i) {
     const Person& p = a.people[i];
@@ -191,8 +191,8 @@ TEST(CrowdMatchedDensity, IsSeededInsideTheExtentAndRefusesWhatItCannotBuild) {
   Result<CrowdConfig> c = matched_crowd(*zara, 8, {6, 120.0});
   ASSERT_TRUE(a.ok()) << a.error().message();
   ASSERT_TRUE(b.ok() && c.ok());
-  EXPECT_TRUE(same(a.value(), b.value()));
-  EXPECT_FALSE(same(a.value(), c.value()));
+  EXPECT_TRUE(same_crowd(a.value(), b.value()));
+  EXPECT_FALSE(same_crowd(a.value(), c.value()));
   const Extent e = summarize(*zara).extent;
   for (const Person& p : a.value().people) {
     for (const Point2D q : {p.start, p.goals[0]}) {
@@ -253,7 +253,7 @@ Recording simulate(const Recording& recording, std::size_t runs, double run_s, s
     if (!crowd.ok()) return all;
     Result<Recording> run = sample_crowd(*crowd.value(), run_s);
     EXPECT_TRUE(run.ok());
-    const double shift_s = static_cast<double>(r) * (run_s + kDt);
+    const double shift_s = static_cast<double>(r) * (run_s + kSampleDt);
     for (Track& t : run.value().tracks) {
       t.person_id += static_cast<std::int64_t>(r) * 100000;
       for (Sample& sample : t.samples) sample.time_s += shift_s;

@@ -13,6 +13,7 @@
 #include "sim_rig.hpp"
 #include "task_table.hpp"
 #include "vel_recorder.hpp"
+#include "stats.hpp"
 
 namespace sen3bot {
 namespace {
@@ -102,11 +103,6 @@ class EstopRig {
   std::unique_ptr<VelRecorder> recorder_;
 };
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
 TEST(EstopChain, PressWhileDrivingStopsWithinTwoControlPeriodsAndHoldsUntilReset) {
   EstopRig rig;
   ASSERT_TRUE(rig.board().io_node() != nullptr) << "config/sim.yaml has sim.io_node";
@@ -144,7 +140,7 @@ TEST(EstopChain, PressWhileDrivingStopsWithinTwoControlPeriodsAndHoldsUntilReset
   ASSERT_TRUE(rig.run_until_driving(hal::seconds(10))) << "a reset lets the robot go on";
   const double worst = *std::max_element(latency_ms.begin(), latency_ms.end());
   std::printf("e-stop edge -> VEL 0 on the P2OS wire: %zu presses, median %.1f ms, max %.1f ms (2 control periods: %.1f ms)\n",
-              latency_ms.size(), median(latency_ms), worst, 2 * hal::to_seconds(kControlPeriodNs) * 1e3);
+              latency_ms.size(), test::median(latency_ms), worst, 2 * hal::to_seconds(kControlPeriodNs) * 1e3);
   EXPECT_LE(worst, 2 * hal::to_seconds(kControlPeriodNs) * 1e3);
   ASSERT_NE(rig.fw().safety(), nullptr);
   ASSERT_NE(rig.fw().safety()->latch(), nullptr);

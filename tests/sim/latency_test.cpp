@@ -22,17 +22,13 @@
 #include "sim_rig.hpp"
 #include "vel_recorder.hpp"
 #include "task_table.hpp"
+#include "stats.hpp"
 
 namespace sen3bot {
 namespace {
 
 using testing::VelPacket;
 using testing::VelRecorder;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 // The acquisition time of the scan a safety decision used: its stamp (when the LMS200 began
 // sending it, the sweep just done), which the decision's age counts from.
@@ -79,8 +75,8 @@ TEST(SenseToAct, EveryControllerCommandReachesTheWireWithinTheBudget) {
   ASSERT_GE(command_ms.size(), 20u) << "the mission should change its speed often";
   const double worst = *std::max_element(command_ms.begin(), command_ms.end());
   std::printf("controller command -> VEL on the wire: %zu speed changes, median %.1f ms, max %.1f ms (budget %.1f ms)\n",
-              command_ms.size(), median(command_ms), worst, hal::to_seconds(firmware::kSenseToActBudgetNs) * 1e3);
-  std::printf("age of the scan behind each VEL: median %.1f ms, max %.1f ms\n", median(scan_age_ms),
+              command_ms.size(), test::median(command_ms), worst, hal::to_seconds(firmware::kSenseToActBudgetNs) * 1e3);
+  std::printf("age of the scan behind each VEL: median %.1f ms, max %.1f ms\n", test::median(scan_age_ms),
               *std::max_element(scan_age_ms.begin(), scan_age_ms.end()));
   EXPECT_LE(worst, hal::to_seconds(firmware::kSenseToActBudgetNs) * 1e3);
 }

@@ -15,9 +15,9 @@ namespace {
 using hal::millis;
 using hal::seconds;
 
-class ScriptedTask final : public Task {
+class HealthScriptedTask final : public Task {
  public:
-  explicit ScriptedTask(std::function<void(const StepContext&)> body) : body_(std::move(body)) {}
+  explicit HealthScriptedTask(std::function<void(const StepContext&)> body) : body_(std::move(body)) {}
   Status init(std::pmr::memory_resource&) override { return Status::success(); }
   void step(const StepContext& c) override { body_(c); }
 
@@ -45,7 +45,7 @@ struct Rig {
 TEST(HealthTask, ReportsAStalledTaskAndItsRecovery) {
   Rig rig;
   // The worker blocks for 400 ms once, at 1 s: with a 50 ms period that is a stall.
-  ScriptedTask worker([&](const StepContext& c) {
+  HealthScriptedTask worker([&](const StepContext& c) {
     if (c.release_ns == seconds(1)) rig.clock.advance_by(millis(400));
   });
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
@@ -54,7 +54,7 @@ TEST(HealthTask, ReportsAStalledTaskAndItsRecovery) {
 
   // Sample the report at every health run.
   std::uint64_t degraded_reports = 0, healthy_reports = 0;
-  ScriptedTask observer([&](const StepContext&) {
+  HealthScriptedTask observer([&](const StepContext&) {
     Sample<HealthReport> s;
     if (!rig.bus.health.read(s)) return;
     (s.value.ok ? healthy_reports : degraded_reports)++;
@@ -82,10 +82,10 @@ TEST(HealthTask, ReportsAStalledTaskAndItsRecovery) {
 
 TEST(HealthTask, DetectsATaskThatNeverRuns) {
   Rig rig;
-  ScriptedTask hog([&](const StepContext& c) {
+  HealthScriptedTask hog([&](const StepContext& c) {
     if (c.cycle == 0) rig.clock.advance_by(millis(500));
   });
-  ScriptedTask starved([](const StepContext&) {});
+  HealthScriptedTask starved([](const StepContext&) {});
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});
   ASSERT_TRUE(rig.scheduler.add({"hog", 1'000'000, 900'000, 90, "control"}, hog));
   ASSERT_TRUE(rig.scheduler.add({"health", 100'000, 1'000, 80, "control"}, health));
@@ -195,7 +195,7 @@ TEST(HealthTask, InitFailsCleanlyWhenItsArenaIsTooSmall) {
   Scheduler scheduler(clock);
   Bus bus;
   HealthTask health(scheduler, bus, clock, HealthConfig{3});
-  ScriptedTask t([](const StepContext&) {});
+  HealthScriptedTask t([](const StepContext&) {});
   for (int i = 0; i < 8; ++i) {
     static const char* names[] = {"a", "b", "c", "d", "e", "f", "g", "h"};
     ASSERT_TRUE(scheduler.add({names[i], 1'000, 100, 1, "control"}, t));
@@ -209,7 +209,7 @@ TEST(TelemetryTask, WritesEventsAndPeriodicStatusLines) {
   Rig rig;
   std::FILE* out = std::tmpfile();
   ASSERT_NE(out, nullptr);
-  ScriptedTask chatty([&](const StepContext& c) {
+  HealthScriptedTask chatty([&](const StepContext& c) {
     if (c.cycle % 10 == 0) rig.bus.events.post(c.start_ns, Severity::warning, "chatty", "cycle %llu", static_cast<unsigned long long>(c.cycle));
   });
   HealthTask health(rig.scheduler, rig.bus, rig.clock, HealthConfig{3});

@@ -5,15 +5,10 @@
 #include <limits>
 
 #include "sen3bot/cobot/polygon.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 #include "sen3bot/nav/arena.hpp"
 
 namespace sen3bot::cobot {
-
-namespace {
-
-double distance(msg::Point2D a, msg::Point2D b) noexcept { return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m); }
-
-}  // namespace
 
 const char* to_string(FollowHold hold) noexcept {
   switch (hold) {
@@ -66,7 +61,7 @@ void FollowMe::point_at(double s_m, msg::Point2D& at, double& heading_rad) const
   for (std::size_t i = 0; i < size_; ++i) {
     const msg::Point2D a = vertex(i);
     const msg::Point2D b = vertex(i + 1);
-    const double len = distance(a, b);
+    const double len = geometry::distance(a, b);
     if (len <= 1e-9) continue;
     heading_rad = std::atan2(b.y_m - a.y_m, b.x_m - a.x_m);
     if (s_m <= walked + len) {
@@ -84,7 +79,7 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
     operator_ = input.operator_at;
     seen_ns_ = input.now_ns;
     if (std::hypot(input.operator_vx_m_s, input.operator_vy_m_s) >= config_.stop_speed_m_s) moving_ns_ = input.now_ns;
-    if (size_ == 0 || distance(trail_point(size_ - 1), operator_) > config_.min_step_m) add(operator_);
+    if (size_ == 0 || geometry::distance(trail_point(size_ - 1), operator_) > config_.min_step_m) add(operator_);
   }
   const msg::Point2D robot{input.robot.x_m, input.robot.y_m};
 
@@ -95,7 +90,7 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
   for (std::size_t i = 0; i < size_; ++i) {
     const msg::Point2D a = vertex(i);
     const msg::Point2D b = vertex(i + 1);
-    const double len = distance(a, b);
+    const double len = geometry::distance(a, b);
     const double t = len > 1e-9
                          ? std::clamp(((robot.x_m - a.x_m) * (b.x_m - a.x_m) + (robot.y_m - a.y_m) * (b.y_m - a.y_m)) /
                                           (len * len),
@@ -108,7 +103,7 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
     }
     length += len;
   }
-  const double straight = distance(robot, operator_);
+  const double straight = geometry::distance(robot, operator_);
   const bool on_trail = robot_off <= config_.on_trail_m;
 
   FollowCommand cmd;
@@ -138,7 +133,7 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
   double walked = 0.0;
   std::size_t last_in = size_ + 1;
   for (std::size_t i = 1; i <= size_ && on_trail; ++i) {
-    walked += distance(vertex(i - 1), vertex(i));
+    walked += geometry::distance(vertex(i - 1), vertex(i));
     if (walked <= robot_s) continue;
     if (walked >= target_s) break;
     if (!inside(vertex(i))) {
@@ -156,7 +151,7 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
   }
   if (first_out <= size_ && inside(target)) {
     // The trail leaves the area and comes back: straight to the target when that way stays in.
-    const double span = distance(robot, target);
+    const double span = geometry::distance(robot, target);
     const int samples = static_cast<int>(std::ceil(span / config_.min_step_m));
     bool clear = true;
     for (int k = 1; k < samples && clear; ++k) {
@@ -175,19 +170,19 @@ FollowCommand FollowMe::update(const FollowInput& input) noexcept {
     // Off the trail: the crumb nearest before the target that lies inside.
     double s = 0.0;
     for (std::size_t i = 1; i <= size_; ++i) {
-      s += distance(vertex(i - 1), vertex(i));
+      s += geometry::distance(vertex(i - 1), vertex(i));
       if (s >= target_s) break;
       if (inside(vertex(i))) last_in = i;
     }
   }
   if (last_in > size_) return hold(FollowHold::area_border);
   double s_in = 0.0;
-  for (std::size_t i = 1; i <= last_in; ++i) s_in += distance(vertex(i - 1), vertex(i));
+  for (std::size_t i = 1; i <= last_in; ++i) s_in += geometry::distance(vertex(i - 1), vertex(i));
   msg::Point2D on_line;
   double border_heading = 0.0;
   point_at(s_in, on_line, border_heading);
   const msg::Point2D border = vertex(last_in);
-  if (std::isnan(border_heading) || distance(robot, border) <= config_.arrive_m) return hold(FollowHold::area_border);
+  if (std::isnan(border_heading) || geometry::distance(robot, border) <= config_.arrive_m) return hold(FollowHold::area_border);
   cmd.go = true;
   cmd.target = border;
   cmd.heading_rad = border_heading;

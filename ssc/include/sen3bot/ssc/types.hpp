@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "sen3bot/geometry/geometry.hpp"
+#include "sen3bot/geometry/point_math.hpp"
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/mem/static_vector.hpp"
 
@@ -20,7 +21,7 @@ using hal::Nanos;  // time is handed in by the caller; the centre never reads a 
 using Point = geometry::Point2D;
 using Pose = geometry::Pose2D;
 
-double distance(Point a, Point b) noexcept;
+using geometry::distance;
 
 // Small dense ids: the host keeps the mapping to VDA 5050 serial numbers and order ids.
 using RobotId = std::uint16_t;

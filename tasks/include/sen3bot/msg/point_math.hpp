@@ -13,6 +13,7 @@ using geometry::operator+=;
 using geometry::operator-=;
 using geometry::convex_polygon_distance;
 using geometry::cross;
+using geometry::distance;
 using geometry::dot;
 using geometry::inside_polygon;
 using geometry::norm;

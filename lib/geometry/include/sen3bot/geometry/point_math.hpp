@@ -12,7 +12,6 @@
 
 namespace sen3bot::geometry {
 
-
 [[nodiscard]] constexpr Point2D operator+(Point2D a, Point2D b) noexcept { return {a.x_m + b.x_m, a.y_m + b.y_m}; }
 [[nodiscard]] constexpr Point2D operator-(Point2D a, Point2D b) noexcept { return {a.x_m - b.x_m, a.y_m - b.y_m}; }
 [[nodiscard]] constexpr Point2D operator-(Point2D a) noexcept { return {-a.x_m, -a.y_m}; }
@@ -25,6 +24,7 @@ constexpr Point2D& operator-=(Point2D& a, Point2D b) noexcept { return a = a - b
 [[nodiscard]] constexpr double cross(Point2D a, Point2D b) noexcept { return a.x_m * b.y_m - a.y_m * b.x_m; }
 [[nodiscard]] inline double norm(Point2D a) noexcept { return std::hypot(a.x_m, a.y_m); }
 [[nodiscard]] constexpr double norm_squared(Point2D a) noexcept { return dot(a, a); }
+[[nodiscard]] inline double distance(Point2D a, Point2D b) noexcept { return norm(a - b); }
 // a rotated by +90 degrees.
 [[nodiscard]] constexpr Point2D perpendicular(Point2D a) noexcept { return {-a.y_m, a.x_m}; }
 // a / |a|, or `fallback` for a (near) zero vector.
