@@ -25,7 +25,6 @@ BUILD_PACKAGES=(
   ninja-build
   ccache                     # the test command's builds reuse objects from earlier runs
   pkgconf                    # pkg-config, for dependencies without CMake packages
-  libeigen3-dev
   libyaml-cpp-dev
   libopencv-core-dev
   libopencv-imgproc-dev

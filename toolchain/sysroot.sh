@@ -5,7 +5,7 @@
 #
 # The sysroot is a plain directory of unpacked Debian arm64 (or armhf) packages: the libraries
 # the firmware and its tests link against (yaml-cpp, GoogleTest/GoogleMock, Google Benchmark,
-# Eigen, OpenCV core/imgproc/imgcodecs/objdetect/ml) and their whole dependency closure, including libc6 and
+# OpenCV core/imgproc/imgcodecs/objdetect/ml) and their whole dependency closure, including libc6 and
 # its dynamic loader so qemu-user can run the test binaries (qemu -L <sysroot>).
 #
 # Why a separate directory and not `dpkg --add-architecture arm64; apt install foo:arm64`:
@@ -39,7 +39,6 @@ SYSROOT_PACKAGES=(
   libyaml-cpp-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev
-  libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev
   libjpeg62-turbo-dev libpng-dev  # JPEG in, PNG out (OpenCV's imgcodecs only for the tests)
   libopencv-objdetect406       # the on-board people detector (HOG); its -dev package below

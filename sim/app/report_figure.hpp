@@ -1,6 +1,6 @@
 #pragma once
 // A finished case of `sen3bot-sim sim` as a report figure: gathers what the firmware, its
-// mission and the simulated board kept, and draws it with tasks/figure (over lib/figure).
+// mission and the simulated board kept, and draws it with nav/figure (over lib/figure).
 #include <string>
 
 #include "config.hpp"

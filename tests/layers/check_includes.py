@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The layers of docs/firmware.md, checked on the sources: every file of a layer includes
 project headers only from its own layer or the layers before it. Layers that share a rank
-(the applications over the tasks) may not include each other.
+(the applications over navigation: ssc, cobot, formation, view) may not include each other.
 
 usage: check_includes.py SOURCE_DIR | --self-test
 Prints each violation (file, line, the header and the layer that owns it); exit status 1 when
@@ -18,11 +18,12 @@ RANKS = {
     "hal": 0,
     "lib": 1,
     "drivers": 2,
-    "tasks": 3,
-    "ssc": 4, "cobot": 4, "formation": 4, "view": 4,
-    "firmware": 5,
-    "centre": 6,
-    "sim": 7,
+    "runtime": 3,
+    "nav": 4,
+    "ssc": 5, "cobot": 5, "formation": 5, "view": 5,
+    "firmware": 6,
+    "centre": 7,
+    "sim": 8,
 }
 # hal's error type is the one project header the neutral libraries use.
 ALLOWED = {("lib", "sen3bot/hal/result.hpp")}
@@ -94,20 +95,20 @@ def self_test():
         "hal/src/clock.cpp": '#include "sen3bot/hal/result.hpp"\n',
         "lib/json/include/sen3bot/json/json.hpp": '#include "sen3bot/hal/result.hpp"\n',
         "drivers/p2os/src/codec.cpp": '#include "sen3bot/json/json.hpp"\n#include "sen3bot/msg/people.hpp"\n',
-        "tasks/include/sen3bot/msg/people.hpp": '#include "sen3bot/hal/result.hpp"\n',
+        "runtime/include/sen3bot/msg/people.hpp": '#include "sen3bot/hal/result.hpp"\n',
         "view/include/sen3bot/view/view.hpp": "",
         "ssc/src/centre.cpp": '#include "sen3bot/view/view.hpp"\n',
         "firmware/cli_util.hpp": "",
         "firmware/cli_util.cpp": '#include "cli_util.hpp"\n',
-        "tasks/src/bus.cpp": '#include "cli_util.hpp"\n',
+        "runtime/src/bus.cpp": '#include "cli_util.hpp"\n',
         "firmware/cmd_sgp.cpp": '#include "sen3bot/sim/report/figure.hpp"\n#include "sen3bot/msg/people.hpp"\n',
         "sim/report/include/sen3bot/sim/report/figure.hpp": '#include "sen3bot/msg/people.hpp"\n',
     }
     expected = {
-        "drivers/p2os/src/codec.cpp:2: drivers/ includes sen3bot/msg/people.hpp of tasks/",
+        "drivers/p2os/src/codec.cpp:2: drivers/ includes sen3bot/msg/people.hpp of runtime/",
         "ssc/src/centre.cpp:1: ssc/ includes sen3bot/view/view.hpp of view/",
         "firmware/cmd_sgp.cpp:1: firmware/ includes sen3bot/sim/report/figure.hpp of sim/",
-        "tasks/src/bus.cpp:1: tasks/ includes cli_util.hpp of firmware/",
+        "runtime/src/bus.cpp:1: runtime/ includes cli_util.hpp of firmware/",
     }
     with tempfile.TemporaryDirectory() as root:
         for rel, text in tree.items():

@@ -300,16 +300,16 @@ TEST(MoverTracker, ConfirmsAfterHitsAndTwoPointVelocity) {
   const Blob second = blob_at(1.08, 1.94);
   tracker.update(std::span(&second, 1), kScanPeriodNs);
   ASSERT_EQ(tracker.tracks().size(), 1u);
-  EXPECT_NEAR(tracker.tracks()[0].x(2), 0.8, 1e-9);  // the displacement over 0.1 s
-  EXPECT_NEAR(tracker.tracks()[0].x(3), -0.6, 1e-9);
+  EXPECT_NEAR(tracker.tracks()[0].kf.x[2], 0.8, 1e-9);  // the displacement over 0.1 s
+  EXPECT_NEAR(tracker.tracks()[0].kf.x[3], -0.6, 1e-9);
   EXPECT_FALSE(tracker.tracks()[0].confirmed);
   const Blob third = blob_at(1.16, 1.88);
   tracker.update(std::span(&third, 1), 2 * kScanPeriodNs);
   EXPECT_TRUE(tracker.tracks()[0].confirmed);
   EXPECT_EQ(tracker.tracks()[0].id, 1u);
   const auto p = MoverTracker::predict_position(tracker.tracks()[0], 3 * kScanPeriodNs);
-  EXPECT_NEAR(p(0), 1.24, 0.01);
-  EXPECT_NEAR(p(1), 1.82, 0.01);
+  EXPECT_NEAR(p.x_m, 1.24, 0.01);
+  EXPECT_NEAR(p.y_m, 1.82, 0.01);
   // A tentative track that misses once is gone; ids are never reused.
   const Blob elsewhere = blob_at(-3.0, -3.0);
   tracker.update(std::span(&elsewhere, 1), 3 * kScanPeriodNs);
@@ -347,7 +347,7 @@ TEST(MoverTracker, TheCameraVouchesForAWalkerAtTheSecondScanNeverForAStillBox) {
     const std::array<Vouch, 1> person = {Vouch{1.0 + t + 0.05, 2.02, 1.0, 0.0}};
     if (tracker.vouch(person) > 0 && vouched_at < 0) vouched_at = k;
     for (const DolTrack& track : tracker.tracks()) {
-      if (track.x(1) > 2.3) {
+      if (track.kf.x[1] > 2.3) {
         EXPECT_FALSE(track.mover) << "the box became a mover at scan " << k;
       }
     }
@@ -398,7 +398,7 @@ TEST(MoverTracker, GateLeavesFarBlobsUnmatched) {
   tracker.update(std::span(&far, 1), t);
   ASSERT_EQ(tracker.tracks().size(), 2u);
   EXPECT_EQ(tracker.tracks()[0].hits, 3);
-  EXPECT_NEAR(tracker.tracks()[0].x(0), 0.0, 1e-6);
+  EXPECT_NEAR(tracker.tracks()[0].kf.x[0], 0.0, 1e-6);
   EXPECT_EQ(tracker.tracks()[1].hits, 1);
   const std::uint32_t newcomer = tracker.tracks()[1].id;
   // Tracks at 0 and 1.1; blobs at 0.5 (0.5 and 0.6 away) and -2 (2 and 3.1 away). By plain
@@ -410,9 +410,9 @@ TEST(MoverTracker, GateLeavesFarBlobsUnmatched) {
   ASSERT_EQ(tracker.tracks().size(), 2u);
   EXPECT_EQ(tracker.tracks()[0].id, 1u);
   EXPECT_EQ(tracker.tracks()[0].hits, 4);
-  EXPECT_GT(tracker.tracks()[0].x(0), 0.2);
+  EXPECT_GT(tracker.tracks()[0].kf.x[0], 0.2);
   EXPECT_EQ(find_track(tracker, newcomer), nullptr);  // tentative and missed: gone
-  EXPECT_NEAR(tracker.tracks()[1].x(0), -2.0, 1e-9);
+  EXPECT_NEAR(tracker.tracks()[1].kf.x[0], -2.0, 1e-9);
   EXPECT_EQ(tracker.tracks()[1].hits, 1);
 }
 
@@ -436,8 +436,8 @@ TEST(Kalman, VelocityConvergesOnAConstantVelocityTrack) {
     }
     ASSERT_EQ(tracker.tracks().size(), 1u);
     const DolTrack& track = tracker.tracks()[0];
-    const double error = std::hypot(track.x(2) - vx, track.x(3) - vy);
-    EXPECT_LT(error, 0.05 * std::hypot(vx, vy)) << "seed " << seed << " v " << track.x(2) << "," << track.x(3);
+    const double error = std::hypot(track.kf.x[2] - vx, track.kf.x[3] - vy);
+    EXPECT_LT(error, 0.05 * std::hypot(vx, vy)) << "seed " << seed << " v " << track.kf.x[2] << "," << track.kf.x[3];
     if (std::getenv("DOL_TRACE") != nullptr) std::printf("seed %u: velocity error %.1f %%\n", seed, 100.0 * error / std::hypot(vx, vy));
   }
 }
@@ -472,8 +472,8 @@ void run_walkers(double ax, double ay, double avx, double avy, double bx, double
       ASSERT_EQ(tracker.tracks().size(), 2u);
       for (const DolTrack& tr : tracker.tracks()) {
         ASSERT_TRUE(tr.confirmed);
-        const double da = std::hypot(tr.x(0) - pa[0], tr.x(1) - pa[1]);
-        const double db = std::hypot(tr.x(0) - pb[0], tr.x(1) - pb[1]);
+        const double da = std::hypot(tr.kf.x[0] - pa[0], tr.kf.x[1] - pa[1]);
+        const double db = std::hypot(tr.kf.x[0] - pb[0], tr.kf.x[1] - pb[1]);
         (da < db ? id_a : id_b) = tr.id;
       }
       ASSERT_NE(id_a, id_b);
@@ -520,8 +520,8 @@ TEST(MoverTracker, TrackSurvivesAnOcclusion) {
     EXPECT_EQ(tracker.tracks()[0].id, 1u) << "t=" << t;
   }
   const auto [x, y] = at(4.0);
-  EXPECT_NEAR(tracker.tracks()[0].x(0), x, 0.1);
-  EXPECT_NEAR(tracker.tracks()[0].x(1), y, 0.1);
+  EXPECT_NEAR(tracker.tracks()[0].kf.x[0], x, 0.1);
+  EXPECT_NEAR(tracker.tracks()[0].kf.x[1], y, 0.1);
   EXPECT_TRUE(tracker.tracks()[0].confirmed);
 }
 
@@ -545,7 +545,7 @@ double lane_error_after_coasting(const DolTrackerConfig& cfg) {
     tracker.update(std::span(&b, 1), k * kScanPeriodNs);
   }
   if (tracker.tracks().size() != 1u) return 1e9;
-  const double x0 = tracker.tracks()[0].x(0);
+  const double x0 = tracker.tracks()[0].kf.x[0];
   EXPECT_NEAR(x0, 2.2, 0.1);  // where the slide left it
   for (; k <= 45; ++k) tracker.update({}, k * kScanPeriodNs, blind);
   EXPECT_EQ(tracker.tracks().size(), 1u);
@@ -553,10 +553,10 @@ double lane_error_after_coasting(const DolTrackerConfig& cfg) {
   const DolTrack& track = tracker.tracks()[0];
   if (cfg.axis_min_travel_m < 10.0) {
     // On its line, at the speed it kept while seen, not the lagging centroids' slower one.
-    EXPECT_NEAR(track.x(1), 0.5 + 0.8 * 4.5, 0.15);
-    EXPECT_NEAR(track.x(3), 0.8, 0.08);
+    EXPECT_NEAR(track.kf.x[1], 0.5 + 0.8 * 4.5, 0.15);
+    EXPECT_NEAR(track.kf.x[3], 0.8, 0.08);
   }
-  return std::abs(track.x(0) - 2.0);
+  return std::abs(track.kf.x[0] - 2.0);
 }
 
 TEST(MoverTracker, TheAxisKeepsACoastingTrackInItsLaneAtItsSpeed) {
@@ -586,15 +586,15 @@ TEST(MoverTracker, TheAxisFollowsAWalkerWhoTurns) {
     if (k == 30) {  // held to the axis: straight up
       ASSERT_EQ(tracker.tracks().size(), 1u);
       const auto v = tracker.velocity(tracker.tracks()[0]);
-      EXPECT_NEAR(std::atan2(v(1), v(0)), M_PI / 2.0, 0.03);
+      EXPECT_NEAR(std::atan2(v.y_m, v.x_m), M_PI / 2.0, 0.03);
     }
   }
   ASSERT_EQ(tracker.tracks().size(), 1u);
   const DolTrack& track = tracker.tracks()[0];
   EXPECT_EQ(track.id, 1u);
   const auto v = tracker.velocity(track);
-  EXPECT_LT(std::abs(std::atan2(v(1), v(0))), 5.0 * M_PI / 180.0);
-  EXPECT_NEAR(v(0), 0.8, 0.1);
+  EXPECT_LT(std::abs(std::atan2(v.y_m, v.x_m)), 5.0 * M_PI / 180.0);
+  EXPECT_NEAR(v.x_m, 0.8, 0.1);
 }
 
 TEST(MoverTracker, TurnBackReversesTheVelocityOnly) {
@@ -611,11 +611,11 @@ TEST(MoverTracker, TurnBackReversesTheVelocityOnly) {
   tracker.turn_back(0);
   tracker.turn_back(7);  // no such track: nothing
   const DolTrack& after = tracker.tracks()[0];
-  EXPECT_EQ(after.x(0), before.x(0));
-  EXPECT_EQ(after.x(1), before.x(1));
-  EXPECT_EQ(after.x(2), -before.x(2));
-  EXPECT_EQ(after.x(3), -before.x(3));
-  EXPECT_GT(before.x(3), 0.4);
+  EXPECT_EQ(after.kf.x[0], before.kf.x[0]);
+  EXPECT_EQ(after.kf.x[1], before.kf.x[1]);
+  EXPECT_EQ(after.kf.x[2], -before.kf.x[2]);
+  EXPECT_EQ(after.kf.x[3], -before.kf.x[3]);
+  EXPECT_GT(before.kf.x[3], 0.4);
 }
 
 // --- Cost -----------------------------------------------------------------------------------
@@ -911,7 +911,7 @@ void track_crossing_box(double robot_heading_rad, double robot_speed_m_s) {
     if (trace) {
       for (const DolTrack& tr : rig.dol.tracks()) {
         std::printf("t=%.2f box %.2f %.2f track %u%s hits %d at %.2f %.2f v %.2f %.2f\n", t, p.x_m, p.y_m, tr.id,
-                    tr.confirmed ? " confirmed" : "", tr.hits, tr.x(0), tr.x(1), tr.x(2), tr.x(3));
+                    tr.confirmed ? " confirmed" : "", tr.hits, tr.kf.x[0], tr.kf.x[1], tr.kf.x[2], tr.kf.x[3]);
       }
     }
     if (confirmed_after < 0 && rig.confirmed_count() > 0) {

@@ -1,60 +1,19 @@
 #include "sen3bot/nav/mover_tracker.hpp"
 
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "sen3bot/geometry/point_math.hpp"
 #include "sen3bot/nav/arena.hpp"
 
 namespace sen3bot::nav {
 
 namespace {
 
-using Vector2 = Eigen::Matrix<double, 2, 1>;
-using Vector4 = Eigen::Matrix<double, 4, 1>;
-using Matrix2 = Eigen::Matrix<double, 2, 2>;
-using Matrix4 = Eigen::Matrix<double, 4, 4>;
-using Matrix24 = Eigen::Matrix<double, 2, 4>;
-using Matrix42 = Eigen::Matrix<double, 4, 2>;
+using geometry::Point2D;
 
 double seconds_between(hal::Nanos from, hal::Nanos to) noexcept { return static_cast<double>(to - from) / 1e9; }
-
-}  // namespace
-
-namespace {
-
-// Constant-velocity transition and white-noise-acceleration process noise for dt.
-void predict_state(DolTrack& track, double dt, double accel_sigma) noexcept {
-  if (!(dt > 0.0)) return;
-  Matrix4 f = Matrix4::Identity();
-  f(0, 2) = dt;
-  f(1, 3) = dt;
-  const double q = accel_sigma * accel_sigma;
-  const double dt2 = dt * dt;
-  const double pp = q * dt2 * dt2 / 4.0;
-  const double pv = q * dt2 * dt / 2.0;
-  const double vv = q * dt2;
-  Matrix4 noise = Matrix4::Zero();
-  noise(0, 0) = noise(1, 1) = pp;
-  noise(0, 2) = noise(2, 0) = noise(1, 3) = noise(3, 1) = pv;
-  noise(2, 2) = noise(3, 3) = vv;
-  track.x = f * track.x;
-  track.P = f * track.P * f.transpose() + noise;
-}
-
-// Standard Kalman correction with a position measurement (Joseph form keeps P symmetric).
-void correct(DolTrack& track, const Vector2& z, double measurement_sigma) noexcept {
-  Matrix24 h = Matrix24::Zero();
-  h(0, 0) = 1.0;
-  h(1, 1) = 1.0;
-  const Matrix2 r = Matrix2::Identity() * (measurement_sigma * measurement_sigma);
-  const Matrix2 s = h * track.P * h.transpose() + r;
-  const Matrix42 k = track.P * h.transpose() * s.inverse();
-  track.x += k * (z - h * track.x);
-  const Matrix4 i_kh = Matrix4::Identity() - k * h;
-  track.P = i_kh * track.P * i_kh.transpose() + k * r * k.transpose();
-}
 
 }  // namespace
 
@@ -79,61 +38,65 @@ Status MoverTracker::init(const DolTrackerConfig& config, std::pmr::memory_resou
   });
 }
 
-Eigen::Matrix<double, 2, 1> MoverTracker::predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept {
+Point2D MoverTracker::predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept {
   const double dt = std::max(0.0, seconds_between(track.stamp_ns, stamp_ns));
-  return {track.x(0) + track.x(2) * dt, track.x(1) + track.x(3) * dt};
+  return {track.kf.x[0] + track.kf.x[2] * dt, track.kf.x[1] + track.kf.x[3] * dt};
 }
 
 DolTrack MoverTracker::predicted(const DolTrack& track, hal::Nanos stamp_ns) const noexcept {
   DolTrack out = track;
-  predict_state(out, seconds_between(track.stamp_ns, stamp_ns), config_.accel_sigma_m_s2);
+  out.kf.predict(seconds_between(track.stamp_ns, stamp_ns), config_.accel_sigma_m_s2, ProcessNoise::piecewise_constant);
   if (stamp_ns > out.stamp_ns) out.stamp_ns = stamp_ns;
   return out;
 }
 
-void MoverTracker::follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept {
-  const double forget = std::exp(-(z - track.seen).norm() / std::max(config_.axis_memory_m, 1e-6));
-  const Vector2 r = z - track.birth;
+void MoverTracker::follow_axis(DolTrack& track, Point2D z) const noexcept {
+  const double forget = std::exp(-geometry::norm(z - track.seen) / std::max(config_.axis_memory_m, 1e-6));
+  const Point2D r = z - track.birth;
   track.axis_weight = forget * track.axis_weight + 1.0;
   track.axis_sum = forget * track.axis_sum + r;
-  track.axis_squares = forget * track.axis_squares + r * r.transpose();
+  track.axis_squares[0] = forget * track.axis_squares[0] + r.x_m * r.x_m;
+  track.axis_squares[1] = forget * track.axis_squares[1] + r.x_m * r.y_m;
+  track.axis_squares[2] = forget * track.axis_squares[2] + r.y_m * r.y_m;
 }
 
 bool MoverTracker::axis(const DolTrack& track, Axis& out) const noexcept {
   constexpr double kMinWeight = 3.0;   // a line needs a few centroids
   constexpr double kMinElongation = 16.0;  // variance ratio: 4 times as long as wide
   if (track.axis_weight < kMinWeight) return false;
-  const Vector2 mean = track.axis_sum / track.axis_weight;
-  const Eigen::Matrix<double, 2, 2> c = track.axis_squares / track.axis_weight - mean * mean.transpose();
-  const SymmetricEigen spread = symmetric_eigen(c(0, 0), c(0, 1), c(1, 1));
+  const Point2D mean{track.axis_sum.x_m / track.axis_weight, track.axis_sum.y_m / track.axis_weight};
+  const double cxx = track.axis_squares[0] / track.axis_weight - mean.x_m * mean.x_m;
+  const double cxy = track.axis_squares[1] / track.axis_weight - mean.x_m * mean.y_m;
+  const double cyy = track.axis_squares[2] / track.axis_weight - mean.y_m * mean.y_m;
+  const SymmetricEigen spread = symmetric_eigen(cxx, cxy, cyy);
   const double major = spread.larger;
   const double minor = std::max(0.0, spread.smaller);
   // A uniform spread over a segment of length L has variance L^2 / 12.
   if (!(12.0 * major >= config_.axis_min_travel_m * config_.axis_min_travel_m) || minor * kMinElongation > major) return false;
   out.centre = track.birth + mean;
-  out.direction = Vector2(std::cos(spread.larger_angle_rad), std::sin(spread.larger_angle_rad));
+  out.direction = {std::cos(spread.larger_angle_rad), std::sin(spread.larger_angle_rad)};
   return true;
 }
 
 bool MoverTracker::along_axis(const DolTrack& track, Axis& a) const noexcept {
   if (!axis(track, a)) return false;
-  const Vector2 v(track.x(2), track.x(3));
-  const double along = v.dot(a.direction);
-  const double across = std::abs(a.direction(0) * v(1) - a.direction(1) * v(0));
+  const Point2D v = track.kf.velocity();
+  const double along = geometry::dot(v, a.direction);
+  const double across = std::abs(geometry::cross(a.direction, v));
   return std::atan2(across, std::abs(along)) <= config_.axis_max_angle_rad;  // else turning: the filter's
 }
 
-Eigen::Matrix<double, 2, 1> MoverTracker::velocity(const DolTrack& track) const noexcept {
-  const Vector2 v(track.x(2), track.x(3));
+Point2D MoverTracker::velocity(const DolTrack& track) const noexcept {
+  const Point2D v = track.kf.velocity();
   Axis a;
-  return along_axis(track, a) ? Vector2(a.direction * v.dot(a.direction)) : v;
+  return along_axis(track, a) ? geometry::dot(v, a.direction) * a.direction : v;
 }
 
 void MoverTracker::hold_to_axis(DolTrack& track, Hold hold) const noexcept {
   Axis a;
   if (!along_axis(track, a)) return;
-  const Vector2& u = a.direction;
-  double along = Vector2(track.x(2), track.x(3)).dot(u);
+  const Point2D u = a.direction;
+  double along = geometry::dot(track.kf.velocity(), u);
   if (hold == Hold::measured) {
     // Averaged over some 20 scans: the last, half-seen ones do not rule it.
     constexpr double kSpeedGain = 0.05;
@@ -141,14 +104,13 @@ void MoverTracker::hold_to_axis(DolTrack& track, Hold hold) const noexcept {
                                                       : std::abs(along);
   } else if (hold == Hold::unseen) {
     // Out of sight: on the line, at the speed it kept while seen.
-    const Vector2 p(track.x(0), track.x(1));
-    const Vector2 on_line = a.centre + u * (p - a.centre).dot(u);
-    track.x(0) = on_line(0);
-    track.x(1) = on_line(1);
+    const Point2D on_line = a.centre + geometry::dot(track.kf.position() - a.centre, u) * u;
+    track.kf.x[0] = on_line.x_m;
+    track.kf.x[1] = on_line.y_m;
     if (std::abs(along) < track.axis_speed_m_s) along = std::copysign(track.axis_speed_m_s, along);
   }
-  track.x(2) = along * u(0);
-  track.x(3) = along * u(1);
+  track.kf.x[2] = along * u.x_m;
+  track.kf.x[3] = along * u.y_m;
 }
 
 void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, const LaserView& view) noexcept {
@@ -156,7 +118,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
   last_update_ns_ = std::max(last_update_ns_, stamp_ns);
   for (std::size_t t = 0; t < count_; ++t) {
     DolTrack& track = tracks_[t];
-    predict_state(track, seconds_between(track.stamp_ns, stamp_ns), config_.accel_sigma_m_s2);
+    track.kf.predict(seconds_between(track.stamp_ns, stamp_ns), config_.accel_sigma_m_s2, ProcessNoise::piecewise_constant);
     track.stamp_ns = std::max(track.stamp_ns, stamp_ns);
   }
   std::fill(blob_used_.begin(), blob_used_.end(), std::uint8_t{0});
@@ -166,7 +128,7 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     const double far = 2.0 * config_.gate_m;
     for (std::size_t t = 0; t < count_; ++t) {
       for (std::size_t b = 0; b < blob_count; ++b) {
-        const double d = std::hypot(blobs[b].x_m - tracks_[t].x(0), blobs[b].y_m - tracks_[t].x(1));
+        const double d = std::hypot(blobs[b].x_m - tracks_[t].kf.x[0], blobs[b].y_m - tracks_[t].kf.x[1]);
         cost_[t * blob_count + b] = std::min(d, far);
       }
     }
@@ -188,19 +150,17 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     const int b = assignment_[t];
     if (b != Hungarian::kUnassigned) {
       const Blob& blob = blobs[static_cast<std::size_t>(b)];
-      const Vector2 z(blob.x_m, blob.y_m);
+      const Point2D z{blob.x_m, blob.y_m};
       const double dt = seconds_between(track.last_hit_ns, stamp_ns);
       if (track.hits == 1 && dt > 0.0) {
         // Two-point initialisation: the velocity from the two positions, with its covariance.
         const double s2 = config_.measurement_sigma_m * config_.measurement_sigma_m;
-        const Vector2 previous(track.x(0), track.x(1));
-        track.x << z, (z - previous) / dt;
-        track.P = Matrix4::Zero();
-        track.P(0, 0) = track.P(1, 1) = s2;
-        track.P(0, 2) = track.P(2, 0) = track.P(1, 3) = track.P(3, 1) = s2 / dt;
-        track.P(2, 2) = track.P(3, 3) = 2.0 * s2 / (dt * dt);
+        const Point2D v{(z.x_m - track.kf.x[0]) / dt, (z.y_m - track.kf.x[1]) / dt};
+        track.kf.reset(z, v, s2, 2.0 * s2 / (dt * dt));
+        track.kf.P[0 * 4 + 2] = track.kf.P[2 * 4 + 0] = track.kf.P[1 * 4 + 3] = track.kf.P[3 * 4 + 1] = s2 / dt;
       } else {
-        correct(track, z, config_.measurement_sigma_m);
+        const double s2 = config_.measurement_sigma_m * config_.measurement_sigma_m;
+        if (!track.kf.correct(z, s2, 0.0, s2)) track.kf.reset(z, {}, s2, config_.initial_velocity_sigma_m_s * config_.initial_velocity_sigma_m_s);
       }
       ++track.hits;
       track.last_hit_ns = stamp_ns;
@@ -213,8 +173,8 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       const double radius = std::clamp(blob.radius_m, config_.min_radius_m, config_.max_radius_m);
       track.radius_m += kRadiusGain * (radius - track.radius_m);
     } else {
-      const double dx = track.x(0) - view.x_m;
-      const double dy = track.x(1) - view.y_m;
+      const double dx = track.kf.x[0] - view.x_m;
+      const double dy = track.kf.x[1] - view.y_m;
       const double bearing = std::abs(normalize_angle(std::atan2(dy, dx) - view.heading_rad));
       track.in_view = bearing <= view.half_angle_rad && std::hypot(dx, dy) <= view.range_m;
       const double limit = track.in_view ? config_.max_coast_s : config_.max_coast_unseen_s;
@@ -239,10 +199,9 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
     track.confirmed = config_.confirm_hits <= 1;
     track.stamp_ns = stamp_ns;
     track.last_hit_ns = stamp_ns;
-    track.x << blobs[b].x_m, blobs[b].y_m, 0.0, 0.0;
-    track.birth << blobs[b].x_m, blobs[b].y_m;
+    track.birth = {blobs[b].x_m, blobs[b].y_m};
     track.seen = track.birth;
-    track.P = Vector4(s2, s2, v2, v2).asDiagonal();
+    track.kf.reset(track.birth, {}, s2, v2);
     track.radius_m = std::clamp(blobs[b].radius_m, config_.min_radius_m, config_.max_radius_m);
   }
 }
@@ -253,7 +212,7 @@ void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeome
     const int k = static_cast<int>(std::ceil(reach));
     int col = 0;
     int row = 0;
-    if (!geometry.world_to_cell(track.birth(0), track.birth(1), col, row)) return false;  // not in view: unknown
+    if (!geometry.world_to_cell(track.birth.x_m, track.birth.y_m, col, row)) return false;  // not in view: unknown
     for (int dr = -k; dr <= k; ++dr) {
       for (int dc = -k; dc <= k; ++dc) {
         if (dc * dc + dr * dr > reach * reach + 1e-9 || !geometry.in_bounds(col + dc, row + dr)) continue;
@@ -265,17 +224,17 @@ void MoverTracker::classify(std::span<const std::uint8_t> image, const GridGeome
   for (std::size_t t = 0; t < count_; ++t) {
     DolTrack& track = tracks_[t];
     if (!track.confirmed || track.mover || track.last_hit_ns != last_update_ns_) continue;
-    if (std::hypot(track.x(2), track.x(3)) < config_.moving_min_speed_m_s) continue;
+    if (std::hypot(track.kf.x[2], track.kf.x[3]) < config_.moving_min_speed_m_s) continue;
     // Measured, not filtered: a filter's overshoot is no evidence of travel.
-    const double travel = std::hypot(track.seen(0) - track.birth(0), track.seen(1) - track.birth(1));
+    const double travel = std::hypot(track.seen.x_m - track.birth.x_m, track.seen.y_m - track.birth.y_m);
     track.mover = travel >= config_.moving_far_travel_m || (travel >= config_.moving_min_travel_m && vacated(track));
   }
 }
 
 void MoverTracker::turn_back(std::size_t index) noexcept {
   if (index >= count_) return;
-  tracks_[index].x(2) = -tracks_[index].x(2);
-  tracks_[index].x(3) = -tracks_[index].x(3);
+  tracks_[index].kf.x[2] = -tracks_[index].kf.x[2];
+  tracks_[index].kf.x[3] = -tracks_[index].kf.x[3];
 }
 
 std::size_t MoverTracker::vouch(std::span<const Vouch> people) noexcept {
@@ -285,15 +244,15 @@ std::size_t MoverTracker::vouch(std::span<const Vouch> people) noexcept {
   for (std::size_t t = 0; t < count_; ++t) {
     DolTrack& track = tracks_[t];
     if (track.mover || track.hits < config_.vouch_min_hits || track.last_hit_ns != last_update_ns_ ||
-        !track.x.allFinite())
+        !track.kf.finite())
       continue;
-    const double speed = std::hypot(track.x(2), track.x(3));
+    const double speed = geometry::norm(track.kf.velocity());
     if (speed < config_.moving_min_speed_m_s) continue;
     for (const Vouch& p : people) {
       const double person_speed = std::hypot(p.vx_m_s, p.vy_m_s);
-      if (std::hypot(track.x(0) - p.x_m, track.x(1) - p.y_m) > config_.vouch_reach_m) continue;
+      if (std::hypot(track.kf.x[0] - p.x_m, track.kf.x[1] - p.y_m) > config_.vouch_reach_m) continue;
       // Their way: the same direction, and a like speed (a box beside a walker has neither).
-      if ((track.x(2) * p.vx_m_s + track.x(3) * p.vy_m_s) < cos_max * speed * person_speed) continue;
+      if ((track.kf.x[2] * p.vx_m_s + track.kf.x[3] * p.vy_m_s) < cos_max * speed * person_speed) continue;
       if (speed > config_.vouch_speed_ratio * person_speed || person_speed > config_.vouch_speed_ratio * speed) continue;
       track.confirmed = true;
       track.mover = true;
@@ -311,7 +270,7 @@ bool MoverTracker::moving(const DolTrack& track) const noexcept {
 
 bool MoverTracker::candidate(const DolTrack& track) const noexcept {
   return track.confirmed && !track.mover && track.last_hit_ns == last_update_ns_ &&
-         std::hypot(track.x(2), track.x(3)) >= config_.moving_min_speed_m_s;
+         geometry::norm(track.kf.velocity()) >= config_.moving_min_speed_m_s;
 }
 
 }  // namespace sen3bot::nav

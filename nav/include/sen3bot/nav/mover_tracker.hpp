@@ -1,7 +1,7 @@
 #pragma once
 // The dynamic obstacle layer's tracking (dynamic_obstacles.hpp): blobs to tracks, and which
 // tracks are movers. Fixed memory from init().
-#include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory_resource>
 #include <span>
@@ -9,6 +9,7 @@
 #include "sen3bot/hal/clock.hpp"
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/nav/assignment.hpp"
+#include "sen3bot/nav/cv_filter.hpp"
 #include "sen3bot/nav/mover_detection.hpp"
 
 namespace sen3bot::nav {
@@ -79,17 +80,17 @@ struct DolTrack {
   std::uint32_t id = 0;
   bool confirmed = false;
   int hits = 0;
-  hal::Nanos stamp_ns = 0;      // time of x and P
+  hal::Nanos stamp_ns = 0;      // time of the filter's state
   hal::Nanos last_hit_ns = 0;
-  Eigen::Matrix<double, 4, 1> x = Eigen::Matrix<double, 4, 1>::Zero();  // x, y, vx, vy (world)
-  Eigen::Matrix<double, 4, 4> P = Eigen::Matrix<double, 4, 4>::Identity();
+  CvFilter kf;                  // x, y, vx, vy (world)
   double radius_m = 0.1;
-  Eigen::Matrix<double, 2, 1> birth = Eigen::Matrix<double, 2, 1>::Zero();  // first position
-  Eigen::Matrix<double, 2, 1> seen = Eigen::Matrix<double, 2, 1>::Zero();   // last blob centroid
-  // The axis fit (axis_memory_m): weighed sums of the centroids relative to birth.
+  geometry::Point2D birth;  // first position
+  geometry::Point2D seen;   // last blob centroid
+  // The axis fit (axis_memory_m): weighed sums of the centroids relative to birth, and of their
+  // squares (xx, xy, yy).
   double axis_weight = 1.0;
-  Eigen::Matrix<double, 2, 1> axis_sum = Eigen::Matrix<double, 2, 1>::Zero();
-  Eigen::Matrix<double, 2, 2> axis_squares = Eigen::Matrix<double, 2, 2>::Zero();
+  geometry::Point2D axis_sum;
+  std::array<double, 3> axis_squares{};
   double axis_speed_m_s = 0.0;  // along the axis, averaged while in view
   bool mover = false;  // has shown that it moves (MoverTracker::classify)
   bool in_view = true;  // where the laser should see it, at the last update
@@ -128,23 +129,23 @@ class MoverTracker {
   [[nodiscard]] bool candidate(const DolTrack& track) const noexcept;
   // A track's position predicted to stamp_ns (constant velocity), without changing it; a
   // stamp before the track's own gives its current position.
-  [[nodiscard]] static Eigen::Matrix<double, 2, 1> predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
+  [[nodiscard]] static geometry::Point2D predict_position(const DolTrack& track, hal::Nanos stamp_ns) noexcept;
   // The whole state and covariance predicted to stamp_ns (the filter's prediction step).
   [[nodiscard]] DolTrack predicted(const DolTrack& track, hal::Nanos stamp_ns) const noexcept;
   void clear() noexcept { count_ = 0; }
   // The track's velocity, held to its travel axis (DolTrackerConfig::axis_memory_m).
-  [[nodiscard]] Eigen::Matrix<double, 2, 1> velocity(const DolTrack& track) const noexcept;
+  [[nodiscard]] geometry::Point2D velocity(const DolTrack& track) const noexcept;
   // The track's velocity reversed: a coasting mover predicted into a wall has turned there.
   void turn_back(std::size_t index) noexcept;
 
  private:
   struct Axis {
-    Eigen::Matrix<double, 2, 1> centre;
-    Eigen::Matrix<double, 2, 1> direction;  // unit
+    geometry::Point2D centre;
+    geometry::Point2D direction;  // unit
   };
   [[nodiscard]] bool axis(const DolTrack& track, Axis& out) const noexcept;  // false: none yet
   // Adds the centroid z (before track.seen becomes z) to the axis fit.
-  void follow_axis(DolTrack& track, const Eigen::Matrix<double, 2, 1>& z) const noexcept;
+  void follow_axis(DolTrack& track, geometry::Point2D z) const noexcept;
   // axis() exists and the filter's velocity lies within axis_max_angle_rad of it.
   [[nodiscard]] bool along_axis(const DolTrack& track, Axis& out) const noexcept;
   // The state's velocity := velocity(track); measured: the along-axis speed is averaged;

@@ -259,36 +259,10 @@ std::size_t PeopleFusion::follow(const msg::ScanView& scan, const Pose2D& laser_
 // --- Tracking ------------------------------------------------------------------------------------
 
 namespace {
-using Matrix4 = std::array<double, 16>;
-
-Matrix4 start_covariance(const PersonTrackerConfig& c) noexcept {
-  Matrix4 p{};
-  p[0] = p[5] = c.fix_sigma_m * c.fix_sigma_m;
-  p[10] = p[15] = c.start_speed_sigma_m_s * c.start_speed_sigma_m_s;
-  return p;
-}
-
-// P <- F P F' + Q for x += v dt, with white acceleration of density q.
-void predict_covariance(Matrix4& p, double dt, double q) noexcept {
-  Matrix4 fp = p;  // F P: rows 0, 1 gain dt times rows 2, 3
-  for (int c = 0; c < 4; ++c) {
-    fp[0 * 4 + c] += dt * p[2 * 4 + c];
-    fp[1 * 4 + c] += dt * p[3 * 4 + c];
-  }
-  p = fp;  // (F P) F': columns 0, 1 gain dt times columns 2, 3
-  for (int r = 0; r < 4; ++r) {
-    p[r * 4 + 0] += dt * fp[r * 4 + 2];
-    p[r * 4 + 1] += dt * fp[r * 4 + 3];
-  }
-  const double q_pp = q * dt * dt * dt / 3.0;
-  const double q_pv = q * dt * dt / 2.0;
-  const double q_vv = q * dt;
-  for (int a = 0; a < 2; ++a) {
-    p[a * 4 + a] += q_pp;
-    p[a * 4 + a + 2] += q_pv;
-    p[(a + 2) * 4 + a] += q_pv;
-    p[(a + 2) * 4 + a + 2] += q_vv;
-  }
+std::array<double, 16> start_covariance(const PersonTrackerConfig& c) noexcept {
+  CvFilter f;
+  f.reset({}, {}, c.fix_sigma_m * c.fix_sigma_m, c.start_speed_sigma_m_s * c.start_speed_sigma_m_s);
+  return f.P;
 }
 }  // namespace
 
@@ -416,10 +390,8 @@ void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp
   // Kalman: predict the state to the fix, then weigh the fix by its error, anisotropic when the
   // body is cut (the velocity is kept for a standing person too: it shows them setting off).
   const double dt = std::max(0.0, static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9);
-  double state[4] = {track.at.x_m + track.velocity.x_m * dt, track.at.y_m + track.velocity.y_m * dt,
-                     track.velocity.x_m, track.velocity.y_m};
-  Matrix4& p = track.covariance;
-  predict_covariance(p, dt, config_.accel_sigma_m_s2 * config_.accel_sigma_m_s2);
+  CvFilter f{{track.at.x_m, track.at.y_m, track.velocity.x_m, track.velocity.y_m}, track.covariance};
+  f.predict(dt, config_.accel_sigma_m_s2, ProcessNoise::continuous);
   // The fix's covariance: fix_sigma along the ray, and across it unless partial.
   const double along2 = config_.fix_sigma_m * config_.fix_sigma_m;
   const double across = fix.partial ? std::max(config_.partial_sigma_m, config_.fix_sigma_m) : config_.fix_sigma_m;
@@ -430,36 +402,14 @@ void PersonTracker::correct(Track& track, const PersonFix& fix, hal::Nanos stamp
   const double r00 = along2 * ux * ux + across2 * uy * uy;
   const double r01 = (along2 - across2) * ux * uy;
   const double r11 = along2 * uy * uy + across2 * ux * ux;
-  // S = H P H' + R and its inverse; K = P H' S^-1.
-  const double s00 = p[0] + r00;
-  const double s01 = p[1] + r01;
-  const double s11 = p[5] + r11;
-  const double det = s00 * s11 - s01 * s01;
-  if (!(det > 0.0) || !std::isfinite(det)) {
+  if (f.correct({fix.x_m, fix.y_m}, r00, r01, r11)) {
+    track.at = f.position();
+    track.velocity = f.velocity();
+    track.covariance = f.P;
+  } else {
     track.covariance = start_covariance(config_);
     track.at = {fix.x_m, fix.y_m};
     track.velocity = {};
-  } else {
-    const double i00 = s11 / det;
-    const double i01 = -s01 / det;
-    const double i11 = s00 / det;
-    double k[4][2];
-    for (int r = 0; r < 4; ++r) {
-      k[r][0] = p[r * 4 + 0] * i00 + p[r * 4 + 1] * i01;
-      k[r][1] = p[r * 4 + 0] * i01 + p[r * 4 + 1] * i11;
-    }
-    const double rx = fix.x_m - state[0];
-    const double ry = fix.y_m - state[1];
-    for (int r = 0; r < 4; ++r) state[r] += k[r][0] * rx + k[r][1] * ry;
-    Matrix4 updated = p;  // (I - K H) P
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) updated[r * 4 + c] -= k[r][0] * p[0 * 4 + c] + k[r][1] * p[1 * 4 + c];
-    for (int r = 0; r < 4; ++r)  // kept symmetric against rounding
-      for (int c = r + 1; c < 4; ++c)
-        updated[r * 4 + c] = updated[c * 4 + r] = 0.5 * (updated[r * 4 + c] + updated[c * 4 + r]);
-    p = updated;
-    track.at = {state[0], state[1]};
-    track.velocity = {state[2], state[3]};
   }
   const double speed = std::hypot(track.velocity.x_m, track.velocity.y_m);
   if (speed > config_.max_speed_m_s) {
@@ -498,8 +448,10 @@ double PersonTracker::position_sigma(const Track& track, hal::Nanos stamp_ns) co
   // all along): a person out of sight may have wandered anywhere near, by hidden_wander_m2_s.
   const double age_s = std::max(0.0, static_cast<double>(stamp_ns - track.last_seen_ns) * 1e-9);
   const double coasted_s = walking(track) ? std::min(age_s, config_.coast_s) : 0.0;
-  Matrix4 p = track.covariance;
-  predict_covariance(p, coasted_s, config_.accel_sigma_m_s2 * config_.accel_sigma_m_s2);
+  CvFilter f;
+  f.P = track.covariance;
+  f.predict(coasted_s, config_.accel_sigma_m_s2, ProcessNoise::continuous);
+  const std::array<double, 16>& p = f.P;
   const double wander = config_.hidden_wander_m2_s * (age_s - coasted_s);
   const double a = p[0] + wander;
   const double c = p[5] + wander;

@@ -25,8 +25,9 @@
 #include "sen3bot/msg/laser.hpp"
 #include "sen3bot/msg/navigation.hpp"
 #include "sen3bot/msg/people.hpp"
-#include "sen3bot/nav/costmap.hpp"
 #include "sen3bot/nav/assignment.hpp"
+#include "sen3bot/nav/costmap.hpp"
+#include "sen3bot/nav/cv_filter.hpp"
 #include "sen3bot/nav/geometry.hpp"
 #include "sen3bot/nav/map.hpp"
 
@@ -210,7 +211,7 @@ class PersonTracker {
     std::uint32_t id = 0;
     Point2D at;
     Point2D velocity;
-    std::array<double, 16> covariance{};  // x, y, vx, vy, row-major
+    std::array<double, 16> covariance{};  // of x, y, vx, vy, row-major (CvFilter::P)
     Point2D first_seen;
     double width_m = 0.0;
     hal::Nanos last_seen_ns = 0;    // the last fix, camera or laser

@@ -11,7 +11,7 @@ namespace sen3bot::nav {
 
 namespace {
 
-using Vector2 = Eigen::Matrix<double, 2, 1>;
+using geometry::Point2D;
 
 }  // namespace
 
@@ -86,11 +86,11 @@ void DynamicObstacleLayer::turn_back_at_walls(hal::Nanos stamp_ns) noexcept {
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const DolTrack& track = tracks[i];
     if (!track.mover || track.last_hit_ns == stamp_ns) continue;  // seen: the filter follows it
-    const double speed = std::hypot(track.x(2), track.x(3));
+    const double speed = std::hypot(track.kf.x[2], track.kf.x[3]);
     if (speed < config_.tracker.moving_min_speed_m_s) continue;
-    const double ux = track.x(2) / speed * kWallLookahead_m;
-    const double uy = track.x(3) / speed * kWallLookahead_m;
-    if (near_wall(track.x(0) + ux, track.x(1) + uy) && !near_wall(track.x(0) - ux, track.x(1) - uy))
+    const double ux = track.kf.x[2] / speed * kWallLookahead_m;
+    const double uy = track.kf.x[3] / speed * kWallLookahead_m;
+    if (near_wall(track.kf.x[0] + ux, track.kf.x[1] + uy) && !near_wall(track.kf.x[0] - ux, track.kf.x[1] - uy))
       tracker_.turn_back(i);
   }
 }
@@ -169,13 +169,13 @@ void DynamicObstacleLayer::update(Costmap2D& master, const CostmapInputs& inputs
     turn_back_at_walls(scan.stamp_ns());
   }
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!tracker_.moving(track) || !track.x.allFinite()) continue;
-    const Vector2 p = MoverTracker::predict_position(track, inputs.now_ns);
-    const Vector2 v = tracker_.velocity(track);
-    if (v.norm() >= config_.cost.min_speed_m_s) {
-      paint_mover(config_.cost, p(0), p(1), v(0), v(1), master);
+    if (!tracker_.moving(track) || !track.kf.finite()) continue;
+    const Point2D p = MoverTracker::predict_position(track, inputs.now_ns);
+    const Point2D v = tracker_.velocity(track);
+    if (std::sqrt(v.x_m * v.x_m + v.y_m * v.y_m) >= config_.cost.min_speed_m_s) {
+      paint_mover(config_.cost, p.x_m, p.y_m, v.x_m, v.y_m, master);
     }
-    paint_core(p(0), p(1), config_.cost.lethal_radius_m, master);
+    paint_core(p.x_m, p.y_m, config_.cost.lethal_radius_m, master);
   }
 }
 
@@ -185,12 +185,12 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
   out.stamp_ns = stamp_ns;
   if (!active_) return;
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!tracker_.moving(track) || !track.x.allFinite()) continue;
+    if (!tracker_.moving(track) || !track.kf.finite()) continue;
     if (out.count >= msg::MovingObstacles::kMax) break;
     put(track, stamp_ns, out.items[out.count++]);
   }
   for (const DolTrack& track : tracker_.tracks()) {
-    if (!tracker_.candidate(track) || !track.x.allFinite()) continue;
+    if (!tracker_.candidate(track) || !track.kf.finite()) continue;
     if (out.count + out.candidate_count >= msg::MovingObstacles::kMax) break;
     put(track, stamp_ns, out.items[out.count + out.candidate_count++]);
   }
@@ -199,14 +199,14 @@ void DynamicObstacleLayer::movers(hal::Nanos stamp_ns, msg::MovingObstacles& out
 void DynamicObstacleLayer::put(const DolTrack& track, hal::Nanos stamp_ns, msg::MovingObstacle& m) const noexcept {
   const DolTrack at = tracker_.predicted(track, stamp_ns);
   m.id = track.id;
-  m.x_m = at.x(0);
-  m.y_m = at.x(1);
-  const Vector2 v = tracker_.velocity(at);
-  m.vx_m_s = v(0);
-  m.vy_m_s = v(1);
+  m.x_m = at.kf.x[0];
+  m.y_m = at.kf.x[1];
+  const Point2D v = tracker_.velocity(at);
+  m.vx_m_s = v.x_m;
+  m.vy_m_s = v.y_m;
   m.radius_m = track.radius_m;
-  m.position_var_m2 = (at.P(0, 0) + at.P(1, 1)) / 2.0;
-  m.velocity_var_m2_s2 = (at.P(2, 2) + at.P(3, 3)) / 2.0;
+  m.position_var_m2 = (at.kf.cov(0, 0) + at.kf.cov(1, 1)) / 2.0;
+  m.velocity_var_m2_s2 = (at.kf.cov(2, 2) + at.kf.cov(3, 3)) / 2.0;
 }
 
 }  // namespace sen3bot::nav
