@@ -483,8 +483,8 @@ void run_walkers(double ax, double ay, double avx, double avy, double bx, double
       const DolTrack* b = find_track(tracker, id_b);
       ASSERT_NE(a, nullptr) << "t=" << t;
       ASSERT_NE(b, nullptr) << "t=" << t;
-      EXPECT_LT(std::hypot(a->x(0) - pa[0], a->x(1) - pa[1]), 0.15) << "walker A swapped at t=" << t;
-      EXPECT_LT(std::hypot(b->x(0) - pb[0], b->x(1) - pb[1]), 0.15) << "walker B swapped at t=" << t;
+      EXPECT_LT(std::hypot(a->kf.x[0] - pa[0], a->kf.x[1] - pa[1]), 0.15) << "walker A swapped at t=" << t;
+      EXPECT_LT(std::hypot(b->kf.x[0] - pb[0], b->kf.x[1] - pb[1]), 0.15) << "walker B swapped at t=" << t;
     }
   }
 }
@@ -925,10 +925,10 @@ void track_crossing_box(double robot_heading_rad, double robot_speed_m_s) {
     const DolTrack* tr = find_confirmed(rig.dol.tracks());
     ASSERT_NE(tr, nullptr);
     EXPECT_EQ(tr->id, id) << "t=" << t;
-    EXPECT_LT(std::hypot(tr->x(0) - p.x_m, tr->x(1) - p.y_m), 0.2) << "t=" << t;
+    EXPECT_LT(std::hypot(tr->kf.x[0] - p.x_m, tr->kf.x[1] - p.y_m), 0.2) << "t=" << t;
     if (t >= 3.0) {  // from about 1 s after it appeared
-      EXPECT_NEAR(std::hypot(tr->x(2), tr->x(3)), 0.6, 0.06) << "t=" << t;
-      EXPECT_LT(std::abs(std::atan2(tr->x(3), tr->x(2))), 10.0 * M_PI / 180.0) << "t=" << t;
+      EXPECT_NEAR(std::hypot(tr->kf.x[2], tr->kf.x[3]), 0.6, 0.06) << "t=" << t;
+      EXPECT_LT(std::abs(std::atan2(tr->kf.x[3], tr->kf.x[2])), 10.0 * M_PI / 180.0) << "t=" << t;
     }
     if (k == 80) {
       // The costmap shows the space ahead of the box as more expensive than behind it.
@@ -1053,9 +1053,9 @@ WallReturn box_returning_from_a_wall(bool walls) {
     if (id == 0) break;
     const DolTrack* first = find_track_by_id(rig.dol.tracks(), id);
     if (first == nullptr) break;  // lost
-    out.worst_gap_m = std::max(out.worst_gap_m, std::hypot(first->x(0) - p.x_m, first->x(1) - p.y_m));
+    out.worst_gap_m = std::max(out.worst_gap_m, std::hypot(first->kf.x[0] - p.x_m, first->kf.x[1] - p.y_m));
     if (t > 10.0) {  // back in sight, going down
-      out.same_id = k * kCostmapTickNs - first->last_hit_ns <= 2 * kCostmapTickNs && first->x(3) < -0.5;
+      out.same_id = k * kCostmapTickNs - first->last_hit_ns <= 2 * kCostmapTickNs && first->kf.x[3] < -0.5;
       break;
     }
   }

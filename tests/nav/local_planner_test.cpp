@@ -146,7 +146,7 @@ TEST(Dwa, ComputeAllocatesNothing) {
 }
 
 // A box crossing the robot's way, as the dynamic obstacle layer would report it.
-struct Crossing {
+struct CrossingBox {
   double x_m;       // its lane
   double y0_m;      // where it is at t = 0
   double vy_m_s;
@@ -165,7 +165,7 @@ struct CrossingRun {
   double max_turn_rad = 0.0;  // the largest heading away from the corridor's direction
 };
 
-CrossingRun drive_across(DwaPlanner& dwa, const Crossing& box, double max_time_s, double start_x_m = 1.0) {
+CrossingRun drive_across(DwaPlanner& dwa, const CrossingBox& box, double max_time_s, double start_x_m = 1.0) {
   const OccupancyMap map = corridor(false);
   const MapCostmap cm(map);
   dwa.set_path(straight(start_x_m, 7.0, 2.0));
@@ -280,7 +280,7 @@ TEST(DwaMovers, TheBroadPhaseNeverChangesATimeToContact) {
 
 TEST(DwaMovers, LetsACrossingBoxPassInsteadOfDrivingIntoIt) {
   // The box crosses y = 2 at x = 3.0 about 4.4 s in, when a robot at full speed is there.
-  const Crossing box{3.0, -1.5, 0.8};
+  const CrossingBox box{3.0, -1.5, 0.8};
   {
     mem::BudgetArena arena("dwa", 1 << 18);
     DwaConfig cfg;
@@ -304,7 +304,7 @@ TEST(DwaMovers, LetsACrossingBoxPassInsteadOfDrivingIntoIt) {
 TEST(DwaMovers, StandingInALaneItSpeedsUpOutOfIt) {
   // The robot starts at rest in the middle of a lane; its box comes down from 2.4 m away at
   // 0.8 m/s. Braking or creeping, it is hit; speeding up all the way, it clears the lane.
-  const Crossing box{1.0, 3.7, -0.8};
+  const CrossingBox box{1.0, 3.7, -0.8};
   mem::BudgetArena arena("dwa", 1 << 18);
   DwaPlanner dwa;
   ASSERT_TRUE(dwa.init({}, arena));
@@ -365,7 +365,7 @@ TEST(DwaMovers, ComputeWithMoversAllocatesNothing) {
   const OccupancyMap map = corridor(false);
   const MapCostmap cm(map);
   dwa.set_path(straight(1.0, 7.0, 2.0));
-  const Crossing box{3.0, 0.5, 0.8};
+  const CrossingBox box{3.0, 0.5, 0.8};
   mem::testing::AllocationScope scope;
   for (int i = 0; i < 50; ++i) {
     const msg::MovingObstacle m = box.at(0.1 * i);
