@@ -140,7 +140,7 @@ case "${1:-}" in
       qemu_closed_loop+='|^QrReaderRate\.WithinHalfAMetre'
       # Real-time pty runs and external peers are covered by the native and sanitized suites;
       # under an emulator ten times slower their timing says more about qemu than about the
-      # firmware. So are the long closed-loop runs of the whole simulated robot (half of the
+      # firmware. So are the long closed-loop runs of the whole simulated robot (over 40 % of the
       # emulated time) and the longer of the QR reader's two rate sweeps: one closed-loop run, the
       # main job's mission, stays as the target's end-to-end run, beside the e-stop chain, the
       # whole table's allocation proof, the people detector and the blurred QR sweep.
