@@ -4,6 +4,7 @@
 // m/s, world frame); the measurements are positions. Plain arrays: a track is copied, stored in
 // arenas and predicted for every reader, and no header that includes it pays for Eigen.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "sen3bot/geometry/geometry.hpp"
