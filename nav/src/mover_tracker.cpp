@@ -152,15 +152,15 @@ void MoverTracker::update(std::span<const Blob> blobs, hal::Nanos stamp_ns, cons
       const Blob& blob = blobs[static_cast<std::size_t>(b)];
       const Point2D z{blob.x_m, blob.y_m};
       const double dt = seconds_between(track.last_hit_ns, stamp_ns);
+      const double s2 = config_.measurement_sigma_m * config_.measurement_sigma_m;
       if (track.hits == 1 && dt > 0.0) {
         // Two-point initialisation: the velocity from the two positions, with its covariance.
-        const double s2 = config_.measurement_sigma_m * config_.measurement_sigma_m;
         const Point2D v{(z.x_m - track.kf.x[0]) / dt, (z.y_m - track.kf.x[1]) / dt};
         track.kf.reset(z, v, s2, 2.0 * s2 / (dt * dt));
         track.kf.P[0 * 4 + 2] = track.kf.P[2 * 4 + 0] = track.kf.P[1 * 4 + 3] = track.kf.P[3 * 4 + 1] = s2 / dt;
-      } else {
-        const double s2 = config_.measurement_sigma_m * config_.measurement_sigma_m;
-        if (!track.kf.correct(z, s2, 0.0, s2)) track.kf.reset(z, {}, s2, config_.initial_velocity_sigma_m_s * config_.initial_velocity_sigma_m_s);
+      } else if (!track.kf.correct(z, s2, 0.0, s2)) {
+        const double v2 = config_.initial_velocity_sigma_m_s * config_.initial_velocity_sigma_m_s;
+        track.kf.reset(z, {}, s2, v2);  // a broken state starts again at the fix
       }
       ++track.hits;
       track.last_hit_ns = stamp_ns;
