@@ -39,6 +39,10 @@ constexpr const char* kUsage =
     "        why. --mermaid prints it as a Mermaid flowchart instead (a figure where\n"
     "        Markdown is rendered). docs/architecture.md quotes this for the robot's\n"
     "        configuration.\n"
+    "  map --carmen FILE --out DIR/NAME.yaml [--resolution R] [--poses FILE]\n"
+    "        A map built from a recorded drive (laser SLAM: submaps, loop closures, a pose\n"
+    "        graph), written as map_server YAML + PGM; --poses writes each scan's solved\n"
+    "        pose (index x y theta); a JSON summary on stdout.\n"
     "  plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]\n"
     "        One global plan (A* with waypoint attraction) on the map's costmap, as\n"
     "        JSON: length_m, cells, expansions, time_ms, path [[x, y], ...] in metres.\n"
@@ -228,6 +232,7 @@ int cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"run", "", run_command},
       {"graph", "", graph_command},
       {"plan", "", plan_command},
+      {"map", "", map_command},
       {"sgp", "", sgp_from_module},
       {"fuse", "", fuse_command},
 #ifdef SEN3BOT_HAS_HOG

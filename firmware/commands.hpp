@@ -24,6 +24,8 @@ int can_dump_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim can io --iface sim; can_io.hpp)
 int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 
+// sen3bot map --carmen FILE --out DIR/NAME.yaml [--resolution R] [--poses FILE]
+int map_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot plan --map MAP.yaml --start X,Y --goal X,Y [--waypoints FILE] [--unit-cost]
 int plan_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot sgp --map MAP.yaml --curve CURVE.yaml --start X,Y --goal X,Y [--direction 1|-1] [--png FILE]

@@ -26,6 +26,8 @@ BUILD_PACKAGES=(
   ccache                     # the test command's builds reuse objects from earlier runs
   pkgconf                    # pkg-config, for dependencies without CMake packages
   libyaml-cpp-dev
+  libeigen3-dev              # map building: the pose graph's sparse Cholesky (headers only)
+  zlib1g-dev                 # map building: gzipped CARMEN logs
   libopencv-core-dev
   libopencv-imgproc-dev
   libjpeg62-turbo-dev        # camera: JPEG frames, `sen3bot detect --image` (libjpeg-turbo)

@@ -39,6 +39,7 @@ SYSROOT_PACKAGES=(
   libyaml-cpp-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev
+  libeigen3-dev zlib1g-dev     # map building: sparse Cholesky, gzipped logs
   libopencv-core-dev libopencv-imgproc-dev
   libjpeg62-turbo-dev libpng-dev  # JPEG in, PNG out (OpenCV's imgcodecs only for the tests)
   libopencv-objdetect406       # the on-board people detector (HOG); its -dev package below

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -195,6 +196,56 @@ Result<OccupancyMap> load_map(const std::string& yaml_path) {
   auto image = parse_pgm(*bytes, image_name);
   if (!image) return image.error();
   return occupancy_from_image(*image, *map_yaml);
+}
+
+namespace {
+
+std::string commented(std::string_view comment) {
+  std::string out;
+  std::size_t start = 0;
+  while (start < comment.size()) {
+    const std::size_t end = std::min(comment.find('\n', start), comment.size());
+    out += "# ";
+    out.append(comment.substr(start, end - start));
+    out += '\n';
+    start = end + 1;
+  }
+  return out;
+}
+
+Status write_whole_file(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return Error::format(Errc::io, "%s: cannot create", path.c_str());
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) return Error::format(Errc::io, "%s: write failed", path.c_str());
+  return {};
+}
+
+}  // namespace
+
+Status save_map(const OccupancyMap& map, const std::string& yaml_path, std::string_view comment) {
+  if (map.width() <= 0 || map.height() <= 0) return Error::format(Errc::invalid_argument, "%s: a map with no cells", yaml_path.c_str());
+  const std::filesystem::path yaml_file(yaml_path);
+  const std::string image = yaml_file.stem().string() + ".pgm";
+  const std::string note = commented(comment);
+  std::string pgm = "P5\n" + note + std::to_string(map.width()) + " " + std::to_string(map.height()) + "\n255\n";
+  pgm.reserve(pgm.size() + map.cell_count());
+  for (int image_row = 0; image_row < map.height(); ++image_row) {
+    const int row = map.height() - 1 - image_row;
+    for (int col = 0; col < map.width(); ++col) {
+      const std::int8_t v = map.at(col, row);
+      pgm.push_back(v >= 65 ? '\0' : (v >= 0 && v <= 19) ? '\xfe' : '\xcd');
+    }
+  }
+  char body[400];
+  std::snprintf(body, sizeof body,
+                "image: %s\nresolution: %.12g\norigin: [%.12g, %.12g, %.12g]\nnegate: 0\n"
+                "occupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n",
+                image.c_str(), map.resolution_m(), map.origin_x_m(), map.origin_y_m(), map.origin_yaw_rad());
+  const std::filesystem::path image_path = yaml_file.parent_path() / image;
+  if (Status s = write_whole_file(image_path.string(), pgm); !s) return s;
+  return write_whole_file(yaml_path, note + body);
 }
 
 }  // namespace sen3bot::nav

@@ -20,7 +20,7 @@ RANKS = {
     "drivers": 2,
     "runtime": 3,
     "nav": 4,
-    "ssc": 5, "cobot": 5, "formation": 5, "view": 5,
+    "ssc": 5, "cobot": 5, "slam": 5, "formation": 5, "view": 5,
     "firmware": 6,
     "centre": 7,
     "sim": 8,

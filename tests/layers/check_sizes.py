@@ -15,7 +15,7 @@ import tempfile
 
 MAX_FILE = 800
 MAX_FUNCTION = 150
-FOLDERS = ("hal", "lib", "drivers", "runtime", "nav", "ssc", "cobot", "formation", "view", "firmware",
+FOLDERS = ("hal", "lib", "drivers", "runtime", "nav", "slam", "ssc", "cobot", "formation", "view", "firmware",
            "centre", "sim")
 SOURCES = (".cpp", ".hpp", ".h", ".cc")
 

@@ -321,14 +321,6 @@ bool on_border(const Wall& w, const Extent& area) noexcept {
          (same(w.a.y_m, area.max.y_m) && same(w.b.y_m, area.max.y_m));
 }
 
-Status write_file(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (out) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) return Error::format(Errc::io, "%s: cannot write", path.c_str());
-  return Status::success();
-}
-
 }  // namespace
 
 double draw_walker_speed(std::mt19937_64& rng) noexcept {
@@ -509,30 +501,21 @@ Result<std::string> write_scene_map(const Scene& scene, const std::string& dir, 
   }
 
   const std::string stem = file_stem(scene.name);
-  char header[160];
-  std::snprintf(header, sizeof header, "P5\n# Sen3Bot crowd scene %s\n%zu %zu\n255\n", stem.c_str(), width, height);
-  std::string pgm = header;
-  pgm.reserve(pgm.size() + width * height);
-  for (std::size_t image_row = 0; image_row < height; ++image_row) {
-    const std::size_t row = height - 1 - image_row;
-    for (std::size_t col = 0; col < width; ++col) pgm.push_back(occupied[row * width + col] ? '\0' : '\xfe');
-  }
-  char yaml[512];
-  std::snprintf(yaml, sizeof yaml,
-                "# Sen3Bot crowd scene %s (write_scene_map): %zu x %zu cells of %.12g m; the free floor is\n"
-                "# x in [%.12g, %.12g] m, y in [%.12g, %.12g] m.\n"
-                "image: %s.pgm\nresolution: %.12g\norigin: [%.12g, %.12g, 0.0]\nnegate: 0\n"
-                "occupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n",
-                stem.c_str(), width, height, resolution_m, area.min.x_m, area.max.x_m, area.min.y_m, area.max.y_m,
-                stem.c_str(), resolution_m, origin.x_m, origin.y_m);
+  nav::OccupancyMap map(static_cast<int>(width), static_cast<int>(height), resolution_m, origin.x_m, origin.y_m);
+  for (std::size_t row = 0; row < height; ++row)
+    for (std::size_t col = 0; col < width; ++col)
+      map.set(static_cast<int>(col), static_cast<int>(row), occupied[row * width + col] ? nav::kOccupiedOccupancy : 0);
+  char comment[320];
+  std::snprintf(comment, sizeof comment,
+                "Sen3Bot crowd scene %s (write_scene_map): %zu x %zu cells of %.12g m; the free floor is\n"
+                "x in [%.12g, %.12g] m, y in [%.12g, %.12g] m.",
+                stem.c_str(), width, height, resolution_m, area.min.x_m, area.max.x_m, area.min.y_m, area.max.y_m);
 
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return Error::format(Errc::io, "%s: cannot create: %s", dir.c_str(), ec.message().c_str());
-  const std::string base_path = (std::filesystem::path(dir) / stem).string();
-  if (Status st = write_file(base_path + ".pgm", pgm); !st) return st.error();
-  const std::string yaml_path = base_path + ".yaml";
-  if (Status st = write_file(yaml_path, yaml); !st) return st.error();
+  const std::string yaml_path = (std::filesystem::path(dir) / stem).string() + ".yaml";
+  if (Status st = nav::save_map(map, yaml_path, comment); !st) return st.error();
   return yaml_path;
 }
 

@@ -91,4 +91,11 @@ OccupancyMap occupancy_from_image(const PgmImage& image, const MapYaml& yaml);
 // Reads the YAML, then the image it names. Errors name the file and the key or line.
 Result<OccupancyMap> load_map(const std::string& yaml_path);
 
+// Writes a map as map_saver does: `<stem>.pgm` beside `yaml_path` (P5, top row first; occupancy
+// >= 65 black 0, 0..19 free 254, unknown and between 205) and the YAML naming it (trinary,
+// thresholds 0.65 / 0.196, the grid's origin; a yawed grid keeps its yaw). `comment` (lines
+// without '#', may be empty) heads both files. Errors: a map with no cells, a file that cannot
+// be written (io). The folder must exist.
+Status save_map(const OccupancyMap& map, const std::string& yaml_path, std::string_view comment = {});
+
 }  // namespace sen3bot::nav
