@@ -239,7 +239,7 @@ Status Mapper::search_loops(std::size_t finished, std::size_t first_new_node) {
   const auto inside = [&](const Submap& s, std::size_t node) {
     return node + span >= s.first_node && node < s.first_node + s.scans + span;
   };
-  for (std::size_t k = 0; k + 1 < finished + 1 && k < submap_count_; ++k) {
+  for (std::size_t k = 0; k < finished; ++k) {
     const Submap& s = submaps_[k];
     if (k == finished || s.grid >= 0 || s.finished.cells == nullptr) continue;
     bool prepared = false;
