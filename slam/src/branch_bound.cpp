@@ -46,44 +46,64 @@ Status BranchBound::prepare(const ProbabilityView& submap) noexcept {
   stride_ = width_ + pad_;
   level_size_ = static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);
   std::uint8_t* base = levels_.data();
-  std::fill(base, base + level_size_, std::uint8_t{0});
+  std::fill(base, base + level_size_, std::uint8_t{1});
   for (int r = 0; r < height_; ++r)
     for (int c = 0; c < width_; ++c)
       base[static_cast<std::size_t>(r + pad_) * static_cast<std::size_t>(stride_) + static_cast<std::size_t>(c + pad_)] =
-          submap.byte(c, r);
-  // Level k holds, at (c, r), the best byte of the 2^k-cell square whose lower-left cell is (c, r).
+          std::max(submap.byte(c, r), std::uint8_t{1});
+  // Level k holds, at (c, r), the best byte of the 2^k-cell square whose lower-left cell is (c, r):
+  // the best of two level k-1 squares side by side, then of two such pairs one above the other.
+  // Cells past the grid's far edges hold unknown (1).
+  const auto rows = static_cast<std::size_t>(height_ + pad_);
+  const auto cols = static_cast<std::size_t>(stride_);
   for (int k = 1; k <= config_.depth; ++k) {
     const std::uint8_t* below = base + static_cast<std::size_t>(k - 1) * level_size_;
     std::uint8_t* level = base + static_cast<std::size_t>(k) * level_size_;
-    const int h = 1 << (k - 1);
-    const auto at = [&](int c, int r) -> std::uint8_t {
-      return (c < stride_ && r < height_ + pad_)
-                 ? below[static_cast<std::size_t>(r) * static_cast<std::size_t>(stride_) + static_cast<std::size_t>(c)]
-                 : std::uint8_t{0};
-    };
-    for (int r = 0; r < height_ + pad_; ++r)
-      for (int c = 0; c < stride_; ++c)
-        level[static_cast<std::size_t>(r) * static_cast<std::size_t>(stride_) + static_cast<std::size_t>(c)] =
-            std::max({at(c, r), at(c + h, r), at(c, r + h), at(c + h, r + h)});
+    const auto h = static_cast<std::size_t>(1) << (k - 1);
+    for (std::size_t r = 0; r < rows; ++r) {
+      const std::uint8_t* in = below + r * cols;
+      std::uint8_t* out = level + r * cols;
+      const std::size_t split = cols > h ? cols - h : 0;
+      for (std::size_t c = 0; c < split; ++c) out[c] = std::max(in[c], in[c + h]);
+      for (std::size_t c = split; c < cols; ++c) out[c] = std::max(in[c], std::uint8_t{1});
+    }
+    for (std::size_t r = 0; r < rows; ++r) {
+      std::uint8_t* out = level + r * cols;
+      if (r + h < rows) {
+        const std::uint8_t* up = level + (r + h) * cols;
+        for (std::size_t c = 0; c < cols; ++c) out[c] = std::max(out[c], up[c]);
+      }
+    }
   }
   return {};
 }
 
+std::uint8_t BranchBound::level_byte(int level, int col, int row) const noexcept {
+  const int c = col + pad_;
+  const int r = row + pad_;
+  if (level < 0 || level > config_.depth || c < 0 || r < 0 || c >= stride_ || r >= height_ + pad_) return 1;
+  return levels_[static_cast<std::size_t>(level) * level_size_ + static_cast<std::size_t>(r) * static_cast<std::size_t>(stride_) +
+                 static_cast<std::size_t>(c)];
+}
+
+// Bytes are probabilities on a line (byte 1 = kMinProbability, 255 = kMaxProbability; the levels
+// hold unknown cells as 1), so a mean of bytes is a mean of probabilities, summed as integers.
 float BranchBound::bound(int level, const Candidate& c) const noexcept {
   const std::uint8_t* cells = levels_.data() + static_cast<std::size_t>(level) * level_size_;
-  const auto& table = probability_table();
   const int* cols = cols_.data() + static_cast<std::size_t>(c.angle) * max_points_;
   const int* rows = rows_.data() + static_cast<std::size_t>(c.angle) * max_points_;
-  float sum = 0.0F;
+  const int rows_total = height_ + pad_;
+  std::uint32_t sum = 0;
   for (std::size_t i = 0; i < points_; ++i) {
     const int col = cols[i] + c.dx + pad_;
     const int row = rows[i] + c.dy + pad_;
-    const bool inside = col >= 0 && row >= 0 && col < stride_ && row < height_ + pad_;
-    sum += table[inside ? cells[static_cast<std::size_t>(row) * static_cast<std::size_t>(stride_) +
-                                static_cast<std::size_t>(col)]
-                        : 0];
+    const bool inside = static_cast<unsigned>(col) < static_cast<unsigned>(stride_) &&
+                        static_cast<unsigned>(row) < static_cast<unsigned>(rows_total);
+    sum += inside ? cells[static_cast<std::size_t>(row) * static_cast<std::size_t>(stride_) + static_cast<std::size_t>(col)]
+                  : 1u;
   }
-  return sum / static_cast<float>(points_);
+  const double mean_byte = static_cast<double>(sum) / static_cast<double>(points_);
+  return static_cast<float>(kMinProbability + (kMaxProbability - kMinProbability) * (mean_byte - 1.0) / 254.0);
 }
 
 nav::Pose2D BranchBound::pose_of(const Candidate& c, const nav::Pose2D& guess) const noexcept {
@@ -125,12 +145,15 @@ void BranchBound::descend(int level, const Candidate& c, double min_score, Candi
 std::optional<Match> BranchBound::search(const nav::Pose2D& guess, std::span<const PointF> points, double min_score,
                                          const Exclusion* exclusion) noexcept {
   scored_ = 0;
-  points_ = std::min(points.size(), max_points_);
+  // Every stride-th point: the search only has to find the basin; the refinement after it
+  // uses them all.
+  const std::size_t wanted = std::min(max_points_, static_cast<std::size_t>(std::max(config_.search_points, 1)));
+  const std::size_t stride = (points.size() + wanted - 1) / std::max<std::size_t>(wanted, 1);
+  points_ = stride == 0 ? 0 : (points.size() + stride - 1) / stride;
   if (points_ == 0 || width_ == 0) return std::nullopt;
   double range = 0.0;
-  for (std::size_t i = 0; i < points_; ++i)
-    range = std::max(range, std::hypot(static_cast<double>(points[i].x), static_cast<double>(points[i].y)));
-  angle_step_ = angular_step(resolution_m_, range);
+  for (const PointF& q : points) range = std::max(range, std::hypot(static_cast<double>(q.x), static_cast<double>(q.y)));
+  angle_step_ = angular_step(resolution_m_, std::min(range, config_.angle_step_range_m));
   int half = static_cast<int>(std::ceil(config_.angular_window_rad / angle_step_));
   if (2 * half + 1 > max_angles_) {
     half = (max_angles_ - 1) / 2;
@@ -144,7 +167,7 @@ std::optional<Match> BranchBound::search(const nav::Pose2D& guess, std::span<con
     int* cols = cols_.data() + static_cast<std::size_t>(a) * max_points_;
     int* rows = rows_.data() + static_cast<std::size_t>(a) * max_points_;
     for (std::size_t i = 0; i < points_; ++i) {
-      const PointF& q = points[i];
+      const PointF& q = points[i * stride];
       cols[i] = static_cast<int>(std::floor(submap_.grid_x(guess.x_m + c * q.x - s * q.y)));
       rows[i] = static_cast<int>(std::floor(submap_.grid_y(guess.y_m + s * q.x + c * q.y)));
     }

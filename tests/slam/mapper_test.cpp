@@ -151,6 +151,28 @@ struct LoopRig {
   }
 };
 
+TEST(LoopSearch, EachLevelHoldsTheBestCellOfItsSquare) {
+  std::vector<std::uint8_t> cells(37 * 23);
+  std::mt19937 rng(4);
+  for (std::uint8_t& c : cells) c = static_cast<std::uint8_t>(rng() % 3 == 0 ? 0 : rng() % 256);
+  const ProbabilityView grid{cells.data(), 37, 23, 0.05, 0.0, 0.0};
+  std::vector<std::byte> memory(4u << 20);
+  std::pmr::monotonic_buffer_resource arena(memory.data(), memory.size(), std::pmr::null_memory_resource());
+  BranchBound search;
+  LoopSearchConfig config;
+  config.depth = 4;
+  ASSERT_TRUE(search.init(arena, 64, 16, 0.05, config));
+  ASSERT_TRUE(search.prepare(grid));
+  for (int level = 0; level <= 4; ++level)
+    for (int row = -16; row < 23; ++row)
+      for (int col = -16; col < 37; ++col) {
+        std::uint8_t best = 1;  // unknown reads as the least probable
+        for (int r = row; r < row + (1 << level); ++r)
+          for (int c = col; c < col + (1 << level); ++c) best = std::max(best, std::max(grid.byte(c, r), std::uint8_t{1}));
+        ASSERT_EQ(search.level_byte(level, col, row), best) << level << " " << col << " " << row;
+      }
+}
+
 TEST(LoopSearch, FindsAScanMetresAndDegreesFromItsGuess) {
   const World room = furnished_room();
   LoopRig rig(room, {{0.0, 0.0, 0.0}, {2.0, 1.0, 1.0}, {-2.0, -1.0, -1.0}});

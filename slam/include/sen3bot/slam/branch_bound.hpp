@@ -17,9 +17,13 @@
 namespace sen3bot::slam {
 
 struct LoopSearchConfig {
-  double linear_window_m = 4.0;
+  double linear_window_m = 3.5;
   double angular_window_rad = 0.35;  // about 20 degrees
   int depth = 6;                     // coarsest level: 2^depth cells a side
+  // The angle step moves a point this far away by a cell: farther points move more between two
+  // steps, and the refinement after the search takes up the difference.
+  double angle_step_range_m = 10.0;
+  int search_points = 90;  // the scan's points the search scores, evenly taken
 };
 
 // A pose region a search must not answer from (the best answer of an earlier search, when
@@ -43,6 +47,8 @@ class BranchBound {
   [[nodiscard]] std::optional<Match> search(const nav::Pose2D& guess, std::span<const PointF> points, double min_score,
                                             const Exclusion* exclusion = nullptr) noexcept;
   [[nodiscard]] const LoopSearchConfig& config() const noexcept { return config_; }
+  // The prepared level's byte at (col, row) of the submap's cells (what the search bounds with).
+  [[nodiscard]] std::uint8_t level_byte(int level, int col, int row) const noexcept;
   // Candidates scored in the last search (its cost).
   [[nodiscard]] std::size_t last_scored() const noexcept { return scored_; }
 
