@@ -579,10 +579,24 @@ void read_view(const Reader& r, FirmwareConfig& c) {
     r.fail("address", server.address + " is reachable from other machines: set token or token_file", YAML::Node());
 }
 
+// mapping: map building on the robot (mapping_task.hpp, docs/mapping.md).
+void read_mapping(const Reader& r, FirmwareConfig& c) {
+  r.allow_only({"out", "max_scans", "beams", "resolution_m", "scans_per_submap", "max_range_m", "finished_submap_bytes"});
+  MappingConfig& m = c.mapping.task;
+  c.mapping.enabled = true;
+  m.out_path = relative_to(r.file(), r.text("out"));
+  if (r.has("max_scans")) m.max_scans = static_cast<std::size_t>(r.integer("max_scans", 1, 1'000'000));
+  if (r.has("beams")) m.beams = static_cast<std::size_t>(r.integer("beams", 16, static_cast<long long>(slam::kMaxBeams)));
+  if (r.has("resolution_m")) m.mapper.resolution_m = r.number("resolution_m", 0.01, 0.5);
+  if (r.has("scans_per_submap")) m.mapper.scans_per_submap = static_cast<int>(r.integer("scans_per_submap", 2, 1000));
+  if (r.has("max_range_m")) m.mapper.max_range_m = r.number("max_range_m", 1.0, 80.0);
+  if (r.has("finished_submap_bytes")) m.finished_submap_bytes = r.bytes("finished_submap_bytes");
+}
+
 FirmwareConfig read(const Reader& top, const std::string& source, std::span<const std::string_view> board_sections) {
   FirmwareConfig c;
   c.source_path = source;
-  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet", "cobot", "view"};
+  std::vector<std::string_view> keys = {"robot", "run", "realtime", "threads", "tasks", "board", "devices", "navigation", "fleet", "cobot", "view", "mapping"};
   keys.insert(keys.end(), board_sections.begin(), board_sections.end());
   if (top.has("sim") && std::find(keys.begin(), keys.end(), "sim") == keys.end())
     top.fail("sim", "a simulated robot: run this configuration with sen3bot-sim", YAML::Node());
@@ -661,6 +675,7 @@ FirmwareConfig read(const Reader& top, const std::string& source, std::span<cons
     top.fail("navigation", "goals: missing (1 to " + std::to_string(MissionConfig::kMaxGoals) + " points, or a fleet section)", YAML::Node());
   }
   if (top.has("view")) read_view(top.child("view"), c);
+  if (top.has("mapping")) read_mapping(top.child("mapping"), c);
   if (top.has("cobot")) {
     read_cobot(top.child("cobot"), c);
     if (!c.navigation.enabled || !c.navigation.people_enabled)

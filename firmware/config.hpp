@@ -26,6 +26,7 @@
 #include "view_config.hpp"
 #include "cobot_task.hpp"
 #include "fleet_task.hpp"
+#include "mapping_task.hpp"
 #include "mission.hpp"
 
 namespace sen3bot::firmware {
@@ -125,6 +126,12 @@ struct ViewSection {
   ViewTaskConfig task;
 };
 
+// mapping: the robot builds a map while it is driven (mapping_task.hpp); off without the section.
+struct MappingSection {
+  bool enabled = false;
+  MappingConfig task;
+};
+
 struct FirmwareConfig {
   std::string source_path;  // the file it came from, for messages
   std::string robot_name;
@@ -151,6 +158,7 @@ struct FirmwareConfig {
   FleetConfig fleet;
   CobotSection cobot;
   ViewSection view;
+  MappingSection mapping;
 };
 
 // `board_sections` are top-level sections that belong to the board the firmware runs on (the

@@ -109,6 +109,7 @@ class Firmware {
   [[nodiscard]] const nav::OccupancyMap& map() const { return shared_.map; }
   // The collaborative mode; null without a `cobot` section.
   [[nodiscard]] const CobotTask* cobot() const { return task_as<CobotTask>("cobot"); }
+  [[nodiscard]] const MappingTask* mapping() const { return task_as<MappingTask>("mapping"); }
   [[nodiscard]] const tasks::Topic<msg::CobotState>& cobot_state() const { return topics_.cobot_state; }
   [[nodiscard]] const tasks::Topic<msg::TagFrame>& tags() const { return topics_.tags; }
   [[nodiscard]] const tasks::Topic<msg::WorkerPath>& worker_path() const { return topics_.worker_path; }

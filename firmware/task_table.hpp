@@ -36,6 +36,7 @@ Status make_vision(Wiring&);        // row_module.cpp
 Status make_qr(Wiring&);            // row_module.cpp
 Status make_recognition(Wiring&);   // row_module.cpp
 Status make_view(Wiring&);          // view_task.cpp
+Status make_mapping(Wiring&);       // mapping_task.cpp
 
 struct Row {
   tasks::TaskSpec spec;
@@ -85,6 +86,11 @@ inline constexpr auto kRows = std::to_array<Row>({
     // reads; last, so that its init() finds the camera row's frames. A step with the map and the
     // global costmap is its longest.
     {{"view",         50'000,    5'000,     0,   "background"}, make_view},
+    // Map building (docs/mapping.md): the wheels' poses every period, five scans a second, on a
+    // thread of its own, whose loop searches and graph solves come in bursts as submaps finish.
+    // Budget: a scan's matching and its share of the loop searches, about 5 ms on the host,
+    // ten times that on a Pi 3.
+    {{"mapping",      50'000,    30'000,    0,   "mapping"},   make_mapping},
 });
 
 // The rows' timing alone, as the scheduler and the reports take it.

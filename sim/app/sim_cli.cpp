@@ -138,6 +138,18 @@ constexpr const char* kUsage =
     "        --references FILE writes the robot's reference route per operation as\n"
     "        the operations file's references block (tools/train_operations.sh).\n"
 #endif
+    "  slam-check --carmen LOG [--poses NAME=FILE ...] [--odometry] [--figure DIR]\n"
+    "             [--min-gap N] [--max-distance M]\n"
+    "        How far mapping trajectories (`sen3bot map --poses` files, NAME=FILE; the\n"
+    "        log's raw odometry with --odometry) agree with themselves where the robot\n"
+    "        came back: pairs of scans at least N (default 200) scans apart whose poses\n"
+    "        are within M (default 1.0) m and 30 degrees, at most one per 10 scans, each\n"
+    "        scan matched against a grid of the other alone from the trajectory's\n"
+    "        relative pose (+-0.3 m, +-15 degrees); the disagreement is how far the match\n"
+    "        moves. Per trajectory on its own pairs and on the pairs of the first one:\n"
+    "        pairs, matched (score 0.5 and over), mean, median and 95th percentile of the\n"
+    "        translational and rotational disagreement, as JSON. --figure DIR: a PNG per\n"
+    "        trajectory of the map drawn from every scan at its poses, with the trajectory.\n"
     "  can io --iface sim --node N [--set OUT=0|1 ...] [--timeout S] [--sim-inputs 0xHH]\n"
     "         [--sim-silent]\n"
     "        The robot's `sen3bot can io` against an emulated CiA 401 node on an\n"
@@ -207,6 +219,7 @@ int sim_cli_main(int argc, char** argv, std::FILE* out, std::FILE* err) {
       {"formation", "", formation_command},
 #endif
       {"agv", "", agv_command},
+      {"slam-check", "", slam_check_command},
       {"can", "io", can_io_command},
       {"p2os-emulator", "", p2os_emulator_command},
       {"lms200-emulator", "", lms200_emulator_command},

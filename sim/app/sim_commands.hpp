@@ -39,6 +39,9 @@ int formation_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim agv --broker URL --serial S [--manufacturer M] [--map-id ID] [--speed M_S] [--x X --y Y --theta RAD]
 //   [--duration S] [--username U --password-file F --ca-file F] [--client-id ID]
 int agv_command(int argc, char** argv, std::FILE* out, std::FILE* err);
+// sen3bot-sim slam-check --carmen LOG [--poses NAME=FILE ...] [--odometry] [--figure DIR] [--min-gap N]
+//   [--max-distance M]: mapping trajectories' consistency between scans far apart in time (cmd_slam_check.cpp)
+int slam_check_command(int argc, char** argv, std::FILE* out, std::FILE* err);
 // sen3bot-sim can io --iface sim --node N [--set OUT=0|1 ...] [--timeout S] [--sim-inputs 0xHH]
 //   [--sim-silent]: the robot's can io against the emulated CiA 401 node (cmd_can_io.cpp)
 int can_io_command(int argc, char** argv, std::FILE* out, std::FILE* err);

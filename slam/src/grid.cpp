@@ -106,12 +106,14 @@ void BuildGrid::ray(int c0, int r0, int c1, int r1) noexcept {
   int err = dc + dr;
   int c = c0;
   int r = r0;
-  // The last cells before the hit are left alone: a ray that grazes a wall crosses the wall's own
-  // cells just before it ends there, and clearing them would thin the wall ahead of every scan
-  // (which pulls later scans back towards where the walls were seen from).
-  int left = std::max(dc, -dr) - kKeepBeforeHit;
-  while ((c != c1 || r != r1) && left-- > 0) {
-    update(static_cast<std::size_t>(r) * static_cast<std::size_t>(side_) + static_cast<std::size_t>(c), miss_delta_);
+  // A wall cell among the last cells before the hit is left as it is: a ray that grazes a wall
+  // crosses the wall's own cells just before it ends there, and clearing them would thin the
+  // wall ahead of every scan (which pulls later scans back towards where the walls were seen
+  // from). Free and unknown cells there are cleared as anywhere else.
+  int left = std::max(dc, -dr);
+  while (c != c1 || r != r1) {
+    const std::size_t index = static_cast<std::size_t>(r) * static_cast<std::size_t>(side_) + static_cast<std::size_t>(c);
+    if (left-- > kKeepBeforeHit || log_odds_[index] == kUnknownLogOdds || log_odds_[index] <= 0) update(index, miss_delta_);
     const int e2 = 2 * err;
     if (e2 >= dr) {
       err += dr;

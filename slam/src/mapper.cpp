@@ -130,7 +130,10 @@ Status Mapper::add(const LaserRecord& scan) {
   node.first_point = static_cast<std::uint32_t>(point_count_);
   const double mc = std::cos(scan.laser_mount.theta_rad);
   const double ms = std::sin(scan.laser_mount.theta_rad);
-  for (std::uint32_t i = 0; i < scan.count && node.point_count < capacity_.beams; ++i) {
+  // A scan of more beams than a node keeps is thinned evenly, never cut at one side.
+  const std::uint32_t stride =
+      std::max<std::uint32_t>(1, static_cast<std::uint32_t>((scan.count + capacity_.beams - 1) / capacity_.beams));
+  for (std::uint32_t i = 0; i < scan.count && node.point_count < capacity_.beams; i += stride) {
     const double r = scan.ranges[i];
     if (!(r > config_.min_range_m && r < far)) continue;
     const double a = scan.start_angle_rad + i * scan.angle_increment_rad;
@@ -296,6 +299,16 @@ Status Mapper::finish() {
   return optimise(50);
 }
 
+// A cell the scans hit more than they crossed is a wall once it is likely (two hits more than
+// misses); one they crossed more than hit is free; a cell seen once each way stays unknown.
+std::int8_t occupancy_of(std::uint8_t byte) noexcept {
+  if (byte == 0) return nav::kUnknownOccupancy;
+  const double p = probability_table()[byte];
+  if (p >= 0.6) return nav::kOccupiedOccupancy;
+  if (p <= 0.47) return 0;
+  return nav::kUnknownOccupancy;
+}
+
 nav::Pose2D Mapper::scan_pose(std::size_t scan) const { return graph_pose(nodes_[scan].graph); }
 
 Result<nav::OccupancyMap> Mapper::render(double resolution_m) const {
@@ -342,11 +355,10 @@ Result<nav::OccupancyMap> Mapper::render(double resolution_m) const {
   }
   const ProbabilityView v = grid.view();
   nav::OccupancyMap map(v.width, v.height, resolution_m, v.origin_x_m + cx, v.origin_y_m + cy);
-  const auto& table = probability_table();
   for (int r = 0; r < v.height; ++r)
     for (int c = 0; c < v.width; ++c) {
       const std::uint8_t b = v.byte(c, r);
-      map.set(c, r, b == 0 ? nav::kUnknownOccupancy : static_cast<std::int8_t>(std::lround(100.0 * table[b])));
+      map.set(c, r, occupancy_of(b));
     }
   return map;
 }

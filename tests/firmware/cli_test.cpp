@@ -142,7 +142,7 @@ TEST(Cli, LockstepRunPrintsStatusAndStatistics) {
   // Every row but the camera's, the detectors' and the people's (config/sim.yaml has none),
   // the fleet's (its mission gives the goals), the collaborative mode's three (no cobot) and the
   // view's (off).
-  EXPECT_NE(o.out.find("status  " + std::to_string(kTaskTable.size() - 9) + " tasks"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("status  " + std::to_string(kTaskTable.size() - 10) + " tasks"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("simulated 12.000 s"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("task statistics"), std::string::npos);
   // health at 10 Hz for 12 s.

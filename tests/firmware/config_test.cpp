@@ -69,6 +69,30 @@ TEST(Config, BoardIoLines) {
   EXPECT_NE(m.find("board.estop: unknown key"), std::string::npos) << m;
 }
 
+TEST(Config, MappingSection) {
+  Result<FirmwareConfig> off = parse_config(kValid, "/site/robot.yaml");
+  ASSERT_TRUE(off);
+  EXPECT_FALSE(off->mapping.enabled);
+  Result<FirmwareConfig> r = parse_config(
+      std::string(kValid) + "mapping: { out: maps/new.yaml, max_scans: 5000, resolution_m: 0.1, scans_per_submap: 20, "
+                            "max_range_m: 15, finished_submap_bytes: 8MiB }\n",
+      "/site/robot.yaml");
+  ASSERT_TRUE(r) << r.error().c_str();
+  EXPECT_TRUE(r->mapping.enabled);
+  EXPECT_EQ(r->mapping.task.out_path, "/site/maps/new.yaml");  // beside the configuration
+  EXPECT_EQ(r->mapping.task.max_scans, 5000u);
+  EXPECT_DOUBLE_EQ(r->mapping.task.mapper.resolution_m, 0.1);
+  EXPECT_EQ(r->mapping.task.mapper.scans_per_submap, 20);
+  EXPECT_DOUBLE_EQ(r->mapping.task.mapper.max_range_m, 15.0);
+  EXPECT_EQ(r->mapping.task.finished_submap_bytes, 8u << 20);
+  std::string m = message_of(std::string(kValid) + "mapping: { max_scans: 10 }\n");
+  EXPECT_NE(m.find("mapping.out"), std::string::npos) << m;
+  m = message_of(std::string(kValid) + "mapping: { out: a.yaml, resolution_m: 0 }\n");
+  EXPECT_NE(m.find("mapping.resolution_m"), std::string::npos) << m;
+  m = message_of(std::string(kValid) + "mapping: { out: a.yaml, loops: 3 }\n");
+  EXPECT_NE(m.find("mapping.loops: unknown key"), std::string::npos) << m;
+}
+
 TEST(Config, ErrorsNameTheFileTheKeyAndTheProblem) {
   std::string m = message_of(R"(
 robot: { name: x }

@@ -25,8 +25,8 @@ TEST(TaskTable, RowsAreValidAndNamesUnique) {
 
 // config/sim.yaml's robot has every device but a camera, no person detector (the detector's,
 // the people's and the on-board detector's rows), its mission's goals instead of a fleet, and no
-// collaborative mode (the cobot, qr and recognition rows), and no live view.
-constexpr std::size_t kSimulatedRows = kTaskTable.size() - 9;
+// collaborative mode (the cobot, qr and recognition rows), no live view and no map building.
+constexpr std::size_t kSimulatedRows = kTaskTable.size() - 10;
 
 TEST(Firmware, InitBuildsTheWholeTableWithinBudgets) {
   FirmwareConfig config = sim_config();

@@ -60,8 +60,7 @@ TEST(SubmapGrid, AHitRaisesItsCellAndTheRayBeforeItIsLowered) {
   const ProbabilityView v = rig.grid.view();
   // The grid is centred on the frame's origin: cell 200 starts at x = 0.
   EXPECT_EQ(v.byte(220, 200), probability_byte(0.55));  // the hit, at x in [1.00, 1.05)
-  for (int c = 200; c < 217; ++c) EXPECT_EQ(v.byte(c, 200), probability_byte(0.49)) << c;
-  for (int c = 217; c < 220; ++c) EXPECT_EQ(v.byte(c, 200), 0) << "the cells just before a hit are left alone: " << c;
+  for (int c = 200; c < 220; ++c) EXPECT_EQ(v.byte(c, 200), probability_byte(0.49)) << c;
   EXPECT_EQ(v.byte(221, 200), 0) << "behind the hit is unknown";
   EXPECT_EQ(v.byte(210, 201), 0) << "beside the ray is unknown";
   // Once per scan: a second hit in the same cell does not count twice.
@@ -74,6 +73,13 @@ TEST(SubmapGrid, AHitRaisesItsCellAndTheRayBeforeItIsLowered) {
   EXPECT_EQ(b.max_col, 220);
   EXPECT_EQ(b.min_row, 200);
   EXPECT_EQ(b.max_row, 200);
+  // A wall cell just before a later hit keeps its evidence (a grazing ray does not thin it);
+  // farther back along the ray it is lowered like any other.
+  const std::vector<PointF> beyond = {{1.17F, 0.02F}};
+  rig.grid.insert({0.02F, 0.02F}, beyond);
+  EXPECT_EQ(v.byte(220, 200), probability_byte(p2));
+  rig.grid.insert({0.02F, 0.02F}, std::vector<PointF>{{1.52F, 0.02F}});
+  EXPECT_LT(v.byte(220, 200), probability_byte(p2));
 }
 
 TEST(SubmapGrid, AFrozenSubmapKeepsOnlyItsKnownCells) {

@@ -66,6 +66,9 @@ struct MapperStats {
   double loop_search_s = 0.0;
 };
 
+// How a probability byte of the drawn map reads: occupied (100), free (0) or unknown (-1).
+std::int8_t occupancy_of(std::uint8_t byte) noexcept;
+
 class Mapper {
  public:
   [[nodiscard]] static std::size_t bytes_for(const MapperConfig& config, const MapperCapacity& capacity) noexcept;
@@ -81,7 +84,7 @@ class Mapper {
   [[nodiscard]] const MapperStats& stats() const noexcept { return stats_; }
 
   // Every scan at its solved pose, as an occupancy map with a margin of unknown cells
-  // (allocates: done once, at the end of a drive). Occupancy: round(100 p) where known.
+  // (allocates: done once, at the end of a drive): 100 wall, 0 free, -1 unknown (occupancy_of).
   [[nodiscard]] Result<nav::OccupancyMap> render(double resolution_m) const;
 
  private:
