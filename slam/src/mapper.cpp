@@ -239,16 +239,16 @@ Status Mapper::search_loops(std::size_t finished, std::size_t first_new_node) {
   // A scan is tied to the submaps next to its own in time through the scans they share; a
   // closure with them says nothing the front end did not.
   const auto span = static_cast<std::size_t>(config_.scans_per_submap) * 3;
-  const auto inside = [&](const Submap& s, std::size_t node) {
+  const auto neighbours_in_time = [&](const Submap& s, std::size_t node) {
     return node + span >= s.first_node && node < s.first_node + s.scans + span;
   };
   for (std::size_t k = 0; k < finished; ++k) {
     const Submap& s = submaps_[k];
-    if (k == finished || s.grid >= 0 || s.finished.cells == nullptr) continue;
+    if (s.grid >= 0 || s.finished.cells == nullptr) continue;
     bool prepared = false;
     const std::size_t taken = stats_.loops_accepted;
     for (std::size_t node = first_new_node; node < node_count_ && stats_.loops_accepted - taken < cap; ++node) {
-      if (node % every != 0 || inside(s, node) || !near(s, node)) continue;
+      if (node % every != 0 || neighbours_in_time(s, node) || !near(s, node)) continue;
       if (!prepared) {
         if (Status st = loops_.prepare(s.finished); !st) return st;
         prepared = true;
@@ -259,21 +259,16 @@ Status Mapper::search_loops(std::size_t finished, std::size_t first_new_node) {
   const Submap& f = submaps_[finished];
   if (f.finished.cells != nullptr) {
     bool prepared = false;
-    std::size_t taken = 0;
-    std::size_t last_submap_node = 0;  // one closure per stretch of older scans
+    std::size_t skip_until = 0;  // one closure per submap's worth of older scans
     for (std::size_t node = 0; node < first_new_node; ++node) {
-      if (stats_.loops_accepted > taken && node < last_submap_node + static_cast<std::size_t>(config_.scans_per_submap)) continue;
-      if (node % every != 0 || inside(f, node) || !near(f, node)) continue;
+      if (node < skip_until || node % every != 0 || neighbours_in_time(f, node) || !near(f, node)) continue;
       if (!prepared) {
         if (Status st = loops_.prepare(f.finished); !st) return st;
         prepared = true;
       }
-      const std::size_t before_try = stats_.loops_accepted;
+      const std::size_t accepted = stats_.loops_accepted;
       if (Status st = try_loop(finished, node); !st) return st;
-      if (stats_.loops_accepted > before_try) {
-        taken = before_try;
-        last_submap_node = node;
-      }
+      if (stats_.loops_accepted > accepted) skip_until = node + static_cast<std::size_t>(config_.scans_per_submap);
     }
   }
   searched_up_to_ = node_count_;
