@@ -581,7 +581,8 @@ void read_view(const Reader& r, FirmwareConfig& c) {
 
 // mapping: map building on the robot (mapping_task.hpp, docs/mapping.md).
 void read_mapping(const Reader& r, FirmwareConfig& c) {
-  r.allow_only({"out", "max_scans", "beams", "resolution_m", "scans_per_submap", "max_range_m", "finished_submap_bytes"});
+  r.allow_only({"out", "max_scans", "beams", "resolution_m", "scans_per_submap", "max_range_m", "finished_submap_bytes",
+                "start_pose"});
   MappingConfig& m = c.mapping.task;
   c.mapping.enabled = true;
   m.out_path = relative_to(r.file(), r.text("out"));
@@ -591,6 +592,7 @@ void read_mapping(const Reader& r, FirmwareConfig& c) {
   if (r.has("scans_per_submap")) m.mapper.scans_per_submap = static_cast<int>(r.integer("scans_per_submap", 2, 1000));
   if (r.has("max_range_m")) m.mapper.max_range_m = r.number("max_range_m", 1.0, 80.0);
   if (r.has("finished_submap_bytes")) m.finished_submap_bytes = r.bytes("finished_submap_bytes");
+  if (r.has("start_pose")) m.start_pose = read_pose(r.child("start_pose"));
 }
 
 FirmwareConfig read(const Reader& top, const std::string& source, std::span<const std::string_view> board_sections) {

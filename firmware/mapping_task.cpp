@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "sen3bot/nav/arena.hpp"
 #include "sen3bot/nav/map.hpp"
@@ -41,7 +42,10 @@ Status MappingTask::init(std::pmr::memory_resource& arena) {
 
 void MappingTask::step(const tasks::StepContext&) {
   tasks::Sample<msg::Odometry> odometry;
-  if (topics_.odometry.read(odometry)) history_.push(odometry.value);
+  if (topics_.odometry.read(odometry) && odometry.value.valid) {
+    history_.push(odometry.value);
+    if (!start_odometry_) start_odometry_ = nav::Pose2D{odometry.value.x_m, odometry.value.y_m, odometry.value.theta_rad};
+  }
   tasks::Sample<msg::ScanMessage> scan;
   if (!topics_.scan.read(scan) || scan.sequence == last_scan_sequence_) return;
   const msg::ScanMessage& s = scan.value;
@@ -63,7 +67,14 @@ void MappingTask::step(const tasks::StepContext&) {
     if (refused_++ == 0) error_ = st.error();
     return;
   }
+  if (taken_ == 0) first_scan_odometry_ = at_scan;
   stamps_[taken_++] = s.stamp_ns;
+}
+
+nav::Pose2D MappingTask::site_pose(std::size_t i) const {
+  const nav::Pose2D first = nav::apply_motion(
+      config_.start_pose, nav::relative_pose(start_odometry_.value_or(first_scan_odometry_), first_scan_odometry_));
+  return nav::apply_motion(first, mapper_.scan_pose(i));
 }
 
 void MappingTask::shutdown() {
@@ -76,11 +87,19 @@ void MappingTask::shutdown() {
     error_ = s.error();
     return;
   }
-  Result<nav::OccupancyMap> map = mapper_.render(config_.mapper.resolution_m);
-  if (!map) {
-    error_ = map.error();
+  Result<nav::OccupancyMap> drawn = mapper_.render(config_.mapper.resolution_m);
+  if (!drawn) {
+    error_ = drawn.error();
     return;
   }
+  // Into the site's frame: the mapper's is the robot's pose at its first scan.
+  const nav::Pose2D first = site_pose(0);
+  const nav::Pose2D origin =
+      nav::apply_motion(first, {drawn->origin_x_m(), drawn->origin_y_m(), drawn->origin_yaw_rad()});
+  std::optional<nav::OccupancyMap> map;
+  map.emplace(drawn->width(), drawn->height(), drawn->resolution_m(), origin.x_m, origin.y_m, origin.theta_rad);
+  for (int r = 0; r < drawn->height(); ++r)
+    for (int c = 0; c < drawn->width(); ++c) map->set(c, r, drawn->at(c, r));
   char comment[160];
   std::snprintf(comment, sizeof comment, "Sen3Bot map built on the robot from %zu scans", mapper_.scan_count());
   if (Status s = nav::save_map(*map, config_.out_path, comment); !s) {
@@ -90,7 +109,7 @@ void MappingTask::shutdown() {
   const std::string poses = (std::filesystem::path(config_.out_path).replace_extension(".poses")).string();
   if (std::FILE* f = std::fopen(poses.c_str(), "w"); f != nullptr) {
     for (std::size_t i = 0; i < mapper_.scan_count(); ++i) {
-      const nav::Pose2D p = mapper_.scan_pose(i);
+      const nav::Pose2D p = site_pose(i);
       std::fprintf(f, "%zu %.4f %.4f %.5f %.3f\n", i, p.x_m, p.y_m, p.theta_rad, static_cast<double>(stamps_[i]) * 1e-9);
     }
     if (std::fclose(f) != 0) error_ = Error::format(Errc::io, "%s: write failed", poses.c_str());

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory_resource>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -30,6 +31,10 @@ struct MappingConfig {
   slam::MapperConfig mapper;            // resolution_m, scans_per_submap, max_range_m from the file
   std::size_t finished_submap_bytes = 64u << 20;
   double scan_interval_s = 0.15;        // scans closer in time than this are skipped
+  // Where the robot stands when the mapping row starts (its first odometry), in the site's frame:
+  // the map and the poses are written in that frame (origin and yaw of the map), so goals given
+  // in site coordinates hold.
+  nav::Pose2D start_pose;
 };
 
 struct MappingTopics {
@@ -55,6 +60,8 @@ class MappingTask final : public tasks::Task {
   // The first error the mapper or the writer met (empty: none).
   [[nodiscard]] const char* last_error() const noexcept { return error_.c_str(); }
   [[nodiscard]] bool written() const noexcept { return written_; }
+  // The i-th scan's solved pose in the site's frame (start_pose), as the poses file has it.
+  [[nodiscard]] nav::Pose2D site_pose(std::size_t i) const;
   // When the i-th scan the mapper took was measured (its stamp).
   [[nodiscard]] hal::Nanos scan_stamp(std::size_t i) const noexcept { return i < taken_ ? stamps_[i] : 0; }
 
@@ -68,6 +75,10 @@ class MappingTask final : public tasks::Task {
   // it is read, and the robot turns 10-20 degrees in that time (odometry_history.hpp).
   nav::OdometryHistory history_;
   hal::Nanos last_scan_stamp_ = 0;
+  // The odometry when the row started and at the mapper's first scan: the robot may have moved
+  // in between, and the mapper's frame is its pose at that scan.
+  std::optional<nav::Pose2D> start_odometry_;
+  nav::Pose2D first_scan_odometry_;
   std::span<hal::Nanos> stamps_;  // per scan taken, for the poses file
   std::uint64_t last_scan_sequence_ = 0;
   std::uint64_t taken_ = 0;

@@ -115,7 +115,8 @@ int parse_slam_check_options(int argc, char** argv, SlamCheckOptions& o, std::FI
 std::string figure_file(const std::string& dir, const std::string& name) {
   std::string safe = name;
   for (char& c : safe) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.';
     if (!ok) c = '_';
   }
   if (safe.empty() || safe[0] == '.') safe = "_" + safe;

@@ -1,5 +1,7 @@
 #include "slam_check.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -26,7 +28,9 @@ constexpr int kPairGridSide = 1024;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr int kMapMarginCells = 10;
 constexpr int kMaxGridSide = 8192;  // BuildGrid's largest
+constexpr double kMaxMapExtentM = 100000.0;  // a map wider is a broken trajectory, not a building
 
+constexpr double kMaxPlotPx = 1600.0;
 constexpr figure::Rgb kTrajectoryColour{220, 0, 0};
 constexpr figure::Rgb kStartColour{0, 150, 150};
 constexpr figure::Rgb kSubtitleColour{90, 90, 90};
@@ -117,6 +121,9 @@ Result<std::vector<nav::Pose2D>> parse_poses(std::string_view text, std::string_
 }
 
 Result<std::vector<nav::Pose2D>> read_poses(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    return Error::format(Errc::invalid_argument, "%s: is a directory", path.c_str());
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error::format(Errc::not_found, "%s: cannot open (%s)", path.c_str(), std::strerror(errno));
   std::ostringstream text;
@@ -176,7 +183,10 @@ PairCheck PairChecker::check(const Scan& a, const Scan& b, const nav::Pose2D& re
   PairCheck c;
   c.relative = relative;
   c.matched = relative;
-  if (!ready_ || a.points.empty() || b.points.empty()) return c;
+  // A relative pose off the grid cannot overlap scan a (and would overflow its cell indices).
+  const bool on_grid = std::isfinite(relative.theta_rad) &&
+                       std::hypot(relative.x_m, relative.y_m) < 0.5 * kPairGridSide * kResolutionM;
+  if (!ready_ || a.points.empty() || b.points.empty() || !on_grid) return c;
   grid_.reset();
   const slam::PointF sensor{static_cast<float>(a.mount.x_m), static_cast<float>(a.mount.y_m)};
   for (int k = 0; k < kInsertions; ++k) grid_.insert(sensor, a.points);
@@ -263,6 +273,9 @@ Result<MapGrid> render_map(std::span<const Scan> scans, std::span<const nav::Pos
   }
   // Cells: the extent and a margin; coarser cells when BuildGrid's largest side would not hold it.
   const double extent = std::max(max_x - min_x, max_y - min_y);
+  if (!(extent < kMaxMapExtentM))
+    return Error::format(Errc::invalid_argument, "map: the poses and returns spread over more than %.0f km",
+                         kMaxMapExtentM / 1000.0);
   double res = resolution_m;
   while (std::ceil(extent / res) + 2 * kMapMarginCells + 2 > kMaxGridSide) res *= 2.0;
   const int side = std::max(16, static_cast<int>(std::ceil(extent / res)) + 2 * kMapMarginCells + 2);
@@ -312,12 +325,46 @@ Result<MapGrid> render_map(std::span<const Scan> scans, std::span<const nav::Pos
   return map;
 }
 
+namespace {
+
+// Cells smaller than a pixel: blocks of k x k cells, a wall where any cell is one, else free
+// where any is known, else unknown (draw_grid would drop the cells that round to no pixel).
+MapGrid pooled_for_drawing(const MapGrid& m, int k) {
+  MapGrid p;
+  p.width = (m.width + k - 1) / k;
+  p.height = (m.height + k - 1) / k;
+  p.resolution_m = m.resolution_m * k;
+  p.origin_x_m = m.origin_x_m;
+  p.origin_y_m = m.origin_y_m;
+  p.cells.assign(static_cast<std::size_t>(p.width) * static_cast<std::size_t>(p.height), std::int8_t{-1});
+  for (int r = 0; r < m.height; ++r)
+    for (int c = 0; c < m.width; ++c) {
+      const auto at = [](int row, int col, int width) {
+        return static_cast<std::size_t>(row) * static_cast<std::size_t>(width) + static_cast<std::size_t>(col);
+      };
+      const std::int8_t v = m.cells[at(r, c, m.width)];
+      std::int8_t& out = p.cells[at(r / k, c / k, p.width)];
+      if (v >= 50 ? out < 50 : (v >= 0 && out < 0)) out = v;
+    }
+  return p;
+}
+
+}  // namespace
+
 figure::Canvas draw_map_figure(const MapFigure& f) {
   using namespace figure;
   using namespace figure::colours;
-  const MapGrid& m = *f.map;
+  const MapGrid& fine = *f.map;
+  // The project's scale, or up to 2 px a cell while the plot stays within kMaxPlotPx: a map of
+  // a building is read for its doubled walls.
+  const Grid fine_grid{fine.width, fine.height, fine.resolution_m, fine.origin_x_m, fine.origin_y_m, fine.cells};
+  const double extent_m = std::max(fine_grid.width_m(), fine_grid.height_m());
+  const double scale = std::max(figure_scale(fine_grid), std::min(2.0 / fine.resolution_m, kMaxPlotPx / extent_m));
+  const int k = static_cast<int>(std::ceil(1.0 / (scale * fine.resolution_m) - 1e-9));
+  MapGrid pooled;
+  if (k > 1) pooled = pooled_for_drawing(fine, k);
+  const MapGrid& m = k > 1 ? pooled : fine;
   const Grid grid{m.width, m.height, m.resolution_m, m.origin_x_m, m.origin_y_m, m.cells};
-  const double scale = figure_scale(grid);
   // The header: the title, then what the check found; room for "y (m)" above the plot.
   const int title_y = kMargin + Canvas::text_height(kTitleSize, 2);
   const int subtitle_y = title_y + 8 + Canvas::text_height(kLineSize);
@@ -333,7 +380,8 @@ figure::Canvas draw_map_figure(const MapFigure& f) {
                       c.fill_rect(static_cast<int>(p.x) - 12, static_cast<int>(p.y) - 6, 24, 12, kWall);
                     }});
   legend.push_back({"free", [](Canvas& c, Px p) {
-                      const std::vector<Px> box{{p.x - 12, p.y - 6}, {p.x + 12, p.y - 6}, {p.x + 12, p.y + 6}, {p.x - 12, p.y + 6}};
+                      const std::vector<Px> box{
+                          {p.x - 12, p.y - 6}, {p.x + 12, p.y - 6}, {p.x + 12, p.y + 6}, {p.x - 12, p.y + 6}};
                       c.outline_polygon(box, kInk, 1);
                     }});
   if (has_unknown(grid))
@@ -347,7 +395,9 @@ figure::Canvas draw_map_figure(const MapFigure& f) {
 
   const int legend_x = plot_left + map_w + kLegendGap;
   const int header_w = std::max(Canvas::text_width(f.title, kTitleSize, 2), Canvas::text_width(f.subtitle, kLineSize));
-  const int width = std::max(legend_x + legend_width(legend) + kMargin, kMargin + header_w + kMargin);
+  // The scale bar under the legend reaches past the entries when it is long: "scale", the bar, its label.
+  const int bar_w = 52 + static_cast<int>(std::lround(scale_bar_length_m(scale) * scale)) + 24;
+  const int width = std::max(legend_x + std::max(legend_width(legend), bar_w) + kMargin, kMargin + header_w + kMargin);
   const int height = std::max(plot_top + map_h + kAxisBottom, plot_top + legend_height(legend)) + kMargin / 2;
   Canvas canvas(width, height, kPaper);
   canvas.text({kMargin, static_cast<double>(title_y)}, f.title, kInk, kTitleSize, 2);

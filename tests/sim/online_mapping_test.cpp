@@ -170,5 +170,96 @@ TEST(OnlineMapping, TheRobotMapsTheLabWhileItRunsTheThesisMission) {
   EXPECT_GT(score.recall, 0.9);
 }
 
+// The lab as a site the robot has no map of: someone pushes it round with its motors off, its
+// odometry 2 % long and turning 3 % too much, a worker walking across the upper area. The map
+// it builds is then the map the thesis mission runs on.
+TEST(OnlineMapping, ARobotPushedRoundALabItHasNoMapOfMapsItAndThenRunsTheMissionOnThatMap) {
+  const std::string out = ::testing::TempDir() + "pushed_lab.yaml";
+  testing::SimRig rig = testing::load_sim_rig();
+  const firmware::FirmwareConfig mission_config = rig.config;
+  rig.config.navigation = {};  // no map: no localization, no planners, no mission
+  for (const char* row : {"safety", "localization", "controller", "planner", "mission"}) rig.config.tasks.erase(row);
+  rig.config.mapping.enabled = true;
+  rig.config.mapping.task.out_path = out;
+  rig.config.mapping.task.max_scans = 3000;
+  rig.config.mapping.task.finished_submap_bytes = 16u << 20;
+  rig.config.mapping.task.start_pose = rig.world.start_pose;  // where the push starts, in the site's frame
+  rig.config.tasks["mapping"].arena_bytes = firmware::MappingTask::arena_bytes_needed(rig.config.mapping.task);
+  rig.world.base.odometry_scale_error = 0.02;
+  rig.world.base.odometry_turn_error = 0.03;
+  // Through the door to the thesis goal, along the upper storage area's racks and into their
+  // aisle, back through the door, round the lower work area, and home.
+  rig.world.push_path = {{2.56, 2.25}, {2.75, 3.0}, {2.88, 3.75}, {2.9, 4.5},  {2.9, 5.25}, {3.35, 5.86}, {4.0, 7.0},
+                         {4.0, 8.5},   {1.2, 8.5},  {3.2, 8.5},   {3.2, 7.0},  {1.5, 7.0},  {3.2, 7.0},   {4.6, 5.5},
+                         {7.4, 5.5},   {4.0, 5.5},  {2.9, 5.25},  {2.9, 4.5},  {2.88, 3.75}, {2.5, 2.0},  {2.5, 0.4},
+                         {6.6, 0.4},   {6.6, 4.2},  {2.5, 4.2},   {2.5, 2.0}};
+  rig.make_board();
+  std::FILE* sink = std::fopen("/dev/null", "w");
+  {
+    firmware::Firmware fw(rig.config, *rig.board, sink);
+    const Status started = fw.init();
+    ASSERT_TRUE(started) << started.error().c_str();
+    const firmware::MappingTask* mapping = fw.mapping();
+    ASSERT_NE(mapping, nullptr);
+    std::vector<std::pair<hal::Nanos, nav::Pose2D>> track;
+    const hal::Nanos limit = hal::seconds(300);
+    while (!rig.board->simulation().truth().push_done && rig.clock().now() < limit) {
+      ASSERT_TRUE(fw.scheduler().run_lockstep(rig.clock(), hal::millis(5)));
+      track.emplace_back(rig.clock().now(), rig.board->simulation().truth().pose);
+    }
+    ASSERT_TRUE(rig.board->simulation().truth().push_done) << "pushed round within " << limit / 1'000'000'000 << " s";
+    // (The script pushing the robot does not give way to the worker: their contacts are the
+    // script's; the robot's motors are off.)
+    fw.shutdown();
+    ASSERT_TRUE(mapping->written()) << mapping->last_error();
+    const slam::Mapper& mapper = mapping->mapper();
+    std::vector<nav::Pose2D> truth;
+    std::vector<nav::Pose2D> solved;
+    for (std::size_t i = 0; i < mapper.scan_count(); ++i) {
+      const hal::Nanos t = mapping->scan_stamp(i);
+      const auto at = std::lower_bound(track.begin(), track.end(), t, [](const auto& a, hal::Nanos b) { return a.first < b; });
+      ASSERT_NE(at, track.end());
+      truth.push_back(at->second);
+      solved.push_back(mapping->site_pose(i));
+    }
+    const Result<nav::OccupancyMap> built = nav::load_map(out);
+    ASSERT_TRUE(built) << built.error().c_str();
+    const Result<nav::OccupancyMap> lab = nav::load_map(SEN3BOT_SOURCE_DIR "/config/maps/lab.yaml");
+    ASSERT_TRUE(lab);
+    const MapScore score = score_map(*built, *lab, {});  // the built map is in the site's frame
+    const double ate = aligned_rms(solved, truth);
+    double worst = 0.0;  // without any alignment: the map frame is the site's
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      worst = std::max(worst, std::hypot(solved[i].x_m - truth[i].x_m, solved[i].y_m - truth[i].y_m));
+    std::printf("largest error in the site's frame %.3f m\n", worst);
+    std::printf("pushed round the lab: %zu scans, %zu submaps, %zu loop closures, trajectory RMS %.3f m aligned, map "
+                "precision %.3f (%zu cells), recall %.3f (%zu seen wall cells)\n",
+                mapper.scan_count(), mapper.stats().submaps, mapper.stats().loops_accepted, ate, score.precision,
+                score.built_walls, score.recall, score.seen_true_walls);
+    // Measured: 0.021 m, 0.07 m, precision 0.87 and recall 0.72 (the worker's passing leaves
+    // marks, and the front end's distances run about 1 % short: docs/mapping.md).
+    EXPECT_LT(ate, 0.03);
+    EXPECT_LT(worst, 0.15);
+    EXPECT_GT(score.precision, 0.8);
+    EXPECT_GT(score.recall, 0.6);
+  }
+
+  // The thesis mission on the map it built.
+  testing::SimRig again = testing::load_sim_rig();
+  again.config = mission_config;
+  again.config.navigation.map_path = out;
+  firmware::Firmware fw(again.config, *again.board, sink);
+  const Status ready = fw.init();
+  ASSERT_TRUE(ready) << ready.error().c_str();
+  while (!fw.mission()->finished() && again.clock().now() < hal::seconds(200))
+    ASSERT_TRUE(fw.scheduler().run_lockstep(again.clock(), hal::millis(10)));
+  EXPECT_TRUE(fw.mission()->finished());
+  const nav::Pose2D end = again.board->simulation().truth().pose;
+  EXPECT_LT(std::hypot(end.x_m - 2.5, end.y_m - 2.0), 0.3) << "home at the end of the mission";
+  EXPECT_EQ(again.board->simulation().truth().contacts, 0u);
+  fw.shutdown();
+  std::fclose(sink);
+}
+
 }  // namespace
 }  // namespace sen3bot

@@ -6,11 +6,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -195,6 +197,21 @@ TEST(SlamCheck, AScanAgainstItselfScoresTheCeiling) {
   EXPECT_FALSE(c.at_window_edge);
 }
 
+TEST(SlamCheck, WildPosesAreNotMatchedAndNoMap) {
+  const std::vector<Scan> scans = synthetic_scans();
+  PairChecker checker;
+  for (const nav::Pose2D& far : {nav::Pose2D{1e300, 0, 0}, nav::Pose2D{-30.0, 2.0, 0.1}, nav::Pose2D{0, 1e12, 3.0}}) {
+    const PairCheck c = checker.check(scans[0], scans[1], far);
+    EXPECT_FALSE(c.matched_ok);
+    EXPECT_EQ(c.score, 0.0);
+  }
+  std::vector<nav::Pose2D> poses = truth_poses();
+  poses[7].x_m = 1e200;
+  Result<MapGrid> map = render_map(scans, poses);
+  ASSERT_FALSE(map.ok());
+  EXPECT_NE(std::string(map.error().c_str()).find("spread over more than"), std::string::npos) << map.error().c_str();
+}
+
 TEST(SlamCheck, PoseFilesParseAndRejectMalformedLinesByNumber) {
   Result<std::vector<nav::Pose2D>> ok = parse_poses("# index x y theta\n0 0 0 0\n\n1 1.5 -2 0.25\n2 3 4 -3.1\n", "p.txt");
   ASSERT_TRUE(ok.ok()) << ok.error().c_str();
@@ -253,7 +270,8 @@ TEST(SlamCheck, PairsKeepTheGapTheDistanceAndOnePerBlock) {
             const double d = std::hypot(poses[j].x_m - poses[i].x_m, poses[j].y_m - poses[i].y_m);
             if (d <= max_distance) nearest = std::min(nearest, d);
           }
-        const auto chosen = std::find_if(pairs.begin(), pairs.end(), [&](const ScanPair& p) { return p.i / kPairStride == block / kPairStride; });
+        const auto chosen = std::find_if(pairs.begin(), pairs.end(),
+                                         [&](const ScanPair& p) { return p.i / kPairStride == block / kPairStride; });
         ASSERT_EQ(chosen != pairs.end(), nearest < 1e9) << "block " << block << " gap " << gap << " max " << max_distance;
         if (chosen != pairs.end()) {
           EXPECT_NEAR(std::hypot(poses[chosen->j].x_m - poses[chosen->i].x_m, poses[chosen->j].y_m - poses[chosen->i].y_m),
@@ -385,6 +403,7 @@ TEST_F(SlamCheckFiles, BadInputIsAClearErrorWithExitStatus2) {
       {{"--carmen", log}, "nothing to check"},
       {{"--carmen", dir_ + "/none.log", "--odometry"}, "none.log"},
       {{"--carmen", log, "--poses", "a=" + dir_ + "/none.txt"}, "none.txt: cannot open"},
+      {{"--carmen", log, "--poses", "a=" + dir_}, dir_ + ": is a directory"},
       {{"--carmen", log, "--poses", "a=" + broken}, "broken.txt:3: expected 'index x y theta', got 3 fields"},
       {{"--carmen", log, "--poses", "a=" + short_file}, "holds 59 poses, " + log + " holds 60 scans"},
       {{"--carmen", log, "--poses", "nofile"}, "--poses: expected NAME=FILE"},

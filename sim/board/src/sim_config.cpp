@@ -63,7 +63,23 @@ void read_io_node(const Reader& r, SimIoNodeConfig& n) {
 
 void read_sim(const Reader& r, SimulationConfig& w) {
   r.allow_only({"map", "start_pose", "seed", "range_noise_m", "laser_max_range_m", "people", "boxes", "laser_status",
-                "detector", "io_node"});
+                "detector", "io_node", "push", "odometry_error"});
+  if (r.has("push")) {
+    // Someone pushes the robot with its motors off along a path (mapping a site by hand).
+    const Reader p = r.child("push");
+    p.allow_only({"path", "speed_m_s", "start_s"});
+    for (const Reader& point : p.sequence("path")) w.push_path.push_back(point.point());
+    if (w.push_path.empty()) p.fail("path", "needs at least one point", YAML::Node());
+    if (p.has("speed_m_s")) w.push_speed_m_s = p.number("speed_m_s", 0.05, 1.5);
+    if (p.has("start_s")) w.push_start_s = p.number("start_s", 0.0, 1e6);
+  }
+  if (r.has("odometry_error")) {
+    // The wheels' odometry off the truth: a scale error of the distance and of the turns.
+    const Reader o = r.child("odometry_error");
+    o.allow_only({"scale", "turn"});
+    if (o.has("scale")) w.base.odometry_scale_error = o.number("scale", -0.2, 0.2);
+    if (o.has("turn")) w.base.odometry_turn_error = o.number("turn", -0.2, 0.2);
+  }
   if (r.has("io_node")) read_io_node(r.child("io_node"), w.io_node);
   w.map_path = relative_to(r.file(), r.text("map"));
   if (r.has("start_pose")) w.start_pose = read_pose(r.child("start_pose"));

@@ -1,5 +1,6 @@
 #include "sen3bot/sim/simulation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -152,6 +153,25 @@ void Simulation::place_crowd(hal::Nanos now_ns) noexcept {
   }
 }
 
+// A person pushing the robot along the path: towards the next point, turning on the spot when
+// it points far off, at a walking pace.
+void Simulation::push(const nav::Pose2D& pose) noexcept {
+  constexpr double kReachedM = 0.15;
+  while (push_next_ < config_.push_path.size() &&
+         std::hypot(config_.push_path[push_next_].x_m - pose.x_m, config_.push_path[push_next_].y_m - pose.y_m) < kReachedM)
+    ++push_next_;
+  if (push_next_ == config_.push_path.size()) {
+    truth_.push_done = true;
+    base_.set_push(0.0, 0.0);
+    return;
+  }
+  const nav::Point2D& to = config_.push_path[push_next_];
+  const double error = nav::normalize_angle(std::atan2(to.y_m - pose.y_m, to.x_m - pose.x_m) - pose.theta_rad);
+  const double w = std::clamp(1.5 * error, -0.8, 0.8);
+  const double v = std::abs(error) > 0.5 ? 0.0 : config_.push_speed_m_s * std::cos(error);
+  base_.set_push(v, w);
+}
+
 void Simulation::step(hal::Nanos now_ns) noexcept {
   world_->set_time(static_cast<double>(now_ns) / kNanosPerSecond);
   hal::ByteStream& base_stream = base_pipe_ ? static_cast<hal::ByteStream&>(base_pipe_->b()) : *base_pty_;
@@ -161,6 +181,11 @@ void Simulation::step(hal::Nanos now_ns) noexcept {
     base_.set_ground_truth({to.x_m, to.y_m, to.theta_rad});  // the controller's odometry stays
     truth_.kidnapped_ns = now_ns;
   }
+  // Pushing starts once the robot is running (its controller talking to the firmware, whose
+  // odometry counts from then) and the person has waited push_start_s.
+  if (!config_.push_path.empty() && base_.state() == p2os::EmulatorState::open &&
+      static_cast<double>(now_ns) >= config_.push_start_s * kNanosPerSecond)
+    push(base_.ground_truth());
   // A failed step means the driver's end went away; the robot keeps its state, as hardware does.
   (void)base_.step(base_stream, now_ns);
   if (crowd_) place_crowd(now_ns);

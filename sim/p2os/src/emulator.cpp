@@ -360,22 +360,28 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
     remaining_ns -= dt_ns;
     const double dt_s = hal::to_seconds(dt_ns);
     const bool powered = state_ == EmulatorState::open && motors_enabled_ && !estop_;
-    if (!powered) {
+    const bool pushed = !powered && (push_v_mm_s_ != 0.0 || push_w_deg_s_ != 0.0);
+    if (!powered && !pushed) {
       v_mm_s_ = w_deg_s_ = 0;
       stalled_now_ = forced_stall_;
       continue;
     }
-    double tv = watchdog_tripped_ ? 0.0 : target_v_mm_s_;
-    double tw = watchdog_tripped_ ? 0.0 : target_w_deg_s_;
-    if (heading_mode_ && !watchdog_tripped_) tw = heading_rate_deg_s(dt_s);
-    if (move_mode_ && !watchdog_tripped_) {
-      // Position mode: the fastest speed that can still brake to rest at the goal.
-      const double reach = braking_speed(std::fabs(move_remaining_mm_), decel_mm_s2_, dt_s);
-      tv = std::fabs(move_remaining_mm_) < kMoveDoneMm ? 0.0 : std::copysign(reach, move_remaining_mm_);
+    if (pushed) {
+      v_mm_s_ = push_v_mm_s_;
+      w_deg_s_ = push_w_deg_s_;
+    } else {
+      double tv = watchdog_tripped_ ? 0.0 : target_v_mm_s_;
+      double tw = watchdog_tripped_ ? 0.0 : target_w_deg_s_;
+      if (heading_mode_ && !watchdog_tripped_) tw = heading_rate_deg_s(dt_s);
+      if (move_mode_ && !watchdog_tripped_) {
+        // Position mode: the fastest speed that can still brake to rest at the goal.
+        const double reach = braking_speed(std::fabs(move_remaining_mm_), decel_mm_s2_, dt_s);
+        tv = std::fabs(move_remaining_mm_) < kMoveDoneMm ? 0.0 : std::copysign(reach, move_remaining_mm_);
+      }
+      tv = std::clamp(tv, -max_v_mm_s_, max_v_mm_s_);
+      v_mm_s_ = approach(v_mm_s_, tv, accel_mm_s2_, decel_mm_s2_, dt_s);
+      w_deg_s_ = approach(w_deg_s_, tw, rot_accel_deg_s2_, rot_decel_deg_s2_, dt_s);
     }
-    tv = std::clamp(tv, -max_v_mm_s_, max_v_mm_s_);
-    v_mm_s_ = approach(v_mm_s_, tv, accel_mm_s2_, decel_mm_s2_, dt_s);
-    w_deg_s_ = approach(w_deg_s_, tw, rot_accel_deg_s2_, rot_decel_deg_s2_, dt_s);
     const double ds_mm = v_mm_s_ * dt_s;
     const double dth_rad = w_deg_s_ / kDegPerRad * dt_s;
     if (ds_mm == 0 && dth_rad == 0) {
@@ -393,10 +399,12 @@ void P2osEmulator::advance(hal::Nanos now_ns) noexcept {
     stalled_now_ = false;
     truth_ = to;
     if (move_mode_) move_remaining_mm_ -= ds_mm;
-    const double odom_mid = odom_theta_rad_ + dth_rad / 2;
-    odom_x_mm_ += ds_mm * std::cos(odom_mid);
-    odom_y_mm_ += ds_mm * std::sin(odom_mid);
-    odom_theta_rad_ = wrap_angle_rad(odom_theta_rad_ + dth_rad);
+    const double odom_ds_mm = ds_mm * (1.0 + config_.odometry_scale_error);
+    const double odom_dth_rad = dth_rad * (1.0 + config_.odometry_turn_error);
+    const double odom_mid = odom_theta_rad_ + odom_dth_rad / 2;
+    odom_x_mm_ += odom_ds_mm * std::cos(odom_mid);
+    odom_y_mm_ += odom_ds_mm * std::sin(odom_mid);
+    odom_theta_rad_ = wrap_angle_rad(odom_theta_rad_ + odom_dth_rad);
     const double wheel_offset_mm = dth_rad / config_.diff_conv_rad_per_mm;
     left_ticks_ += (ds_mm - wheel_offset_mm) * config_.ticks_mm;
     right_ticks_ += (ds_mm + wheel_offset_mm) * config_.ticks_mm;

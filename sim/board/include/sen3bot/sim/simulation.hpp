@@ -61,6 +61,11 @@ struct SimulationConfig {
   // odometry is not told.
   double kidnap_time_s = -1.0;
   nav::Pose2D kidnap_pose;
+  // Someone pushes the robot with its motors off along these points (map frame) at push_speed
+  // (the way a site is often mapped: sim.push); empty: nobody does.
+  std::vector<nav::Point2D> push_path;
+  double push_speed_m_s = 0.4;
+  double push_start_s = 3.0;  // after the robot's start-up, as a person waits for it
   p2os::EmulatorConfig base;
   lms200::EmulatorOptions laser;
   std::size_t pipe_bytes = 16 * 1024;  // per direction, memory links
@@ -83,6 +88,7 @@ struct GroundTruth {
   bool in_contact = false;
   bool contact_person = false;  // the newest contact began with a person
   hal::Nanos kidnapped_ns = -1;     // when the robot was carried away (-1: not yet)
+  bool push_done = false;           // the push path's last point was reached
   // The visible people's true centres (the first kMaxPeople of them), for the referee.
   static constexpr std::size_t kMaxPeople = 16;
   std::array<nav::Point2D, kMaxPeople> people{};
@@ -141,6 +147,7 @@ class Simulation {
   std::unique_ptr<WorldRanges> ranges_;
   std::unique_ptr<WorldObstacles> obstacles_;
   p2os::P2osEmulator base_;
+  std::size_t push_next_ = 0;  // the push path's point being pushed towards
   std::unique_ptr<lms200::Lms200Emulator> laser_;
   // Memory links.
   std::unique_ptr<hal::MemoryPipe> base_pipe_;
@@ -153,6 +160,7 @@ class Simulation {
   GroundTruth truth_;
   hal::Nanos next_clearance_ns_ = 0;
   void judge_cages(const nav::Pose2D& pose) noexcept;
+  void push(const nav::Pose2D& pose) noexcept;
   hal::Nanos next_cage_judge_ns_ = 0;
   bool cage_judged_ = false;
   nav::Pose2D cage_judged_pose_;

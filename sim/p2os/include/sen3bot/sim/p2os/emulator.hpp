@@ -70,6 +70,10 @@ struct EmulatorConfig {
   double sonar_miss_rate = 0.02;  // a reading lost to a glancing surface reads as max range
   double diff_conv_rad_per_mm = 0.0056;  // wheel speeds <-> yaw rate
   std::uint32_t noise_seed = 1;          // fault-injection noise is deterministic
+  // The odometry's systematic errors (a wheel diameter and a wheel base a little off): the
+  // distance it counts is (1 + scale) times the true one, a turn (1 + turn) times. 0: exact.
+  double odometry_scale_error = 0.0;
+  double odometry_turn_error = 0.0;
 };
 
 enum class EmulatorState : std::uint8_t {
@@ -134,6 +138,13 @@ class P2osEmulator {
   void set_silent(bool silent) noexcept { silent_ = silent; }
   void inject_reset() noexcept { reset_pending_ = true; }
   void set_stalled(bool stalled) noexcept { forced_stall_ = stalled; }
+  // Someone pushes the robot at (v, w) while its motors are off (disabled, or the e-stop): the
+  // wheels turn freely, so the robot moves and its encoders count, as a Pioneer pushed by hand
+  // does. (0, 0): nobody pushes. Ignored while the motors drive.
+  void set_push(double v_m_s, double w_rad_s) noexcept {
+    push_v_mm_s_ = v_m_s * 1000.0;
+    push_w_deg_s_ = w_rad_s * 57.29577951308232;
+  }
   void set_estop(bool pressed) noexcept;
   void set_bumpers(std::uint8_t front_bits, std::uint8_t rear_bits) noexcept {
     front_bumpers_ = front_bits & 0x7F;
@@ -233,6 +244,8 @@ class P2osEmulator {
   bool silent_ = false;
   bool reset_pending_ = false;
   bool forced_stall_ = false;
+  double push_v_mm_s_ = 0.0;
+  double push_w_deg_s_ = 0.0;
   bool estop_ = false;
   std::uint8_t front_bumpers_ = 0;
   std::uint8_t rear_bumpers_ = 0;
