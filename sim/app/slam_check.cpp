@@ -30,7 +30,7 @@ constexpr int kMapMarginCells = 10;
 constexpr int kMaxGridSide = 8192;  // BuildGrid's largest
 constexpr double kMaxMapExtentM = 100000.0;  // a map wider is a broken trajectory, not a building
 
-constexpr double kMaxPlotPx = 1600.0;
+constexpr double kMaxPlotPx = 1000.0;
 constexpr figure::Rgb kTrajectoryColour{220, 0, 0};
 constexpr figure::Rgb kStartColour{0, 150, 150};
 constexpr figure::Rgb kSubtitleColour{90, 90, 90};

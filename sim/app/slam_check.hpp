@@ -34,7 +34,9 @@ inline constexpr double kMinRangeM = 0.1;                // the returns used, as
 inline constexpr double kMaxRangeM = 20.0;
 inline constexpr double kMatchWindowM = 0.3;             // the match's window around the trajectory's
 inline constexpr double kMatchWindowRad = std::numbers::pi / 12.0;  // relative pose (15 degrees)
-inline constexpr double kMinScore = 0.5;                 // below: "not matched"
+// Below: "not matched". A grid of one scan scores 0.646 at most (kScoreCeiling), neighbouring
+// scans a median of 0.50; 0.4 keeps the pairs that overlap and drops those that do not.
+inline constexpr double kMinScore = 0.4;
 inline constexpr int kInsertions = 3;                    // scan i goes into its grid this many times
 inline constexpr double kResolutionM = 0.05;             // the pair grid's and the figure map's cells
 

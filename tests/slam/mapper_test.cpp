@@ -58,15 +58,16 @@ TEST(SubmapGrid, AHitRaisesItsCellAndTheRayBeforeItIsLowered) {
   const std::vector<PointF> hit = {{1.02F, 0.02F}};
   rig.grid.insert({0.02F, 0.02F}, hit);
   const ProbabilityView v = rig.grid.view();
+  const InsertionConfig odds;
   // The grid is centred on the frame's origin: cell 200 starts at x = 0.
-  EXPECT_EQ(v.byte(220, 200), probability_byte(0.55));  // the hit, at x in [1.00, 1.05)
-  for (int c = 200; c < 220; ++c) EXPECT_EQ(v.byte(c, 200), probability_byte(0.49)) << c;
+  EXPECT_EQ(v.byte(220, 200), probability_byte(odds.hit_probability));  // the hit, at x in [1.00, 1.05)
+  for (int c = 200; c < 220; ++c) EXPECT_EQ(v.byte(c, 200), probability_byte(odds.miss_probability)) << c;
   EXPECT_EQ(v.byte(221, 200), 0) << "behind the hit is unknown";
   EXPECT_EQ(v.byte(210, 201), 0) << "beside the ray is unknown";
   // Once per scan: a second hit in the same cell does not count twice.
   const std::vector<PointF> twice = {{1.02F, 0.02F}, {1.03F, 0.03F}};
   rig.grid.insert({0.02F, 0.02F}, twice);
-  const double p2 = 1.0 / (1.0 + std::exp(-2.0 * std::log(0.55 / 0.45)));
+  const double p2 = 1.0 / (1.0 + std::exp(-2.0 * std::log(odds.hit_probability / (1.0 - odds.hit_probability))));
   EXPECT_EQ(v.byte(220, 200), probability_byte(p2));
   const BuildGrid::Bounds b = rig.grid.known_bounds();
   EXPECT_EQ(b.min_col, 200);

@@ -29,6 +29,8 @@ struct MapperConfig {
   int scans_per_submap = 30;     // a new submap starts every this many scans; each takes twice as many
   double min_range_m = 0.1;      // returns used; nearer ones are the robot or noise
   double max_range_m = 20.0;
+  // The scan-to-submap match uses returns nearer than this fraction of the range (mapper.cpp).
+  double match_range_fraction = 0.75;
   InsertionConfig insertion;
   LocalMatchConfig local;
   LoopSearchConfig loop;
