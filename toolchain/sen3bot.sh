@@ -137,7 +137,7 @@ case "${1:-}" in
       qemu_closed_loop+='|^Mcl\.RecoversFromAKidnappingOnlyWithInjection$|^Dwa\.RecoversWhenBlockedAndCountsIt$'
       qemu_closed_loop+='|^DwaMovers\.(LetsACrossingBoxPass|TheBroadPhaseNeverChanges)'
       qemu_closed_loop+='|^SenseToAct\.|^Fleet\.(AnOrderDrives|BadMessages|ARobotCutOff)'
-      qemu_closed_loop+='|^QrReaderRate\.WithinHalfAMetre|^Mapper\.ClosesTheLoop|^PoseGraph\.SolveTimeOf'
+      qemu_closed_loop+='|^QrReaderRate\.WithinHalfAMetre|^Mapper\.ClosesTheLoop|^PoseGraph\.SolveTimeOf|^OnlineMapping\.'
       # Real-time pty runs and external peers are covered by the native and sanitized suites;
       # under an emulator ten times slower their timing says more about qemu than about the
       # firmware. So are the long closed-loop runs of the whole simulated robot (over 40 % of the
