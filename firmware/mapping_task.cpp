@@ -71,11 +71,14 @@ void MappingTask::step(const tasks::StepContext&) {
   stamps_[taken_++] = s.stamp_ns;
 }
 
-nav::Pose2D MappingTask::site_pose(std::size_t i) const {
-  const nav::Pose2D first = nav::apply_motion(
-      config_.start_pose, nav::relative_pose(start_odometry_.value_or(first_scan_odometry_), first_scan_odometry_));
-  return nav::apply_motion(first, mapper_.scan_pose(i));
+// The mapper's frame is the robot's pose at its first scan; the robot may have moved since the row
+// started (start_pose), by what the odometry says.
+nav::Pose2D MappingTask::site_frame() const noexcept {
+  return nav::apply_motion(config_.start_pose,
+                           nav::relative_pose(start_odometry_.value_or(first_scan_odometry_), first_scan_odometry_));
 }
+
+nav::Pose2D MappingTask::site_pose(std::size_t i) const { return nav::apply_motion(site_frame(), mapper_.scan_pose(i)); }
 
 void MappingTask::shutdown() {
   if (written_ || config_.out_path.empty()) return;
@@ -92,8 +95,7 @@ void MappingTask::shutdown() {
     error_ = drawn.error();
     return;
   }
-  // Into the site's frame: the mapper's is the robot's pose at its first scan.
-  const nav::Pose2D first = site_pose(0);
+  const nav::Pose2D first = site_frame();
   const nav::Pose2D origin =
       nav::apply_motion(first, {drawn->origin_x_m(), drawn->origin_y_m(), drawn->origin_yaw_rad()});
   std::optional<nav::OccupancyMap> map;

@@ -62,6 +62,8 @@ class MappingTask final : public tasks::Task {
   [[nodiscard]] bool written() const noexcept { return written_; }
   // The i-th scan's solved pose in the site's frame (start_pose), as the poses file has it.
   [[nodiscard]] nav::Pose2D site_pose(std::size_t i) const;
+  // Where the mapper's frame lies in the site's frame (the map is written in the site's).
+  [[nodiscard]] nav::Pose2D site_frame() const noexcept;
   // When the i-th scan the mapper took was measured (its stamp).
   [[nodiscard]] hal::Nanos scan_stamp(std::size_t i) const noexcept { return i < taken_ ? stamps_[i] : 0; }
 
