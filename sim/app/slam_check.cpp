@@ -175,7 +175,7 @@ PairChecker::PairChecker()
   slam::LocalMatchConfig config;
   config.linear_window_m = kMatchWindowM;
   config.angular_window_rad = kMatchWindowRad;
-  ready_ = grid_.init(arena_, kPairGridSide, kResolutionM, slam::InsertionConfig{}).ok() &&
+  ready_ = grid_.init(arena_, kPairGridSide, kResolutionM, kPairOdds).ok() &&
            matcher_.init(arena_, slam::kMaxBeams, config).ok();
 }
 
@@ -248,7 +248,7 @@ Summary summarise(std::span<const PairCheck> checks) {
 }
 
 double score_ceiling() noexcept {
-  const slam::InsertionConfig insertion;
+  const slam::InsertionConfig insertion = kPairOdds;
   const double log_odds = kInsertions * std::log(insertion.hit_probability / (1.0 - insertion.hit_probability));
   return 1.0 / (1.0 + std::exp(-log_odds));
 }

@@ -37,6 +37,9 @@ inline constexpr double kMatchWindowRad = std::numbers::pi / 12.0;  // relative 
 // Below: "not matched". A grid of one scan scores 0.646 at most (kScoreCeiling), neighbouring
 // scans a median of 0.50; 0.4 keeps the pairs that overlap and drops those that do not.
 inline constexpr double kMinScore = 0.4;
+// The odds scan i's grid is built with: fixed here, so the check means the same whatever the
+// mapper's own odds are (three hits at 0.55 give the 0.646 ceiling).
+inline constexpr slam::InsertionConfig kPairOdds{0.55, 0.49};
 inline constexpr int kInsertions = 3;                    // scan i goes into its grid this many times
 inline constexpr double kResolutionM = 0.05;             // the pair grid's and the figure map's cells
 
