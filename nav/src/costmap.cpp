@@ -183,31 +183,16 @@ void ObstacleLayer::shift_grid(std::span<std::uint8_t> cells, int shift_cols, in
 }
 
 void ObstacleLayer::raytrace(int c0, int r0, int c1, int r1, int max_cells) noexcept {
-  // Bresenham from the sensor cell towards the endpoint cell, the endpoint itself excluded.
-  const int dc = std::abs(c1 - c0);
-  const int dr = -std::abs(r1 - r0);
-  const int sc = c0 < c1 ? 1 : -1;
-  const int sr = r0 < r1 ? 1 : -1;
-  int err = dc + dr;
-  int c = c0;
-  int r = r0;
-  for (int steps = 0; steps < max_cells && (c != c1 || r != r1); ++steps) {
+  // From the sensor cell towards the endpoint cell, the endpoint itself excluded.
+  walk_line(c0, r0, c1, r1, [&](int c, int r, int step) noexcept {
+    if (step >= max_cells) return false;
     if (grid_.in_bounds(c, r)) {
       grid_.set(c, r, kFreeCost);
       seen_free_[grid_.index(c, r)] = 1;
-    } else if (steps > 0) {
-      break;  // left the window; nothing further can be inside again on a straight line
+      return true;
     }
-    const int e2 = 2 * err;
-    if (e2 >= dr) {
-      err += dr;
-      c += sc;
-    }
-    if (e2 <= dc) {
-      err += dc;
-      r += sr;
-    }
-  }
+    return step == 0;  // left the window: nothing further can be inside again on a straight line
+  });
 }
 
 void ObstacleLayer::clear_sonar_cones(const CostmapInputs& inputs) noexcept {

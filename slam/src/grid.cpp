@@ -6,6 +6,7 @@
 #include <new>
 
 #include "sen3bot/nav/arena.hpp"
+#include "sen3bot/nav/grid_geometry.hpp"
 
 namespace sen3bot::slam {
 namespace {
@@ -97,33 +98,18 @@ void BuildGrid::update(std::size_t index, std::int16_t delta) noexcept {
   }
 }
 
-// Bresenham from (c0, r0) up to, not including, (c1, r1); both are inside the grid.
+// From (c0, r0) up to, not including, (c1, r1); both are inside the grid.
 void BuildGrid::ray(int c0, int r0, int c1, int r1) noexcept {
-  const int dc = std::abs(c1 - c0);
-  const int dr = -std::abs(r1 - r0);
-  const int sc = c0 < c1 ? 1 : -1;
-  const int sr = r0 < r1 ? 1 : -1;
-  int err = dc + dr;
-  int c = c0;
-  int r = r0;
   // A wall cell among the last cells before the hit is left as it is: a ray that grazes a wall
   // crosses the wall's own cells just before it ends there, and clearing them would thin the
   // wall ahead of every scan (which pulls later scans back towards where the walls were seen
   // from). Free and unknown cells there are cleared as anywhere else.
-  int left = std::max(dc, -dr);
-  while (c != c1 || r != r1) {
+  const int length = std::max(std::abs(c1 - c0), std::abs(r1 - r0));
+  nav::walk_line(c0, r0, c1, r1, [&](int c, int r, int step) noexcept {
     const std::size_t index = static_cast<std::size_t>(r) * static_cast<std::size_t>(side_) + static_cast<std::size_t>(c);
-    if (left-- > kKeepBeforeHit || log_odds_[index] == kUnknownLogOdds || log_odds_[index] <= 0) update(index, miss_delta_);
-    const int e2 = 2 * err;
-    if (e2 >= dr) {
-      err += dr;
-      c += sc;
-    }
-    if (e2 <= dc) {
-      err += dc;
-      r += sr;
-    }
-  }
+    if (length - step > kKeepBeforeHit || log_odds_[index] <= 0) update(index, miss_delta_);
+    return true;
+  });
 }
 
 void BuildGrid::insert(const PointF& sensor, std::span<const PointF> hits) noexcept {

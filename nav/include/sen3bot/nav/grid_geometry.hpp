@@ -5,6 +5,7 @@
 // in grid coordinates; col grows with x and row with y when the yaw is 0.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstddef>
 
 namespace sen3bot::nav {
@@ -89,5 +90,30 @@ class GridGeometry {
   double cos_yaw_ = 1.0;
   double sin_yaw_ = 0.0;
 };
+
+// The cells of the Bresenham line from (c0, r0) towards (c1, r1), the end cell excluded, in order:
+// visit(col, row, step) with step counting from 0; the walk stops when visit returns false.
+template <typename Visit>
+void walk_line(int c0, int r0, int c1, int r1, Visit&& visit) noexcept(noexcept(visit(0, 0, 0))) {
+  const int dc = std::abs(c1 - c0);
+  const int dr = -std::abs(r1 - r0);
+  const int sc = c0 < c1 ? 1 : -1;
+  const int sr = r0 < r1 ? 1 : -1;
+  int err = dc + dr;
+  int c = c0;
+  int r = r0;
+  for (int step = 0; c != c1 || r != r1; ++step) {
+    if (!visit(c, r, step)) return;
+    const int e2 = 2 * err;
+    if (e2 >= dr) {
+      err += dr;
+      c += sc;
+    }
+    if (e2 <= dc) {
+      err += dc;
+      r += sr;
+    }
+  }
+}
 
 }  // namespace sen3bot::nav
