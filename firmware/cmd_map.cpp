@@ -40,17 +40,6 @@ Result<std::size_t> count_scans(const std::string& path) {
   return static_cast<std::size_t>(reader->counts().scans);
 }
 
-Status write_poses(const std::string& path, const slam::Mapper& mapper) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return Error::format(Errc::io, "%s: cannot create", path.c_str());
-  for (std::size_t i = 0; i < mapper.scan_count(); ++i) {
-    const nav::Pose2D p = mapper.scan_pose(i);
-    std::fprintf(f, "%zu %.4f %.4f %.5f\n", i, p.x_m, p.y_m, p.theta_rad);
-  }
-  if (std::fclose(f) != 0) return Error::format(Errc::io, "%s: write failed", path.c_str());
-  return {};
-}
-
 }  // namespace
 
 int map_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
@@ -144,7 +133,7 @@ int map_command(int argc, char** argv, std::FILE* out, std::FILE* err) {
     return 1;
   }
   if (!o.poses_path.empty())
-    if (Status s = write_poses(o.poses_path, mapper); !s) {
+    if (Status s = slam::write_poses(mapper, o.poses_path); !s) {
       std::fprintf(err, "sen3bot map: %s\n", s.error().c_str());
       return 1;
     }

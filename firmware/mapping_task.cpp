@@ -109,15 +109,7 @@ void MappingTask::shutdown() {
     return;
   }
   const std::string poses = (std::filesystem::path(config_.out_path).replace_extension(".poses")).string();
-  if (std::FILE* f = std::fopen(poses.c_str(), "w"); f != nullptr) {
-    for (std::size_t i = 0; i < mapper_.scan_count(); ++i) {
-      const nav::Pose2D p = site_pose(i);
-      std::fprintf(f, "%zu %.4f %.4f %.5f %.3f\n", i, p.x_m, p.y_m, p.theta_rad, static_cast<double>(stamps_[i]) * 1e-9);
-    }
-    if (std::fclose(f) != 0) error_ = Error::format(Errc::io, "%s: write failed", poses.c_str());
-  } else {
-    error_ = Error::format(Errc::io, "%s: cannot create", poses.c_str());
-  }
+  if (Status s = slam::write_poses(mapper_, poses, first); !s) error_ = s.error();
   written_ = true;
 }
 

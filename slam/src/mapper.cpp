@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "sen3bot/nav/arena.hpp"
@@ -366,6 +367,17 @@ Result<nav::OccupancyMap> Mapper::render(double resolution_m) const {
       map.set(c, r, occupancy_of(b));
     }
   return map;
+}
+
+Status write_poses(const Mapper& mapper, const std::string& path, const nav::Pose2D& frame) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return Error::format(Errc::io, "%s: cannot create", path.c_str());
+  for (std::size_t i = 0; i < mapper.scan_count(); ++i) {
+    const nav::Pose2D p = nav::apply_motion(frame, mapper.scan_pose(i));
+    std::fprintf(f, "%zu %.4f %.4f %.5f\n", i, p.x_m, p.y_m, p.theta_rad);
+  }
+  if (std::fclose(f) != 0) return Error::format(Errc::io, "%s: write failed", path.c_str());
+  return {};
 }
 
 }  // namespace sen3bot::slam

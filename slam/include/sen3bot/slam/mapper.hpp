@@ -12,6 +12,7 @@
 #include <memory_resource>
 #include <optional>
 #include <span>
+#include <string>
 
 #include "sen3bot/hal/result.hpp"
 #include "sen3bot/nav/map.hpp"
@@ -142,5 +143,10 @@ class Mapper {
   nav::Pose2D correction_;          // local frame -> map frame, from the last solve
   MapperStats stats_;
 };
+
+// Every scan's solved pose, `index x y theta` a line in the input's order (metres, radians), in
+// the frame `frame` places the mapper's in (identity: the first scan's pose). Errc::io when the
+// file cannot be written.
+Status write_poses(const Mapper& mapper, const std::string& path, const nav::Pose2D& frame = {});
 
 }  // namespace sen3bot::slam
